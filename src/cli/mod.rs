@@ -1,0 +1,91 @@
+//! Command-line front end (clap derive). One file per subcommand; the library stays free of
+//! clap. Errors print as `day2night: <file>: <reason>` on stderr.
+
+use clap::{Parser, Subcommand};
+use std::process::ExitCode;
+
+mod calibrate;
+mod convert;
+mod dataset;
+mod eval;
+mod info;
+mod merge;
+mod render;
+mod synth;
+
+/// Turn daytime camera raw photos (DNG) into realistic nighttime raw photos.
+#[derive(Debug, Parser)]
+#[command(name = "day2night", version, about, long_about = None)]
+pub struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Debug, Subcommand)]
+enum Command {
+    /// Describe DNG files: camera, geometry, CFA, levels, colour, ISO, noise, storage.
+    Info(info::InfoArgs),
+    /// Re-write a DNG through the reader and writer (same pixels, fresh valid layout).
+    Convert(convert::ConvertArgs),
+    /// Synthesize clean and noisy night DNGs (and targets) from day DNGs.
+    Synth(synth::SynthArgs),
+    /// Render a DNG through the software ISP to EXR, PNG or TIFF.
+    Render(render::RenderArgs),
+    /// Compare two images: PSNR, SSIM, mean Delta E 2000.
+    Eval(eval::EvalArgs),
+    /// Build calibration files (night illuminants, brightness, noise) from real captures.
+    #[command(subcommand)]
+    Calibrate(calibrate::CalibrateCommand),
+    /// Average an aligned burst into one low-noise DNG.
+    Merge(merge::MergeArgs),
+    /// Generate a whole dataset: split, manifest, resumable, shardable.
+    Dataset(dataset::DatasetArgs),
+}
+
+/// Error reported by a subcommand, with the exit code it maps to.
+pub struct Failure {
+    /// 1 = bad input / failed work, 2 = bad usage.
+    pub code: u8,
+    /// The message (already `<file>: <reason>` where a file is concerned).
+    pub error: anyhow::Error,
+}
+
+impl<E: Into<anyhow::Error>> From<E> for Failure {
+    fn from(e: E) -> Self {
+        Failure { code: 1, error: e.into() }
+    }
+}
+
+/// A usage error (exit code 2).
+pub fn usage(msg: impl std::fmt::Display) -> Failure {
+    Failure { code: 2, error: anyhow::anyhow!("{msg}") }
+}
+
+/// Result type of subcommands.
+pub type CmdResult = Result<(), Failure>;
+
+/// Entry point used by `main`.
+pub fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let result = match cli.command {
+        Command::Info(a) => info::run(a),
+        Command::Convert(a) => convert::run(a),
+        Command::Synth(a) => synth::run(a),
+        Command::Render(a) => render::run(a),
+        Command::Eval(a) => eval::run(a),
+        Command::Calibrate(c) => calibrate::run(c),
+        Command::Merge(a) => merge::run(a),
+        Command::Dataset(a) => dataset::run(a),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(f) => {
+            let mut msg = format!("{}", f.error);
+            for cause in f.error.chain().skip(1) {
+                msg.push_str(&format!(": {cause}"));
+            }
+            eprintln!("day2night: {msg}");
+            ExitCode::from(f.code)
+        }
+    }
+}

@@ -1,0 +1,34 @@
+//! # day2night
+//!
+//! Turn daytime camera raw photos (DNG) into realistic nighttime raw photos for training
+//! night-mode neural ISPs, after Punnappurath et al., "Day-to-Night Image Synthesis for
+//! Training Nighttime Neural ISPs" (CVPR 2022).
+//!
+//! Flow: [`dng::read`] -> [`raw::RawImage`] -> [`synth`] (a seeded `Plan`, then a pure run)
+//! -> [`noise`] -> [`dng::write`], plus the software ISP in [`isp`] for EXR/PNG targets,
+//! [`metrics`] for evaluation and [`calibrate`] for new cameras.
+#![forbid(unsafe_code)]
+#![warn(missing_docs)]
+
+pub mod calibrate;
+pub mod dng;
+pub mod error;
+pub mod exr;
+pub mod isp;
+pub mod metrics;
+pub mod noise;
+pub mod output;
+pub mod raw;
+pub mod synth;
+pub mod tiff;
+
+pub use error::{Error, Result};
+pub use raw::{Bayer, Levels, RawImage, Rect};
+
+/// Tool version written into Software tags, EXR attributes and sidecars.
+pub const VERSION: &str = env!("CARGO_PKG_VERSION");
+
+/// "day2night <version>": the Software tag value.
+pub fn software_name() -> String {
+    format!("day2night {}", VERSION)
+}
