@@ -20,4 +20,4 @@ if [ ! -x "$VENV/bin/python" ] || [ "$(cat "$stamp" 2>/dev/null)" != "$want" ]; 
 fi
 export D2N_PYTHON="$VENV/bin/python"
 export D2N_REQUIRE_VALIDATORS="${D2N_REQUIRE_VALIDATORS:-1}"
-cargo test --release "$@"
+cargo test "$@"
