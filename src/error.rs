@@ -65,7 +65,10 @@ impl Error {
     pub fn in_file(self, path: impl Into<PathBuf>) -> Self {
         match self {
             e @ Error::File { .. } => e,
-            e => Error::File { path: path.into(), source: Box::new(e) },
+            e => Error::File {
+                path: path.into(),
+                source: Box::new(e),
+            },
         }
     }
     /// The innermost error, below any `File` wrappers.

@@ -17,6 +17,7 @@ pub mod exr;
 pub mod isp;
 pub mod metrics;
 pub mod noise;
+pub mod normalize;
 pub mod output;
 pub mod raw;
 pub mod synth;

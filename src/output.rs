@@ -99,9 +99,15 @@ mod tests {
         assert_eq!(fs::read(&p).unwrap(), b"one");
         let err = write_bytes_atomic(&p, &pol, b"two").unwrap_err();
         assert!(err.to_string().contains("--overwrite"), "{err}");
-        let pol2 = OutputPolicy { overwrite: true, inputs: vec![p.clone()] };
+        let pol2 = OutputPolicy {
+            overwrite: true,
+            inputs: vec![p.clone()],
+        };
         assert!(write_bytes_atomic(&p, &pol2, b"two").is_err());
-        let pol3 = OutputPolicy { overwrite: true, inputs: vec![] };
+        let pol3 = OutputPolicy {
+            overwrite: true,
+            inputs: vec![],
+        };
         write_bytes_atomic(&p, &pol3, b"two").unwrap();
         assert_eq!(fs::read(&p).unwrap(), b"two");
         // A failing fill leaves nothing behind.

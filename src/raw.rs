@@ -224,7 +224,9 @@ impl Levels {
             .chain(&self.black_delta_v)
             .chain(std::iter::once(&self.white));
         if all.clone().any(|v| !v.is_finite()) {
-            return Err(Error::malformed("black or white level is not a finite number"));
+            return Err(Error::malformed(
+                "black or white level is not a finite number",
+            ));
         }
         let bmax = self.black_max();
         if bmax >= self.white {

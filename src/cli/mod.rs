@@ -52,13 +52,19 @@ pub struct Failure {
 
 impl<E: Into<anyhow::Error>> From<E> for Failure {
     fn from(e: E) -> Self {
-        Failure { code: 1, error: e.into() }
+        Failure {
+            code: 1,
+            error: e.into(),
+        }
     }
 }
 
 /// A usage error (exit code 2).
 pub fn usage(msg: impl std::fmt::Display) -> Failure {
-    Failure { code: 2, error: anyhow::anyhow!("{msg}") }
+    Failure {
+        code: 2,
+        error: anyhow::anyhow!("{msg}"),
+    }
 }
 
 /// Result type of subcommands.

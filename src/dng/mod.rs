@@ -1,8 +1,10 @@
 //! DNG reading and writing on top of the [`crate::tiff`] layer.
 
 pub mod ljpeg;
+pub mod ljpeg_encode;
 pub mod meta;
 pub mod read;
+pub mod thumbnail;
 pub mod write;
 
 pub use meta::RawMeta;

@@ -40,7 +40,12 @@ pub fn encode_dng(img: &RawImage, opts: &WriteOptions) -> Result<Vec<u8>> {
 }
 
 /// Encode and write a DNG atomically under `policy`.
-pub fn write_dng(img: &RawImage, path: &Path, opts: &WriteOptions, policy: &OutputPolicy) -> Result<()> {
+pub fn write_dng(
+    img: &RawImage,
+    path: &Path,
+    opts: &WriteOptions,
+    policy: &OutputPolicy,
+) -> Result<()> {
     let bytes = encode_dng(img, opts)?;
     crate::output::write_bytes_atomic(path, policy, &bytes)
 }

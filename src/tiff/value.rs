@@ -220,7 +220,10 @@ fn srational(x: f64) -> (i32, i32) {
         (n as i32, DEN as i32)
     } else {
         let d = (i32::MAX as f64 / x.abs()).floor().max(1.0);
-        ((x * d).round().clamp(i32::MIN as f64, i32::MAX as f64) as i32, d as i32)
+        (
+            (x * d).round().clamp(i32::MIN as f64, i32::MAX as f64) as i32,
+            d as i32,
+        )
     }
 }
 
@@ -266,6 +269,9 @@ mod tests {
     #[test]
     fn ascii_cut_at_nul() {
         assert_eq!(Value::ascii("Canon").as_string().as_deref(), Some("Canon"));
-        assert_eq!(Value::Ascii(b"ab\0cd".to_vec()).as_string().as_deref(), Some("ab"));
+        assert_eq!(
+            Value::Ascii(b"ab\0cd".to_vec()).as_string().as_deref(),
+            Some("ab")
+        );
     }
 }

@@ -23,7 +23,10 @@ pub fn shared_data() -> Option<PathBuf> {
     if p.is_dir() {
         Some(p)
     } else {
-        eprintln!("SKIP: shared real-camera data not found at {} (set D2N_SHARED_DATA)", p.display());
+        eprintln!(
+            "SKIP: shared real-camera data not found at {} (set D2N_SHARED_DATA)",
+            p.display()
+        );
         None
     }
 }
@@ -39,9 +42,15 @@ pub fn python() -> Option<PathBuf> {
         return Some(p);
     }
     if std::env::var("D2N_REQUIRE_VALIDATORS").as_deref() == Ok("1") {
-        panic!("validator Python {} missing but D2N_REQUIRE_VALIDATORS=1", p.display());
+        panic!(
+            "validator Python {} missing but D2N_REQUIRE_VALIDATORS=1",
+            p.display()
+        );
     }
-    eprintln!("SKIP: validator Python not found at {} (run scripts/test.sh to set it up)", p.display());
+    eprintln!(
+        "SKIP: validator Python not found at {} (run scripts/test.sh to set it up)",
+        p.display()
+    );
     None
 }
 

@@ -1,0 +1,201 @@
+//! Normalization of stored raw values to [0, 1] and back (DNG chapter 5; SYNTHESIS.md 1 and 6).
+//! The one code path shared by synthesis, the ISP, calibration and merging.
+//!
+//! `y = (lin(x) - black(site)) / (white - black_max)`, where `lin` is the LinearizationTable
+//! (values past its end map to its last entry), `black(site)` is BlackLevel (repeat pattern
+//! relative to the ActiveArea origin) plus BlackLevelDeltaH[col] plus BlackLevelDeltaV[row],
+//! and `black_max` is the largest black over the plane.
+
+use crate::error::Result;
+use crate::raw::RawImage;
+
+/// Normalized active-area plane: `width * height` f32 samples, row-major, active-area
+/// coordinates (so the Bayer pattern applies directly).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Plane {
+    /// Active-area width.
+    pub width: usize,
+    /// Active-area height.
+    pub height: usize,
+    /// Normalized samples.
+    pub data: Vec<f32>,
+}
+
+/// Options of [`normalize`].
+#[derive(Debug, Clone, Copy)]
+pub struct NormalizeOptions {
+    /// Clip below at 0 (default true; false keeps negative values).
+    pub clip_negative: bool,
+}
+
+impl Default for NormalizeOptions {
+    fn default() -> Self {
+        NormalizeOptions {
+            clip_negative: true,
+        }
+    }
+}
+
+/// Precomputed per-image normalization constants.
+#[derive(Debug, Clone)]
+pub struct Normalizer {
+    lut: Option<Vec<u16>>,
+    /// `white - black_max`: the scale of normalized units in DN.
+    pub scale: f64,
+    /// White level.
+    pub white: f64,
+    black_repeat: (usize, usize),
+    black: Vec<f64>,
+    delta_h: Vec<f64>,
+    delta_v: Vec<f64>,
+}
+
+impl Normalizer {
+    /// Constants for `img`; errors on inconsistent geometry or black >= white.
+    pub fn new(img: &RawImage) -> Result<Normalizer> {
+        img.validate()?;
+        let l = &img.meta.levels;
+        Ok(Normalizer {
+            lut: img
+                .meta
+                .linearization_table
+                .clone()
+                .filter(|t| !t.is_empty()),
+            scale: l.white - l.black_max(),
+            white: l.white,
+            black_repeat: l.black_repeat,
+            black: l.black.clone(),
+            delta_h: l.black_delta_h.clone(),
+            delta_v: l.black_delta_v.clone(),
+        })
+    }
+    /// Linearized value of a stored sample.
+    #[inline]
+    pub fn linearize(&self, x: u16) -> f64 {
+        match &self.lut {
+            Some(t) => t[(x as usize).min(t.len() - 1)] as f64,
+            None => x as f64,
+        }
+    }
+    /// Black level at active-area (row, col).
+    #[inline]
+    pub fn black_at(&self, row: usize, col: usize) -> f64 {
+        let (rr, rc) = self.black_repeat;
+        let mut b = self.black[(row % rr) * rc + (col % rc)];
+        if let Some(d) = self.delta_h.get(col) {
+            b += d;
+        }
+        if let Some(d) = self.delta_v.get(row) {
+            b += d;
+        }
+        b
+    }
+    /// Normalize one stored sample at active-area (row, col).
+    #[inline]
+    pub fn normalize(&self, x: u16, row: usize, col: usize) -> f64 {
+        (self.linearize(x) - self.black_at(row, col)) / self.scale
+    }
+    /// Denormalize (SYNTHESIS.md 6): `y * scale + black(site)`, rounded (or truncated),
+    /// clipped to [0, white], as a linear (post-LinearizationTable) value.
+    #[inline]
+    pub fn denormalize(&self, y: f64, row: usize, col: usize, truncate: bool) -> u16 {
+        let v = y * self.scale + self.black_at(row, col);
+        let v = if truncate { v.trunc() } else { v.round() };
+        let v = if v.is_nan() { 0.0 } else { v };
+        v.clamp(0.0, self.white.min(u16::MAX as f64)) as u16
+    }
+}
+
+/// Normalize the active area of `img` into a [`Plane`].
+pub fn normalize(img: &RawImage, opts: NormalizeOptions) -> Result<Plane> {
+    let n = Normalizer::new(img)?;
+    let a = img.active_area();
+    let (w, h) = (a.width(), a.height());
+    let mut data = Vec::with_capacity(w * h);
+    for r in 0..h {
+        let row = &img.data[(r + a.top as usize) * img.width + a.left as usize..][..w];
+        for (c, &x) in row.iter().enumerate() {
+            let mut y = n.normalize(x, r, c);
+            if opts.clip_negative && y < 0.0 {
+                y = 0.0;
+            }
+            data.push(y as f32);
+        }
+    }
+    Ok(Plane {
+        width: w,
+        height: h,
+        data,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::dng::meta::RawMeta;
+    use crate::raw::{Bayer, Rect};
+
+    fn img(w: usize, h: usize, data: Vec<u16>) -> RawImage {
+        RawImage {
+            width: w,
+            height: h,
+            data,
+            meta: RawMeta::new_bayer(Bayer::RGGB, 12, 64.0, 4095.0),
+        }
+    }
+
+    #[test]
+    fn per_site_black_with_deltas_and_active_area() {
+        let mut i = img(4, 3, (0..12).map(|v| 1000 + v).collect());
+        i.meta.active_area = Some(Rect {
+            top: 1,
+            left: 1,
+            bottom: 3,
+            right: 4,
+        });
+        i.meta.levels.black_repeat = (1, 2);
+        i.meta.levels.black = vec![60.0, 70.0];
+        i.meta.levels.black_delta_h = vec![0.0, 1.0, 2.0];
+        i.meta.levels.black_delta_v = vec![0.5, 0.0];
+        let p = normalize(&i, NormalizeOptions::default()).unwrap();
+        assert_eq!((p.width, p.height), (3, 2));
+        // black_max = 70 + 2 + 0.5; scale = 4095 - 72.5
+        let scale = 4095.0 - 72.5;
+        // active (0,0) = stored (1,1) = 1005; black = 60 + 0 + 0.5
+        assert!((p.data[0] as f64 - (1005.0 - 60.5) / scale).abs() < 1e-6);
+        // active (1,2) = stored (2,3) = 1011; black = 60 + 2 + 0
+        assert!((p.data[5] as f64 - (1011.0 - 62.0) / scale).abs() < 1e-6);
+    }
+
+    #[test]
+    fn linearization_table_clamps_past_end() {
+        let mut i = img(2, 1, vec![1, 10]);
+        i.meta.levels.black = vec![0.0];
+        i.meta.levels.white = 1000.0;
+        i.meta.linearization_table = Some(vec![0, 100, 400]);
+        let p = normalize(&i, NormalizeOptions::default()).unwrap();
+        assert_eq!(p.data, vec![0.1, 0.4]);
+    }
+
+    #[test]
+    fn black_at_or_above_white_is_an_error() {
+        let mut i = img(2, 2, vec![0; 4]);
+        i.meta.levels.black = vec![4095.0];
+        let e = normalize(&i, NormalizeOptions::default()).unwrap_err();
+        assert!(e.to_string().contains(">= white"), "{e}");
+    }
+
+    #[test]
+    fn denormalize_round_trip_and_clip() {
+        let i = img(2, 2, vec![0; 4]);
+        let n = Normalizer::new(&i).unwrap();
+        for x in [64u16, 65, 1000, 4095] {
+            let y = n.normalize(x, 0, 0);
+            assert_eq!(n.denormalize(y, 0, 0, false), x);
+        }
+        assert_eq!(n.denormalize(2.0, 0, 0, false), 4095);
+        assert_eq!(n.denormalize(-1.0, 0, 0, false), 0);
+        assert_eq!(n.denormalize(f64::NAN, 0, 0, false), 0);
+        assert_eq!(n.denormalize(0.49 / n.scale, 0, 0, true), 64);
+    }
+}
