@@ -103,3 +103,15 @@ fn mutated_dngs_never_panic() {
     );
     assert!(errors > 0);
 }
+
+/// `D2N_WRITE_SEEDS=DIR cargo test --test dng_robustness write_seeds` writes the valid seed
+/// DNGs into DIR (a starting corpus for `cargo fuzz run read_dng`).
+#[test]
+fn write_seeds() {
+    let Some(dir) = std::env::var_os("D2N_WRITE_SEEDS") else {
+        return;
+    };
+    for (i, s) in seeds().iter().enumerate() {
+        std::fs::write(std::path::Path::new(&dir).join(format!("seed{i}.dng")), s).unwrap();
+    }
+}
