@@ -421,14 +421,19 @@ mod tests {
             sorted.dedup();
             assert_eq!(tags_, sorted);
             for r in &rows {
-                let size = crate::tiff::value::FieldType::from_code(r.1).unwrap().size();
+                let size = crate::tiff::value::FieldType::from_code(r.1)
+                    .unwrap()
+                    .size();
                 if size * r.2 as usize > 4 {
                     assert_eq!(r.3 % 2, 0, "tag {} value at odd offset", r.0);
                 }
             }
             // Strips: offsets even, data right.
             let so = rows.iter().find(|r| r.0 == tags::STRIP_OFFSETS).unwrap();
-            let sc = rows.iter().find(|r| r.0 == tags::STRIP_BYTE_COUNTS).unwrap();
+            let sc = rows
+                .iter()
+                .find(|r| r.0 == tags::STRIP_BYTE_COUNTS)
+                .unwrap();
             assert_eq!((so.2, sc.2), (2, 2));
             let o1 = rd32(&b, so.3 as usize, big) as usize;
             let o2 = rd32(&b, so.3 as usize + 4, big) as usize;
