@@ -270,7 +270,13 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             .nth(1)
             .unwrap_or_else(|| "fixtures".to_string()),
     );
-    std::fs::create_dir_all(&dir)?;
+    generate(&dir, &dir.join("source/astronaut.png"))
+}
+
+/// Write every fixture into `dir`; `source` is the photograph behind `day.dng`.
+/// (Also used by tests/fixtures_reproducible.rs.)
+pub fn generate(dir: &Path, source: &Path) -> Result<(), Box<dyn std::error::Error>> {
+    std::fs::create_dir_all(dir)?;
     let order = |big: bool| WriteOptions {
         big_endian: big,
         ..Default::default()
@@ -435,11 +441,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     for s in &specs {
         let img = make_synthetic(s);
         img.validate()?;
-        write(&dir, s.name, &img, &s.opts)?;
+        write(dir, s.name, &img, &s.opts)?;
     }
-    let source = dir.join("source/astronaut.png");
-    let day = make_day(&source)?;
+    let day = make_day(source)?;
     day.validate()?;
-    write(&dir, "day.dng", &day, &order(false))?;
+    write(dir, "day.dng", &day, &order(false))?;
     Ok(())
 }
