@@ -87,8 +87,13 @@ pub fn main() -> ExitCode {
         Ok(()) => ExitCode::SUCCESS,
         Err(f) => {
             let mut msg = format!("{}", f.error);
+            // Library `File` errors already print their source ("file: reason"): append
+            // only causes whose text is not in the message yet.
             for cause in f.error.chain().skip(1) {
-                msg.push_str(&format!(": {cause}"));
+                let c = cause.to_string();
+                if !msg.contains(&c) {
+                    msg.push_str(&format!(": {c}"));
+                }
             }
             eprintln!("day2night: {msg}");
             ExitCode::from(f.code)
