@@ -14,6 +14,11 @@ pub fn frame(w: usize, h: usize, data: Vec<u16>, black: f64, white: f64, iso: u3
     let bits = if white > 4095.0 { 16 } else { 12 };
     let mut meta = RawMeta::new_bayer(Bayer::RGGB, bits, black, white);
     meta.exif.iso = Some(iso);
+    // An 8-pixel border outside the default crop: the DNG SDK wants room to demosaic.
+    if w > 32 && h > 32 {
+        meta.default_crop_origin = Some([8.0, 8.0]);
+        meta.default_crop_size = Some([(w - 16) as f64, (h - 16) as f64]);
+    }
     RawImage {
         width: w,
         height: h,
