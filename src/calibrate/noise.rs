@@ -638,13 +638,14 @@ pub fn build_model(
     }
     let mut warnings = vec![];
     for p in profiles {
-        if models.contains_key(&p.iso) {
-            warnings.push(format!(
+        match models.entry(p.iso) {
+            std::collections::btree_map::Entry::Occupied(_) => warnings.push(format!(
                 "ISO {}: measured bursts/pairs take precedence over NoiseProfile tags",
                 p.iso
-            ));
-        } else {
-            models.insert(p.iso, p);
+            )),
+            std::collections::btree_map::Entry::Vacant(v) => {
+                v.insert(p);
+            }
         }
     }
     if models.is_empty() {
