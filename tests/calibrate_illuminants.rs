@@ -87,6 +87,13 @@ fn gray_cards_recovered_and_gaussian_matches_numpy() {
             "{f}"
         );
     }
+    // synth's reader takes the file and its own fit gives the same Gaussian.
+    let src = day2night::synth::dictionaries::load_illuminants(&out).unwrap();
+    let g = day2night::synth::illuminant::Gaussian2::from_source(&src, Default::default()).unwrap();
+    assert_eq!(g.count, 6);
+    for i in 0..2 {
+        assert!((g.mean[i] - d["fit"]["mean"][i].as_f64().unwrap()).abs() < 1e-15);
+    }
     if let Some(py) = common::python() {
         let o = common::run_validator(&py, "calibrate_gaussian_check.py", &[out.as_os_str()]);
         assert!(
@@ -165,11 +172,20 @@ fn degenerate_gray_cards() {
         err.contains("sat.dng") && err.contains("saturated"),
         "{err}"
     );
-    // One illuminant: no covariance.
+    // One illuminant: documented fallback, zero covariance (synth always draws it) + warning.
     let one = gray_card(dir.path(), "one.dng", Bayer::RGGB, [0.7, 1.0, 0.3], 1);
-    let (code, _, err) = run_os(&args!["calibrate", "illuminants", &one, "-o", &out]);
-    assert_eq!(code, 1);
-    assert!(err.contains("at least 2"), "{err}");
+    let one_out = dir.path().join("one.json");
+    let (code, _, err) = run_os(&args!["calibrate", "illuminants", &one, "-o", &one_out]);
+    assert_eq!(code, 0, "{err}");
+    assert!(err.contains("warning: one illuminant"), "{err}");
+    let d = read_json(&one_out);
+    assert_eq!(
+        d["fit"]["covariance"],
+        serde_json::json!([[0.0, 0.0], [0.0, 0.0]])
+    );
+    let src = day2night::synth::dictionaries::load_illuminants(&one_out).unwrap();
+    let g = day2night::synth::illuminant::Gaussian2::from_source(&src, Default::default()).unwrap();
+    assert!((g.mean[0] / 0.7 - 1.0).abs() < 0.005 && g.cov == [[0.0; 2]; 2]);
     // Bad ROI syntax is a usage error; an ROI outside the image is a bad input.
     let (code, _, _) = run_os(&args![
         "calibrate",
@@ -249,18 +265,30 @@ fn brightness_dictionary() {
         // The shared normalize path works in f32.
         assert!((v / e - 1.0).abs() < 1e-6, "{v} vs {e}");
     }
-    let logs: Vec<f64> = vals.iter().map(|v| v.ln()).collect();
-    let mu = logs.iter().sum::<f64>() / 4.0;
-    let sigma = (logs.iter().map(|l| (l - mu).powi(2)).sum::<f64>() / 3.0).sqrt();
-    assert!((d["fit"]["mu"].as_f64().unwrap() - mu).abs() < 1e-12);
-    assert!((d["fit"]["sigma"].as_f64().unwrap() - sigma).abs() < 1e-12);
-    assert_eq!(d["fit"]["distribution"], "lognormal");
+    let mean = vals.iter().sum::<f64>() / 4.0;
+    let std = (vals.iter().map(|l| (l - mean).powi(2)).sum::<f64>() / 3.0).sqrt();
+    assert!((d["fit"]["mean"].as_f64().unwrap() - mean).abs() < 1e-15);
+    assert!((d["fit"]["std"].as_f64().unwrap() - std).abs() < 1e-15);
+    assert!(d["fit"]["distribution"]
+        .as_str()
+        .unwrap()
+        .starts_with("normal"));
+    // synth's reader takes the file and agrees.
+    let b = day2night::synth::dictionaries::load_brightness(&out).unwrap();
+    assert_eq!(
+        (b.count, b.mean, b.std),
+        (
+            4,
+            d["fit"]["mean"].as_f64().unwrap(),
+            d["fit"]["std"].as_f64().unwrap()
+        )
+    );
     // One image: documented fallback (sigma 0, warning).
     let one = dir.path().join("one.json");
     let (code, _, err) = run_os(&args!["calibrate", "brightness", &paths[0], "-o", &one]);
     assert_eq!(code, 0, "{err}");
     assert!(err.contains("warning: one image"), "{err}");
-    assert_eq!(read_json(&one)["fit"]["sigma"], 0.0);
+    assert_eq!(read_json(&one)["fit"]["std"], 0.0);
     // A black image is an error; an existing output is refused.
     let black_img = write(
         dir.path(),

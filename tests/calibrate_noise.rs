@@ -15,7 +15,7 @@ fn positions(model: &Value, iso: u64) -> Vec<Value> {
         .unwrap()
         .iter()
         .find(|m| m["iso"].as_u64() == Some(iso))
-        .unwrap_or_else(|| panic!("no ISO {iso} in {model}"))["positions"]
+        .unwrap_or_else(|| panic!("no ISO {iso} in {model}"))["fits"]
         .as_array()
         .unwrap()
         .clone()
@@ -86,6 +86,16 @@ fn project_writer_bursts_two_isos_within_3_percent() {
     let laws = &model["iso_laws"];
     let c = laws["s_per_iso"][0].as_f64().unwrap();
     assert!((c / 1.5e-6 - 1.0).abs() < 0.03, "{laws}");
+    // synth's reader takes the file; its `positions` equal the detailed fits.
+    let nm = day2night::noise::model::NoiseModel::from_file(&out).unwrap();
+    assert_eq!(nm.iso_range(), (800, 3200));
+    let at = nm.at(800).unwrap();
+    for (p, f) in positions(&model, 800).iter().enumerate() {
+        assert_eq!(
+            at.params.positions[p],
+            [f["S"].as_f64().unwrap(), f["O"].as_f64().unwrap()]
+        );
+    }
 }
 
 /// The same closed loop with bursts written by an independent tifffile script.

@@ -1,9 +1,9 @@
 //! Night brightness dictionary (SYNTHESIS.md 3, the paper's dictionary D): the normalized
 //! mean intensity of each real night raw (active area, the shared normalize path, negatives
-//! clipped at 0 as in step 1), and a log-normal fit `ln d ~ N(mu, sigma^2)` that
-//! `synth --brightness` samples target means from. Log-normal because brightness is positive
-//! and spreads over orders of magnitude at night. With one image the fit degenerates to
-//! `sigma = 0` (always that brightness): a documented fallback, reported as a warning.
+//! clipped at 0 as in step 1), and the normal fit `N(mean, std^2)` (unbiased std) that
+//! `synth --brightness` samples target means from (draws outside (0, 1] are redrawn), computed
+//! by synth's own reader. With one image `std = 0` (always that brightness): a documented
+//! fallback, reported as a warning.
 
 use super::format::{
     BrightnessDictionary, BrightnessFit, BrightnessMeasurement, BRIGHTNESS_FORMAT,
@@ -11,6 +11,7 @@ use super::format::{
 use crate::error::{Error, Result};
 use crate::normalize::{normalize, NormalizeOptions};
 use crate::raw::RawImage;
+use crate::synth::dictionaries::parse_brightness;
 
 /// Normalized mean intensity of one night image.
 pub fn measure(img: &RawImage, file: &str) -> Result<BrightnessMeasurement> {
@@ -30,37 +31,21 @@ pub fn measure(img: &RawImage, file: &str) -> Result<BrightnessMeasurement> {
     })
 }
 
-/// Log-normal fit over positive values (unbiased sigma; 0 for a single value).
+/// The normal fit synth samples from, computed by synth's own reader
+/// ([`parse_brightness`]) so that the file and the sampler agree; plus min/max.
 pub fn fit(values: &[f64]) -> Result<BrightnessFit> {
-    if values.is_empty() {
-        return Err(Error::invalid("no brightness values to fit"));
-    }
-    if let Some(v) = values.iter().find(|v| !(**v > 0.0 && v.is_finite())) {
-        return Err(Error::invalid(format!(
-            "brightness {v} is not a positive finite number"
-        )));
-    }
-    let m = values.len() as f64;
-    let logs: Vec<f64> = values.iter().map(|v| v.ln()).collect();
-    let mu = logs.iter().sum::<f64>() / m;
-    let mean = values.iter().sum::<f64>() / m;
-    let (sigma, std) = if values.len() > 1 {
-        (
-            (logs.iter().map(|l| (l - mu).powi(2)).sum::<f64>() / (m - 1.0)).sqrt(),
-            (values.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (m - 1.0)).sqrt(),
-        )
-    } else {
-        (0.0, 0.0)
-    };
+    let b = parse_brightness(
+        "calibrate brightness",
+        &serde_json::json!({ "values": values }),
+    )
+    .map_err(|e| Error::invalid(e.root().to_string()))?;
     Ok(BrightnessFit {
-        distribution: "lognormal".into(),
-        mu,
-        sigma,
-        mean,
-        std,
+        distribution: "normal, truncated to (0, 1]".into(),
+        mean: b.mean,
+        std: b.std,
         min: values.iter().cloned().fold(f64::INFINITY, f64::min),
         max: values.iter().cloned().fold(f64::NEG_INFINITY, f64::max),
-        count: values.len(),
+        count: b.count,
     })
 }
 
@@ -69,7 +54,7 @@ pub fn build_dictionary(files: Vec<BrightnessMeasurement>) -> Result<BrightnessD
     let values: Vec<f64> = files.iter().map(|f| f.mean).collect();
     Ok(BrightnessDictionary {
         format: BRIGHTNESS_FORMAT.into(),
-        what: "Night brightness dictionary D: normalized mean intensity of real night raws (active area, black-subtracted, divided by white - black), with a log-normal fit ln(d) ~ N(mu, sigma^2) to sample target means from".into(),
+        what: "Night brightness dictionary D: normalized mean intensity of real night raws (active area, black-subtracted, divided by white - black), with the normal fit synth samples target means from (draws kept in (0, 1])".into(),
         fit: fit(&values)?,
         values,
         files,
@@ -95,10 +80,10 @@ mod tests {
         let m = measure(&img, "a").unwrap();
         assert!((m.mean - 0.25).abs() < 1e-9, "{m:?}");
         let f = fit(&[0.01, 0.1]).unwrap();
-        assert!((f.mu - (0.001f64).ln() / 2.0).abs() < 1e-12);
-        assert!((f.sigma - (10f64).ln() / 2f64.sqrt()).abs() < 1e-12);
+        assert!((f.mean - 0.055).abs() < 1e-12);
+        assert!((f.std - 0.09 / 2f64.sqrt()).abs() < 1e-12);
         let one = fit(&[0.05]).unwrap();
-        assert_eq!((one.sigma, one.std, one.count), (0.0, 0.0, 1));
+        assert_eq!((one.std, one.count), (0.0, 1));
         assert!(fit(&[]).is_err() && fit(&[0.0]).is_err());
     }
 

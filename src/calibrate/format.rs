@@ -1,9 +1,8 @@
-//! JSON formats written by `day2night calibrate` (and read back by it for refits).
-//!
-//! Defined here because the synthesis side had not published its readers when calibration
-//! was written; the field names follow the shared calibration files
-//! (`illuminants_rgb_over_g`) and SYNTHESIS.md (`S`, `O`, `beta1`, `beta2`) so that the
-//! integrator can point `synth --illuminants/--brightness/--noise-model` at them.
+//! JSON formats written by `day2night calibrate`. Each is a SUPERSET of what `synth` reads
+//! (`crate::synth::dictionaries::{parse_illuminants, parse_brightness}`,
+//! `crate::noise::model::NoiseModel`): the keys synth uses come first and carry the same
+//! meaning; the extra keys (per-file measurements, fit quality, DN forms, ISO laws) are for
+//! people and are ignored by synth. Tests parse every written file with synth's readers.
 
 use serde::{Deserialize, Serialize};
 
@@ -11,8 +10,8 @@ use serde::{Deserialize, Serialize};
 pub const ILLUMINANTS_FORMAT: &str = "day2night-illuminants/1";
 /// Format tag of brightness dictionaries.
 pub const BRIGHTNESS_FORMAT: &str = "day2night-brightness/1";
-/// Format tag of noise models.
-pub const NOISE_FORMAT: &str = "day2night-noise-model/1";
+/// Format tag of noise models (synth's).
+pub const NOISE_FORMAT: &str = crate::noise::model::NOISE_MODEL_FORMAT;
 
 /// A fitted 2-D Gaussian over `[r/g, b/g]`.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -23,8 +22,9 @@ pub struct Gaussian2Fit {
     pub covariance: [[f64; 2]; 2],
     /// Number of chromaticities fitted.
     pub count: usize,
-    /// "unbiased" (1/(M-1), the released code and the default) or "ml" (1/M, the paper's eq. 2).
-    pub estimator: String,
+    /// "unbiased" (1/(M-1), the released code and the default) or "maximum_likelihood"
+    /// (1/M, the paper's eq. 2): synth's `Covariance` names.
+    pub estimator: crate::synth::illuminant::Covariance,
 }
 
 /// Per-file measurement of a gray card.
@@ -65,18 +65,15 @@ pub struct IlluminantDictionary {
     pub files: Vec<GrayCardMeasurement>,
 }
 
-/// Fitted distribution of night brightness.
+/// Fitted distribution of night brightness: the normal distribution synth samples target
+/// means from (`synth::dictionaries::parse_brightness`, draws kept in (0, 1]).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct BrightnessFit {
-    /// "lognormal": `ln(d) ~ N(mu, sigma^2)`.
+    /// "normal, truncated to (0, 1]".
     pub distribution: String,
-    /// Mean of `ln d`.
-    pub mu: f64,
-    /// Standard deviation of `ln d` (unbiased, 1/(M-1); 0 for a single image).
-    pub sigma: f64,
-    /// Arithmetic mean of the values.
+    /// Mean of the values.
     pub mean: f64,
-    /// Sample standard deviation of the values (1/(M-1); 0 for a single image).
+    /// Sample standard deviation (1/(M-1); 0 for a single image).
     pub std: f64,
     /// Smallest value.
     pub min: f64,
@@ -148,11 +145,13 @@ pub struct PositionFit {
     pub clipped_pixels: u64,
 }
 
-/// Model at one ISO.
+/// Model at one ISO: synth's `IsoPoint` (`iso`, `positions`) plus calibration details.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct IsoModel {
     /// Exif ISO of the frames.
     pub iso: u32,
+    /// `[[S, O]; 4]` per 2x2 position (normalized units): what synth reads.
+    pub positions: [[f64; 2]; 4],
     /// "burst", "pair", "burst+pair" or "noise_profile".
     pub source: String,
     /// Black level (max over the plane, DN) used for the DN conversion.
@@ -164,8 +163,8 @@ pub struct IsoModel {
     /// Variance subtracted from O for the rounding of raw values, normalized units
     /// (`1 / (12 (white - black)^2)`; 0 for NoiseProfile sources).
     pub quantization_variance_removed: f64,
-    /// The four 2x2 positions.
-    pub positions: Vec<PositionFit>,
+    /// Details of the four 2x2 positions (same S, O as `positions`).
+    pub fits: Vec<PositionFit>,
 }
 
 /// Cross-ISO laws (SYNTHESIS.md 7): `S = c * ISO`, `O = a + b * ISO^2`, per position.
@@ -181,13 +180,16 @@ pub struct IsoLaws {
     pub isos: Vec<u32>,
 }
 
-/// `calibrate noise` output (`synth --noise-model` input).
+/// `calibrate noise` output (`synth --noise-model` input): synth's `NoiseModel` (`format`,
+/// `units`, `source`, `isos[].iso/positions`) plus calibration details.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct NoiseModelFile {
     /// [`NOISE_FORMAT`].
     pub format: String,
     /// Units and model statement.
     pub units: String,
+    /// Provenance.
+    pub source: String,
     /// Camera make/model of the first input.
     pub camera: Option<String>,
     /// One entry per ISO, ascending.
@@ -197,4 +199,4 @@ pub struct NoiseModelFile {
 }
 
 /// The `units` statement written into noise models.
-pub const NOISE_UNITS: &str = "S, O: normalized units, var(y) = S*y + O with y = (x - black(site)) / (white - black_max) (DNG NoiseProfile form, per 2x2 CFA position). beta1, beta2: DN with the camera's levels given per ISO, var(x) = beta1*x + beta2 where x is the raw value INCLUDING the black level (beta1 = S*(white-black), beta2 = O*(white-black)^2 - black*beta1).";
+pub const NOISE_UNITS: &str = "positions [[S, O]; 4] and fits[].S/O: variance of the normalized signal y = (x - black(site)) / (white - black_max), linear (post-LinearizationTable) values: var(y) = S * y + O (DNG NoiseProfile form); positions are the 2x2 CFA tile relative to the ActiveArea origin, row-major (0=(0,0), 1=(0,1), 2=(1,0), 3=(1,1)). fits[].beta1/beta2: DN with the black/white levels given per ISO, var(x) = beta1*x + beta2 where x is the raw value INCLUDING the black level (beta1 = S*(white-black), beta2 = O*(white-black)^2 - black*beta1).";

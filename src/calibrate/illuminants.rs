@@ -5,14 +5,18 @@
 //! normalized samples of each CFA colour (both greens pooled) excluding saturated sites
 //! (linearized value >= WhiteLevel), reduced with a 10 %-trimmed mean (robust to dust and
 //! specular spots, no integer quantization as a median would have). Chromaticity
-//! `[r/g, 1, b/g]`. Then a 2-D Gaussian over `[r/g, b/g]`: mean and covariance, unbiased
-//! (1/(M-1), default, as the released code) or maximum-likelihood (1/M, the paper's eq. 2).
+//! `[r/g, 1, b/g]`. Then a 2-D Gaussian over `[r/g, b/g]` by synth's own fit
+//! (`synth::illuminant::Gaussian2::fit`): mean and covariance, unbiased (1/(M-1), default, as
+//! the released code) or maximum-likelihood (1/M, the paper's eq. 2). A single illuminant gives
+//! a zero covariance (documented fallback: synth then always draws that illuminant).
 
 use super::format::{Gaussian2Fit, GrayCardMeasurement, IlluminantDictionary, ILLUMINANTS_FORMAT};
 use super::stats::trimmed_mean;
 use crate::error::{Error, Result};
 use crate::normalize::Normalizer;
 use crate::raw::RawImage;
+use crate::synth::dictionaries::IlluminantDict;
+use crate::synth::illuminant::{Covariance, Gaussian2};
 
 /// Fraction trimmed at each end by the robust mean.
 pub const TRIM: f64 = 0.1;
@@ -76,11 +80,18 @@ pub enum Estimator {
 }
 
 impl Estimator {
-    /// Name written into the file.
-    pub fn name(self) -> &'static str {
+    /// synth's name for it.
+    pub fn covariance(self) -> Covariance {
+        match self {
+            Estimator::Unbiased => Covariance::Unbiased,
+            Estimator::Ml => Covariance::MaximumLikelihood,
+        }
+    }
+    /// Name written in messages.
+    pub fn covariance_name(self) -> &'static str {
         match self {
             Estimator::Unbiased => "unbiased",
-            Estimator::Ml => "ml",
+            Estimator::Ml => "maximum_likelihood",
         }
     }
 }
@@ -154,15 +165,11 @@ pub fn measure_gray_card(
     })
 }
 
-/// Mean and covariance of `[r/g, b/g]` over `chroma` (`[r/g, 1, b/g]` entries).
-/// Errors with fewer than two illuminants (no covariance can be defined).
+/// Mean and covariance of `[r/g, b/g]` over `chroma` (`[r/g, 1, b/g]` entries), computed by
+/// synth's own fit ([`Gaussian2::fit`]) so that calibration and sampling agree. One
+/// illuminant: zero covariance (synth then always uses it; the CLI warns). Errors on an
+/// empty list or a non-positive chromaticity.
 pub fn fit_gaussian(chroma: &[[f64; 3]], est: Estimator) -> Result<Gaussian2Fit> {
-    let m = chroma.len();
-    if m < 2 {
-        return Err(Error::invalid(format!(
-            "a dictionary of {m} illuminant(s) cannot define a covariance: shoot at least 2 gray cards (3 or more for a non-degenerate ellipse)"
-        )));
-    }
     if let Some(bad) = chroma
         .iter()
         .find(|c| !(c[0] > 0.0 && c[2] > 0.0 && c[0].is_finite() && c[2].is_finite()))
@@ -171,34 +178,17 @@ pub fn fit_gaussian(chroma: &[[f64; 3]], est: Estimator) -> Result<Gaussian2Fit>
             "illuminant {bad:?} is not a positive finite [r/g, 1, b/g] chromaticity"
         )));
     }
-    let mf = m as f64;
-    let mean = [
-        chroma.iter().map(|c| c[0]).sum::<f64>() / mf,
-        chroma.iter().map(|c| c[2]).sum::<f64>() / mf,
-    ];
-    let mut cov = [[0.0; 2]; 2];
-    for c in chroma {
-        let d = [c[0] - mean[0], c[2] - mean[1]];
-        for i in 0..2 {
-            for j in 0..2 {
-                cov[i][j] += d[i] * d[j];
-            }
-        }
-    }
-    let denom = match est {
-        Estimator::Unbiased => mf - 1.0,
-        Estimator::Ml => mf,
+    let dict = IlluminantDict {
+        name: "calibrate illuminants".into(),
+        source: String::new(),
+        chromaticities: chroma.iter().map(|c| [c[0], c[2]]).collect(),
     };
-    for row in cov.iter_mut() {
-        for v in row.iter_mut() {
-            *v /= denom;
-        }
-    }
+    let g = Gaussian2::fit(&dict, est.covariance())?;
     Ok(Gaussian2Fit {
-        mean,
-        covariance: cov,
-        count: m,
-        estimator: est.name().to_string(),
+        mean: g.mean,
+        covariance: g.cov,
+        count: g.count,
+        estimator: g.estimator,
     })
 }
 
@@ -351,8 +341,10 @@ mod tests {
         assert!((f.covariance[1][1] - 0.01).abs() < 1e-12);
         let g = fit_gaussian(&pts, Estimator::Ml).unwrap();
         assert!((g.covariance[0][0] - 0.04 * 2.0 / 3.0).abs() < 1e-12);
-        let e = fit_gaussian(&pts[..1], Estimator::Unbiased).unwrap_err();
-        assert!(e.to_string().contains("at least 2"), "{e}");
+        let one = fit_gaussian(&pts[..1], Estimator::Unbiased).unwrap();
+        assert_eq!((one.covariance, one.count), ([[0.0; 2]; 2], 1));
+        assert!(fit_gaussian(&[], Estimator::Unbiased).is_err());
+        assert!(fit_gaussian(&[[0.0, 1.0, 0.3]], Estimator::Unbiased).is_err());
     }
 
     #[test]

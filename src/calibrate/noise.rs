@@ -28,6 +28,7 @@ use super::format::{IsoLaws, IsoModel, NoiseModelFile, PositionFit, NOISE_FORMAT
 use super::stats::{ls_through_origin, wls_line, LineFit};
 use super::{check_same_capture, SameCapture};
 use crate::error::{Error, Result};
+use crate::noise::model::NoiseParams;
 use crate::normalize::Normalizer;
 use crate::raw::{Bayer, RawImage};
 use std::collections::BTreeMap;
@@ -498,12 +499,13 @@ pub fn fit_iso(sources: &[SourceStats]) -> Result<IsoModel> {
     let kinds: std::collections::BTreeSet<&str> = sources.iter().map(|s| s.kind).collect();
     Ok(IsoModel {
         iso: first.iso,
+        positions: std::array::from_fn(|p| [positions[p].s, positions[p].o]),
         source: kinds.into_iter().collect::<Vec<_>>().join("+"),
         black: first.black,
         white: first.white,
         inputs: sources.len(),
         quantization_variance_removed: q,
-        positions,
+        fits: positions,
     })
 }
 
@@ -536,27 +538,16 @@ pub fn from_noise_profiles(imgs: &[(String, &RawImage)]) -> Result<Vec<IsoModel>
                 .as_ref()
                 .filter(|v| !v.is_empty())
                 .ok_or_else(|| Error::invalid("the DNG has no NoiseProfile tag").in_file(name))?;
-            for (p, acc) in sum.iter_mut().enumerate() {
-                let c = bayer.color_at(p / 2, p % 2) as usize;
-                let (s, o) = if np.len() == 1 {
-                    np[0]
-                } else {
-                    *np.get(c).ok_or_else(|| {
-                        Error::malformed(format!(
-                            "NoiseProfile has {} pairs for a 3-colour CFA",
-                            np.len()
-                        ))
-                        .in_file(name)
-                    })?
-                };
-                acc[0] += s;
-                acc[1] += o;
+            let params = NoiseParams::from_dng_profile(np, bayer).map_err(|e| e.in_file(name))?;
+            for (acc, so) in sum.iter_mut().zip(params.positions) {
+                acc[0] += so[0];
+                acc[1] += so[1];
             }
         }
         let bayer = bayer0.ok_or_else(|| Error::invalid("no files"))?;
         let k = files.len() as f64;
         let scale = white - black;
-        let positions = (0..4)
+        let fits: Vec<PositionFit> = (0..4)
             .map(|p| {
                 let (s, o) = (sum[p][0] / k, sum[p][1] / k);
                 let beta1 = s * scale;
@@ -579,12 +570,13 @@ pub fn from_noise_profiles(imgs: &[(String, &RawImage)]) -> Result<Vec<IsoModel>
             .collect();
         out.push(IsoModel {
             iso,
+            positions: std::array::from_fn(|p| [fits[p].s, fits[p].o]),
             source: "noise_profile".into(),
             black,
             white,
             inputs: files.len(),
             quantization_variance_removed: 0.0,
-            positions,
+            fits,
         });
     }
     Ok(out)
@@ -605,14 +597,8 @@ pub fn fit_iso_laws(models: &[IsoModel]) -> Option<IsoLaws> {
         isos: models.iter().map(|m| m.iso).collect(),
     };
     for p in 0..4 {
-        let s: Vec<f64> = models
-            .iter()
-            .map(|m| m.positions.get(p).map_or(0.0, |f| f.s))
-            .collect();
-        let o: Vec<f64> = models
-            .iter()
-            .map(|m| m.positions.get(p).map_or(0.0, |f| f.o))
-            .collect();
+        let s: Vec<f64> = models.iter().map(|m| m.positions[p][0]).collect();
+        let o: Vec<f64> = models.iter().map(|m| m.positions[p][1]).collect();
         laws.s_per_iso[p] = ls_through_origin(&isos, &s)?;
         let f = wls_line(&iso2, &o, &vec![1.0; o.len()]).ok()?;
         laws.o_at_iso0[p] = f.intercept;
@@ -655,7 +641,7 @@ pub fn build_model(
     }
     let isos: Vec<IsoModel> = models.into_values().collect();
     for m in &isos {
-        for f in &m.positions {
+        for f in &m.fits {
             if f.o < 0.0 || f.s < 0.0 {
                 warnings.push(format!(
                     "ISO {} position {}: negative parameter (S {:.3e}, O {:.3e}); synth clamps variances at 0",
@@ -668,6 +654,14 @@ pub fn build_model(
         NoiseModelFile {
             format: NOISE_FORMAT.into(),
             units: NOISE_UNITS.into(),
+            source: format!(
+                "day2night {} calibrate noise{}",
+                crate::VERSION,
+                camera
+                    .as_deref()
+                    .map(|c| format!(" ({c})"))
+                    .unwrap_or_default()
+            ),
             camera,
             iso_laws: fit_iso_laws(&isos),
             isos,
@@ -739,7 +733,7 @@ pub(crate) mod tests {
         let (s, o) = (2.3 / 959.0, 1.03e-5);
         let st = run_burst(burst(s, o, 8, 512, 256, 1)).unwrap();
         let m = fit_iso(&[st]).unwrap();
-        for f in &m.positions {
+        for f in &m.fits {
             assert!((f.s / s - 1.0).abs() < 0.02, "{f:?}");
             // O's standard error is about 2.6 % at this size: allow 3 of them.
             assert!((f.o - o).abs() < 3.0 * f.o_stderr.unwrap(), "{f:?}");
@@ -759,7 +753,7 @@ pub(crate) mod tests {
         clean.meta.exif.iso = Some(50);
         let st = pair_stats(&clean, &noisy).unwrap();
         let m = fit_iso(&[st]).unwrap();
-        for f in &m.positions {
+        for f in &m.fits {
             // Within 3 standard errors (about 3 % for S, 5 % for O at this size).
             assert!((f.s - s).abs() < 3.0 * f.s_stderr.unwrap(), "{f:?}");
             assert!((f.o - o).abs() < 3.0 * f.o_stderr.unwrap(), "{f:?}");
@@ -807,7 +801,7 @@ pub(crate) mod tests {
         let b = mk(1600, 16e-4, 1e-6 + 1e-12 * 2560000.0);
         let models = from_noise_profiles(&[("a".into(), &a), ("b".into(), &b)]).unwrap();
         assert_eq!(models.len(), 2);
-        assert_eq!(models[0].positions[0].color, "G");
+        assert_eq!(models[0].fits[0].color, "G");
         let laws = fit_iso_laws(&models).unwrap();
         assert!((laws.s_per_iso[0] - 1e-6).abs() < 1e-15);
         assert!((laws.o_at_iso0[2] - 1e-6).abs() < 1e-12);

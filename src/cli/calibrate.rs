@@ -24,8 +24,8 @@ Example:
     Illuminants(IlluminantsArgs),
     /// Night brightness dictionary from real night raws.
     #[command(after_help = "\
-Normalized mean intensity of each image's active area and a log-normal fit ln(d) ~ N(mu, sigma^2)
-that `synth --brightness` samples target means from. One image: sigma = 0 (warning).
+Normalized mean intensity of each image's active area and the normal fit N(mean, std^2) that
+`synth --brightness` samples target means from. One image: std = 0 (warning).
 
 Example:
   day2night calibrate brightness night/*.dng -o brightness.json")]
@@ -237,7 +237,7 @@ fn run_illuminants(a: IlluminantsArgs) -> CmdResult {
     eprintln!(
         "fit over {} illuminants ({} covariance): mean [{:.6}, {:.6}]  covariance [[{:.6e}, {:.6e}], [{:.6e}, {:.6e}]]",
         f.count,
-        f.estimator,
+        est.covariance_name(),
         f.mean[0],
         f.mean[1],
         f.covariance[0][0],
@@ -245,7 +245,9 @@ fn run_illuminants(a: IlluminantsArgs) -> CmdResult {
         f.covariance[1][0],
         f.covariance[1][1]
     );
-    if f.count == 2 {
+    if f.count == 1 {
+        eprintln!("day2night: warning: one illuminant: zero covariance, synth will always use it; shoot more gray cards");
+    } else if f.count == 2 {
         eprintln!("day2night: warning: 2 illuminants give a degenerate (line) covariance; shoot more gray cards");
     }
     write_json(&a.out, &a.inputs, &dict)
@@ -262,19 +264,11 @@ fn run_brightness(a: BrightnessArgs) -> CmdResult {
     let dict = brightness::build_dictionary(files)?;
     let f = &dict.fit;
     eprintln!(
-        "log-normal fit over {} images: mu {:.4} sigma {:.4} (median {:.5}, mean {:.5}, range {:.5}..{:.5})",
-        f.count,
-        f.mu,
-        f.sigma,
-        f.mu.exp(),
-        f.mean,
-        f.min,
-        f.max
+        "normal fit over {} images: mean {:.6} std {:.6} (range {:.6}..{:.6})",
+        f.count, f.mean, f.std, f.min, f.max
     );
     if f.count == 1 {
-        eprintln!(
-            "day2night: warning: one image: sigma = 0, synth will always use this brightness"
-        );
+        eprintln!("day2night: warning: one image: std = 0, synth will always use this brightness");
     }
     write_json(&a.out, &a.inputs, &dict)
 }
@@ -346,7 +340,7 @@ fn run_noise(a: NoiseArgs) -> CmdResult {
             "ISO {} ({}, {} input(s), black {} white {}):",
             m.iso, m.source, m.inputs, m.black, m.white
         );
-        for f in &m.positions {
+        for f in &m.fits {
             let fit = match (f.r2, f.chi2_reduced) {
                 (Some(r2), Some(c2)) => format!(
                     "  R^2 {:.4}  chi2/dof {:.2}  {} bins  {} px  ({} clipped px excluded)",

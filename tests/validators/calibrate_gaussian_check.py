@@ -3,7 +3,7 @@
 
 usage: calibrate_gaussian_check.py ILLUMINANTS.json
 Recomputes mean and covariance of [r/g, b/g] over `illuminants_rgb_over_g` with numpy
-(np.cov, unbiased or bias=True for "ml") and compares with the file's `fit` (rtol 1e-9).
+(np.cov, unbiased or bias=True for "maximum_likelihood") and compares with the file's `fit` (rtol 1e-9).
 Exit 0 when equal, 1 with the differences otherwise.
 """
 import json
@@ -23,9 +23,12 @@ def main():
     rb = pts[:, [0, 2]]
     mean = rb.mean(axis=0)
     est = d["fit"]["estimator"]
-    if est not in ("unbiased", "ml"):
+    if est not in ("unbiased", "maximum_likelihood"):
         fails.append(f"unknown estimator {est!r}")
-    cov = np.cov(rb.T, bias=(est == "ml"))
+    if len(pts) == 1:
+        cov = np.zeros((2, 2))  # documented fallback: one illuminant, zero covariance
+    else:
+        cov = np.cov(rb.T, bias=(est == "maximum_likelihood"))
     if not np.allclose(d["fit"]["mean"], mean, rtol=1e-9, atol=1e-12):
         fails.append(f"mean {d['fit']['mean']} vs numpy {mean.tolist()}")
     if not np.allclose(d["fit"]["covariance"], cov, rtol=1e-9, atol=1e-15):
