@@ -352,3 +352,76 @@ fn degenerate_inputs_are_clear_errors() {
     assert_eq!(code, 2);
     assert!(!out.exists());
 }
+
+/// Calibrate from a burst, then let synth's noise code (`noise::apply_noise` with the model
+/// read by `NoiseModel::from_file`) noise flat patches: its variance matches the true
+/// generator's within 5 % at every level.
+#[test]
+fn synth_with_fitted_model_reproduces_true_variance() {
+    use day2night::noise::apply::apply_noise;
+    use day2night::noise::model::NoiseModel;
+    let dir = tempfile::tempdir().unwrap();
+    let (black, white) = (64.0, 1023.0);
+    let (s, o) = (2.4e-3, 1.03e-5);
+    let mut a = args!["calibrate", "noise", "--burst"];
+    for p in burst(
+        dir.path(),
+        "b",
+        16,
+        (1024, 512),
+        (black, white),
+        (s, o),
+        1600,
+        7,
+    ) {
+        a.push(p.into());
+    }
+    let out = dir.path().join("noise.json");
+    a.extend(args!["-o", &out]);
+    let (code, _, err) = run_os(&a);
+    assert_eq!(code, 0, "{err}");
+    let params = NoiseModel::from_file(&out)
+        .unwrap()
+        .at(1600)
+        .unwrap()
+        .params;
+    // Flat bands (128 columns each) at these normalized levels.
+    let levels = [0.0, 0.01, 0.03, 0.1, 0.2, 0.4, 0.6, 0.8];
+    let (w, h) = (1024, 256);
+    let scale = white - black;
+    let clean: Vec<f64> = (0..w * h)
+        .map(|i| (levels[(i % w) / 128] * scale + black).round())
+        .collect();
+    let clean_img = frame(
+        w,
+        h,
+        clean.iter().map(|&v| v as u16).collect(),
+        black,
+        white,
+        50,
+    );
+    let synth = apply_noise(&clean_img, &params, 42).unwrap();
+    let truth = noisy(&clean, black, white, s, o, 4242);
+    let band_var = |data: &dyn Fn(usize) -> f64, b: usize| {
+        let xs: Vec<f64> = (0..h)
+            .flat_map(|r| (b * 128..(b + 1) * 128).map(move |c| r * w + c))
+            .map(data)
+            .collect();
+        let m = xs.iter().sum::<f64>() / xs.len() as f64;
+        xs.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (xs.len() - 1) as f64
+    };
+    for (b, y) in levels.iter().enumerate() {
+        let vs = band_var(&|i| synth.data[i] as f64, b);
+        let vt = band_var(&|i| truth[i] as f64, b);
+        let model = (s * y + o) * scale * scale + 1.0 / 12.0;
+        eprintln!(
+            "level {y}: synth var {vs:.3} DN^2, true generator {vt:.3}, model {model:.3} ({:+.2}%)",
+            100.0 * (vs / vt - 1.0)
+        );
+        assert!((vs / vt - 1.0).abs() < 0.05, "level {y}: {vs} vs {vt}");
+        assert!(
+            (vs / model - 1.0).abs() < 0.05,
+            "level {y}: {vs} vs model {model}"
+        );
+    }
+}
