@@ -76,7 +76,14 @@ impl Merger {
 
     /// Add a frame; errors unless it matches the first frame (see module docs).
     pub fn add(&mut self, img: &RawImage) -> Result<()> {
-        check_same_capture(&self.first, &meta_only(img), SameCapture { iso: true })?;
+        check_same_capture(
+            &self.first,
+            &meta_only(img),
+            SameCapture {
+                iso: true,
+                levels: true,
+            },
+        )?;
         img.validate()?;
         self.add_unchecked(img);
         Ok(())

@@ -19,6 +19,8 @@ use crate::raw::RawImage;
 pub struct SameCapture {
     /// Also require the same Exif ISO.
     pub iso: bool,
+    /// Also require the same levels (black, white, LinearizationTable).
+    pub levels: bool,
 }
 
 /// Error naming the first mismatch between `first` and `other` in geometry (stored size,
@@ -53,7 +55,9 @@ pub fn check_same_capture(first: &RawImage, other: &RawImage, what: SameCapture)
         )));
     }
     let (fl, ol) = (&first.meta.levels, &other.meta.levels);
-    if fl.black != ol.black
+    if !what.levels {
+        // Only geometry and CFA asked for.
+    } else if fl.black != ol.black
         || fl.black_repeat != ol.black_repeat
         || fl.black_delta_h != ol.black_delta_h
         || fl.black_delta_v != ol.black_delta_v
@@ -63,13 +67,13 @@ pub fn check_same_capture(first: &RawImage, other: &RawImage, what: SameCapture)
             ol.black, fl.black
         )));
     }
-    if fl.white != ol.white {
+    if what.levels && fl.white != ol.white {
         return Err(Error::invalid(format!(
             "white level {} differs from the first frame's {}",
             ol.white, fl.white
         )));
     }
-    if first.meta.linearization_table != other.meta.linearization_table {
+    if what.levels && first.meta.linearization_table != other.meta.linearization_table {
         return Err(Error::invalid(
             "LinearizationTable differs from the first frame's",
         ));

@@ -177,7 +177,14 @@ impl BurstAccumulator {
             meta: self.first.meta.clone(),
         };
         first.meta.storage = None;
-        check_same_capture(&first, &probe, SameCapture { iso: true })?;
+        check_same_capture(
+            &first,
+            &probe,
+            SameCapture {
+                iso: true,
+                levels: true,
+            },
+        )?;
         img.validate()?;
         if img.data == self.first.data {
             return Err(Error::invalid(
@@ -303,10 +310,21 @@ impl BurstAccumulator {
     }
 }
 
-/// Binned residual statistics of a clean/noisy pair (ISO from the noisy frame).
+/// Binned residual statistics of a clean/noisy pair (ISO and levels from the noisy frame).
+/// Both are normalized with their own levels, so the clean may be a `merge` output (levels
+/// scaled by the frame count); they must share geometry and CFA. The residual variance also
+/// holds the clean frame's own noise: a merge of N frames at the noisy frame's ISO adds 1/N.
 pub fn pair_stats(clean: &RawImage, noisy: &RawImage) -> Result<SourceStats> {
-    check_same_capture(clean, noisy, SameCapture { iso: false })?;
+    check_same_capture(
+        clean,
+        noisy,
+        SameCapture {
+            iso: false,
+            levels: false,
+        },
+    )?;
     let norm = Normalizer::new(noisy)?;
+    let cnorm = Normalizer::new(clean)?;
     let bayer = noisy.bayer()?;
     let iso = iso_of(noisy)?;
     if clean.data == noisy.data {
@@ -316,7 +334,6 @@ pub fn pair_stats(clean: &RawImage, noisy: &RawImage) -> Result<SourceStats> {
     }
     let a = noisy.active_area();
     let (w, h) = (a.width(), a.height());
-    let scale = norm.scale;
     let mut accs = vec![[Acc::default(); 4]; NBINS];
     let mut clipped = [0u64; 4];
     for r in 0..h {
@@ -329,14 +346,14 @@ pub fn pair_stats(clean: &RawImage, noisy: &RawImage) -> Result<SourceStats> {
         };
         for (c, (&xc, &xn)) in rc.iter().zip(rn).enumerate() {
             let p = Bayer::position(r, c);
-            let (lc, ln) = (norm.linearize(xc), norm.linearize(xn));
-            if xc == 0 || xn == 0 || lc >= norm.white || ln >= norm.white {
+            let (lc, ln) = (cnorm.linearize(xc), norm.linearize(xn));
+            if xc == 0 || xn == 0 || lc >= cnorm.white || ln >= norm.white {
                 clipped[p] += 1;
                 continue;
             }
-            let y = (lc - norm.black_at(r, c)) / scale;
+            let y = cnorm.normalize(xc, r, c);
             if let Some(b) = bin_index(y) {
-                let d = (ln - lc) / scale;
+                let d = norm.normalize(xn, r, c) - y;
                 let acc = &mut accs[b][p];
                 acc.n += 1;
                 acc.sy += y;
