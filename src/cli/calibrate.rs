@@ -172,6 +172,19 @@ fn read(path: &Path) -> day2night::Result<RawImage> {
     read_dng(path).in_file(path)
 }
 
+/// A progress bar over `len` files on stderr, hidden unless stderr is a terminal.
+pub(super) fn progress(len: usize) -> indicatif::ProgressBar {
+    use std::io::IsTerminal;
+    if !std::io::stderr().is_terminal() || len < 2 {
+        return indicatif::ProgressBar::hidden();
+    }
+    let pb = indicatif::ProgressBar::new(len as u64);
+    if let Ok(style) = indicatif::ProgressStyle::with_template("{bar:40} {pos}/{len} files {msg}") {
+        pb.set_style(style);
+    }
+    pb
+}
+
 fn write_json<T: serde::Serialize>(out: &OutArgs, inputs: &[PathBuf], doc: &T) -> CmdResult {
     let mut bytes = serde_json::to_vec_pretty(doc)?;
     bytes.push(b'\n');
@@ -282,16 +295,21 @@ fn run_noise(a: NoiseArgs) -> CmdResult {
     let mut inputs: Vec<PathBuf> = vec![];
     let mut sources = vec![];
     let mut camera = None;
+    let total =
+        a.burst.iter().map(Vec::len).sum::<usize>() + 2 * a.pair.len() + a.from_noise_profile.len();
+    let pb = progress(total);
     for burst in &a.burst {
         inputs.extend(burst.iter().cloned());
         let mut it = burst.iter();
         let Some(first) = it.next() else { continue };
         let img = read(first)?;
+        pb.inc(1);
         camera = camera.or_else(|| img.meta.unique_camera_model.clone());
         let mut acc = noise::BurstAccumulator::new(img).in_file(first)?;
         for p in it {
             let img = read(p)?;
             acc.add(&img).in_file(p)?;
+            pb.inc(1);
         }
         let st = acc.finish().in_file(first)?;
         eprintln!(
@@ -308,6 +326,7 @@ fn run_noise(a: NoiseArgs) -> CmdResult {
         };
         inputs.extend([clean.clone(), noisy.clone()]);
         let (c, n) = (read(clean)?, read(noisy)?);
+        pb.inc(2);
         camera = camera.or_else(|| n.meta.unique_camera_model.clone());
         let st = noise::pair_stats(&c, &n).in_file(noisy)?;
         eprintln!(
@@ -322,6 +341,7 @@ fn run_noise(a: NoiseArgs) -> CmdResult {
     for p in &a.from_noise_profile {
         inputs.push(p.clone());
         let img = read(p)?;
+        pb.inc(1);
         camera = camera.or_else(|| img.meta.unique_camera_model.clone());
         // Keep metadata only: pixels are not needed.
         profiled.push((
@@ -332,6 +352,7 @@ fn run_noise(a: NoiseArgs) -> CmdResult {
             },
         ));
     }
+    pb.finish_and_clear();
     let refs: Vec<(String, &RawImage)> = profiled.iter().map(|(n, i)| (n.clone(), i)).collect();
     let profiles = noise::from_noise_profiles(&refs)?;
     let (model, warnings) = noise::build_model(sources, profiles, camera)?;

@@ -57,11 +57,15 @@ pub fn run(args: MergeArgs) -> CmdResult {
     };
     // Refuse a bad output path before reading the whole burst.
     policy.check(&args.output)?;
+    let pb = super::calibrate::progress(args.frames.len());
     let mut merger = Merger::new(read_dng(first).in_file(first)?).in_file(first)?;
+    pb.inc(1);
     for p in it {
         let img = read_dng(p).in_file(p)?;
         merger.add(&img).in_file(p)?;
+        pb.inc(1);
     }
+    pb.finish_and_clear();
     let (img, report) = merger.finish().in_file(first)?;
     let opts = WriteOptions {
         compression: match args.compression {
