@@ -429,52 +429,65 @@ fn pack_rows(samples: &[u16], w: usize, bits: u16, big: bool) -> Vec<u8> {
         }
         8 => samples.iter().map(|&s| s as u8).collect(),
         _ => {
+            let w = w.max(1);
             let row_bytes = (w * bits as usize).div_ceil(8);
-            let mut out = Vec::with_capacity(row_bytes * samples.len() / w.max(1));
-            for row in samples.chunks(w.max(1)) {
-                // Fast paths: whole groups of samples that end on a byte boundary.
-                let rest = match bits {
-                    12 => {
-                        let mut it = row.chunks_exact(2);
-                        for g in &mut it {
-                            let (a, b) = (g[0] as u32 & 0xFFF, g[1] as u32 & 0xFFF);
-                            let v = (a << 12) | b;
-                            out.extend_from_slice(&[(v >> 16) as u8, (v >> 8) as u8, v as u8]);
-                        }
-                        it.remainder()
-                    }
-                    10 | 14 => {
-                        let mut it = row.chunks_exact(4);
-                        let m = (1u64 << bits) - 1;
-                        for g in &mut it {
-                            let v = (g[0] as u64 & m) << (3 * bits)
-                                | (g[1] as u64 & m) << (2 * bits)
-                                | (g[2] as u64 & m) << bits
-                                | (g[3] as u64 & m);
-                            let nbytes = bits as usize / 2;
-                            let be = v.to_be_bytes();
-                            out.extend_from_slice(&be[8 - nbytes..]);
-                        }
-                        it.remainder()
-                    }
-                    _ => row,
-                };
-                let mut acc: u64 = 0;
-                let mut n = 0u32;
-                for &s in rest {
-                    acc = (acc << bits) | (s as u64 & ((1u64 << bits) - 1));
-                    n += bits as u32;
-                    while n >= 8 {
-                        n -= 8;
-                        out.push((acc >> n) as u8);
-                    }
-                    acc &= (1u64 << n) - 1;
-                }
-                if n > 0 {
-                    out.push((acc << (8 - n)) as u8);
-                }
+            let rows = samples.len().div_ceil(w);
+            let mut out = vec![0u8; row_bytes * rows];
+            for (row, orow) in samples.chunks(w).zip(out.chunks_mut(row_bytes)) {
+                pack_row(row, orow, bits);
             }
             out
+        }
+    }
+}
+
+/// Pack one row MSB-first into `out` (exactly `ceil(len * bits / 8)` bytes).
+fn pack_row(row: &[u16], out: &mut [u8], bits: u16) {
+    // Fast paths: whole groups of samples that end on a byte boundary.
+    let (done_s, done_b) = match bits {
+        12 => {
+            let n = row.len() / 2;
+            for (o, g) in out.chunks_exact_mut(3).zip(row.chunks_exact(2)) {
+                let v = ((g[0] as u32 & 0xFFF) << 12) | (g[1] as u32 & 0xFFF);
+                o[0] = (v >> 16) as u8;
+                o[1] = (v >> 8) as u8;
+                o[2] = v as u8;
+            }
+            (n * 2, n * 3)
+        }
+        10 | 14 => {
+            let n = row.len() / 4;
+            let nb = bits as usize / 2;
+            let m = (1u64 << bits) - 1;
+            for (o, g) in out.chunks_exact_mut(nb).zip(row.chunks_exact(4)) {
+                let v = (g[0] as u64 & m) << (3 * bits)
+                    | (g[1] as u64 & m) << (2 * bits)
+                    | (g[2] as u64 & m) << bits
+                    | (g[3] as u64 & m);
+                o.copy_from_slice(&v.to_be_bytes()[8 - nb..]);
+            }
+            (n * 4, n * nb)
+        }
+        _ => (0, 0),
+    };
+    let mut pos = done_b;
+    let mut acc: u64 = 0;
+    let mut n = 0u32;
+    for &s in &row[done_s..] {
+        acc = (acc << bits) | (s as u64 & ((1u64 << bits) - 1));
+        n += bits as u32;
+        while n >= 8 {
+            n -= 8;
+            if let Some(b) = out.get_mut(pos) {
+                *b = (acc >> n) as u8;
+            }
+            pos += 1;
+        }
+        acc &= (1u64 << n) - 1;
+    }
+    if n > 0 {
+        if let Some(b) = out.get_mut(pos) {
+            *b = (acc << (8 - n)) as u8;
         }
     }
 }
@@ -751,13 +764,21 @@ pub fn raw_data_unique_id(img: &RawImage) -> Vec<u8> {
     h.update(b"day2night RawDataUniqueID v1\0");
     h.update((img.width as u64).to_le_bytes());
     h.update((img.height as u64).to_le_bytes());
-    let mut buf = Vec::with_capacity(1 << 16);
-    for chunk in img.data.chunks(1 << 15) {
-        buf.clear();
-        for &s in chunk {
-            buf.extend_from_slice(&s.to_le_bytes());
-        }
-        h.update(&buf);
+    // Pixels: fixed 1 Mi-sample blocks hashed in parallel, then their digests in order
+    // (a fixed tree, so the ID does not depend on the thread count).
+    let digests: Vec<Vec<u8>> = img
+        .data
+        .par_chunks(1 << 20)
+        .map(|chunk| {
+            let mut buf = vec![0u8; chunk.len() * 2];
+            for (o, &s) in buf.chunks_exact_mut(2).zip(chunk) {
+                o.copy_from_slice(&s.to_le_bytes());
+            }
+            Sha256::digest(&buf).to_vec()
+        })
+        .collect();
+    for d in &digests {
+        h.update(d);
     }
     // Canonical metadata: what this writer actually writes, so that re-writing a file it
     // wrote reproduces the same ID (a fixed point) while any change of meaning changes it.
