@@ -441,6 +441,21 @@ fn pack_rows(samples: &[u16], w: usize, bits: u16, big: bool) -> Vec<u8> {
     }
 }
 
+/// Pack groups of 4 samples of `BITS` bits into `NB` bytes; returns (samples, bytes) done.
+fn pack4<const BITS: u32, const NB: usize>(row: &[u16], out: &mut [u8]) -> (usize, usize) {
+    let n = row.len() / 4;
+    let m = (1u64 << BITS) - 1;
+    for (o, g) in out.chunks_exact_mut(NB).zip(row.chunks_exact(4)) {
+        let v = (g[0] as u64 & m) << (3 * BITS)
+            | (g[1] as u64 & m) << (2 * BITS)
+            | (g[2] as u64 & m) << BITS
+            | (g[3] as u64 & m);
+        let be = v.to_be_bytes();
+        o.copy_from_slice(&be[8 - NB..]);
+    }
+    (n * 4, n * NB)
+}
+
 /// Pack one row MSB-first into `out` (exactly `ceil(len * bits / 8)` bytes).
 fn pack_row(row: &[u16], out: &mut [u8], bits: u16) {
     // Fast paths: whole groups of samples that end on a byte boundary.
@@ -455,19 +470,8 @@ fn pack_row(row: &[u16], out: &mut [u8], bits: u16) {
             }
             (n * 2, n * 3)
         }
-        10 | 14 => {
-            let n = row.len() / 4;
-            let nb = bits as usize / 2;
-            let m = (1u64 << bits) - 1;
-            for (o, g) in out.chunks_exact_mut(nb).zip(row.chunks_exact(4)) {
-                let v = (g[0] as u64 & m) << (3 * bits)
-                    | (g[1] as u64 & m) << (2 * bits)
-                    | (g[2] as u64 & m) << bits
-                    | (g[3] as u64 & m);
-                o.copy_from_slice(&v.to_be_bytes()[8 - nb..]);
-            }
-            (n * 4, n * nb)
-        }
+        10 => pack4::<10, 5>(row, out),
+        14 => pack4::<14, 7>(row, out),
         _ => (0, 0),
     };
     let mut pos = done_b;
