@@ -389,22 +389,27 @@ fn encode_pixels(img: &RawImage, opts: &WriteOptions, order: ByteOrder) -> Resul
     }
 }
 
-/// A `tw x th` tile at (x0, y0), edges padded by replicating the last column/row.
+/// A `tw x th` tile at (x0, y0), edges padded by replicating the last column/row of the
+/// same CFA parity (so predictors keep running over one colour).
 fn extract_tile(img: &RawImage, x0: usize, y0: usize, tw: usize, th: usize) -> Vec<u16> {
+    let clamp = |v: usize, n: usize| -> usize {
+        let last = n - 1;
+        if v <= last {
+            v
+        } else if (v - last) % 2 == 0 {
+            last
+        } else {
+            last.saturating_sub(1)
+        }
+    };
     let mut out = Vec::with_capacity(tw * th);
     for y in 0..th {
-        let sy = (y0 + y).min(img.height - 1);
+        let sy = clamp(y0 + y, img.height);
         let row = &img.data[sy * img.width..(sy + 1) * img.width];
-        for x in 0..tw {
-            // Replicate with the same CFA parity so predictors stay within one colour.
-            let mut sx = x0 + x;
-            while sx >= img.width {
-                sx = sx.saturating_sub(2).min(img.width - 1);
-                if img.width == 1 {
-                    sx = 0;
-                }
-            }
-            out.push(row[sx]);
+        let inside = img.width.saturating_sub(x0).min(tw);
+        out.extend_from_slice(&row[x0.min(img.width)..x0.min(img.width) + inside]);
+        for x in inside..tw {
+            out.push(row[clamp(x0 + x, img.width)]);
         }
     }
     out
@@ -906,6 +911,21 @@ mod tests {
         };
         let a = encode_dng(&img, &o).unwrap();
         assert_eq!(&a[..4], b"MM\0*");
+    }
+
+    #[test]
+    fn tiles_pad_with_same_parity() {
+        let img = sample_image(5, 3, 12);
+        let t = extract_tile(&img, 0, 0, 8, 4);
+        // Columns 5,6,7 repeat columns 3,4,3; row 3 repeats row 1.
+        for y in 0..4 {
+            let sy = [0, 1, 2, 1][y];
+            let want: Vec<u16> = [0, 1, 2, 3, 4, 3, 4, 3]
+                .iter()
+                .map(|&x| img.data[sy * 5 + x])
+                .collect();
+            assert_eq!(&t[y * 8..y * 8 + 8], &want[..], "row {y}");
+        }
     }
 
     #[test]
