@@ -285,10 +285,17 @@ pub fn plan(
         let e = model.at(iso)?;
         if e.extrapolated {
             let (lo, hi) = model.iso_range();
-            warnings.push(format!(
-                "ISO {} is outside the noise model's calibrated range {}..{} ({}): extrapolated",
-                iso, lo, hi, model.source
-            ));
+            warnings.push(if lo == hi {
+                format!(
+                    "ISO {} scaled from the single calibrated ISO {} ({}): S in proportion to ISO, O to ISO^2",
+                    iso, lo, model.source
+                )
+            } else {
+                format!(
+                    "ISO {} is outside the noise model's calibrated range {}..{} ({}): extrapolated",
+                    iso, lo, hi, model.source
+                )
+            });
         }
         noise.push(NoisePlan {
             iso,
