@@ -106,6 +106,32 @@ pub struct SynthArgs {
     /// Saturated bulbs (default 5 with the release formula, 0 with the paper's).
     #[arg(long)]
     pub bulbs: Option<u32>,
+    /// Calibration files and finer options (boxed to keep the subcommand enum small).
+    #[command(flatten)]
+    pub extra: Box<ExtraArgs>,
+    /// Targets to render from the clean night raw.
+    #[arg(long, value_enum, default_value = "exr")]
+    pub target: TargetArg,
+    /// Also write the network input (normalized, white-balanced, demosaiced noisy raw).
+    #[arg(long = "input-exr")]
+    pub input_exr: bool,
+    /// DNG compression.
+    #[arg(long, value_enum, default_value = "none")]
+    pub compression: CompressionArg,
+    /// Worker threads (default: all cores).
+    #[arg(long)]
+    pub jobs: Option<usize>,
+    /// Replace existing outputs.
+    #[arg(long)]
+    pub overwrite: bool,
+    /// Truncate instead of rounding when denormalizing (released code, -0.5 DN bias).
+    #[arg(long)]
+    pub truncate: bool,
+}
+
+/// Less common `synth` options.
+#[derive(Debug, clap::Args)]
+pub struct ExtraArgs {
     /// Local lights besides the ambient (default 4 release; paper: 4 to 6 drawn).
     #[arg(long)]
     pub lights: Option<u32>,
@@ -122,27 +148,9 @@ pub struct SynthArgs {
     /// the embedded paper phone table.
     #[arg(long = "noise-model", value_name = "FILE.json")]
     pub noise_model: Option<PathBuf>,
-    /// Targets to render from the clean night raw.
-    #[arg(long, value_enum, default_value = "exr")]
-    pub target: TargetArg,
-    /// Also write the network input (normalized, white-balanced, demosaiced noisy raw).
-    #[arg(long = "input-exr")]
-    pub input_exr: bool,
-    /// DNG compression.
-    #[arg(long, value_enum, default_value = "none")]
-    pub compression: CompressionArg,
-    /// Worker threads (default: all cores).
-    #[arg(long)]
-    pub jobs: Option<usize>,
-    /// Replace existing outputs.
-    #[arg(long)]
-    pub overwrite: bool,
     /// Re-run a sidecar's plan on its input (one input): byte-identical outputs.
     #[arg(long, value_name = "SIDECAR.json")]
     pub replay: Option<PathBuf>,
-    /// Truncate instead of rounding when denormalizing (released code, -0.5 DN bias).
-    #[arg(long)]
-    pub truncate: bool,
     /// Day neutral r,g,b overriding (or replacing a missing) AsShotNeutral.
     #[arg(long = "day-neutral", value_name = "R,G,B")]
     pub day_neutral: Option<String>,
@@ -248,7 +256,7 @@ pub fn run(args: SynthArgs) -> CmdResult {
     if args.jobs == Some(0) {
         return Err(usage("--jobs must be at least 1"));
     }
-    let replay = match &args.replay {
+    let replay = match &args.extra.replay {
         Some(p) => {
             if args.inputs.len() != 1 {
                 return Err(usage(
@@ -296,19 +304,24 @@ pub fn run(args: SynthArgs) -> CmdResult {
                     FormulaArg::Paper => RelightFormula::Paper,
                 },
                 bulbs: args.bulbs,
-                local_lights: args.lights,
+                local_lights: args.extra.lights,
                 isos: parse_isos(&args.iso)?,
                 truncate: args.truncate,
-                covariance: match args.covariance {
+                covariance: match args.extra.covariance {
                     CovArg::Unbiased => Covariance::Unbiased,
                     CovArg::Ml => Covariance::MaximumLikelihood,
                 },
-                day_neutral: args.day_neutral.as_deref().map(parse_neutral).transpose()?,
-                mask_eval: parse_mask_eval(&args.mask_eval)?,
+                day_neutral: args
+                    .extra
+                    .day_neutral
+                    .as_deref()
+                    .map(parse_neutral)
+                    .transpose()?,
+                mask_eval: parse_mask_eval(&args.extra.mask_eval)?,
                 ..SynthOptions::default()
             };
-            opts.validate().map_err(|e| usage(e))?;
-            let illuminants = match &args.illuminants {
+            opts.validate().map_err(usage)?;
+            let illuminants = match &args.extra.illuminants {
                 Some(p) => {
                     Gaussian2::from_source(&dictionaries::load_illuminants(p)?, opts.covariance)
                         .map_err(|e| e.in_file(p))?
@@ -316,11 +329,13 @@ pub fn run(args: SynthArgs) -> CmdResult {
                 None => Gaussian2::fit(&embedded::illuminants(), opts.covariance)?,
             };
             let brightness = args
+                .extra
                 .brightness
                 .as_deref()
                 .map(dictionaries::load_brightness)
                 .transpose()?;
             let noise = args
+                .extra
                 .noise_model
                 .as_deref()
                 .map(NoiseModel::from_file)

@@ -106,7 +106,7 @@ pub fn gauss(d: f64, sigma: f64) -> f64 {
     if d == 0.0 {
         return 1.0;
     }
-    if !(sigma > 0.0) {
+    if sigma.is_nan() || sigma <= 0.0 {
         return 0.0;
     }
     (-(d * d) / (2.0 * sigma * sigma)).exp()
@@ -223,6 +223,7 @@ pub fn release_sigma(h: f64, w: f64) -> [f64; 2] {
 }
 
 #[cfg(test)]
+#[allow(clippy::needless_range_loop)]
 mod tests {
     use super::*;
 

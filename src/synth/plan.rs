@@ -262,8 +262,8 @@ pub fn plan(
                 .collect();
             let mut n = [0.0; 3];
             for l in &used {
-                for i in 0..3 {
-                    n[i] += l.illuminant[i] / used.len() as f64;
+                for (ni, li) in n.iter_mut().zip(l.illuminant) {
+                    *ni += li / used.len() as f64;
                 }
             }
             let def = if paper {

@@ -2,6 +2,8 @@
 //! all four Bayer phases, the numerical stability matrix, geometry ranges (proptest),
 //! noise statistics and determinism.
 
+#![allow(clippy::needless_range_loop)]
+
 use super::dictionaries::IlluminantDict;
 use super::dim::DimPlan;
 use super::masks::{Light, LightKind, MaskEval, MASK_FLOOR};
@@ -289,8 +291,10 @@ fn stability_white_65535_no_overflow() {
 #[test]
 fn stability_iso_25_and_204800_extrapolate_finite() {
     let img = frame(Bayer::RGGB, 16, 16, [500, 700, 300]);
-    let mut o = SynthOptions::default();
-    o.isos = vec![25, 204800];
+    let o = SynthOptions {
+        isos: vec![25, 204800],
+        ..SynthOptions::default()
+    };
     let cal = Calibration::embedded(&o).unwrap();
     let p = plan(&img, "x", 0, 0, &o, &cal).unwrap();
     assert_eq!(p.warnings.len(), 2, "{:?}", p.warnings);
@@ -330,9 +334,11 @@ fn stability_single_illuminant_dictionary() {
 fn no_nan_anywhere_in_plan_and_sidecar_values() {
     for mode in [Mode::Day, Mode::Dimmed, Mode::Global, Mode::Local] {
         let img = frame(Bayer::GBRG, 7, 9, [1023, 64, 0]);
-        let mut o = SynthOptions::default();
-        o.mode = mode;
-        o.isos = vec![25, 1600, 204800];
+        let o = SynthOptions {
+            mode,
+            isos: vec![25, 1600, 204800],
+            ..SynthOptions::default()
+        };
         let cal = Calibration::embedded(&o).unwrap();
         let p = plan(&img, "x", 9, 0, &o, &cal).unwrap();
         let j = serde_json::to_string(&p).unwrap();
