@@ -218,8 +218,14 @@ impl PreparedMask {
 /// `0.3 * ((k - 1) / 2 - 1) + 0.8` with `k = max(h, w)`, scaled per axis by `h/k`, `w/k`.
 pub fn release_sigma(h: f64, w: f64) -> [f64; 2] {
     let k = h.max(w);
-    let s = 0.3 * ((k - 1.0) / 2.0 - 1.0) + 0.8;
+    let s = opencv_sigma(k);
     [s * h / k, s * w / k]
+}
+
+/// OpenCV's default sigma of a Gaussian kernel of size `k`: `0.3 * ((k - 1) / 2 - 1) + 0.8`
+/// (at least 0.35 for k >= 0).
+pub fn opencv_sigma(k: f64) -> f64 {
+    0.3 * ((k - 1.0) / 2.0 - 1.0) + 0.8
 }
 
 #[cfg(test)]

@@ -4,7 +4,7 @@
 
 use super::dim::{sample_dim, DimPlan};
 use super::illuminant::Gaussian2;
-use super::masks::{release_sigma, Light, LightKind, MaskEval, MASK_FLOOR};
+use super::masks::{opencv_sigma, release_sigma, Light, LightKind, MaskEval, MASK_FLOOR};
 use super::neutral::day_neutral;
 use super::rng::SynthRng;
 use super::{Calibration, Mode, RelightFormula, SynthOptions};
@@ -243,8 +243,10 @@ pub fn plan(
                 let (wh, ww) = (window_len(&mut rng, h), window_len(&mut rng, w));
                 let u = rng.uniform();
                 let gain = rng.range(opts.bulb_gain[0], opts.bulb_gain[1]);
+                // Released code: OpenCV's size-to-sigma rule applied to a kernel size of
+                // max(h, w) / (5 + 5u), then scaled per axis like the local lights.
                 let m = wh.max(ww);
-                let s = m / (5.0 + 5.0 * u);
+                let s = opencv_sigma(m / (5.0 + 5.0 * u));
                 lights.push(Light {
                     kind: LightKind::Bulb,
                     illuminant: l,

@@ -529,7 +529,8 @@ proptest! {
                     if l.kind == LightKind::Local {
                         prop_assert!((s - (0.3 * ((m - 1.0) / 2.0 - 1.0) + 0.8)).abs() < 1e-9);
                     } else {
-                        prop_assert!(s > m / 10.0 - 1e-9 && s <= m / 5.0 + 1e-9);
+                        let f = |k: f64| 0.3 * ((k - 1.0) / 2.0 - 1.0) + 0.8;
+                        prop_assert!(s > f(m / 10.0) - 1e-9 && s <= f(m / 5.0) + 1e-9);
                         prop_assert!((50.0..100.0).contains(&l.gain));
                     }
                 }
