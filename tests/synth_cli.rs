@@ -436,3 +436,73 @@ fn flat_field_noise_matches_written_profile() {
         }
     }
 }
+
+/// Calibration files on the command line: noise model, illuminant dictionary, brightness.
+#[test]
+fn calibration_files() {
+    let t = tempfile::tempdir().unwrap();
+    let nm = t.path().join("noise.json");
+    std::fs::write(
+        &nm,
+        day2night::synth::dictionaries::embedded::noise_model().to_json(),
+    )
+    .unwrap();
+    let il = t.path().join("ill.json");
+    std::fs::write(&il, r#"{"illuminants_rgb_over_g": [[0.6, 1.0, 0.4]]}"#).unwrap();
+    let br = t.path().join("bright.json");
+    std::fs::write(&br, r#"{"values": [0.02, 0.03, 0.04]}"#).unwrap();
+    let o = t.path().join("o");
+    let out = synth(&[
+        s(&day()),
+        "-o",
+        s(&o),
+        "--noise-model",
+        s(&nm),
+        "--illuminants",
+        s(&il),
+        "--brightness",
+        s(&br),
+        "--iso",
+        "1600,25",
+        "--target",
+        "none",
+    ]);
+    ok(&out);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("warning: ISO 25"), "{err}");
+    assert!(!err.contains("ISO 1600"), "{err}");
+    let sc: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(o.join("day.json")).unwrap()).unwrap();
+    let plan = &sc["plan"];
+    assert!(plan["noise_model_source"]
+        .as_str()
+        .unwrap()
+        .contains("embedded"));
+    let nn: Vec<f64> = plan["night_neutral"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_f64().unwrap())
+        .collect();
+    for (a, b) in nn.iter().zip([0.6, 1.0, 0.4]) {
+        assert!((a - b).abs() < 1e-12, "{nn:?}");
+    }
+    assert_eq!(plan["dim"]["kind"], "target_mean");
+    let t_mean = plan["dim"]["target_mean"].as_f64().unwrap();
+    let mean = sc["run"]["mean_white_balanced"].as_f64().unwrap();
+    let s_used = sc["run"]["dim_scale"].as_f64().unwrap();
+    assert!((s_used - t_mean / mean).abs() < 1e-12);
+    validate(&day(), &o.join("day.json"), &o);
+    // A malformed noise model is a clear error naming the file.
+    std::fs::write(&nm, "{}").unwrap();
+    let out = synth(&[
+        s(&day()),
+        "-o",
+        s(&o),
+        "--noise-model",
+        s(&nm),
+        "--overwrite",
+    ]);
+    assert_eq!(out.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("noise.json"));
+}
