@@ -85,14 +85,14 @@ pub fn axis_range(
         // |i - c| < h/2  <=>  c - h/2 < i < c + h/2
         let a = center - h / 2.0;
         let b = center + h / 2.0;
-        lo = lo.max(a.floor() as i64 + 1);
+        lo = lo.max((a.floor() as i64).saturating_add(1));
         hi = hi.min(b.ceil() as i64);
     }
     if let Some(k) = eval.k() {
         let a = center - k * sigma;
         let b = center + k * sigma;
         lo = lo.max(a.ceil() as i64);
-        hi = hi.min(b.floor() as i64 + 1);
+        hi = hi.min((b.floor() as i64).saturating_add(1));
     }
     if hi <= lo {
         return (0, 0);

@@ -375,7 +375,20 @@ impl Plan {
                     && l.window.map(|w| finite(&w)).unwrap_or(true)
                     && l.weight >= 0.0
             });
-        if !ok || self.day_neutral.iter().any(|&v| v <= 0.0) {
+        let dim_ok = match &self.dim {
+            super::dim::DimPlan::None => true,
+            super::dim::DimPlan::Uniform { s, .. } => s.is_finite() && *s >= 0.0,
+            super::dim::DimPlan::TargetMean { target_mean, .. } => {
+                target_mean.is_finite() && *target_mean >= 0.0
+            }
+        };
+        let noise_ok = self.noise.iter().all(|n| {
+            n.params
+                .positions
+                .iter()
+                .all(|p| p[0].is_finite() && p[1].is_finite())
+        });
+        if !ok || !dim_ok || !noise_ok || self.day_neutral.iter().any(|&v| v <= 0.0) {
             return Err(Error::invalid("plan holds non-finite or invalid values"));
         }
         Ok(())

@@ -568,3 +568,32 @@ fn truncated_and_exact_masks_close_to_separable() {
         assert!(maxd <= 2, "{eval:?}: {maxd}");
     }
 }
+
+#[test]
+fn tampered_plans_are_refused_not_panicking() {
+    let img = frame(Bayer::RGGB, 8, 8, [500, 700, 300]);
+    let o = SynthOptions::default();
+    let p = plan_for(&img, &o);
+    let mut q = p.clone();
+    q.dim = DimPlan::Uniform {
+        s: f64::NAN,
+        range: [0.0, 1.0],
+    };
+    assert!(run(&img, &q).is_err());
+    let mut q = p.clone();
+    q.noise[0].params.positions[0][0] = f64::INFINITY;
+    assert!(run(&img, &q).is_err());
+    let mut q = p.clone();
+    q.lights[1].window = Some([f64::NAN, 3.0]);
+    assert!(run(&img, &q).is_err());
+    let mut q = p.clone();
+    q.active_width = 9;
+    assert!(run(&img, &q).is_err());
+    // Extreme but finite geometry runs.
+    let mut q = p.clone();
+    for l in &mut q.lights {
+        l.center = [1e300, -1e300];
+        l.sigma = [0.0, 1e-300];
+    }
+    run(&img, &q).unwrap();
+}
