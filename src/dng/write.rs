@@ -3,9 +3,11 @@
 //!
 //! Layouts: raw in IFD0 (default) or in a SubIFD behind a small RGB thumbnail rendered from
 //! the raw being written ([`RawIfd::Sub`]); uncompressed strips (default; 16-bit container
-//! samples, or 8-bit for 8-bit sources) or lossless-JPEG tiles ([`Compression::Ljpeg`], 256x256,
-//! two-component half-width encoding, precision = BitsPerSample). Fixture-only options:
-//! big-endian files, packed 10/12/14-bit samples, uncompressed tiles, chosen strip height.
+//! or packed samples) or lossless-JPEG tiles ([`Compression::Ljpeg`], 256x256,
+//! two-component half-width encoding, precision = BitsPerSample). Uncompressed samples keep
+//! the source's BitsPerSample (10/12/14-bit packed MSB-first, as camera firmwares write);
+//! `unpacked16` stores them in a 16-bit container instead. Fixture-only options: big-endian
+//! files, uncompressed tiles, chosen strip height.
 //!
 //! What is carried and what is dropped is documented in docs/dng-writing.md and in
 //! [`is_dropped`].
@@ -73,9 +75,10 @@ pub struct WriteOptions {
     pub raw_ifd: RawIfd,
     /// Fixture option: write a big-endian ("MM") file.
     pub big_endian: bool,
-    /// Fixture option: uncompressed samples packed at `meta.bits_per_sample` bits (MSB
-    /// first, rows padded to a byte) instead of a 16-bit container. Ignored for 8/16 bits.
-    pub packed: bool,
+    /// Write uncompressed 9..15-bit samples in a 16-bit container instead of packing them
+    /// at `meta.bits_per_sample` bits (MSB first, rows padded to a byte; the default, which
+    /// keeps BitsPerSample as the source had it, as Magic Lantern and camera firmwares do).
+    pub unpacked16: bool,
     /// Fixture option: uncompressed tiles of this size (multiple of 16) instead of strips.
     pub uncompressed_tiles: Option<(u32, u32)>,
     /// Fixture option: rows per uncompressed strip (default: about 1 MiB per strip).
@@ -333,7 +336,7 @@ fn encode_pixels(img: &RawImage, opts: &WriteOptions, order: ByteOrder) -> Resul
             ))
         }
         Compression::None => {
-            let bits = if opts.packed && fit_bits != 8 && fit_bits != 16 {
+            let bits = if !opts.unpacked16 {
                 fit_bits
             } else if fit_bits <= 8 {
                 8
@@ -386,22 +389,27 @@ fn encode_pixels(img: &RawImage, opts: &WriteOptions, order: ByteOrder) -> Resul
     }
 }
 
-/// A `tw x th` tile at (x0, y0), edges padded by replicating the last column/row.
+/// A `tw x th` tile at (x0, y0), edges padded by replicating the last column/row of the
+/// same CFA parity (so predictors keep running over one colour).
 fn extract_tile(img: &RawImage, x0: usize, y0: usize, tw: usize, th: usize) -> Vec<u16> {
+    let clamp = |v: usize, n: usize| -> usize {
+        let last = n - 1;
+        if v <= last {
+            v
+        } else if (v - last) % 2 == 0 {
+            last
+        } else {
+            last.saturating_sub(1)
+        }
+    };
     let mut out = Vec::with_capacity(tw * th);
     for y in 0..th {
-        let sy = (y0 + y).min(img.height - 1);
+        let sy = clamp(y0 + y, img.height);
         let row = &img.data[sy * img.width..(sy + 1) * img.width];
-        for x in 0..tw {
-            // Replicate with the same CFA parity so predictors stay within one colour.
-            let mut sx = x0 + x;
-            while sx >= img.width {
-                sx = sx.saturating_sub(2).min(img.width - 1);
-                if img.width == 1 {
-                    sx = 0;
-                }
-            }
-            out.push(row[sx]);
+        let inside = img.width.saturating_sub(x0).min(tw);
+        out.extend_from_slice(&row[x0.min(img.width)..x0.min(img.width) + inside]);
+        for x in inside..tw {
+            out.push(row[clamp(x0 + x, img.width)]);
         }
     }
     out
@@ -426,25 +434,69 @@ fn pack_rows(samples: &[u16], w: usize, bits: u16, big: bool) -> Vec<u8> {
         }
         8 => samples.iter().map(|&s| s as u8).collect(),
         _ => {
+            let w = w.max(1);
             let row_bytes = (w * bits as usize).div_ceil(8);
-            let mut out = Vec::with_capacity(row_bytes * samples.len() / w.max(1));
-            for row in samples.chunks(w.max(1)) {
-                let mut acc: u64 = 0;
-                let mut n = 0u32;
-                for &s in row {
-                    acc = (acc << bits) | (s as u64 & ((1u64 << bits) - 1));
-                    n += bits as u32;
-                    while n >= 8 {
-                        n -= 8;
-                        out.push((acc >> n) as u8);
-                    }
-                    acc &= (1u64 << n) - 1;
-                }
-                if n > 0 {
-                    out.push((acc << (8 - n)) as u8);
-                }
+            let rows = samples.len().div_ceil(w);
+            let mut out = vec![0u8; row_bytes * rows];
+            for (row, orow) in samples.chunks(w).zip(out.chunks_mut(row_bytes)) {
+                pack_row(row, orow, bits);
             }
             out
+        }
+    }
+}
+
+/// Pack groups of 4 samples of `BITS` bits into `NB` bytes; returns (samples, bytes) done.
+fn pack4<const BITS: u32, const NB: usize>(row: &[u16], out: &mut [u8]) -> (usize, usize) {
+    let n = row.len() / 4;
+    let m = (1u64 << BITS) - 1;
+    for (o, g) in out.chunks_exact_mut(NB).zip(row.chunks_exact(4)) {
+        let v = (g[0] as u64 & m) << (3 * BITS)
+            | (g[1] as u64 & m) << (2 * BITS)
+            | (g[2] as u64 & m) << BITS
+            | (g[3] as u64 & m);
+        let be = v.to_be_bytes();
+        o.copy_from_slice(&be[8 - NB..]);
+    }
+    (n * 4, n * NB)
+}
+
+/// Pack one row MSB-first into `out` (exactly `ceil(len * bits / 8)` bytes).
+fn pack_row(row: &[u16], out: &mut [u8], bits: u16) {
+    // Fast paths: whole groups of samples that end on a byte boundary.
+    let (done_s, done_b) = match bits {
+        12 => {
+            let n = row.len() / 2;
+            for (o, g) in out.chunks_exact_mut(3).zip(row.chunks_exact(2)) {
+                let v = ((g[0] as u32 & 0xFFF) << 12) | (g[1] as u32 & 0xFFF);
+                o[0] = (v >> 16) as u8;
+                o[1] = (v >> 8) as u8;
+                o[2] = v as u8;
+            }
+            (n * 2, n * 3)
+        }
+        10 => pack4::<10, 5>(row, out),
+        14 => pack4::<14, 7>(row, out),
+        _ => (0, 0),
+    };
+    let mut pos = done_b;
+    let mut acc: u64 = 0;
+    let mut n = 0u32;
+    for &s in &row[done_s..] {
+        acc = (acc << bits) | (s as u64 & ((1u64 << bits) - 1));
+        n += bits as u32;
+        while n >= 8 {
+            n -= 8;
+            if let Some(b) = out.get_mut(pos) {
+                *b = (acc >> n) as u8;
+            }
+            pos += 1;
+        }
+        acc &= (1u64 << n) - 1;
+    }
+    if n > 0 {
+        if let Some(b) = out.get_mut(pos) {
+            *b = (acc << (8 - n)) as u8;
         }
     }
 }
@@ -713,23 +765,46 @@ fn exif_ifd(m: &RawMeta) -> Ifd {
 }
 
 /// RawDataUniqueID: the first 16 bytes of SHA-256 over the pixel data (little-endian
-/// u16), the dimensions and the metadata (JSON, without the source storage description).
+/// u16), the dimensions and the metadata as written (JSON; no storage description, no
+/// regenerated or dropped entries).
 /// Deterministic: the same image always gets the same ID, a changed image a new one.
 pub fn raw_data_unique_id(img: &RawImage) -> Vec<u8> {
     let mut h = Sha256::new();
     h.update(b"day2night RawDataUniqueID v1\0");
     h.update((img.width as u64).to_le_bytes());
     h.update((img.height as u64).to_le_bytes());
-    let mut buf = Vec::with_capacity(1 << 16);
-    for chunk in img.data.chunks(1 << 15) {
-        buf.clear();
-        for &s in chunk {
-            buf.extend_from_slice(&s.to_le_bytes());
-        }
-        h.update(&buf);
+    // Pixels: fixed 1 Mi-sample blocks hashed in parallel, then their digests in order
+    // (a fixed tree, so the ID does not depend on the thread count).
+    let digests: Vec<Vec<u8>> = img
+        .data
+        .par_chunks(1 << 20)
+        .map(|chunk| {
+            let mut buf = vec![0u8; chunk.len() * 2];
+            for (o, &s) in buf.chunks_exact_mut(2).zip(chunk) {
+                o.copy_from_slice(&s.to_le_bytes());
+            }
+            Sha256::digest(&buf).to_vec()
+        })
+        .collect();
+    for d in &digests {
+        h.update(d);
     }
+    // Canonical metadata: what this writer actually writes, so that re-writing a file it
+    // wrote reproduces the same ID (a fixed point) while any change of meaning changes it.
     let mut meta = img.meta.clone();
     meta.storage = None;
+    meta.dng_version = [1, 4, 0, 0];
+    meta.dng_backward_version = None;
+    let keep = |e: &Entry| {
+        !is_dropped(e.tag)
+            && !matches!(
+                e.tag,
+                t::X_RESOLUTION | t::Y_RESOLUTION | t::RESOLUTION_UNIT
+            )
+    };
+    meta.ifd0_extra.retain(keep);
+    meta.raw_extra.retain(keep);
+    meta.exif_extra.retain(keep);
     if let Ok(json) = serde_json::to_vec(&meta) {
         h.update(&json);
     }
@@ -788,6 +863,28 @@ mod tests {
             vec![0xFF, 0xC0, 0x00, 0x40]
         );
         assert_eq!(pack_rows(&[0x0102], 1, 16, true), vec![1, 2]);
+        // Fast paths agree with the generic packer (odd widths leave a generic tail).
+        for bits in [10u16, 12, 14] {
+            let row: Vec<u16> = (0..13u32)
+                .map(|i| ((i * 977) % (1 << bits)) as u16)
+                .collect();
+            let fast = pack_rows(&row, 13, bits, false);
+            let mut slow = vec![];
+            let (mut acc, mut n) = (0u64, 0u32);
+            for &s in &row {
+                acc = (acc << bits) | s as u64;
+                n += bits as u32;
+                while n >= 8 {
+                    n -= 8;
+                    slow.push((acc >> n) as u8);
+                }
+                acc &= (1 << n) - 1;
+            }
+            if n > 0 {
+                slow.push((acc << (8 - n)) as u8);
+            }
+            assert_eq!(fast, slow, "{bits}");
+        }
         assert_eq!(pack_rows(&[0x0102], 1, 16, false), vec![2, 1]);
     }
 
@@ -809,12 +906,26 @@ mod tests {
         }
         let o = WriteOptions {
             big_endian: true,
-            packed: true,
             uncompressed_tiles: Some((16, 16)),
             ..Default::default()
         };
         let a = encode_dng(&img, &o).unwrap();
         assert_eq!(&a[..4], b"MM\0*");
+    }
+
+    #[test]
+    fn tiles_pad_with_same_parity() {
+        let img = sample_image(5, 3, 12);
+        let t = extract_tile(&img, 0, 0, 8, 4);
+        // Columns 5,6,7 repeat columns 3,4,3; row 3 repeats row 1.
+        for y in 0..4 {
+            let sy = [0, 1, 2, 1][y];
+            let want: Vec<u16> = [0, 1, 2, 3, 4, 3, 4, 3]
+                .iter()
+                .map(|&x| img.data[sy * 5 + x])
+                .collect();
+            assert_eq!(&t[y * 8..y * 8 + 8], &want[..], "row {y}");
+        }
     }
 
     #[test]
