@@ -428,9 +428,9 @@ fn synth_with_fitted_model_reproduces_true_variance() {
 
 /// The paper's workflow: clean = `merge` of a burst (levels scaled by N), noisy = other frames
 /// of the same scene at the same ISO. The residual holds the clean's own noise (1/N of it):
-/// the fit returns (1 + 1/N) times the truth, as documented. Binning by the (slightly noisy)
-/// merged value also biases O upward at the dark end (measured: +5 % with N = 16 on this
-/// dark-heavy scene), so O gets 7 % here; bursts are the unbiased source.
+/// the fit returns (1 + 1/N) times the truth, as documented. (Binning by the slightly noisy
+/// merged value no longer biases O: each bin's intensity is the mean of the noisy values;
+/// with the clean value as intensity O came out +5 % here.)
 #[test]
 fn pairs_against_a_merged_clean_frame() {
     let dir = tempfile::tempdir().unwrap();
@@ -470,7 +470,13 @@ fn pairs_against_a_merged_clean_frame() {
     let k = 1.0 + 1.0 / n as f64;
     for p in positions(&model, 1600) {
         let (fs, fo) = (p["S"].as_f64().unwrap(), p["O"].as_f64().unwrap());
+        eprintln!(
+            "merged-clean pair pos {}: S {:+.2}%  O {:+.2}% vs (1+1/N) truth",
+            p["position"],
+            100.0 * (fs / (s * k) - 1.0),
+            100.0 * (fo / (o * k) - 1.0)
+        );
         assert!((fs / (s * k) - 1.0).abs() < 0.03, "{p}");
-        assert!((fo / (o * k) - 1.0).abs() < 0.07, "{p}");
+        assert!((fo / (o * k) - 1.0).abs() < 0.05, "{p}");
     }
 }

@@ -12,7 +12,8 @@
 //!   4 frames (2 per half); measured on a dark ramp, the unsplit estimator on 2-3 frames
 //!   overestimated O by 35-60 %, so it is refused rather than offered.
 //! - From a pair (clean = e.g. a merged long burst, noisy = one frame): the residual
-//!   `noisy - clean` per pixel, its variance per intensity bin of the clean value.
+//!   `noisy - clean` per pixel, its variance per intensity bin of the clean value, the bin's
+//!   intensity being the mean of the noisy values (unaffected by the binning).
 //!
 //! Pixels with any clipped sample (stored 0 or linearized >= white) are excluded. Pixels are
 //! binned by intensity (256 bins over normalized [-0.1, 1.05]); each bin gives a point (mean
@@ -353,10 +354,14 @@ pub fn pair_stats(clean: &RawImage, noisy: &RawImage) -> Result<SourceStats> {
             }
             let y = cnorm.normalize(xc, r, c);
             if let Some(b) = bin_index(y) {
-                let d = norm.normalize(xn, r, c) - y;
+                let yn = norm.normalize(xn, r, c);
+                let d = yn - y;
                 let acc = &mut accs[b][p];
                 acc.n += 1;
-                acc.sy += y;
+                // Binned by the clean value, but the bin's intensity is the mean of the NOISY
+                // values: their noise is independent of the binning, so it estimates
+                // E[x | bin] without the shrinkage the clean frame's own noise would bring.
+                acc.sy += yn;
                 acc.sr += d;
                 acc.srr += d * d;
             }
