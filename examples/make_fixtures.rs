@@ -1,7 +1,7 @@
 //! Generate the committed DNG fixtures (deterministic: same code, same bytes).
 //!
 //! ```text
-//! cargo run --release --example make_fixtures -- fixtures/
+//! cargo run --release --example make_fixtures -- fixtures/ [SOURCE.png]
 //! ```
 //!
 //! Writes every fixture listed in `fixtures/README.md`; the default day image `day.dng` is
@@ -270,7 +270,13 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             .nth(1)
             .unwrap_or_else(|| "fixtures".to_string()),
     );
-    generate(&dir, &dir.join("source/astronaut.png"))
+    let source = std::env::args()
+        .nth(2)
+        .map(PathBuf::from)
+        .unwrap_or_else(|| {
+            Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/source/astronaut.png")
+        });
+    generate(&dir, &source)
 }
 
 /// Write every fixture into `dir`; `source` is the photograph behind `day.dng`.

@@ -19,6 +19,7 @@ pub mod metrics;
 pub mod noise;
 pub mod normalize;
 pub mod output;
+pub mod png;
 pub mod raw;
 pub mod synth;
 pub mod tiff;

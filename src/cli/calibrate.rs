@@ -1,19 +1,388 @@
-//! `day2night calibrate ...` (in progress).
-use super::CmdResult;
+//! `day2night calibrate illuminants|brightness|noise`: calibration files for a new camera.
+use super::{usage, CmdResult};
+use day2night::calibrate::{brightness, illuminants, noise};
+use day2night::dng::read_dng;
+use day2night::error::ResultExt;
+use day2night::output::{write_bytes_atomic, OutputPolicy};
+use day2night::raw::RawImage;
+use std::path::{Path, PathBuf};
 
 /// Calibration subcommands.
 #[derive(Debug, clap::Subcommand)]
 pub enum CalibrateCommand {
-    /// Night illuminant dictionary from gray-card shots (not implemented yet).
-    Illuminants {
-        /// Arguments.
-        #[arg(trailing_var_arg = true, allow_hyphen_values = true)]
-        rest: Vec<String>,
-    },
+    /// Night illuminant dictionary from gray-card shots (and/or existing JSON lists to refit).
+    #[command(after_help = "\
+Per gray card: black-subtracted 10%-trimmed means of R, G, B over the ROI (default: the
+central quarter x quarter of the active area), saturated sites excluded, chromaticity
+[r/g, 1, b/g]. Then a 2-D Gaussian over [r/g, b/g] (unbiased covariance by default).
+A .json input is a list of chromaticities to include (a day2night dictionary, the shared
+s20fe file, or a bare [[r/g, 1, b/g], ...] list).
+
+Example:
+  day2night calibrate illuminants card_*.dng -o illuminants.json
+  day2night calibrate illuminants card_01.dng --roi 1200,800,400,300 -o one_more.json")]
+    Illuminants(IlluminantsArgs),
+    /// Night brightness dictionary from real night raws.
+    #[command(after_help = "\
+Normalized mean intensity of each image's active area and the normal fit N(mean, std^2) that
+`synth --brightness` samples target means from. One image: std = 0 (warning).
+
+Example:
+  day2night calibrate brightness night/*.dng -o brightness.json")]
+    Brightness(BrightnessArgs),
+    /// Per-ISO noise model from bursts, clean/noisy pairs or NoiseProfile tags.
+    #[command(after_help = "\
+Per ISO (Exif ISO of the frames) and 2x2 CFA position: var(y) = S*y + O on normalized data,
+fitted by weighted least squares over intensity bins (split-half burst statistics or pair
+residuals), clipped pixels excluded, rounding variance removed from O. Several ISOs in one
+file; S = c*ISO and O = a + b*ISO^2 fitted across them. A burst needs >= 4 frames; 16 frames
+of 1024x512 pixels measure S and O to about 1 %.
+
+Examples:
+  day2night calibrate noise --burst iso1600_*.dng --burst iso3200_*.dng -o noise.json
+  day2night calibrate noise --pair merged_iso50.dng iso3200_01.dng -o noise.json
+  day2night calibrate noise --from-noise-profile shots/*.dng -o noise.json")]
+    Noise(NoiseArgs),
+}
+
+/// Options shared by every calibrate command.
+#[derive(Debug, clap::Args)]
+pub struct OutArgs {
+    /// Output JSON file.
+    #[arg(short, long, value_name = "FILE.json")]
+    output: PathBuf,
+    /// Replace an existing output file.
+    #[arg(long)]
+    overwrite: bool,
+    /// Also print the written document on stdout.
+    #[arg(long)]
+    json: bool,
+}
+
+/// Arguments of `calibrate illuminants`.
+#[derive(Debug, clap::Args)]
+pub struct IlluminantsArgs {
+    /// Gray-card DNGs (and/or .json chromaticity lists).
+    #[arg(required = true, value_name = "GRAYCARD.dng")]
+    inputs: Vec<PathBuf>,
+    /// Region of interest X,Y,W,H in active-area pixels (default: the central 1/4 x 1/4).
+    #[arg(long, value_name = "X,Y,W,H")]
+    roi: Option<String>,
+    /// Covariance estimator: unbiased 1/(M-1) (released code) or ml 1/M (paper eq. 2).
+    #[arg(long, value_enum, default_value = "unbiased")]
+    estimator: EstimatorArg,
+    #[command(flatten)]
+    out: OutArgs,
+}
+
+#[derive(Debug, Clone, Copy, clap::ValueEnum)]
+enum EstimatorArg {
+    Unbiased,
+    Ml,
+}
+
+/// Arguments of `calibrate brightness`.
+#[derive(Debug, clap::Args)]
+pub struct BrightnessArgs {
+    /// Real night DNGs.
+    #[arg(required = true, value_name = "NIGHT.dng")]
+    inputs: Vec<PathBuf>,
+    #[command(flatten)]
+    out: OutArgs,
+}
+
+/// Arguments of `calibrate noise` (hand-written clap impls: `--burst` groups need
+/// per-occurrence values, which clap's derive only offers behind an unstable feature).
+#[derive(Debug)]
+pub struct NoiseArgs {
+    burst: Vec<Vec<PathBuf>>,
+    pair: Vec<Vec<PathBuf>>,
+    from_noise_profile: Vec<PathBuf>,
+    out: OutArgs,
+}
+
+impl clap::FromArgMatches for NoiseArgs {
+    fn from_arg_matches(m: &clap::ArgMatches) -> Result<Self, clap::Error> {
+        let occ = |id: &str| -> Vec<Vec<PathBuf>> {
+            m.get_occurrences::<PathBuf>(id)
+                .map(|o| o.map(|g| g.cloned().collect()).collect())
+                .unwrap_or_default()
+        };
+        Ok(NoiseArgs {
+            burst: occ("burst"),
+            pair: occ("pair"),
+            from_noise_profile: occ("from_noise_profile").into_iter().flatten().collect(),
+            out: OutArgs::from_arg_matches(m)?,
+        })
+    }
+    fn update_from_arg_matches(&mut self, m: &clap::ArgMatches) -> Result<(), clap::Error> {
+        *self = Self::from_arg_matches(m)?;
+        Ok(())
+    }
+}
+
+impl clap::Args for NoiseArgs {
+    fn augment_args(cmd: clap::Command) -> clap::Command {
+        use clap::{value_parser, Arg, ArgAction};
+        let cmd = cmd
+            .arg(
+                Arg::new("burst")
+                    .long("burst")
+                    .num_args(1..)
+                    .action(ArgAction::Append)
+                    .value_parser(value_parser!(PathBuf))
+                    .value_name("FRAME.dng")
+                    .help("An aligned burst of one static scene at one ISO (>= 4 frames); repeatable"),
+            )
+            .arg(
+                Arg::new("pair")
+                    .long("pair")
+                    .num_args(2)
+                    .action(ArgAction::Append)
+                    .value_parser(value_parser!(PathBuf))
+                    .value_names(["CLEAN.dng", "NOISY.dng"])
+                    .help("A clean (e.g. merged) frame and a noisy frame of the same scene; repeatable"),
+            )
+            .arg(
+                Arg::new("from_noise_profile")
+                    .long("from-noise-profile")
+                    .num_args(1..)
+                    .action(ArgAction::Append)
+                    .value_parser(value_parser!(PathBuf))
+                    .value_name("DNG")
+                    .help("DNGs whose NoiseProfile tags (and Exif ISO) give the model"),
+            );
+        <OutArgs as clap::Args>::augment_args(cmd)
+    }
+    fn augment_args_for_update(cmd: clap::Command) -> clap::Command {
+        Self::augment_args(cmd)
+    }
 }
 
 /// Run a calibration subcommand.
 pub fn run(cmd: CalibrateCommand) -> CmdResult {
-    let _ = cmd;
-    Err(super::usage("`calibrate` is not implemented yet"))
+    match cmd {
+        CalibrateCommand::Illuminants(a) => run_illuminants(a),
+        CalibrateCommand::Brightness(a) => run_brightness(a),
+        CalibrateCommand::Noise(a) => run_noise(a),
+    }
+}
+
+fn read(path: &Path) -> day2night::Result<RawImage> {
+    read_dng(path).in_file(path)
+}
+
+/// A progress bar over `len` files on stderr, hidden unless stderr is a terminal.
+pub(super) fn progress(len: usize) -> indicatif::ProgressBar {
+    use std::io::IsTerminal;
+    if !std::io::stderr().is_terminal() || len < 2 {
+        return indicatif::ProgressBar::hidden();
+    }
+    let pb = indicatif::ProgressBar::new(len as u64);
+    if let Ok(style) = indicatif::ProgressStyle::with_template("{bar:40} {pos}/{len} files {msg}") {
+        pb.set_style(style);
+    }
+    pb
+}
+
+fn write_json<T: serde::Serialize>(out: &OutArgs, inputs: &[PathBuf], doc: &T) -> CmdResult {
+    let mut bytes = serde_json::to_vec_pretty(doc)?;
+    bytes.push(b'\n');
+    let policy = OutputPolicy {
+        overwrite: out.overwrite,
+        inputs: inputs.to_vec(),
+    };
+    write_bytes_atomic(&out.output, &policy, &bytes)?;
+    if out.json {
+        print!("{}", String::from_utf8_lossy(&bytes));
+    }
+    eprintln!("wrote {}", out.output.display());
+    Ok(())
+}
+
+fn run_illuminants(a: IlluminantsArgs) -> CmdResult {
+    let roi = match &a.roi {
+        Some(s) => Some(illuminants::Roi::parse(s).map_err(usage)?),
+        None => None,
+    };
+    let est = match a.estimator {
+        EstimatorArg::Unbiased => illuminants::Estimator::Unbiased,
+        EstimatorArg::Ml => illuminants::Estimator::Ml,
+    };
+    let mut files = vec![];
+    let mut extra = vec![];
+    for p in &a.inputs {
+        let is_json = p
+            .extension()
+            .is_some_and(|e| e.eq_ignore_ascii_case("json"));
+        if is_json {
+            let text = std::fs::read_to_string(p)
+                .map_err(day2night::Error::from)
+                .in_file(p)?;
+            let list = illuminants::parse_chromaticity_list(&text).in_file(p)?;
+            eprintln!("{}: {} chromaticities", p.display(), list.len());
+            extra.extend(list);
+        } else {
+            let img = read(p)?;
+            let m =
+                illuminants::measure_gray_card(&img, roi, &p.display().to_string()).in_file(p)?;
+            eprintln!(
+                "{}: r/g {:.5}  b/g {:.5}  (R/G/B means {:.5} {:.5} {:.5}, {}/{}/{} px, {} saturated)",
+                p.display(),
+                m.chromaticity[0],
+                m.chromaticity[2],
+                m.means[0],
+                m.means[1],
+                m.means[2],
+                m.pixels[0],
+                m.pixels[1],
+                m.pixels[2],
+                m.saturated.iter().sum::<usize>()
+            );
+            for w in &m.warnings {
+                eprintln!("day2night: warning: {}: {w}", p.display());
+            }
+            files.push(m);
+        }
+    }
+    let dict = illuminants::build_dictionary(files, extra, est)?;
+    let f = &dict.fit;
+    eprintln!(
+        "fit over {} illuminants ({} covariance): mean [{:.6}, {:.6}]  covariance [[{:.6e}, {:.6e}], [{:.6e}, {:.6e}]]",
+        f.count,
+        est.covariance_name(),
+        f.mean[0],
+        f.mean[1],
+        f.covariance[0][0],
+        f.covariance[0][1],
+        f.covariance[1][0],
+        f.covariance[1][1]
+    );
+    if f.count == 1 {
+        eprintln!("day2night: warning: one illuminant: zero covariance, synth will always use it; shoot more gray cards");
+    } else if f.count == 2 {
+        eprintln!("day2night: warning: 2 illuminants give a degenerate (line) covariance; shoot more gray cards");
+    }
+    write_json(&a.out, &a.inputs, &dict)
+}
+
+fn run_brightness(a: BrightnessArgs) -> CmdResult {
+    let mut files = vec![];
+    for p in &a.inputs {
+        let img = read(p)?;
+        let m = brightness::measure(&img, &p.display().to_string()).in_file(p)?;
+        eprintln!("{}: mean {:.6}", p.display(), m.mean);
+        files.push(m);
+    }
+    let dict = brightness::build_dictionary(files)?;
+    let f = &dict.fit;
+    eprintln!(
+        "normal fit over {} images: mean {:.6} std {:.6} (range {:.6}..{:.6})",
+        f.count, f.mean, f.std, f.min, f.max
+    );
+    if f.count == 1 {
+        eprintln!("day2night: warning: one image: std = 0, synth will always use this brightness");
+    }
+    write_json(&a.out, &a.inputs, &dict)
+}
+
+fn run_noise(a: NoiseArgs) -> CmdResult {
+    if a.burst.is_empty() && a.pair.is_empty() && a.from_noise_profile.is_empty() {
+        return Err(usage(
+            "give at least one --burst FRAMES..., --pair CLEAN NOISY or --from-noise-profile DNG...",
+        ));
+    }
+    let mut inputs: Vec<PathBuf> = vec![];
+    let mut sources = vec![];
+    let mut camera = None;
+    let total =
+        a.burst.iter().map(Vec::len).sum::<usize>() + 2 * a.pair.len() + a.from_noise_profile.len();
+    let pb = progress(total);
+    for burst in &a.burst {
+        inputs.extend(burst.iter().cloned());
+        let mut it = burst.iter();
+        let Some(first) = it.next() else { continue };
+        let img = read(first)?;
+        pb.inc(1);
+        camera = camera.or_else(|| img.meta.unique_camera_model.clone());
+        let mut acc = noise::BurstAccumulator::new(img).in_file(first)?;
+        for p in it {
+            let img = read(p)?;
+            acc.add(&img).in_file(p)?;
+            pb.inc(1);
+        }
+        let st = acc.finish().in_file(first)?;
+        eprintln!(
+            "burst of {} frames from {}: ISO {}",
+            st.frames,
+            first.display(),
+            st.iso
+        );
+        sources.push(st);
+    }
+    for pair in &a.pair {
+        let [clean, noisy] = pair.as_slice() else {
+            return Err(usage("--pair takes exactly two files: CLEAN NOISY"));
+        };
+        inputs.extend([clean.clone(), noisy.clone()]);
+        let (c, n) = (read(clean)?, read(noisy)?);
+        pb.inc(2);
+        camera = camera.or_else(|| n.meta.unique_camera_model.clone());
+        let st = noise::pair_stats(&c, &n).in_file(noisy)?;
+        eprintln!(
+            "pair {} / {}: ISO {}",
+            clean.display(),
+            noisy.display(),
+            st.iso
+        );
+        sources.push(st);
+    }
+    let mut profiled = vec![];
+    for p in &a.from_noise_profile {
+        inputs.push(p.clone());
+        let img = read(p)?;
+        pb.inc(1);
+        camera = camera.or_else(|| img.meta.unique_camera_model.clone());
+        // Keep metadata only: pixels are not needed.
+        profiled.push((
+            p.display().to_string(),
+            RawImage {
+                data: vec![],
+                ..img
+            },
+        ));
+    }
+    pb.finish_and_clear();
+    let refs: Vec<(String, &RawImage)> = profiled.iter().map(|(n, i)| (n.clone(), i)).collect();
+    let profiles = noise::from_noise_profiles(&refs)?;
+    let (model, warnings) = noise::build_model(sources, profiles, camera)?;
+    for m in &model.isos {
+        eprintln!(
+            "ISO {} ({}, {} input(s), black {} white {}):",
+            m.iso, m.source, m.inputs, m.black, m.white
+        );
+        for f in &m.fits {
+            let fit = match (f.r2, f.chi2_reduced) {
+                (Some(r2), Some(c2)) => format!(
+                    "  R^2 {:.4}  chi2/dof {:.2}  {} bins  {} px  ({} clipped px excluded)",
+                    r2, c2, f.bins, f.pixels, f.clipped_pixels
+                ),
+                _ => String::new(),
+            };
+            eprintln!(
+                "  position {} ({}): S {:.4e}  O {:.4e}  (beta1 {:.4} DN, beta2 {:.3} DN^2){}",
+                f.position, f.color, f.s, f.o, f.beta1, f.beta2, fit
+            );
+        }
+    }
+    if let Some(l) = &model.iso_laws {
+        eprintln!(
+            "ISO laws over {:?}: S = {:.4e} * ISO, O = {:.4e} + {:.4e} * ISO^2 (position 0)",
+            l.isos, l.s_per_iso[0], l.o_at_iso0[0], l.o_per_iso2[0]
+        );
+    }
+    for w in &warnings {
+        eprintln!("day2night: warning: {w}");
+    }
+    write_json(&a.out, &inputs, &model)
 }

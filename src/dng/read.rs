@@ -413,31 +413,8 @@ pub fn unpack_row(src: &[u8], dst: &mut [u16], bits: usize, order: ByteOrder) {
                 }
             }
         }
-        10 | 14 => {
-            // Four samples fill exactly bits/2 bytes: decode whole groups from a 64-bit
-            // big-endian word, then the tail bit by bit.
-            let gb = bits / 2;
-            let groups = (dst.len() / 4).min(src.len() / gb);
-            let mask = (1u64 << bits) - 1;
-            for (d, s) in dst
-                .chunks_exact_mut(4)
-                .zip(src.chunks_exact(gb))
-                .take(groups)
-            {
-                let mut word = [0u8; 8];
-                word[..gb].copy_from_slice(s);
-                let v = u64::from_be_bytes(word);
-                d[0] = ((v >> (64 - bits)) & mask) as u16;
-                d[1] = ((v >> (64 - 2 * bits)) & mask) as u16;
-                d[2] = ((v >> (64 - 3 * bits)) & mask) as u16;
-                d[3] = ((v >> (64 - 4 * bits)) & mask) as u16;
-            }
-            unpack_bits(
-                &src[(groups * gb).min(src.len())..],
-                &mut dst[groups * 4..],
-                bits,
-            );
-        }
+        10 => unpack_quads::<10>(src, dst),
+        14 => unpack_quads::<14>(src, dst),
         _ => {
             // Eight samples of `bits` bits fill exactly `bits` bytes: decode whole groups
             // from a 128-bit big-endian word, then the tail bit by bit.
@@ -462,6 +439,35 @@ pub fn unpack_row(src: &[u8], dst: &mut [u16], bits: usize, order: ByteOrder) {
             );
         }
     }
+}
+
+/// Four `BITS`-bit samples fill exactly BITS/2 bytes (BITS even): decode whole groups from
+/// a 64-bit big-endian word (constant-size copies, no per-sample branches), then the tail.
+fn unpack_quads<const BITS: usize>(src: &[u8], dst: &mut [u16]) {
+    let gb = BITS / 2;
+    let groups = (dst.len() / 4).min(src.len() / gb);
+    let mask = (1u64 << BITS) - 1;
+    for (d, s) in dst
+        .chunks_exact_mut(4)
+        .zip(src.chunks_exact(gb))
+        .take(groups)
+    {
+        let mut word = [0u8; 8];
+        for (w, b) in word.iter_mut().zip(s) {
+            *w = *b;
+        }
+        let v = u64::from_be_bytes(word);
+        d[0] = ((v >> (64 - BITS)) & mask) as u16;
+        d[1] = ((v >> (64 - 2 * BITS)) & mask) as u16;
+        d[2] = ((v >> (64 - 3 * BITS)) & mask) as u16;
+        d[3] = ((v >> (64 - 4 * BITS)) & mask) as u16;
+    }
+    let (s_done, d_done) = (groups * gb, groups * 4);
+    unpack_bits(
+        src.get(s_done..).unwrap_or(&[]),
+        dst.get_mut(d_done..).unwrap_or(&mut []),
+        BITS,
+    );
 }
 
 /// Generic MSB-first unpacking (missing source bytes read as zero).

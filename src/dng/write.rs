@@ -389,22 +389,27 @@ fn encode_pixels(img: &RawImage, opts: &WriteOptions, order: ByteOrder) -> Resul
     }
 }
 
-/// A `tw x th` tile at (x0, y0), edges padded by replicating the last column/row.
+/// A `tw x th` tile at (x0, y0), edges padded by replicating the last column/row of the
+/// same CFA parity (so predictors keep running over one colour).
 fn extract_tile(img: &RawImage, x0: usize, y0: usize, tw: usize, th: usize) -> Vec<u16> {
+    let clamp = |v: usize, n: usize| -> usize {
+        let last = n - 1;
+        if v <= last {
+            v
+        } else if (v - last) % 2 == 0 {
+            last
+        } else {
+            last.saturating_sub(1)
+        }
+    };
     let mut out = Vec::with_capacity(tw * th);
     for y in 0..th {
-        let sy = (y0 + y).min(img.height - 1);
+        let sy = clamp(y0 + y, img.height);
         let row = &img.data[sy * img.width..(sy + 1) * img.width];
-        for x in 0..tw {
-            // Replicate with the same CFA parity so predictors stay within one colour.
-            let mut sx = x0 + x;
-            while sx >= img.width {
-                sx = sx.saturating_sub(2).min(img.width - 1);
-                if img.width == 1 {
-                    sx = 0;
-                }
-            }
-            out.push(row[sx]);
+        let inside = img.width.saturating_sub(x0).min(tw);
+        out.extend_from_slice(&row[x0.min(img.width)..x0.min(img.width) + inside]);
+        for x in inside..tw {
+            out.push(row[clamp(x0 + x, img.width)]);
         }
     }
     out
@@ -429,52 +434,69 @@ fn pack_rows(samples: &[u16], w: usize, bits: u16, big: bool) -> Vec<u8> {
         }
         8 => samples.iter().map(|&s| s as u8).collect(),
         _ => {
+            let w = w.max(1);
             let row_bytes = (w * bits as usize).div_ceil(8);
-            let mut out = Vec::with_capacity(row_bytes * samples.len() / w.max(1));
-            for row in samples.chunks(w.max(1)) {
-                // Fast paths: whole groups of samples that end on a byte boundary.
-                let rest = match bits {
-                    12 => {
-                        let mut it = row.chunks_exact(2);
-                        for g in &mut it {
-                            let (a, b) = (g[0] as u32 & 0xFFF, g[1] as u32 & 0xFFF);
-                            let v = (a << 12) | b;
-                            out.extend_from_slice(&[(v >> 16) as u8, (v >> 8) as u8, v as u8]);
-                        }
-                        it.remainder()
-                    }
-                    10 | 14 => {
-                        let mut it = row.chunks_exact(4);
-                        let m = (1u64 << bits) - 1;
-                        for g in &mut it {
-                            let v = (g[0] as u64 & m) << (3 * bits)
-                                | (g[1] as u64 & m) << (2 * bits)
-                                | (g[2] as u64 & m) << bits
-                                | (g[3] as u64 & m);
-                            let nbytes = bits as usize / 2;
-                            let be = v.to_be_bytes();
-                            out.extend_from_slice(&be[8 - nbytes..]);
-                        }
-                        it.remainder()
-                    }
-                    _ => row,
-                };
-                let mut acc: u64 = 0;
-                let mut n = 0u32;
-                for &s in rest {
-                    acc = (acc << bits) | (s as u64 & ((1u64 << bits) - 1));
-                    n += bits as u32;
-                    while n >= 8 {
-                        n -= 8;
-                        out.push((acc >> n) as u8);
-                    }
-                    acc &= (1u64 << n) - 1;
-                }
-                if n > 0 {
-                    out.push((acc << (8 - n)) as u8);
-                }
+            let rows = samples.len().div_ceil(w);
+            let mut out = vec![0u8; row_bytes * rows];
+            for (row, orow) in samples.chunks(w).zip(out.chunks_mut(row_bytes)) {
+                pack_row(row, orow, bits);
             }
             out
+        }
+    }
+}
+
+/// Pack groups of 4 samples of `BITS` bits into `NB` bytes; returns (samples, bytes) done.
+fn pack4<const BITS: u32, const NB: usize>(row: &[u16], out: &mut [u8]) -> (usize, usize) {
+    let n = row.len() / 4;
+    let m = (1u64 << BITS) - 1;
+    for (o, g) in out.chunks_exact_mut(NB).zip(row.chunks_exact(4)) {
+        let v = (g[0] as u64 & m) << (3 * BITS)
+            | (g[1] as u64 & m) << (2 * BITS)
+            | (g[2] as u64 & m) << BITS
+            | (g[3] as u64 & m);
+        let be = v.to_be_bytes();
+        o.copy_from_slice(&be[8 - NB..]);
+    }
+    (n * 4, n * NB)
+}
+
+/// Pack one row MSB-first into `out` (exactly `ceil(len * bits / 8)` bytes).
+fn pack_row(row: &[u16], out: &mut [u8], bits: u16) {
+    // Fast paths: whole groups of samples that end on a byte boundary.
+    let (done_s, done_b) = match bits {
+        12 => {
+            let n = row.len() / 2;
+            for (o, g) in out.chunks_exact_mut(3).zip(row.chunks_exact(2)) {
+                let v = ((g[0] as u32 & 0xFFF) << 12) | (g[1] as u32 & 0xFFF);
+                o[0] = (v >> 16) as u8;
+                o[1] = (v >> 8) as u8;
+                o[2] = v as u8;
+            }
+            (n * 2, n * 3)
+        }
+        10 => pack4::<10, 5>(row, out),
+        14 => pack4::<14, 7>(row, out),
+        _ => (0, 0),
+    };
+    let mut pos = done_b;
+    let mut acc: u64 = 0;
+    let mut n = 0u32;
+    for &s in &row[done_s..] {
+        acc = (acc << bits) | (s as u64 & ((1u64 << bits) - 1));
+        n += bits as u32;
+        while n >= 8 {
+            n -= 8;
+            if let Some(b) = out.get_mut(pos) {
+                *b = (acc >> n) as u8;
+            }
+            pos += 1;
+        }
+        acc &= (1u64 << n) - 1;
+    }
+    if n > 0 {
+        if let Some(b) = out.get_mut(pos) {
+            *b = (acc << (8 - n)) as u8;
         }
     }
 }
@@ -751,13 +773,21 @@ pub fn raw_data_unique_id(img: &RawImage) -> Vec<u8> {
     h.update(b"day2night RawDataUniqueID v1\0");
     h.update((img.width as u64).to_le_bytes());
     h.update((img.height as u64).to_le_bytes());
-    let mut buf = Vec::with_capacity(1 << 16);
-    for chunk in img.data.chunks(1 << 15) {
-        buf.clear();
-        for &s in chunk {
-            buf.extend_from_slice(&s.to_le_bytes());
-        }
-        h.update(&buf);
+    // Pixels: fixed 1 Mi-sample blocks hashed in parallel, then their digests in order
+    // (a fixed tree, so the ID does not depend on the thread count).
+    let digests: Vec<Vec<u8>> = img
+        .data
+        .par_chunks(1 << 20)
+        .map(|chunk| {
+            let mut buf = vec![0u8; chunk.len() * 2];
+            for (o, &s) in buf.chunks_exact_mut(2).zip(chunk) {
+                o.copy_from_slice(&s.to_le_bytes());
+            }
+            Sha256::digest(&buf).to_vec()
+        })
+        .collect();
+    for d in &digests {
+        h.update(d);
     }
     // Canonical metadata: what this writer actually writes, so that re-writing a file it
     // wrote reproduces the same ID (a fixed point) while any change of meaning changes it.
@@ -881,6 +911,21 @@ mod tests {
         };
         let a = encode_dng(&img, &o).unwrap();
         assert_eq!(&a[..4], b"MM\0*");
+    }
+
+    #[test]
+    fn tiles_pad_with_same_parity() {
+        let img = sample_image(5, 3, 12);
+        let t = extract_tile(&img, 0, 0, 8, 4);
+        // Columns 5,6,7 repeat columns 3,4,3; row 3 repeats row 1.
+        for y in 0..4 {
+            let sy = [0, 1, 2, 1][y];
+            let want: Vec<u16> = [0, 1, 2, 3, 4, 3, 4, 3]
+                .iter()
+                .map(|&x| img.data[sy * 5 + x])
+                .collect();
+            assert_eq!(&t[y * 8..y * 8 + 8], &want[..], "row {y}");
+        }
     }
 
     #[test]
