@@ -20,7 +20,7 @@ use crate::output::OutputPolicy;
 use crate::raw::RawImage;
 use crate::tiff::tags as t;
 use crate::tiff::value::{Entry, Value};
-use crate::tiff::write::{encode_tiff, Chunks, Ifd};
+use crate::tiff::write::{encode_tiff, write_tiff, Chunks, Ifd};
 use rayon::prelude::*;
 use sha2::{Digest, Sha256};
 use std::path::Path;
@@ -87,6 +87,25 @@ pub struct WriteOptions {
 
 /// Encode a DNG into memory.
 pub fn encode_dng(img: &RawImage, opts: &WriteOptions) -> Result<Vec<u8>> {
+    let (order, ifd0) = build(img, opts)?;
+    encode_tiff(order, &[ifd0])
+}
+
+/// Encode and write a DNG atomically under `policy` (strips/tiles are streamed to the
+/// temporary file, not assembled in memory first).
+pub fn write_dng(
+    img: &RawImage,
+    path: &Path,
+    opts: &WriteOptions,
+    policy: &OutputPolicy,
+) -> Result<()> {
+    policy.check(path)?;
+    let (order, ifd0) = build(img, opts).map_err(|e| e.in_file(path))?;
+    crate::output::write_atomic(path, policy, |w| write_tiff(order, &[ifd0], w))
+}
+
+/// The IFD tree of a DNG: byte order and IFD0 (with its SubIFD/Exif children and data).
+fn build(img: &RawImage, opts: &WriteOptions) -> Result<(ByteOrder, Ifd)> {
     img.validate()?;
     let m = &img.meta;
     check_meta(img)?;
@@ -97,6 +116,7 @@ pub fn encode_dng(img: &RawImage, opts: &WriteOptions) -> Result<Vec<u8>> {
     };
 
     let (raw_chunks, bits, compression, layout_tags) = encode_pixels(img, opts, order)?;
+    let unique_id = raw_data_unique_id(img, &raw_chunks);
 
     let mut raw = Ifd::new();
     raw.set(t::NEW_SUBFILE_TYPE, Value::Long(vec![0]));
@@ -145,20 +165,9 @@ pub fn encode_dng(img: &RawImage, opts: &WriteOptions) -> Result<Vec<u8>> {
             ifd0
         }
     };
-    set_ifd0_tags(&mut ifd0, img, opts)?;
+    set_ifd0_tags(&mut ifd0, img, unique_id);
     ifd0.set_children(t::EXIF_IFD, vec![exif_ifd(m)]);
-    encode_tiff(order, &[ifd0])
-}
-
-/// Encode and write a DNG atomically under `policy`.
-pub fn write_dng(
-    img: &RawImage,
-    path: &Path,
-    opts: &WriteOptions,
-    policy: &OutputPolicy,
-) -> Result<()> {
-    let bytes = encode_dng(img, opts).map_err(|e| e.in_file(path))?;
-    crate::output::write_bytes_atomic(path, policy, &bytes)
+    Ok((order, ifd0))
 }
 
 /// Tags never copied from the source's carried entries: structural tags the writer
@@ -657,7 +666,7 @@ fn set_raw_tags(ifd: &mut Ifd, m: &RawMeta) {
 }
 
 /// Tags of IFD0 (camera, colour, version, provenance).
-fn set_ifd0_tags(ifd: &mut Ifd, img: &RawImage, opts: &WriteOptions) -> Result<()> {
+fn set_ifd0_tags(ifd: &mut Ifd, img: &RawImage, unique_id: Vec<u8>) {
     let m = &img.meta;
     let has_opcodes = m.opcode_lists.iter().any(|o| o.is_some());
     ifd.set(t::DNG_VERSION, Value::Byte(vec![1, 4, 0, 0]));
@@ -722,7 +731,7 @@ fn set_ifd0_tags(ifd: &mut Ifd, img: &RawImage, opts: &WriteOptions) -> Result<(
     } else if let Some(xy) = m.as_shot_white_xy {
         ifd.set(t::AS_SHOT_WHITE_XY, urational(&xy));
     }
-    ifd.set(t::RAW_DATA_UNIQUE_ID, Value::Byte(raw_data_unique_id(img)));
+    ifd.set(t::RAW_DATA_UNIQUE_ID, Value::Byte(unique_id));
     for e in &m.ifd0_extra {
         if !is_dropped(e.tag) {
             ifd.set_if_absent(e.tag, e.value.clone());
@@ -731,8 +740,6 @@ fn set_ifd0_tags(ifd: &mut Ifd, img: &RawImage, opts: &WriteOptions) -> Result<(
     ifd.set_if_absent(t::X_RESOLUTION, Value::Rational(vec![(72, 1)]));
     ifd.set_if_absent(t::Y_RESOLUTION, Value::Rational(vec![(72, 1)]));
     ifd.set_if_absent(t::RESOLUTION_UNIT, Value::Short(vec![2]));
-    let _ = opts;
-    Ok(())
 }
 
 fn exif_ifd(m: &RawMeta) -> Ifd {
@@ -764,28 +771,26 @@ fn exif_ifd(m: &RawMeta) -> Ifd {
     ifd
 }
 
-/// RawDataUniqueID: the first 16 bytes of SHA-256 over the pixel data (little-endian
-/// u16), the dimensions and the metadata as written (JSON; no storage description, no
-/// regenerated or dropped entries).
-/// Deterministic: the same image always gets the same ID, a changed image a new one.
-pub fn raw_data_unique_id(img: &RawImage) -> Vec<u8> {
+/// RawDataUniqueID: the first 16 bytes of SHA-256 over the dimensions, the SHA-256 of every
+/// encoded strip/tile (computed in parallel, combined in order: independent of the thread
+/// count) and the metadata as written (JSON; no storage description, no regenerated or
+/// dropped entries). Deterministic: the same image written the same way always gets the
+/// same ID, a change of pixels or meaning a new one. Hashing the encoded (packed or
+/// compressed) data rather than the `u16` samples keeps it cheap.
+fn raw_data_unique_id(img: &RawImage, chunks: &Chunks) -> Vec<u8> {
+    let (list, tiled) = match chunks {
+        Chunks::Strips(c) => (c, 0u8),
+        Chunks::Tiles(c) => (c, 1u8),
+    };
+    let digests: Vec<Vec<u8>> = list
+        .par_iter()
+        .map(|c| Sha256::digest(c).to_vec())
+        .collect();
     let mut h = Sha256::new();
-    h.update(b"day2night RawDataUniqueID v1\0");
+    h.update(b"day2night RawDataUniqueID v2\0");
     h.update((img.width as u64).to_le_bytes());
     h.update((img.height as u64).to_le_bytes());
-    // Pixels: fixed 1 Mi-sample blocks hashed in parallel, then their digests in order
-    // (a fixed tree, so the ID does not depend on the thread count).
-    let digests: Vec<Vec<u8>> = img
-        .data
-        .par_chunks(1 << 20)
-        .map(|chunk| {
-            let mut buf = vec![0u8; chunk.len() * 2];
-            for (o, &s) in buf.chunks_exact_mut(2).zip(chunk) {
-                o.copy_from_slice(&s.to_le_bytes());
-            }
-            Sha256::digest(&buf).to_vec()
-        })
-        .collect();
+    h.update([tiled]);
     for d in &digests {
         h.update(d);
     }
@@ -929,13 +934,20 @@ mod tests {
     }
 
     #[test]
-    fn unique_id_changes_with_pixels() {
+    fn unique_id_changes_with_pixels_and_meta() {
+        let id = |img: &RawImage| {
+            let (_, ifd0) = build(img, &WriteOptions::default()).unwrap();
+            ifd0.get(t::RAW_DATA_UNIQUE_ID).cloned().unwrap()
+        };
         let a = sample_image(8, 8, 12);
         let mut b = a.clone();
         b.data[5] ^= 1;
-        assert_ne!(raw_data_unique_id(&a), raw_data_unique_id(&b));
-        assert_eq!(raw_data_unique_id(&a), raw_data_unique_id(&a.clone()));
-        assert_eq!(raw_data_unique_id(&a).len(), 16);
+        let mut c = a.clone();
+        c.meta.exif.iso = Some(3200);
+        assert_ne!(id(&a), id(&b));
+        assert_ne!(id(&a), id(&c));
+        assert_eq!(id(&a), id(&a.clone()));
+        assert_eq!(id(&a).count(), 16);
     }
 
     #[test]
