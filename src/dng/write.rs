@@ -115,8 +115,9 @@ fn build(img: &RawImage, opts: &WriteOptions) -> Result<(ByteOrder, Ifd)> {
         ByteOrder::Little
     };
 
-    let (raw_chunks, bits, compression, layout_tags) = encode_pixels(img, opts, order)?;
-    let unique_id = raw_data_unique_id(img, &raw_chunks);
+    let (raw_chunks, digests, bits, compression, layout_tags) = encode_pixels(img, opts, order)?;
+    let tiled = matches!(raw_chunks, Chunks::Tiles(_));
+    let unique_id = raw_data_unique_id(img, tiled, &digests);
 
     let mut raw = Ifd::new();
     raw.set(t::NEW_SUBFILE_TYPE, Value::Long(vec![0]));
@@ -300,12 +301,24 @@ fn check_meta(img: &RawImage) -> Result<()> {
     Ok(())
 }
 
-type Pixels = (Chunks, u16, u16, Vec<(u16, Value)>);
+type Pixels = (Chunks, Vec<Digest32>, u16, u16, Vec<(u16, Value)>);
+type Digest32 = Vec<u8>;
 
-/// Encode the samples: (chunks, BitsPerSample, Compression, layout tags).
+/// A chunk with its SHA-256 (hashed while it is still in cache).
+fn hashed(bytes: Vec<u8>) -> (Vec<u8>, Digest32) {
+    let d = Sha256::digest(&bytes).to_vec();
+    (bytes, d)
+}
+
+/// Encode the samples: (chunks, their SHA-256s, BitsPerSample, Compression, layout tags).
 fn encode_pixels(img: &RawImage, opts: &WriteOptions, order: ByteOrder) -> Result<Pixels> {
     let (w, h) = (img.width, img.height);
-    let max = img.data.iter().copied().max().unwrap_or(0);
+    let max = img
+        .data
+        .par_chunks(1 << 16)
+        .map(|c| c.iter().copied().max().unwrap_or(0))
+        .max()
+        .unwrap_or(0);
     let src_bits = img.meta.bits_per_sample;
     // Bits actually written: the source depth unless a sample does not fit in it.
     let fit_bits = if (max as u32) < (1u32 << src_bits) {
@@ -327,15 +340,17 @@ fn encode_pixels(img: &RawImage, opts: &WriteOptions, order: ByteOrder) -> Resul
                 h.div_ceil(16) * 16
             };
             let (nx, ny) = (w.div_ceil(tw), h.div_ceil(th));
-            let tiles: Vec<Vec<u8>> = (0..nx * ny)
+            let tiles: Vec<(Vec<u8>, Digest32)> = (0..nx * ny)
                 .into_par_iter()
                 .map(|i| {
                     let tile = extract_tile(img, (i % nx) * tw, (i / nx) * th, tw, th);
-                    ljpeg_encode::encode(&tile, tw / 2, th, 2, precision as u8)
+                    ljpeg_encode::encode(&tile, tw / 2, th, 2, precision as u8).map(hashed)
                 })
                 .collect::<Result<_>>()?;
+            let (tiles, digests) = tiles.into_iter().unzip();
             Ok((
                 Chunks::Tiles(tiles),
+                digests,
                 precision,
                 7,
                 vec![
@@ -361,14 +376,15 @@ fn encode_pixels(img: &RawImage, opts: &WriteOptions, order: ByteOrder) -> Resul
                     )));
                 }
                 let (nx, ny) = (w.div_ceil(tw), h.div_ceil(th));
-                let tiles = (0..nx * ny)
+                let (tiles, digests) = (0..nx * ny)
                     .map(|i| {
                         let tile = extract_tile(img, (i % nx) * tw, (i / nx) * th, tw, th);
-                        pack_rows(&tile, tw, bits, big)
+                        hashed(pack_rows(&tile, tw, bits, big))
                     })
-                    .collect();
+                    .unzip();
                 return Ok((
                     Chunks::Tiles(tiles),
+                    digests,
                     bits,
                     1,
                     vec![
@@ -383,13 +399,15 @@ fn encode_pixels(img: &RawImage, opts: &WriteOptions, order: ByteOrder) -> Resul
                 Some(r) => (r as usize).min(h),
                 None => STRIP_BYTES.div_ceil(row_bytes).clamp(1, h),
             };
-            let strips: Vec<Vec<u8>> = img
+            let strips: Vec<(Vec<u8>, Digest32)> = img
                 .data
                 .par_chunks(rps * w)
-                .map(|rows| pack_rows(rows, w, bits, big))
+                .map(|rows| hashed(pack_rows(rows, w, bits, big)))
                 .collect();
+            let (strips, digests) = strips.into_iter().unzip();
             Ok((
                 Chunks::Strips(strips),
+                digests,
                 bits,
                 1,
                 vec![(t::ROWS_PER_STRIP, Value::Long(vec![rps as u32]))],
@@ -772,26 +790,18 @@ fn exif_ifd(m: &RawMeta) -> Ifd {
 }
 
 /// RawDataUniqueID: the first 16 bytes of SHA-256 over the dimensions, the SHA-256 of every
-/// encoded strip/tile (computed in parallel, combined in order: independent of the thread
-/// count) and the metadata as written (JSON; no storage description, no regenerated or
+/// encoded strip/tile (computed in parallel right after encoding each, combined in order:
+/// independent of the thread count) and the metadata as written (JSON; no storage description, no regenerated or
 /// dropped entries). Deterministic: the same image written the same way always gets the
 /// same ID, a change of pixels or meaning a new one. Hashing the encoded (packed or
 /// compressed) data rather than the `u16` samples keeps it cheap.
-fn raw_data_unique_id(img: &RawImage, chunks: &Chunks) -> Vec<u8> {
-    let (list, tiled) = match chunks {
-        Chunks::Strips(c) => (c, 0u8),
-        Chunks::Tiles(c) => (c, 1u8),
-    };
-    let digests: Vec<Vec<u8>> = list
-        .par_iter()
-        .map(|c| Sha256::digest(c).to_vec())
-        .collect();
+fn raw_data_unique_id(img: &RawImage, tiled: bool, digests: &[Digest32]) -> Vec<u8> {
     let mut h = Sha256::new();
     h.update(b"day2night RawDataUniqueID v2\0");
     h.update((img.width as u64).to_le_bytes());
     h.update((img.height as u64).to_le_bytes());
-    h.update([tiled]);
-    for d in &digests {
+    h.update([tiled as u8]);
+    for d in digests {
         h.update(d);
     }
     // Canonical metadata: what this writer actually writes, so that re-writing a file it
