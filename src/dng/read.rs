@@ -913,7 +913,9 @@ fn build_meta(tiff: &Tiff, d: &Located<'_>, g: &Geometry) -> Result<RawMeta> {
     let opcode = |tag: u16| raw.get(tag).and_then(|v| v.as_bytes()).map(|b| b.to_vec());
     let dng_version = version4(ifd0.get(DNG_VERSION)).unwrap_or([1, 0, 0, 0]);
     let raw_in_sub = d.path.is_some();
-    let ifd0_extra = carried(ifd0, if raw_in_sub { &[] } else { MODELLED_EXIF_TAGS });
+    // TIFF/EP copies of the Exif fields in IFD0 are modelled too (the writer puts the
+    // current values in the Exif IFD; a stale IFD0 copy would contradict them).
+    let ifd0_extra = carried(ifd0, MODELLED_EXIF_TAGS);
     let raw_extra = if raw_in_sub {
         carried(raw, &[])
     } else {
