@@ -157,7 +157,13 @@ fn build(img: &RawImage, opts: &WriteOptions) -> Result<(ByteOrder, Ifd)> {
             ifd0.set(t::ROWS_PER_STRIP, Value::Long(vec![th.height as u32]));
             ifd0.set_chunks(Chunks::Strips(vec![th.rgb]));
             let mut raw = raw;
-            for e in &m.raw_extra {
+            // Raw-IFD tags that a source with its raw in IFD0 carried in `ifd0_extra`
+            // belong with the raw image, not with the preview.
+            let raw_tags = m
+                .ifd0_extra
+                .iter()
+                .filter(|e| RAW_IFD_TAGS.contains(&e.tag));
+            for e in m.raw_extra.iter().chain(raw_tags) {
                 if !is_dropped(e.tag) {
                     raw.set_if_absent(e.tag, e.value.clone());
                 }
@@ -166,10 +172,25 @@ fn build(img: &RawImage, opts: &WriteOptions) -> Result<(ByteOrder, Ifd)> {
             ifd0
         }
     };
-    set_ifd0_tags(&mut ifd0, img, unique_id);
+    set_ifd0_tags(&mut ifd0, img, unique_id, opts.raw_ifd == RawIfd::Sub);
     ifd0.set_children(t::EXIF_IFD, vec![exif_ifd(m)]);
     Ok((order, ifd0))
 }
+
+/// Carried tags that describe the raw image itself (DNG spec: "IFD: Raw IFD"); with the raw
+/// in a SubIFD they are written there even when the source had them in IFD0.
+const RAW_IFD_TAGS: &[u16] = &[
+    t::DEFAULT_SCALE,
+    t::BAYER_GREEN_SPLIT,
+    t::CHROMA_BLUR_RADIUS,
+    t::ANTI_ALIAS_STRENGTH,
+    t::BEST_QUALITY_SCALE,
+    t::MASKED_AREAS,
+    t::NOISE_REDUCTION_APPLIED,
+    t::SUB_TILE_BLOCK_SIZE,
+    t::ROW_INTERLEAVE_FACTOR,
+    t::DEFAULT_USER_CROP,
+];
 
 /// Tags never copied from the source's carried entries: structural tags the writer
 /// generates, and tags that become false or dangling once the file is re-laid out or its
@@ -684,7 +705,7 @@ fn set_raw_tags(ifd: &mut Ifd, m: &RawMeta) {
 }
 
 /// Tags of IFD0 (camera, colour, version, provenance).
-fn set_ifd0_tags(ifd: &mut Ifd, img: &RawImage, unique_id: Vec<u8>) {
+fn set_ifd0_tags(ifd: &mut Ifd, img: &RawImage, unique_id: Vec<u8>, raw_in_sub: bool) {
     let m = &img.meta;
     let has_opcodes = m.opcode_lists.iter().any(|o| o.is_some());
     ifd.set(t::DNG_VERSION, Value::Byte(vec![1, 4, 0, 0]));
@@ -751,7 +772,8 @@ fn set_ifd0_tags(ifd: &mut Ifd, img: &RawImage, unique_id: Vec<u8>) {
     }
     ifd.set(t::RAW_DATA_UNIQUE_ID, Value::Byte(unique_id));
     for e in &m.ifd0_extra {
-        if !is_dropped(e.tag) {
+        let belongs_to_raw = raw_in_sub && RAW_IFD_TAGS.contains(&e.tag);
+        if !is_dropped(e.tag) && !belongs_to_raw {
             ifd.set_if_absent(e.tag, e.value.clone());
         }
     }
@@ -958,6 +980,34 @@ mod tests {
         assert_ne!(id(&a), id(&c));
         assert_eq!(id(&a), id(&a.clone()));
         assert_eq!(id(&a).count(), 16);
+    }
+
+    #[test]
+    fn raw_ifd_tags_follow_the_raw_into_the_subifd() {
+        let mut img = sample_image(16, 16, 12);
+        img.meta.ifd0_extra.push(Entry {
+            tag: t::DEFAULT_SCALE,
+            value: Value::Rational(vec![(1, 1), (1, 1)]),
+        });
+        img.meta.ifd0_extra.push(Entry {
+            tag: t::COPYRIGHT,
+            value: Value::ascii("x"),
+        });
+        let sub = WriteOptions {
+            raw_ifd: RawIfd::Sub,
+            ..Default::default()
+        };
+        let (_, ifd0) = build(&img, &sub).unwrap();
+        assert!(ifd0.get(t::DEFAULT_SCALE).is_none());
+        assert!(ifd0.get(t::COPYRIGHT).is_some());
+        let back = crate::dng::read::read_dng_bytes(&encode_dng(&img, &sub).unwrap()).unwrap();
+        assert!(back
+            .meta
+            .raw_extra
+            .iter()
+            .any(|e| e.tag == t::DEFAULT_SCALE));
+        let (_, main) = build(&img, &WriteOptions::default()).unwrap();
+        assert!(main.get(t::DEFAULT_SCALE).is_some());
     }
 
     #[test]
