@@ -6,7 +6,8 @@
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 use day2night::dng::meta::RawMeta;
 use day2night::dng::read::read_dng;
-use day2night::dng::write::{encode_dng, Compression, WriteOptions};
+use day2night::dng::write::{encode_dng, write_dng, Compression, WriteOptions};
+use day2night::output::{write_bytes_atomic, OutputPolicy};
 use day2night::raw::{Bayer, RawImage};
 use std::hint::black_box;
 use std::time::Duration;
@@ -54,21 +55,23 @@ fn bench(c: &mut Criterion) {
         std::fs::write(&src, &bytes).unwrap();
         let out = dir.path().join(format!("{name}_out.dng"));
         g.throughput(Throughput::Bytes(bytes.len() as u64));
+        let policy = OutputPolicy {
+            overwrite: true,
+            inputs: vec![src.clone()],
+        };
         g.bench_function(format!("copy_file_{name}"), |b| {
             b.iter(|| {
-                // Read the file's bytes and write them to a new file: the floor for I/O.
+                // Read the file's bytes and write them through the same atomic path
+                // (temp file, fsync, rename): the floor for reading + writing this file.
                 let v = std::fs::read(&src).unwrap();
-                std::fs::write(&out, &v).unwrap();
+                write_bytes_atomic(&out, &policy, &v).unwrap();
             })
         });
         g.bench_function(format!("read_{name}"), |b| {
             b.iter(|| black_box(read_dng(&src).unwrap()))
         });
         g.bench_function(format!("write_{name}"), |b| {
-            b.iter(|| {
-                let v = encode_dng(&img, &opts).unwrap();
-                std::fs::write(&out, &v).unwrap();
-            })
+            b.iter(|| write_dng(&img, &out, &opts, &policy).unwrap())
         });
         g.bench_function(format!("encode_{name}"), |b| {
             b.iter(|| black_box(encode_dng(&img, &opts).unwrap()))

@@ -512,3 +512,14 @@ fn writer_encoder_round_trips_through_our_decoder() {
         }
     }
 }
+
+/// When IFD0 (an RGB preview) also claims NewSubFileType 0, the CFA SubIFD is still chosen.
+#[test]
+fn cfa_subifd_preferred_over_main_preview() {
+    use day2night::tiff::value::Value;
+    let mut b = Builder::new(24, 16, 12);
+    b.raw_in_sub = true;
+    b.ifd0_set = vec![(254, Value::Long(vec![0]))];
+    let img = check_same(&b);
+    assert_eq!(img.meta.storage.unwrap().sub_ifd, Some(vec![0]));
+}

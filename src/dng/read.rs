@@ -114,37 +114,43 @@ fn is_main_image(ifd: &Ifd) -> bool {
     ifd.u32(NEW_SUBFILE_TYPE).unwrap_or(0) == 0
 }
 
-fn find_in_subs<'a>(ifd: &'a Ifd, path: &mut Vec<usize>) -> Option<(&'a Ifd, Vec<usize>)> {
+fn collect_main<'a>(ifd: &'a Ifd, path: &mut Vec<usize>, out: &mut Vec<(&'a Ifd, Vec<usize>)>) {
     for (i, s) in ifd.sub_ifds.iter().enumerate() {
         path.push(i);
         if is_main_image(s) {
-            return Some((s, path.clone()));
+            out.push((s, path.clone()));
         }
-        if let Some(found) = find_in_subs(s, path) {
-            return Some(found);
-        }
+        collect_main(s, path, out);
         path.pop();
     }
-    None
 }
 
+/// The raw IFD: among IFD0 and its SubIFD tree (depth first) the IFDs with NewSubFileType 0,
+/// the first one with CFA photometric, else the first one (e.g. LinearRaw, reported later).
 fn locate(tiff: &Tiff) -> Result<Located<'_>> {
     let ifd0 = tiff.ifd0();
     if ifd0.get(DNG_VERSION).is_none() {
         return Err(Error::unsupported("not a DNG: IFD0 has no DNGVersion tag"));
     }
+    let mut candidates = Vec::new();
     if is_main_image(ifd0) {
-        return Ok(Located {
-            ifd0,
-            raw: ifd0,
-            path: None,
-        });
+        candidates.push((ifd0, Vec::new()));
     }
-    match find_in_subs(ifd0, &mut Vec::new()) {
+    collect_main(ifd0, &mut Vec::new(), &mut candidates);
+    let is_cfa = |i: &Ifd| i.u32(PHOTOMETRIC_INTERPRETATION) == Some(u32::from(PHOTOMETRIC_CFA));
+    let chosen = candidates
+        .iter()
+        .find(|(i, _)| is_cfa(i))
+        .or_else(|| candidates.first());
+    match chosen {
         Some((raw, path)) => Ok(Located {
             ifd0,
             raw,
-            path: Some(path),
+            path: if path.is_empty() {
+                None
+            } else {
+                Some(path.clone())
+            },
         }),
         None => Err(Error::malformed(
             "no raw image: no IFD with NewSubFileType 0 (IFD0 or SubIFDs)",
@@ -907,7 +913,9 @@ fn build_meta(tiff: &Tiff, d: &Located<'_>, g: &Geometry) -> Result<RawMeta> {
     let opcode = |tag: u16| raw.get(tag).and_then(|v| v.as_bytes()).map(|b| b.to_vec());
     let dng_version = version4(ifd0.get(DNG_VERSION)).unwrap_or([1, 0, 0, 0]);
     let raw_in_sub = d.path.is_some();
-    let ifd0_extra = carried(ifd0, if raw_in_sub { &[] } else { MODELLED_EXIF_TAGS });
+    // TIFF/EP copies of the Exif fields in IFD0 are modelled too (the writer puts the
+    // current values in the Exif IFD; a stale IFD0 copy would contradict them).
+    let ifd0_extra = carried(ifd0, MODELLED_EXIF_TAGS);
     let raw_extra = if raw_in_sub {
         carried(raw, &[])
     } else {

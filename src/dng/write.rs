@@ -20,7 +20,7 @@ use crate::output::OutputPolicy;
 use crate::raw::RawImage;
 use crate::tiff::tags as t;
 use crate::tiff::value::{Entry, Value};
-use crate::tiff::write::{encode_tiff, Chunks, Ifd};
+use crate::tiff::write::{encode_tiff, write_tiff, Chunks, Ifd};
 use rayon::prelude::*;
 use sha2::{Digest, Sha256};
 use std::path::Path;
@@ -87,6 +87,25 @@ pub struct WriteOptions {
 
 /// Encode a DNG into memory.
 pub fn encode_dng(img: &RawImage, opts: &WriteOptions) -> Result<Vec<u8>> {
+    let (order, ifd0) = build(img, opts)?;
+    encode_tiff(order, &[ifd0])
+}
+
+/// Encode and write a DNG atomically under `policy` (strips/tiles are streamed to the
+/// temporary file, not assembled in memory first).
+pub fn write_dng(
+    img: &RawImage,
+    path: &Path,
+    opts: &WriteOptions,
+    policy: &OutputPolicy,
+) -> Result<()> {
+    policy.check(path)?;
+    let (order, ifd0) = build(img, opts).map_err(|e| e.in_file(path))?;
+    crate::output::write_atomic(path, policy, |w| write_tiff(order, &[ifd0], w))
+}
+
+/// The IFD tree of a DNG: byte order and IFD0 (with its SubIFD/Exif children and data).
+fn build(img: &RawImage, opts: &WriteOptions) -> Result<(ByteOrder, Ifd)> {
     img.validate()?;
     let m = &img.meta;
     check_meta(img)?;
@@ -96,7 +115,9 @@ pub fn encode_dng(img: &RawImage, opts: &WriteOptions) -> Result<Vec<u8>> {
         ByteOrder::Little
     };
 
-    let (raw_chunks, bits, compression, layout_tags) = encode_pixels(img, opts, order)?;
+    let (raw_chunks, digests, bits, compression, layout_tags) = encode_pixels(img, opts, order)?;
+    let tiled = matches!(raw_chunks, Chunks::Tiles(_));
+    let unique_id = raw_data_unique_id(img, tiled, &digests);
 
     let mut raw = Ifd::new();
     raw.set(t::NEW_SUBFILE_TYPE, Value::Long(vec![0]));
@@ -136,7 +157,13 @@ pub fn encode_dng(img: &RawImage, opts: &WriteOptions) -> Result<Vec<u8>> {
             ifd0.set(t::ROWS_PER_STRIP, Value::Long(vec![th.height as u32]));
             ifd0.set_chunks(Chunks::Strips(vec![th.rgb]));
             let mut raw = raw;
-            for e in &m.raw_extra {
+            // Raw-IFD tags that a source with its raw in IFD0 carried in `ifd0_extra`
+            // belong with the raw image, not with the preview.
+            let raw_tags = m
+                .ifd0_extra
+                .iter()
+                .filter(|e| RAW_IFD_TAGS.contains(&e.tag));
+            for e in m.raw_extra.iter().chain(raw_tags) {
                 if !is_dropped(e.tag) {
                     raw.set_if_absent(e.tag, e.value.clone());
                 }
@@ -145,21 +172,25 @@ pub fn encode_dng(img: &RawImage, opts: &WriteOptions) -> Result<Vec<u8>> {
             ifd0
         }
     };
-    set_ifd0_tags(&mut ifd0, img, opts)?;
+    set_ifd0_tags(&mut ifd0, img, unique_id, opts.raw_ifd == RawIfd::Sub);
     ifd0.set_children(t::EXIF_IFD, vec![exif_ifd(m)]);
-    encode_tiff(order, &[ifd0])
+    Ok((order, ifd0))
 }
 
-/// Encode and write a DNG atomically under `policy`.
-pub fn write_dng(
-    img: &RawImage,
-    path: &Path,
-    opts: &WriteOptions,
-    policy: &OutputPolicy,
-) -> Result<()> {
-    let bytes = encode_dng(img, opts).map_err(|e| e.in_file(path))?;
-    crate::output::write_bytes_atomic(path, policy, &bytes)
-}
+/// Carried tags that describe the raw image itself (DNG spec: "IFD: Raw IFD"); with the raw
+/// in a SubIFD they are written there even when the source had them in IFD0.
+const RAW_IFD_TAGS: &[u16] = &[
+    t::DEFAULT_SCALE,
+    t::BAYER_GREEN_SPLIT,
+    t::CHROMA_BLUR_RADIUS,
+    t::ANTI_ALIAS_STRENGTH,
+    t::BEST_QUALITY_SCALE,
+    t::MASKED_AREAS,
+    t::NOISE_REDUCTION_APPLIED,
+    t::SUB_TILE_BLOCK_SIZE,
+    t::ROW_INTERLEAVE_FACTOR,
+    t::DEFAULT_USER_CROP,
+];
 
 /// Tags never copied from the source's carried entries: structural tags the writer
 /// generates, and tags that become false or dangling once the file is re-laid out or its
@@ -291,12 +322,24 @@ fn check_meta(img: &RawImage) -> Result<()> {
     Ok(())
 }
 
-type Pixels = (Chunks, u16, u16, Vec<(u16, Value)>);
+type Pixels = (Chunks, Vec<Digest32>, u16, u16, Vec<(u16, Value)>);
+type Digest32 = Vec<u8>;
 
-/// Encode the samples: (chunks, BitsPerSample, Compression, layout tags).
+/// A chunk with its SHA-256 (hashed while it is still in cache).
+fn hashed(bytes: Vec<u8>) -> (Vec<u8>, Digest32) {
+    let d = Sha256::digest(&bytes).to_vec();
+    (bytes, d)
+}
+
+/// Encode the samples: (chunks, their SHA-256s, BitsPerSample, Compression, layout tags).
 fn encode_pixels(img: &RawImage, opts: &WriteOptions, order: ByteOrder) -> Result<Pixels> {
     let (w, h) = (img.width, img.height);
-    let max = img.data.iter().copied().max().unwrap_or(0);
+    let max = img
+        .data
+        .par_chunks(1 << 16)
+        .map(|c| c.iter().copied().max().unwrap_or(0))
+        .max()
+        .unwrap_or(0);
     let src_bits = img.meta.bits_per_sample;
     // Bits actually written: the source depth unless a sample does not fit in it.
     let fit_bits = if (max as u32) < (1u32 << src_bits) {
@@ -318,15 +361,17 @@ fn encode_pixels(img: &RawImage, opts: &WriteOptions, order: ByteOrder) -> Resul
                 h.div_ceil(16) * 16
             };
             let (nx, ny) = (w.div_ceil(tw), h.div_ceil(th));
-            let tiles: Vec<Vec<u8>> = (0..nx * ny)
+            let tiles: Vec<(Vec<u8>, Digest32)> = (0..nx * ny)
                 .into_par_iter()
                 .map(|i| {
                     let tile = extract_tile(img, (i % nx) * tw, (i / nx) * th, tw, th);
-                    ljpeg_encode::encode(&tile, tw / 2, th, 2, precision as u8)
+                    ljpeg_encode::encode(&tile, tw / 2, th, 2, precision as u8).map(hashed)
                 })
                 .collect::<Result<_>>()?;
+            let (tiles, digests) = tiles.into_iter().unzip();
             Ok((
                 Chunks::Tiles(tiles),
+                digests,
                 precision,
                 7,
                 vec![
@@ -352,14 +397,15 @@ fn encode_pixels(img: &RawImage, opts: &WriteOptions, order: ByteOrder) -> Resul
                     )));
                 }
                 let (nx, ny) = (w.div_ceil(tw), h.div_ceil(th));
-                let tiles = (0..nx * ny)
+                let (tiles, digests) = (0..nx * ny)
                     .map(|i| {
                         let tile = extract_tile(img, (i % nx) * tw, (i / nx) * th, tw, th);
-                        pack_rows(&tile, tw, bits, big)
+                        hashed(pack_rows(&tile, tw, bits, big))
                     })
-                    .collect();
+                    .unzip();
                 return Ok((
                     Chunks::Tiles(tiles),
+                    digests,
                     bits,
                     1,
                     vec![
@@ -374,13 +420,15 @@ fn encode_pixels(img: &RawImage, opts: &WriteOptions, order: ByteOrder) -> Resul
                 Some(r) => (r as usize).min(h),
                 None => STRIP_BYTES.div_ceil(row_bytes).clamp(1, h),
             };
-            let strips: Vec<Vec<u8>> = img
+            let strips: Vec<(Vec<u8>, Digest32)> = img
                 .data
                 .par_chunks(rps * w)
-                .map(|rows| pack_rows(rows, w, bits, big))
+                .map(|rows| hashed(pack_rows(rows, w, bits, big)))
                 .collect();
+            let (strips, digests) = strips.into_iter().unzip();
             Ok((
                 Chunks::Strips(strips),
+                digests,
                 bits,
                 1,
                 vec![(t::ROWS_PER_STRIP, Value::Long(vec![rps as u32]))],
@@ -657,7 +705,7 @@ fn set_raw_tags(ifd: &mut Ifd, m: &RawMeta) {
 }
 
 /// Tags of IFD0 (camera, colour, version, provenance).
-fn set_ifd0_tags(ifd: &mut Ifd, img: &RawImage, opts: &WriteOptions) -> Result<()> {
+fn set_ifd0_tags(ifd: &mut Ifd, img: &RawImage, unique_id: Vec<u8>, raw_in_sub: bool) {
     let m = &img.meta;
     let has_opcodes = m.opcode_lists.iter().any(|o| o.is_some());
     ifd.set(t::DNG_VERSION, Value::Byte(vec![1, 4, 0, 0]));
@@ -722,17 +770,16 @@ fn set_ifd0_tags(ifd: &mut Ifd, img: &RawImage, opts: &WriteOptions) -> Result<(
     } else if let Some(xy) = m.as_shot_white_xy {
         ifd.set(t::AS_SHOT_WHITE_XY, urational(&xy));
     }
-    ifd.set(t::RAW_DATA_UNIQUE_ID, Value::Byte(raw_data_unique_id(img)));
+    ifd.set(t::RAW_DATA_UNIQUE_ID, Value::Byte(unique_id));
     for e in &m.ifd0_extra {
-        if !is_dropped(e.tag) {
+        let belongs_to_raw = raw_in_sub && RAW_IFD_TAGS.contains(&e.tag);
+        if !is_dropped(e.tag) && !belongs_to_raw {
             ifd.set_if_absent(e.tag, e.value.clone());
         }
     }
     ifd.set_if_absent(t::X_RESOLUTION, Value::Rational(vec![(72, 1)]));
     ifd.set_if_absent(t::Y_RESOLUTION, Value::Rational(vec![(72, 1)]));
     ifd.set_if_absent(t::RESOLUTION_UNIT, Value::Short(vec![2]));
-    let _ = opts;
-    Ok(())
 }
 
 fn exif_ifd(m: &RawMeta) -> Ifd {
@@ -764,29 +811,19 @@ fn exif_ifd(m: &RawMeta) -> Ifd {
     ifd
 }
 
-/// RawDataUniqueID: the first 16 bytes of SHA-256 over the pixel data (little-endian
-/// u16), the dimensions and the metadata as written (JSON; no storage description, no
-/// regenerated or dropped entries).
-/// Deterministic: the same image always gets the same ID, a changed image a new one.
-pub fn raw_data_unique_id(img: &RawImage) -> Vec<u8> {
+/// RawDataUniqueID: the first 16 bytes of SHA-256 over the dimensions, the SHA-256 of every
+/// encoded strip/tile (computed in parallel right after encoding each, combined in order:
+/// independent of the thread count) and the metadata as written (JSON; no storage description, no regenerated or
+/// dropped entries). Deterministic: the same image written the same way always gets the
+/// same ID, a change of pixels or meaning a new one. Hashing the encoded (packed or
+/// compressed) data rather than the `u16` samples keeps it cheap.
+fn raw_data_unique_id(img: &RawImage, tiled: bool, digests: &[Digest32]) -> Vec<u8> {
     let mut h = Sha256::new();
-    h.update(b"day2night RawDataUniqueID v1\0");
+    h.update(b"day2night RawDataUniqueID v2\0");
     h.update((img.width as u64).to_le_bytes());
     h.update((img.height as u64).to_le_bytes());
-    // Pixels: fixed 1 Mi-sample blocks hashed in parallel, then their digests in order
-    // (a fixed tree, so the ID does not depend on the thread count).
-    let digests: Vec<Vec<u8>> = img
-        .data
-        .par_chunks(1 << 20)
-        .map(|chunk| {
-            let mut buf = vec![0u8; chunk.len() * 2];
-            for (o, &s) in buf.chunks_exact_mut(2).zip(chunk) {
-                o.copy_from_slice(&s.to_le_bytes());
-            }
-            Sha256::digest(&buf).to_vec()
-        })
-        .collect();
-    for d in &digests {
+    h.update([tiled as u8]);
+    for d in digests {
         h.update(d);
     }
     // Canonical metadata: what this writer actually writes, so that re-writing a file it
@@ -929,13 +966,48 @@ mod tests {
     }
 
     #[test]
-    fn unique_id_changes_with_pixels() {
+    fn unique_id_changes_with_pixels_and_meta() {
+        let id = |img: &RawImage| {
+            let (_, ifd0) = build(img, &WriteOptions::default()).unwrap();
+            ifd0.get(t::RAW_DATA_UNIQUE_ID).cloned().unwrap()
+        };
         let a = sample_image(8, 8, 12);
         let mut b = a.clone();
         b.data[5] ^= 1;
-        assert_ne!(raw_data_unique_id(&a), raw_data_unique_id(&b));
-        assert_eq!(raw_data_unique_id(&a), raw_data_unique_id(&a.clone()));
-        assert_eq!(raw_data_unique_id(&a).len(), 16);
+        let mut c = a.clone();
+        c.meta.exif.iso = Some(3200);
+        assert_ne!(id(&a), id(&b));
+        assert_ne!(id(&a), id(&c));
+        assert_eq!(id(&a), id(&a.clone()));
+        assert_eq!(id(&a).count(), 16);
+    }
+
+    #[test]
+    fn raw_ifd_tags_follow_the_raw_into_the_subifd() {
+        let mut img = sample_image(16, 16, 12);
+        img.meta.ifd0_extra.push(Entry {
+            tag: t::DEFAULT_SCALE,
+            value: Value::Rational(vec![(1, 1), (1, 1)]),
+        });
+        img.meta.ifd0_extra.push(Entry {
+            tag: t::COPYRIGHT,
+            value: Value::ascii("x"),
+        });
+        let sub = WriteOptions {
+            raw_ifd: RawIfd::Sub,
+            ..Default::default()
+        };
+        let (_, ifd0) = build(&img, &sub).unwrap();
+        assert!(ifd0.get(t::DEFAULT_SCALE).is_none());
+        assert!(ifd0.get(t::COPYRIGHT).is_some());
+        let back = crate::dng::read::read_dng_bytes(&encode_dng(&img, &sub).unwrap()).unwrap();
+        assert!(back
+            .meta
+            .raw_extra
+            .iter()
+            .any(|e| e.tag == t::DEFAULT_SCALE));
+        let (_, main) = build(&img, &WriteOptions::default()).unwrap();
+        assert!(main.get(t::DEFAULT_SCALE).is_some());
     }
 
     #[test]
