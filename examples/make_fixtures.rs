@@ -271,8 +271,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             .unwrap_or_else(|| "fixtures".to_string()),
     );
     std::fs::create_dir_all(&dir)?;
-    let packed = |big: bool| WriteOptions {
-        packed: true,
+    let order = |big: bool| WriteOptions {
         big_endian: big,
         ..Default::default()
     };
@@ -293,12 +292,27 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             border: None,
         },
         Spec {
+            name: "rggb_12bit_in16_le_strips.dng",
+            width: 320,
+            height: 240,
+            bayer: Bayer::RGGB,
+            bits: 12,
+            opts: WriteOptions {
+                unpacked16: true,
+                ..Default::default()
+            },
+            per_site_black: false,
+            black_deltas: false,
+            linearization: false,
+            border: None,
+        },
+        Spec {
             name: "grbg_12bit_packed_be_strips.dng",
             width: 320,
             height: 240,
             bayer: Bayer::GRBG,
             bits: 12,
-            opts: packed(true),
+            opts: order(true),
             per_site_black: false,
             black_deltas: false,
             linearization: false,
@@ -311,7 +325,6 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             bayer: Bayer::GBRG,
             bits: 10,
             opts: WriteOptions {
-                packed: true,
                 uncompressed_tiles: Some((64, 48)),
                 ..Default::default()
             },
@@ -327,7 +340,6 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             bayer: Bayer::BGGR,
             bits: 14,
             opts: WriteOptions {
-                packed: true,
                 raw_ifd: RawIfd::Sub,
                 ..Default::default()
             },
@@ -374,7 +386,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             height: 240,
             bayer: Bayer::GBRG,
             bits: 10,
-            opts: packed(true),
+            opts: order(true),
             per_site_black: false,
             black_deltas: false,
             linearization: true,
@@ -398,7 +410,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             height: 9,
             bayer: Bayer::BGGR,
             bits: 12,
-            opts: packed(false),
+            opts: order(false),
             per_site_black: false,
             black_deltas: false,
             linearization: false,
@@ -428,6 +440,6 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let source = dir.join("source/astronaut.png");
     let day = make_day(&source)?;
     day.validate()?;
-    write(&dir, "day.dng", &day, &packed(false))?;
+    write(&dir, "day.dng", &day, &order(false))?;
     Ok(())
 }

@@ -3,9 +3,11 @@
 //!
 //! Layouts: raw in IFD0 (default) or in a SubIFD behind a small RGB thumbnail rendered from
 //! the raw being written ([`RawIfd::Sub`]); uncompressed strips (default; 16-bit container
-//! samples, or 8-bit for 8-bit sources) or lossless-JPEG tiles ([`Compression::Ljpeg`], 256x256,
-//! two-component half-width encoding, precision = BitsPerSample). Fixture-only options:
-//! big-endian files, packed 10/12/14-bit samples, uncompressed tiles, chosen strip height.
+//! or packed samples) or lossless-JPEG tiles ([`Compression::Ljpeg`], 256x256,
+//! two-component half-width encoding, precision = BitsPerSample). Uncompressed samples keep
+//! the source's BitsPerSample (10/12/14-bit packed MSB-first, as camera firmwares write);
+//! `unpacked16` stores them in a 16-bit container instead. Fixture-only options: big-endian
+//! files, uncompressed tiles, chosen strip height.
 //!
 //! What is carried and what is dropped is documented in docs/dng-writing.md and in
 //! [`is_dropped`].
@@ -73,9 +75,10 @@ pub struct WriteOptions {
     pub raw_ifd: RawIfd,
     /// Fixture option: write a big-endian ("MM") file.
     pub big_endian: bool,
-    /// Fixture option: uncompressed samples packed at `meta.bits_per_sample` bits (MSB
-    /// first, rows padded to a byte) instead of a 16-bit container. Ignored for 8/16 bits.
-    pub packed: bool,
+    /// Write uncompressed 9..15-bit samples in a 16-bit container instead of packing them
+    /// at `meta.bits_per_sample` bits (MSB first, rows padded to a byte; the default, which
+    /// keeps BitsPerSample as the source had it, as Magic Lantern and camera firmwares do).
+    pub unpacked16: bool,
     /// Fixture option: uncompressed tiles of this size (multiple of 16) instead of strips.
     pub uncompressed_tiles: Option<(u32, u32)>,
     /// Fixture option: rows per uncompressed strip (default: about 1 MiB per strip).
@@ -333,7 +336,7 @@ fn encode_pixels(img: &RawImage, opts: &WriteOptions, order: ByteOrder) -> Resul
             ))
         }
         Compression::None => {
-            let bits = if opts.packed && fit_bits != 8 && fit_bits != 16 {
+            let bits = if !opts.unpacked16 {
                 fit_bits
             } else if fit_bits <= 8 {
                 8
@@ -429,9 +432,36 @@ fn pack_rows(samples: &[u16], w: usize, bits: u16, big: bool) -> Vec<u8> {
             let row_bytes = (w * bits as usize).div_ceil(8);
             let mut out = Vec::with_capacity(row_bytes * samples.len() / w.max(1));
             for row in samples.chunks(w.max(1)) {
+                // Fast paths: whole groups of samples that end on a byte boundary.
+                let rest = match bits {
+                    12 => {
+                        let mut it = row.chunks_exact(2);
+                        for g in &mut it {
+                            let (a, b) = (g[0] as u32 & 0xFFF, g[1] as u32 & 0xFFF);
+                            let v = (a << 12) | b;
+                            out.extend_from_slice(&[(v >> 16) as u8, (v >> 8) as u8, v as u8]);
+                        }
+                        it.remainder()
+                    }
+                    10 | 14 => {
+                        let mut it = row.chunks_exact(4);
+                        let m = (1u64 << bits) - 1;
+                        for g in &mut it {
+                            let v = (g[0] as u64 & m) << (3 * bits)
+                                | (g[1] as u64 & m) << (2 * bits)
+                                | (g[2] as u64 & m) << bits
+                                | (g[3] as u64 & m);
+                            let nbytes = bits as usize / 2;
+                            let be = v.to_be_bytes();
+                            out.extend_from_slice(&be[8 - nbytes..]);
+                        }
+                        it.remainder()
+                    }
+                    _ => row,
+                };
                 let mut acc: u64 = 0;
                 let mut n = 0u32;
-                for &s in row {
+                for &s in rest {
                     acc = (acc << bits) | (s as u64 & ((1u64 << bits) - 1));
                     n += bits as u32;
                     while n >= 8 {
@@ -713,7 +743,8 @@ fn exif_ifd(m: &RawMeta) -> Ifd {
 }
 
 /// RawDataUniqueID: the first 16 bytes of SHA-256 over the pixel data (little-endian
-/// u16), the dimensions and the metadata (JSON, without the source storage description).
+/// u16), the dimensions and the metadata as written (JSON; no storage description, no
+/// regenerated or dropped entries).
 /// Deterministic: the same image always gets the same ID, a changed image a new one.
 pub fn raw_data_unique_id(img: &RawImage) -> Vec<u8> {
     let mut h = Sha256::new();
@@ -728,8 +759,22 @@ pub fn raw_data_unique_id(img: &RawImage) -> Vec<u8> {
         }
         h.update(&buf);
     }
+    // Canonical metadata: what this writer actually writes, so that re-writing a file it
+    // wrote reproduces the same ID (a fixed point) while any change of meaning changes it.
     let mut meta = img.meta.clone();
     meta.storage = None;
+    meta.dng_version = [1, 4, 0, 0];
+    meta.dng_backward_version = None;
+    let keep = |e: &Entry| {
+        !is_dropped(e.tag)
+            && !matches!(
+                e.tag,
+                t::X_RESOLUTION | t::Y_RESOLUTION | t::RESOLUTION_UNIT
+            )
+    };
+    meta.ifd0_extra.retain(keep);
+    meta.raw_extra.retain(keep);
+    meta.exif_extra.retain(keep);
     if let Ok(json) = serde_json::to_vec(&meta) {
         h.update(&json);
     }
@@ -788,6 +833,28 @@ mod tests {
             vec![0xFF, 0xC0, 0x00, 0x40]
         );
         assert_eq!(pack_rows(&[0x0102], 1, 16, true), vec![1, 2]);
+        // Fast paths agree with the generic packer (odd widths leave a generic tail).
+        for bits in [10u16, 12, 14] {
+            let row: Vec<u16> = (0..13u32)
+                .map(|i| ((i * 977) % (1 << bits)) as u16)
+                .collect();
+            let fast = pack_rows(&row, 13, bits, false);
+            let mut slow = vec![];
+            let (mut acc, mut n) = (0u64, 0u32);
+            for &s in &row {
+                acc = (acc << bits) | s as u64;
+                n += bits as u32;
+                while n >= 8 {
+                    n -= 8;
+                    slow.push((acc >> n) as u8);
+                }
+                acc &= (1 << n) - 1;
+            }
+            if n > 0 {
+                slow.push((acc << (8 - n)) as u8);
+            }
+            assert_eq!(fast, slow, "{bits}");
+        }
         assert_eq!(pack_rows(&[0x0102], 1, 16, false), vec![2, 1]);
     }
 
@@ -809,7 +876,6 @@ mod tests {
         }
         let o = WriteOptions {
             big_endian: true,
-            packed: true,
             uncompressed_tiles: Some((16, 16)),
             ..Default::default()
         };
