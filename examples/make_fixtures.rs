@@ -1,7 +1,7 @@
 //! Generate the committed DNG fixtures (deterministic: same code, same bytes).
 //!
 //! ```text
-//! cargo run --release --example make_fixtures -- fixtures/
+//! cargo run --release --example make_fixtures -- fixtures/ [SOURCE.png]
 //! ```
 //!
 //! Writes every fixture listed in `fixtures/README.md`; the default day image `day.dng` is
@@ -270,7 +270,19 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             .nth(1)
             .unwrap_or_else(|| "fixtures".to_string()),
     );
-    std::fs::create_dir_all(&dir)?;
+    let source = std::env::args()
+        .nth(2)
+        .map(PathBuf::from)
+        .unwrap_or_else(|| {
+            Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/source/astronaut.png")
+        });
+    generate(&dir, &source)
+}
+
+/// Write every fixture into `dir`; `source` is the photograph behind `day.dng`.
+/// (Also used by tests/fixtures_reproducible.rs.)
+pub fn generate(dir: &Path, source: &Path) -> Result<(), Box<dyn std::error::Error>> {
+    std::fs::create_dir_all(dir)?;
     let order = |big: bool| WriteOptions {
         big_endian: big,
         ..Default::default()
@@ -435,11 +447,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     for s in &specs {
         let img = make_synthetic(s);
         img.validate()?;
-        write(&dir, s.name, &img, &s.opts)?;
+        write(dir, s.name, &img, &s.opts)?;
     }
-    let source = dir.join("source/astronaut.png");
-    let day = make_day(&source)?;
+    let day = make_day(source)?;
     day.validate()?;
-    write(&dir, "day.dng", &day, &order(false))?;
+    write(dir, "day.dng", &day, &order(false))?;
     Ok(())
 }

@@ -15,6 +15,8 @@ For every OUT:
                      when the raw is in a SubIFD) and, for raw in IFD0, the SOURCE's. Known
                      limitation: the PyPI build's libtiff cannot decode lossless JPEG, so
                      LJ92 in IFD0 is reported as KNOWN, not checked.
+  iinfo            : Debian openimageio-tools (OpenImageIO through LibRaw), when installed:
+                     same decoded width/height/channels as the SOURCE.
   tifffile         : parses OUT; DNG tags present in IFD0/raw IFD; entries sorted and unique;
                      every strip/tile offset even; stale tags absent; uncompressed 16-bit raw
                      data decodes to the expected pixels.
@@ -103,6 +105,20 @@ def oiio_probe(path):
     return res, None
 
 
+def iinfo_probe(path):
+    """Debian's OpenImageIO (openimageio-tools) reads raw files through LibRaw."""
+    import os
+    import re
+    exe = os.environ.get("D2N_IINFO", "/usr/bin/iinfo")
+    if not os.path.exists(exe):
+        return None, "not installed"
+    r = subprocess.run([exe, path], capture_output=True, text=True)
+    m = re.search(r":\s*(\d+)\s*x\s*(\d+),\s*(\d+) channel", r.stdout)
+    if r.returncode != 0 or not m:
+        return None, (r.stdout + r.stderr).strip()[-200:]
+    return tuple(int(g) for g in m.groups()), None
+
+
 STALE = {50972: "RawImageDigest", 51111: "NewRawImageDigest", 50828: "OriginalRawFileData",
          50973: "OriginalRawFileDigest", 37500: "MakerNote", 50740: "DNGPrivateData"}
 IFD0_REQUIRED = {50706: "DNGVersion", 50707: "DNGBackwardVersion", 50708: "UniqueCameraModel",
@@ -182,6 +198,10 @@ def main():
     s_rp, s_rp_err = rawpy_probe(src)
     s_code, s_msgs, s_info, s_px, _ = dngpy_probe(src)
     s_oiio, _ = oiio_probe(src)
+    s_iinfo, s_iinfo_err = iinfo_probe(src)
+    if s_iinfo_err == "not installed":
+        print("SKIP Debian OpenImageIO (iinfo, LibRaw) checks: /usr/bin/iinfo not installed "
+              "(Debian openimageio-tools)")
 
     for out in outs:
         # rawpy / LibRaw
@@ -221,6 +241,17 @@ def main():
                     fail(f"{out}: DNG SDK white balance {o_info['wb']} != {s_info['wb']}")
                 if o_info["pattern"] != s_info["pattern"]:
                     fail(f"{out}: DNG SDK pattern {o_info['pattern']} != {s_info['pattern']}")
+        # Debian OpenImageIO through LibRaw: same decoded size as the source.
+        if s_iinfo_err != "not installed":
+            o_iinfo, o_iinfo_err = iinfo_probe(out)
+            if s_iinfo is None or s_rp is None:
+                print(f"SKIP iinfo on {out}: LibRaw refuses the source "
+                      f"({s_iinfo_err or s_rp_err}); iinfo would fall back to libtiff")
+            elif o_iinfo != s_iinfo:
+                fail(f"{out}: Debian OpenImageIO/LibRaw sees {o_iinfo} ({o_iinfo_err}), "
+                     f"source {s_iinfo}")
+            else:
+                ok(f"{out}: Debian OpenImageIO/LibRaw decodes {o_iinfo[0]}x{o_iinfo[1]}")
         # tifffile
         t_ifd0 = None
         try:
