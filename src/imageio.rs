@@ -168,7 +168,9 @@ fn read_exr(path: &Path) -> Result<LoadedImage> {
         .map(|c| c.sample_data.values_as_f32().collect())
         .collect();
     if planes.iter().any(|p| p.len() != w * h) {
-        return Err(Error::malformed("EXR: channel sample count does not match the data window"));
+        return Err(Error::malformed(
+            "EXR: channel sample count does not match the data window",
+        ));
     }
     let mut data = Vec::with_capacity(3 * w * h);
     for i in 0..w * h {
@@ -212,12 +214,31 @@ mod tests {
             *v = (i % 7) as f32 / 8.0;
         }
         let e = dir.path().join("a.exr");
-        write_exr(&img, &e, &ExrOptions { half: false, ..Default::default() }, &[], &OutputPolicy::default()).unwrap();
+        write_exr(
+            &img,
+            &e,
+            &ExrOptions {
+                half: false,
+                ..Default::default()
+            },
+            &[],
+            &OutputPolicy::default(),
+        )
+        .unwrap();
         let back = read_image(&e).unwrap();
         assert!(back.linear && back.format == "exr");
         assert_eq!(back.image, img);
         let p = dir.path().join("a.png");
-        write_png(&img, &p, &PngOptions { sixteen_bit: true, ..Default::default() }, &OutputPolicy::default()).unwrap();
+        write_png(
+            &img,
+            &p,
+            &PngOptions {
+                sixteen_bit: true,
+                ..Default::default()
+            },
+            &OutputPolicy::default(),
+        )
+        .unwrap();
         let back = read_image(&p).unwrap();
         assert!(!back.linear);
         assert_eq!((back.image.width, back.image.height), (6, 4));
@@ -226,6 +247,9 @@ mod tests {
         assert!(read_image(&bad).is_err());
         let txt = dir.path().join("x.txt");
         std::fs::write(&txt, b"hello").unwrap();
-        assert!(read_image(&txt).unwrap_err().to_string().contains("not a PNG"));
+        assert!(read_image(&txt)
+            .unwrap_err()
+            .to_string()
+            .contains("not a PNG"));
     }
 }

@@ -133,8 +133,20 @@ pub fn ssim(pred: &RgbImage, target: &RgbImage, opts: &SsimOptions) -> Result<f6
     }
     let mut total = 0.0;
     for c in 0..3 {
-        let x: Vec<f64> = pred.data.iter().skip(c).step_by(3).map(|&v| v as f64).collect();
-        let y: Vec<f64> = target.data.iter().skip(c).step_by(3).map(|&v| v as f64).collect();
+        let x: Vec<f64> = pred
+            .data
+            .iter()
+            .skip(c)
+            .step_by(3)
+            .map(|&v| v as f64)
+            .collect();
+        let y: Vec<f64> = target
+            .data
+            .iter()
+            .skip(c)
+            .step_by(3)
+            .map(|&v| v as f64)
+            .collect();
         total += ssim_channel(&x, &y, w, h, opts);
     }
     Ok(total / 3.0)
@@ -148,7 +160,9 @@ mod tests {
         let mut s = seed;
         let mut img = RgbImage::new(w, h);
         for (i, v) in img.data.iter_mut().enumerate() {
-            s = s.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            s = s
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
             let r = (s >> 33) as f32 / (1u64 << 31) as f32;
             *v = 0.5 + 0.3 * ((i / 3 % w) as f32 * 0.2).sin() + amp * (r - 0.5);
         }
@@ -169,7 +183,12 @@ mod tests {
             assert!(s < 0.9 && s > 0.0, "{s}");
         }
         assert!(ssim(&a, &noise_img(20, 15, 1, 0.0), &SsimOptions::default()).is_err());
-        assert!(ssim(&RgbImage::new(5, 5), &RgbImage::new(5, 5), &SsimOptions::default()).is_err());
+        assert!(ssim(
+            &RgbImage::new(5, 5),
+            &RgbImage::new(5, 5),
+            &SsimOptions::default()
+        )
+        .is_err());
     }
 
     #[test]
