@@ -24,11 +24,17 @@ fn frame() -> RawImage {
     let mut s: u64 = 1;
     for y in 0..H {
         for x in 0..W {
-            s = s.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            s = s
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
             let n = ((s >> 40) as f64 / (1u64 << 24) as f64 - 0.5) * 0.01;
             let (fx, fy) = (x as f64 / W as f64, y as f64 / H as f64);
             let base = 0.3 + 0.2 * (fx * 9.0).sin() * (fy * 7.0).cos();
-            let edge = if ((x / 250) + (y / 250)) % 2 == 0 { 0.15 } else { 0.0 };
+            let edge = if ((x / 250) + (y / 250)) % 2 == 0 {
+                0.15
+            } else {
+                0.0
+            };
             let tex = 0.05 * ((x as f64 * 0.7).sin() * (y as f64 * 0.3).cos());
             let gain = [0.5, 1.0, 0.6][Bayer::RGGB.color_at(y, x) as usize];
             let v = ((base + edge + tex) * gain + n).clamp(0.0, 1.0);
@@ -43,9 +49,51 @@ fn frame() -> RawImage {
     }
 }
 
+/// CPU time (user + system) of this process in seconds, from /proc/self/stat (Linux).
+fn cpu_seconds() -> Option<f64> {
+    let s = std::fs::read_to_string("/proc/self/stat").ok()?;
+    let rest = s.rsplit(')').next()?;
+    let f: Vec<&str> = rest.split_whitespace().collect();
+    // fields 14 and 15 of stat (utime, stime) are at 11 and 12 after the ')'
+    let ticks: f64 = f.get(11)?.parse::<f64>().ok()? + f.get(12)?.parse::<f64>().ok()?;
+    Some(ticks / 100.0)
+}
+
+/// On a shared, loaded machine wall time overstates the cost; print the CPU time of the
+/// default render as well (on an idle 2-core machine the wall time is at least half of it).
+fn print_cpu_time(raw: &RawImage) {
+    for d in Demosaic::ALL {
+        let opts = RenderOptions {
+            demosaic: d,
+            ..RenderOptions::default()
+        };
+        let n = 5;
+        let (c0, t0) = (cpu_seconds(), std::time::Instant::now());
+        for _ in 0..n {
+            black_box(render_linear(raw, &opts).unwrap());
+        }
+        let wall = t0.elapsed().as_secs_f64() / n as f64;
+        if let (Some(a), Some(b)) = (c0, cpu_seconds()) {
+            eprintln!(
+                "render_linear 12 MP {d}: wall {:.0} ms, CPU {:.0} ms per render (threads {})",
+                wall * 1e3,
+                (b - a) / n as f64 * 1e3,
+                rayon::current_num_threads()
+            );
+        }
+    }
+}
+
 fn benches(c: &mut Criterion) {
     let raw = frame();
-    let plane: Vec<f32> = raw.data.iter().map(|&v| (v as f32 - 64.0) / 4031.0).collect();
+    if std::env::var("D2N_BENCH_CPU").is_ok() {
+        print_cpu_time(&raw);
+    }
+    let plane: Vec<f32> = raw
+        .data
+        .iter()
+        .map(|&v| (v as f32 - 64.0) / 4031.0)
+        .collect();
 
     let mut g = c.benchmark_group("demosaic_12mp");
     g.sample_size(10).warm_up_time(Duration::from_secs(1));
@@ -71,9 +119,7 @@ fn benches(c: &mut Criterion) {
         )
     });
     g.bench_function("normalize", |b| {
-        b.iter(|| {
-            black_box(day2night::normalize::normalize(&raw, Default::default()).unwrap())
-        })
+        b.iter(|| black_box(day2night::normalize::normalize(&raw, Default::default()).unwrap()))
     });
     for d in Demosaic::ALL {
         g.bench_with_input(BenchmarkId::new("render_linear", d), &d, |b, &d| {
@@ -89,8 +135,17 @@ fn benches(c: &mut Criterion) {
     let lin: RgbImage = render_linear(&raw, &RenderOptions::default()).unwrap();
     let mut g = c.benchmark_group("write_12mp");
     g.sample_size(10).warm_up_time(Duration::from_millis(500));
-    for comp in ExrCompression::ALL {
-        for half in [true, false] {
+    let configs = ExrCompression::ALL.iter().map(|&c| (c, true)).chain(
+        [
+            ExrCompression::None,
+            ExrCompression::Zip,
+            ExrCompression::Piz,
+        ]
+        .into_iter()
+        .map(|c| (c, false)),
+    );
+    for (comp, half) in configs {
+        {
             let opts = ExrOptions {
                 half,
                 compression: comp,
@@ -119,8 +174,14 @@ fn benches(c: &mut Criterion) {
             let bytes = day2night::png::encode_u8(&lin, Default::default());
             let mut out = Vec::new();
             let enc = image::codecs::png::PngEncoder::new(&mut out);
-            image::ImageEncoder::write_image(enc, &bytes, W as u32, H as u32, image::ExtendedColorType::Rgb8)
-                .unwrap();
+            image::ImageEncoder::write_image(
+                enc,
+                &bytes,
+                W as u32,
+                H as u32,
+                image::ExtendedColorType::Rgb8,
+            )
+            .unwrap();
             black_box(out.len())
         })
     });

@@ -31,17 +31,30 @@ fn demosaic_accuracy_on_sample_photos() {
     let slow = std::env::var("D2N_SLOW").as_deref() == Ok("1");
     let dir = tempfile::tempdir().unwrap();
     let out = common::run_validator(&py, "isp_skimage_photos.py", &[dir.path().as_os_str()]);
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let listing = String::from_utf8_lossy(&out.stdout).to_string();
-    let names: Vec<&str> = listing.lines().filter_map(|l| l.split_whitespace().next()).collect();
+    let names: Vec<&str> = listing
+        .lines()
+        .filter_map(|l| l.split_whitespace().next())
+        .collect();
     assert!(names.len() >= 4, "{listing}");
     let names = if slow { names } else { vec![names[0]] };
-    let phases: Vec<Bayer> = if slow { Bayer::ALL.to_vec() } else { vec![Bayer::RGGB] };
+    let phases: Vec<Bayer> = if slow {
+        Bayer::ALL.to_vec()
+    } else {
+        vec![Bayer::RGGB]
+    };
     println!("| photo | size | bilinear | mhc | menon |");
     println!("|---|---|---|---|---|");
     let mut totals = [0.0f64; 3];
     for name in &names {
-        let img = read_image(&dir.path().join(format!("{name}.png"))).unwrap().image;
+        let img = read_image(&dir.path().join(format!("{name}.png")))
+            .unwrap()
+            .image;
         let mut per = [0.0f64; 3];
         for &bayer in &phases {
             let m = mosaic(&img, bayer);
@@ -58,7 +71,10 @@ fn demosaic_accuracy_on_sample_photos() {
             totals[k] += per[k] / names.len() as f64;
         }
         // the quality order the literature reports (bilinear < MHC < Menon), on every photo
-        assert!(per[1] > per[0] + 0.5 && per[2] > per[1] + 0.5, "{name}: {per:?}");
+        assert!(
+            per[1] > per[0] + 0.5 && per[2] > per[1] + 0.5,
+            "{name}: {per:?}"
+        );
     }
     println!(
         "| mean | | {:.2} | {:.2} | {:.2} |",
