@@ -207,6 +207,44 @@ pub fn run_clean(img: &RawImage, plan: &Plan) -> Result<(RawImage, RunReport)> {
     ))
 }
 
+/// The per-colour factors of a row segment starting at column `c0` (even/odd offsets).
+#[inline]
+fn parity(k: [f32; 2], c0: usize) -> [f32; 2] {
+    if c0 & 1 == 0 {
+        k
+    } else {
+        [k[1], k[0]]
+    }
+}
+
+/// Apply `f(num, den, ye, mask, k)` element-wise, two columns at a time so that the CFA
+/// factor is a constant per lane (no per-sample parity index; same arithmetic per element).
+#[inline]
+fn pairwise<F: Fn(&mut f32, &mut f32, f32, f32, f32)>(
+    num: &mut [f32],
+    den: &mut [f32],
+    ye: &[f32],
+    m: &[f32],
+    k: [f32; 2],
+    f: F,
+) {
+    let n = m.len().min(num.len()).min(den.len()).min(ye.len());
+    let (num, den, ye, m) = (&mut num[..n], &mut den[..n], &ye[..n], &m[..n]);
+    for (((nn, dd), yy), mm) in num
+        .chunks_exact_mut(2)
+        .zip(den.chunks_exact_mut(2))
+        .zip(ye.chunks_exact(2))
+        .zip(m.chunks_exact(2))
+    {
+        f(&mut nn[0], &mut dd[0], yy[0], mm[0], k[0]);
+        f(&mut nn[1], &mut dd[1], yy[1], mm[1], k[1]);
+    }
+    if n % 2 == 1 {
+        let i = n - 1;
+        f(&mut num[i], &mut den[i], ye[i], m[i], k[0]);
+    }
+}
+
 fn local_row(
     r: usize,
     cols: [usize; 2],
@@ -244,12 +282,18 @@ fn local_row(
         p.mask.fill_row(r, mm);
         let k = [p.illum[cols[0]] * p.gain, p.illum[cols[1]] * p.gain];
         let w = p.weight;
-        for (i, &mv) in mm.iter().enumerate() {
-            let c = c0 + i;
-            let wm = w * mv;
-            num[c] += wm * (ye[c] * k[c & 1]).clamp(0.0, 1.0);
-            den[c] += wm;
-        }
+        pairwise(
+            &mut num[c0..c1],
+            &mut den[c0..c1],
+            &ye[c0..c1],
+            mm,
+            parity(k, c0),
+            |n, d, y, mv, k| {
+                let wm = w * mv;
+                *n += wm * (y * k).clamp(0.0, 1.0);
+                *d += wm;
+            },
+        );
     }
     for (n, &d) in num.iter_mut().zip(den.iter()) {
         *n /= d.max(1e-30);
@@ -259,10 +303,17 @@ fn local_row(
         let mm = &mut m[..c1 - c0];
         p.mask.fill_row(r, mm);
         let k = [p.illum[cols[0]], p.illum[cols[1]]];
-        for (i, &mv) in mm.iter().enumerate() {
-            let c = c0 + i;
-            num[c] += p.gain * mv * (ye[c] * k[c & 1]).clamp(0.0, 1.0);
-        }
+        let g = p.gain;
+        pairwise(
+            &mut num[c0..c1],
+            &mut den[c0..c1],
+            &ye[c0..c1],
+            mm,
+            parity(k, c0),
+            |n, _, y, mv, k| {
+                *n += g * mv * (y * k).clamp(0.0, 1.0);
+            },
+        );
     }
     for n in num.iter_mut() {
         *n = if n.is_nan() { 0.0 } else { n.clamp(0.0, 1.0) };
