@@ -14,6 +14,7 @@ pub mod calibrate;
 pub mod dng;
 pub mod error;
 pub mod exr;
+pub mod imageio;
 pub mod isp;
 pub mod metrics;
 pub mod noise;

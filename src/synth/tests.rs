@@ -597,3 +597,17 @@ fn tampered_plans_are_refused_not_panicking() {
     }
     run(&img, &q).unwrap();
 }
+
+#[test]
+fn non_bayer_cfa_is_a_clear_error() {
+    let mut img = frame(Bayer::RGGB, 6, 6, [500, 700, 300]);
+    img.meta.cfa.rows = 3;
+    img.meta.cfa.cols = 3;
+    img.meta.cfa.pattern = vec![0, 1, 2, 1, 2, 0, 2, 0, 1];
+    let cal = Calibration::embedded(&SynthOptions::default()).unwrap();
+    let e = plan(&img, "x", 0, 0, &SynthOptions::default(), &cal).unwrap_err();
+    assert!(e.to_string().contains("not a 2x2 Bayer"), "{e}");
+    let mut img = frame(Bayer::RGGB, 6, 6, [500, 700, 300]);
+    img.meta.cfa.plane_color = vec![0, 1, 3];
+    assert!(plan(&img, "x", 0, 0, &SynthOptions::default(), &cal).is_err());
+}
