@@ -91,6 +91,15 @@ pub enum Kind {
     Meta,
 }
 
+/// Every output kind.
+pub const ALL_KINDS: [Kind; 5] = [
+    Kind::CleanRaw,
+    Kind::NoisyRaw,
+    Kind::Target,
+    Kind::Input,
+    Kind::Meta,
+];
+
 impl Kind {
     /// Folder name inside a split.
     pub fn dir(self) -> &'static str {

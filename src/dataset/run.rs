@@ -179,6 +179,7 @@ pub fn run<P: Processor>(opts: &RunOptions, processor: &P) -> Result<Summary> {
     previous.extend(own_loaded.records);
     let previous = manifest::latest(previous);
     let appender = Appender::open(&own_manifest)?;
+    remove_stale_temp_files(out_dir, &tasks, opts.variants);
 
     let options_sha = sha256_hex(processor.fingerprint().as_bytes());
     let policy = OutputPolicy {
@@ -276,6 +277,56 @@ pub fn run<P: Processor>(opts: &RunOptions, processor: &P) -> Result<Summary> {
     summary.manifest = own_manifest;
     summary.seconds = start.elapsed().as_secs_f64();
     Ok(summary)
+}
+
+/// Remove the hidden temporary files (`.<name>.tmp-<pid>`, see `crate::output`) that a
+/// killed run left for the outputs of this run's units: each unit belongs to exactly one
+/// shard, so no live process can own them. Other shards' files are left alone.
+fn remove_stale_temp_files(out_dir: &Path, tasks: &[Task], variants: u32) {
+    let mut ids = std::collections::HashSet::new();
+    for t in tasks {
+        if variants > 1 {
+            for v in 1..=variants {
+                ids.insert(format!("{}_v{v}", t.stem));
+            }
+        } else {
+            ids.insert(t.stem.clone());
+        }
+    }
+    for split in [Split::Train, Split::Val] {
+        for kind in super::ALL_KINDS {
+            let dir = out_dir.join(split.name()).join(kind.dir());
+            let Ok(rd) = std::fs::read_dir(&dir) else {
+                continue;
+            };
+            for e in rd.flatten() {
+                let name = e.file_name();
+                let Some(name) = name.to_str() else { continue };
+                if let Some(id) = temp_file_id(name) {
+                    if ids.contains(id) {
+                        let _ = std::fs::remove_file(e.path());
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// The output id a temporary file `.<id><suffix>.tmp-<pid>` belongs to, where the suffix is
+/// an extension optionally preceded by `_iso<N>`.
+fn temp_file_id(name: &str) -> Option<&str> {
+    let rest = name.strip_prefix('.')?;
+    let (out_name, pid) = rest.rsplit_once(".tmp-")?;
+    if pid.is_empty() || !pid.bytes().all(|b| b.is_ascii_digit()) {
+        return None;
+    }
+    let (base, _ext) = out_name.rsplit_once('.')?;
+    if let Some((id, iso)) = base.rsplit_once("_iso") {
+        if !iso.is_empty() && iso.bytes().all(|b| b.is_ascii_digit()) {
+            return Some(id);
+        }
+    }
+    Some(base)
 }
 
 fn dir_has_entries(p: &Path) -> bool {
@@ -504,5 +555,19 @@ impl Progress {
         if let Some(b) = &self.bar {
             b.finish_and_clear();
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn temp_file_ids() {
+        assert_eq!(temp_file_id(".a_v2_iso1600.dng.tmp-123"), Some("a_v2"));
+        assert_eq!(temp_file_id(".a__b.json.tmp-9"), Some("a__b"));
+        assert_eq!(temp_file_id(".a_isox.exr.tmp-9"), Some("a_isox"));
+        assert_eq!(temp_file_id("a.dng"), None);
+        assert_eq!(temp_file_id(".a.dng.tmp-"), None);
     }
 }
