@@ -1,1 +1,3 @@
-//! Dataset report (in progress).
+//! `day2night report OUT_DIR`: a self-contained HTML page to judge a dataset at a glance.
+pub mod html;
+pub mod plot;
