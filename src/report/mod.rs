@@ -1,3 +1,4 @@
 //! `day2night report OUT_DIR`: a self-contained HTML page to judge a dataset at a glance.
 pub mod html;
 pub mod plot;
+pub mod thumb;
