@@ -28,7 +28,11 @@ impl Rgb8 {
 
     /// From linear floats in [0, 1] (any range; clipped), encoded with the sRGB curve.
     /// `get(r, c)` returns the linear RGB of a pixel.
-    pub fn from_linear(width: usize, height: usize, get: impl Fn(usize, usize) -> [f32; 3]) -> Rgb8 {
+    pub fn from_linear(
+        width: usize,
+        height: usize,
+        get: impl Fn(usize, usize) -> [f32; 3],
+    ) -> Rgb8 {
         let mut img = Rgb8::new(width, height);
         for r in 0..height {
             for c in 0..width {
@@ -96,7 +100,11 @@ impl Rgb8 {
 
 /// sRGB-encode a linear value to 8 bits.
 pub fn srgb8(v: f32) -> u8 {
-    let v = if v.is_finite() { v.clamp(0.0, 1.0) } else { 0.0 };
+    let v = if v.is_finite() {
+        v.clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
     let e = if v <= 0.003_130_8 {
         12.92 * v
     } else {
@@ -147,7 +155,11 @@ pub fn downscale(
             }
             let n = ((r1 - r0) * (c1 - c0)).max(1) as f64;
             if let Some(o) = out.get_mut(ty * tw + tx) {
-                *o = [(acc[0] / n) as f32, (acc[1] / n) as f32, (acc[2] / n) as f32];
+                *o = [
+                    (acc[0] / n) as f32,
+                    (acc[1] / n) as f32,
+                    (acc[2] / n) as f32,
+                ];
             }
         }
     }
