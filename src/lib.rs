@@ -20,6 +20,7 @@ pub mod metrics;
 pub mod noise;
 pub mod normalize;
 pub mod output;
+pub mod png;
 pub mod raw;
 pub mod report;
 pub mod synth;

@@ -1,16 +1,251 @@
-//! `day2night info` (in progress).
+//! `day2night info FILE... [--json]`: describe DNG files, including ones synthesis cannot use.
 use super::CmdResult;
+use day2night::dng::read::{inspect, DngInfo};
+use std::fmt::Write as _;
+use std::path::PathBuf;
 
 /// Arguments of `day2night info`.
 #[derive(Debug, clap::Args)]
+#[command(
+    after_help = "Example:\n  day2night info photo.dng\n  day2night info a.dng b.dng --json > info.json"
+)]
 pub struct InfoArgs {
-    /// Arguments (not implemented yet).
-    #[arg(trailing_var_arg = true, allow_hyphen_values = true)]
-    pub rest: Vec<String>,
+    /// DNG files to describe.
+    #[arg(required = true, value_name = "FILE.dng")]
+    pub files: Vec<PathBuf>,
+    /// Print a JSON array (one object per readable file) instead of text.
+    #[arg(long)]
+    pub json: bool,
 }
 
 /// Run `day2night info`.
 pub fn run(args: InfoArgs) -> CmdResult {
-    let _ = args;
-    Err(super::usage("`info` is not implemented yet"))
+    let mut failed = 0usize;
+    let mut objects = Vec::new();
+    let mut text = String::new();
+    for f in &args.files {
+        match inspect(f) {
+            Ok(info) => {
+                if let Some(e) = &info.error {
+                    eprintln!("day2night: {}: {e}", f.display());
+                    failed += 1;
+                }
+                if args.json {
+                    let mut v = serde_json::to_value(&info)?;
+                    if let Some(o) = v.as_object_mut() {
+                        o.insert("file".into(), f.display().to_string().into());
+                    }
+                    objects.push(v);
+                } else {
+                    describe(&mut text, f, &info);
+                }
+            }
+            Err(e) => {
+                // `inspect` already names the file.
+                eprintln!("day2night: {e}");
+                failed += 1;
+            }
+        }
+    }
+    if args.json {
+        println!("{}", serde_json::to_string_pretty(&objects)?);
+    } else {
+        print!("{text}");
+    }
+    if failed > 0 {
+        return Err(super::Failure {
+            code: 1,
+            error: anyhow::anyhow!("{failed} of {} files could not be read", args.files.len()),
+        });
+    }
+    Ok(())
+}
+
+fn opt<T: std::fmt::Display>(v: &Option<T>) -> String {
+    v.as_ref().map_or("-".to_string(), |x| x.to_string())
+}
+
+fn nums(v: &[f64]) -> String {
+    v.iter()
+        .map(|x| {
+            format!("{x:.6}")
+                .trim_end_matches('0')
+                .trim_end_matches('.')
+                .to_string()
+        })
+        .collect::<Vec<_>>()
+        .join(" ")
+}
+
+fn describe(out: &mut String, file: &std::path::Path, i: &DngInfo) {
+    let _ = writeln!(out, "{}", file.display());
+    let _ = writeln!(
+        out,
+        "  camera:        {} {} ({})",
+        opt(&i.make),
+        opt(&i.model),
+        opt(&i.unique_camera_model)
+    );
+    let _ = writeln!(
+        out,
+        "  format:        DNG {}, {}",
+        opt(&i.dng_version),
+        i.byte_order
+    );
+    for s in &i.ifds {
+        let _ = writeln!(
+            out,
+            "  {:<14} type {} {}x{} {}-bit x{} {} ({}), {}, {}",
+            format!("{}:", s.path),
+            s.new_subfile_type,
+            opt(&s.width),
+            opt(&s.height),
+            opt(&s.bits_per_sample),
+            s.samples_per_pixel,
+            s.photometric_name,
+            opt(&s.photometric),
+            s.compression_name,
+            s.layout
+        );
+    }
+    let _ = writeln!(out, "  raw IFD:       {}", opt(&i.raw_ifd));
+    if let Some(r) = &i.raw {
+        let m = &r.meta;
+        let _ = writeln!(
+            out,
+            "  raw size:      {}x{}, {}-bit",
+            r.width, r.height, m.bits_per_sample
+        );
+        if let Some(a) = m.active_area {
+            let _ = writeln!(
+                out,
+                "  active area:   {},{},{},{} ({}x{})",
+                a.top,
+                a.left,
+                a.bottom,
+                a.right,
+                a.width(),
+                a.height()
+            );
+        }
+        if let (Some(o), Some(s)) = (m.default_crop_origin, m.default_crop_size) {
+            let _ = writeln!(
+                out,
+                "  default crop:  origin {} size {}",
+                nums(&o),
+                nums(&s)
+            );
+        }
+        let _ = writeln!(out, "  CFA:           {}", r.cfa);
+        if let Some(st) = &m.storage {
+            let layout = match st.layout {
+                day2night::dng::meta::Layout::Strips { rows_per_strip } => {
+                    format!("strips of {rows_per_strip} rows")
+                }
+                day2night::dng::meta::Layout::Tiles { width, height } => {
+                    format!("tiles {width}x{height}")
+                }
+            };
+            let _ = writeln!(
+                out,
+                "  storage:       {layout}, compression {} ({})",
+                st.compression,
+                day2night::dng::read::compression_name(st.compression)
+            );
+        }
+        let l = &m.levels;
+        let _ = writeln!(
+            out,
+            "  black level:   {} (repeat {}x{}){}{}",
+            nums(&l.black),
+            l.black_repeat.0,
+            l.black_repeat.1,
+            if l.black_delta_h.is_empty() {
+                ""
+            } else {
+                ", DeltaH"
+            },
+            if l.black_delta_v.is_empty() {
+                ""
+            } else {
+                ", DeltaV"
+            }
+        );
+        let _ = writeln!(out, "  white level:   {}", nums(&[l.white]));
+        if let Some(n) = m.linearization_table_len {
+            let _ = writeln!(out, "  linearization: table of {n} entries");
+        }
+        let _ = writeln!(
+            out,
+            "  as-shot neutral: {}",
+            m.as_shot_neutral.map_or("-".into(), |n| nums(&n))
+        );
+        if let Some(xy) = m.as_shot_white_xy {
+            let _ = writeln!(out, "  as-shot white xy: {}", nums(&xy));
+        }
+        let c = &m.color;
+        for (name, mat, ill) in [
+            ("ColorMatrix1", &c.color_matrix1, c.calibration_illuminant1),
+            ("ColorMatrix2", &c.color_matrix2, c.calibration_illuminant2),
+        ] {
+            if let Some(mx) = mat {
+                let _ = writeln!(out, "  {name}:  {} (illuminant {})", nums(mx), opt(&ill));
+            }
+        }
+        for (name, mat) in [
+            ("ForwardMatrix1", &c.forward_matrix1),
+            ("ForwardMatrix2", &c.forward_matrix2),
+            ("CameraCalibration1", &c.camera_calibration1),
+            ("CameraCalibration2", &c.camera_calibration2),
+            ("AnalogBalance", &c.analog_balance),
+        ] {
+            if let Some(mx) = mat {
+                let _ = writeln!(out, "  {name}: {}", nums(mx));
+            }
+        }
+        if let Some(b) = c.baseline_exposure {
+            let _ = writeln!(out, "  baseline exposure: {} EV", nums(&[b]));
+        }
+        let e = &m.exif;
+        let _ = writeln!(
+            out,
+            "  exposure:      ISO {}, {} s, f/{}, {}",
+            opt(&e.iso),
+            opt(&e.exposure_time),
+            opt(&e.f_number),
+            opt(&e.date_time_original)
+        );
+        let _ = writeln!(
+            out,
+            "  noise profile: {}",
+            m.noise_profile.as_ref().map_or("-".into(), |p| p
+                .iter()
+                .map(|(s, o)| format!("S={s:e} O={o:e}"))
+                .collect::<Vec<_>>()
+                .join("; "))
+        );
+        let _ = writeln!(out, "  orientation:   {}", m.orientation);
+        let _ = writeln!(
+            out,
+            "  opcode lists:  {}",
+            if m.opcode_lists.is_empty() {
+                "none".to_string()
+            } else {
+                m.opcode_lists
+                    .iter()
+                    .map(|i| format!("OpcodeList{i}"))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            }
+        );
+    }
+    let _ = writeln!(
+        out,
+        "  synthesis:     {}",
+        if i.synth_ready {
+            "ready".to_string()
+        } else {
+            format!("not usable: {}", opt(&i.reason))
+        }
+    );
 }

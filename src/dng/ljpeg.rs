@@ -1,1 +1,745 @@
-//! (in progress)
+//! Lossless JPEG decoder (ITU T.81 process 14: SOF3, Huffman coded, 1-4 components,
+//! predictors 1-7, point transform, restart markers, 2-16 bit precision).
+//!
+//! DNG stores each tile or strip of a Compression 7 image as one such stream; converters
+//! often encode a tile of width `W` as a 2-component frame of width `W/2`. [`decode`] returns
+//! the frame's samples interleaved (`width * components` per row); the DNG reader maps them
+//! onto the tile row-major, which covers both layouts.
+
+use crate::error::{Error, Result};
+
+/// Most samples (width * height * components) one stream may decode to.
+pub const MAX_SAMPLES: usize = 1 << 28;
+
+/// A decoded lossless JPEG frame.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Decoded {
+    /// Frame width (samples per line per component).
+    pub width: usize,
+    /// Frame height (lines).
+    pub height: usize,
+    /// Number of components (1..=4).
+    pub components: usize,
+    /// Sample precision in bits (2..=16).
+    pub precision: u8,
+    /// `width * height * components` samples, row-major, components interleaved.
+    pub data: Vec<u16>,
+}
+
+#[derive(Clone)]
+struct Huffman {
+    /// Fast table: for the next 9 bits, (symbol, code length) or length 0 = slow path.
+    fast: Vec<(u8, u8)>,
+    /// Per code length 1..=16: (max code, value offset) for canonical decoding.
+    maxcode: [i32; 18],
+    valptr: [i32; 17],
+    mincode: [i32; 17],
+    values: Vec<u8>,
+}
+
+const FAST_BITS: u32 = 9;
+
+impl Huffman {
+    fn new(counts: &[u8; 16], values: Vec<u8>) -> Result<Huffman> {
+        let total: usize = counts.iter().map(|&c| c as usize).sum();
+        if total != values.len() || total == 0 || total > 256 {
+            return Err(Error::malformed("lossless JPEG: bad Huffman table size"));
+        }
+        let mut fast = vec![(0u8, 0u8); 1 << FAST_BITS];
+        let mut maxcode = [-1i32; 18];
+        let mut valptr = [0i32; 17];
+        let mut mincode = [0i32; 17];
+        let mut code: i32 = 0;
+        let mut k = 0usize;
+        for len in 1..=16usize {
+            let n = counts[len - 1] as usize;
+            valptr[len] = k as i32;
+            mincode[len] = code;
+            for _ in 0..n {
+                if code >= (1 << len) {
+                    return Err(Error::malformed(
+                        "lossless JPEG: Huffman table has too many codes",
+                    ));
+                }
+                if len as u32 <= FAST_BITS {
+                    let shift = FAST_BITS - len as u32;
+                    let start = (code as usize) << shift;
+                    let sym = values.get(k).copied().unwrap_or(0);
+                    for f in fast.iter_mut().skip(start).take(1 << shift) {
+                        *f = (sym, len as u8);
+                    }
+                }
+                code += 1;
+                k += 1;
+            }
+            maxcode[len] = if n > 0 { code - 1 } else { -1 };
+            code <<= 1;
+        }
+        maxcode[17] = i32::MAX;
+        Ok(Huffman {
+            fast,
+            maxcode,
+            valptr,
+            mincode,
+            values,
+        })
+    }
+}
+
+/// Bit reader over entropy-coded data: removes 0xFF00 stuffing and stops at markers
+/// (feeding zero bits past a marker, as T.81 decoders do).
+struct Bits<'a> {
+    data: &'a [u8],
+    pos: usize,
+    acc: u64,
+    nbits: u32,
+    /// Set once a marker (0xFF followed by non-zero) was hit.
+    marker: Option<u8>,
+    /// Zero bits fed past the end of data or a marker.
+    padded: u32,
+}
+
+impl<'a> Bits<'a> {
+    fn new(data: &'a [u8], pos: usize) -> Self {
+        Bits {
+            data,
+            pos,
+            acc: 0,
+            nbits: 0,
+            marker: None,
+            padded: 0,
+        }
+    }
+    #[inline]
+    fn refill(&mut self) {
+        while self.nbits <= 56 {
+            let mut byte = 0u8;
+            if self.marker.is_none() {
+                match self.data.get(self.pos) {
+                    Some(&0xFF) => match self.data.get(self.pos + 1) {
+                        Some(&0) => {
+                            byte = 0xFF;
+                            self.pos += 2;
+                        }
+                        Some(&m) => self.marker = Some(m),
+                        None => {
+                            self.pos += 1;
+                            byte = 0xFF;
+                        }
+                    },
+                    Some(&b) => {
+                        byte = b;
+                        self.pos += 1;
+                    }
+                    None => self.padded += 8,
+                }
+            } else {
+                self.padded += 8;
+            }
+            self.acc |= (byte as u64) << (56 - self.nbits);
+            self.nbits += 8;
+        }
+    }
+    #[inline]
+    fn peek(&mut self, n: u32) -> u32 {
+        if self.nbits < n {
+            self.refill();
+        }
+        (self.acc >> (64 - n)) as u32
+    }
+    #[inline]
+    fn consume(&mut self, n: u32) {
+        self.acc <<= n;
+        self.nbits -= n;
+    }
+    #[inline]
+    fn get(&mut self, n: u32) -> u32 {
+        if n == 0 {
+            return 0;
+        }
+        let v = self.peek(n);
+        self.consume(n);
+        v
+    }
+    fn too_far(&self) -> bool {
+        // Padding bits consumed (more fed than still buffered): the stream ran out.
+        self.padded > self.nbits
+    }
+    #[inline]
+    fn decode(&mut self, h: &Huffman) -> Result<u8> {
+        let look = self.peek(FAST_BITS) as usize;
+        if let Some(&(sym, len)) = h.fast.get(look) {
+            if len > 0 {
+                self.consume(len as u32);
+                return Ok(sym);
+            }
+        }
+        let all = self.peek(16) as i32;
+        for len in (FAST_BITS as usize + 1)..=16 {
+            let code = all >> (16 - len);
+            if code <= h.maxcode[len] {
+                self.consume(len as u32);
+                let idx = h.valptr[len] + code - h.mincode[len];
+                return h
+                    .values
+                    .get(idx as usize)
+                    .copied()
+                    .ok_or_else(|| Error::malformed("lossless JPEG: Huffman code out of range"));
+            }
+        }
+        Err(Error::malformed("lossless JPEG: invalid Huffman code"))
+    }
+    /// Skip to after the next RST marker (byte aligned), resetting the bit buffer.
+    fn restart(&mut self) -> Result<()> {
+        self.acc = 0;
+        self.nbits = 0;
+        self.marker = None;
+        self.padded = 0;
+        // Find 0xFF 0xD0..=0xD7.
+        while let Some(&b) = self.data.get(self.pos) {
+            if b == 0xFF {
+                match self.data.get(self.pos + 1) {
+                    Some(&m) if (0xD0..=0xD7).contains(&m) => {
+                        self.pos += 2;
+                        return Ok(());
+                    }
+                    Some(&0xFF) => self.pos += 1,
+                    Some(_) => self.pos += 2,
+                    None => break,
+                }
+            } else {
+                self.pos += 1;
+            }
+        }
+        Err(Error::malformed("lossless JPEG: expected a restart marker"))
+    }
+}
+
+struct Component {
+    id: u8,
+    table: usize,
+}
+
+fn u16be(d: &[u8], p: usize) -> Result<u16> {
+    match (d.get(p), d.get(p + 1)) {
+        (Some(&a), Some(&b)) => Ok(u16::from_be_bytes([a, b])),
+        _ => Err(Error::malformed("lossless JPEG: truncated header")),
+    }
+}
+
+/// Decode one lossless JPEG stream.
+pub fn decode(data: &[u8]) -> Result<Decoded> {
+    if data.get(0..2) != Some(&[0xFF, 0xD8]) {
+        return Err(Error::malformed(
+            "lossless JPEG: stream does not start with SOI",
+        ));
+    }
+    let mut pos = 2usize;
+    let mut tables: [Option<Huffman>; 4] = [None, None, None, None];
+    let mut frame: Option<(u8, usize, usize, Vec<u8>)> = None; // precision, h, w, ids
+    let mut restart_interval = 0usize;
+    loop {
+        // Find the next marker (skip fill bytes).
+        let Some(&ff) = data.get(pos) else {
+            return Err(Error::malformed(
+                "lossless JPEG: no SOS marker before end of data",
+            ));
+        };
+        if ff != 0xFF {
+            return Err(Error::malformed(format!(
+                "lossless JPEG: expected a marker at byte {pos}"
+            )));
+        }
+        let Some(&m) = data.get(pos + 1) else {
+            return Err(Error::malformed("lossless JPEG: truncated marker"));
+        };
+        pos += 2;
+        match m {
+            0xFF => {
+                pos -= 1;
+                continue;
+            }
+            0xD8 | 0x01 | 0xD0..=0xD7 => continue,
+            0xD9 => return Err(Error::malformed("lossless JPEG: EOI before any scan")),
+            _ => {}
+        }
+        let len = u16be(data, pos)? as usize;
+        if len < 2 {
+            return Err(Error::malformed("lossless JPEG: bad segment length"));
+        }
+        let seg = data
+            .get(pos + 2..pos + len)
+            .ok_or_else(|| Error::malformed("lossless JPEG: truncated segment"))?;
+        pos += len;
+        match m {
+            0xC3 => {
+                let p = *seg.first().unwrap_or(&0);
+                let h = u16be(seg, 1)? as usize;
+                let w = u16be(seg, 3)? as usize;
+                let nf = *seg.get(5).unwrap_or(&0) as usize;
+                if !(2..=16).contains(&p) {
+                    return Err(Error::unsupported(format!(
+                        "lossless JPEG precision {p} bits (2..16 supported)"
+                    )));
+                }
+                if !(1..=4).contains(&nf) {
+                    return Err(Error::unsupported(format!(
+                        "lossless JPEG with {nf} components (1..4 supported)"
+                    )));
+                }
+                if h == 0 || w == 0 {
+                    return Err(Error::malformed(
+                        "lossless JPEG: zero frame width or height",
+                    ));
+                }
+                let mut ids = Vec::with_capacity(nf);
+                for c in 0..nf {
+                    let b = seg
+                        .get(6 + 3 * c..9 + 3 * c)
+                        .ok_or_else(|| Error::malformed("lossless JPEG: truncated SOF3"))?;
+                    if b[1] != 0x11 {
+                        return Err(Error::unsupported(format!(
+                            "lossless JPEG sampling factors {}x{} (only 1x1)",
+                            b[1] >> 4,
+                            b[1] & 15
+                        )));
+                    }
+                    ids.push(b[0]);
+                }
+                frame = Some((p, h, w, ids));
+            }
+            0xC0..=0xC2 | 0xC5..=0xC7 | 0xC9..=0xCB | 0xCD..=0xCF => {
+                return Err(Error::unsupported(format!(
+                    "JPEG process SOF{} (only lossless SOF3 is supported)",
+                    m - 0xC0
+                )))
+            }
+            0xC4 => {
+                let mut s = seg;
+                while !s.is_empty() {
+                    let tc_th = s[0];
+                    let th = (tc_th & 15) as usize;
+                    if th > 3 {
+                        return Err(Error::malformed("lossless JPEG: Huffman table id > 3"));
+                    }
+                    let counts: [u8; 16] = s
+                        .get(1..17)
+                        .and_then(|c| c.try_into().ok())
+                        .ok_or_else(|| Error::malformed("lossless JPEG: truncated DHT"))?;
+                    let n: usize = counts.iter().map(|&c| c as usize).sum();
+                    let vals = s
+                        .get(17..17 + n)
+                        .ok_or_else(|| Error::malformed("lossless JPEG: truncated DHT"))?;
+                    tables[th] = Some(Huffman::new(&counts, vals.to_vec())?);
+                    s = &s[17 + n..];
+                }
+            }
+            0xDD => restart_interval = u16be(seg, 0)? as usize,
+            0xDA => {
+                let (p, h, w, ids) = frame
+                    .take()
+                    .ok_or_else(|| Error::malformed("lossless JPEG: SOS before SOF3"))?;
+                let ns = *seg.first().unwrap_or(&0) as usize;
+                if ns != ids.len() {
+                    return Err(Error::unsupported(format!(
+                        "lossless JPEG scan with {ns} of {} components (non-interleaved scans)",
+                        ids.len()
+                    )));
+                }
+                let mut comps = Vec::with_capacity(ns);
+                for c in 0..ns {
+                    let b = seg
+                        .get(1 + 2 * c..3 + 2 * c)
+                        .ok_or_else(|| Error::malformed("lossless JPEG: truncated SOS"))?;
+                    let table = (b[1] >> 4) as usize;
+                    if table > 3 || tables[table].is_none() {
+                        return Err(Error::malformed(format!(
+                            "lossless JPEG: scan uses undefined Huffman table {table}"
+                        )));
+                    }
+                    comps.push(Component { id: b[0], table });
+                }
+                for (c, id) in comps.iter().zip(&ids) {
+                    if c.id != *id {
+                        // Tolerated: some encoders number components differently in SOS.
+                        let _ = id;
+                    }
+                }
+                let tail = seg
+                    .get(1 + 2 * ns..4 + 2 * ns)
+                    .ok_or_else(|| Error::malformed("lossless JPEG: truncated SOS"))?;
+                let predictor = tail[0];
+                let pt = tail[2] & 15;
+                if predictor > 7 {
+                    return Err(Error::malformed(format!(
+                        "lossless JPEG: predictor {predictor} (1..7)"
+                    )));
+                }
+                if pt >= p {
+                    return Err(Error::malformed(
+                        "lossless JPEG: point transform >= precision",
+                    ));
+                }
+                let hts: Vec<&Huffman> = comps
+                    .iter()
+                    .filter_map(|c| tables[c.table].as_ref())
+                    .collect();
+                return scan(
+                    data,
+                    pos,
+                    ScanParams {
+                        precision: p,
+                        height: h,
+                        width: w,
+                        predictor,
+                        pt,
+                        restart_interval,
+                    },
+                    &hts,
+                );
+            }
+            _ => {} // APPn, COM, DQT, ...: skipped
+        }
+    }
+}
+
+struct ScanParams {
+    precision: u8,
+    height: usize,
+    width: usize,
+    predictor: u8,
+    pt: u8,
+    restart_interval: usize,
+}
+
+fn scan(data: &[u8], pos: usize, sp: ScanParams, hts: &[&Huffman]) -> Result<Decoded> {
+    let nc = hts.len();
+    let row_len = sp
+        .width
+        .checked_mul(nc)
+        .ok_or_else(|| Error::limits("lossless JPEG frame too large"))?;
+    let total = row_len
+        .checked_mul(sp.height)
+        .filter(|&t| t <= MAX_SAMPLES)
+        .ok_or_else(|| {
+            Error::limits(format!(
+                "lossless JPEG frame {}x{}x{} exceeds {} samples",
+                sp.width, sp.height, nc, MAX_SAMPLES
+            ))
+        })?;
+    // Every sample costs at least one bit: refuse frames the data cannot hold before
+    // allocating for them.
+    let avail_bits = (data.len().saturating_sub(pos)).saturating_mul(8);
+    if total > avail_bits {
+        return Err(Error::malformed(format!(
+            "lossless JPEG: {} bytes of data cannot hold a {}x{}x{} frame",
+            data.len().saturating_sub(pos),
+            sp.width,
+            sp.height,
+            nc
+        )));
+    }
+    let mut out = vec![0u16; total];
+    let mut bits = Bits::new(data, pos);
+    let default_pred: i32 = 1 << (sp.precision - sp.pt - 1);
+    let mask: i32 = 0xFFFF;
+    let mut mcus_left = sp.restart_interval;
+    // Row in which the current restart interval began and column: the first line of an
+    // interval predicts from the left only.
+    let mut first_line = true;
+    let mut restart_col: Option<usize> = Some(0);
+    let mut prev_start = 0usize;
+    for row in 0..sp.height {
+        let start = row * row_len;
+        let (done, cur_and_rest) = out.split_at_mut(start);
+        let prev = done.get(prev_start..prev_start + row_len);
+        let cur = &mut cur_and_rest[..row_len];
+        for col in 0..sp.width {
+            if sp.restart_interval > 0 {
+                if mcus_left == 0 {
+                    bits.restart()?;
+                    mcus_left = sp.restart_interval;
+                    restart_col = Some(col);
+                    first_line = true;
+                }
+                mcus_left -= 1;
+            }
+            for (c, ht) in hts.iter().enumerate() {
+                let i = col * nc + c;
+                let pred: i32 = if restart_col == Some(col) && first_line {
+                    default_pred
+                } else if first_line {
+                    // Left neighbour (first line of the scan or restart interval).
+                    i32::from(cur[i - nc])
+                } else if col == 0 {
+                    i32::from(prev.and_then(|p| p.get(i).copied()).unwrap_or(0))
+                } else {
+                    let ra = i32::from(cur[i - nc]);
+                    let p = prev.unwrap_or(&[]);
+                    let rb = i32::from(*p.get(i).unwrap_or(&0));
+                    let rc = i32::from(*p.get(i - nc).unwrap_or(&0));
+                    match sp.predictor {
+                        1 => ra,
+                        2 => rb,
+                        3 => rc,
+                        4 => ra + rb - rc,
+                        5 => ra + ((rb - rc) >> 1),
+                        6 => rb + ((ra - rc) >> 1),
+                        7 => (ra + rb) >> 1,
+                        _ => 0,
+                    }
+                };
+                let s = bits.decode(ht)?;
+                let diff: i32 = match s {
+                    0 => 0,
+                    16 => 32768,
+                    1..=15 => {
+                        let v = bits.get(s as u32) as i32;
+                        if v < (1 << (s - 1)) {
+                            v - (1 << s) + 1
+                        } else {
+                            v
+                        }
+                    }
+                    _ => {
+                        return Err(Error::malformed(format!(
+                            "lossless JPEG: difference category {s} > 16"
+                        )))
+                    }
+                };
+                cur[i] = ((pred + diff) & mask) as u16;
+            }
+            if bits.too_far() {
+                return Err(Error::malformed(
+                    "lossless JPEG: entropy-coded data ends before the frame is complete",
+                ));
+            }
+        }
+        first_line = false;
+        restart_col = None;
+        prev_start = start;
+    }
+    if sp.pt > 0 {
+        for v in &mut out {
+            *v <<= sp.pt;
+        }
+    }
+    Ok(Decoded {
+        width: sp.width,
+        height: sp.height,
+        components: nc,
+        precision: sp.precision,
+        data: out,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Tiny reference encoder for tests: one Huffman table with categories 0..=16 all 5-bit
+    /// codes, any predictor, optional restart interval.
+    #[allow(clippy::too_many_arguments)]
+    pub(crate) fn encode(
+        w: usize,
+        h: usize,
+        nc: usize,
+        p: u8,
+        pred: u8,
+        pt: u8,
+        ri: usize,
+        samples: &[u16],
+    ) -> Vec<u8> {
+        let mut o = vec![0xFF, 0xD8];
+        // SOF3
+        o.extend_from_slice(&[0xFF, 0xC3]);
+        let l = 8 + 3 * nc;
+        o.extend_from_slice(&(l as u16).to_be_bytes());
+        o.push(p);
+        o.extend_from_slice(&(h as u16).to_be_bytes());
+        o.extend_from_slice(&(w as u16).to_be_bytes());
+        o.push(nc as u8);
+        for c in 0..nc {
+            o.extend_from_slice(&[c as u8 + 1, 0x11, 0]);
+        }
+        // DHT: 17 symbols of length 5.
+        o.extend_from_slice(&[0xFF, 0xC4]);
+        o.extend_from_slice(&((2 + 17 + 17) as u16).to_be_bytes());
+        o.push(0x00);
+        let mut counts = [0u8; 16];
+        counts[4] = 17;
+        o.extend_from_slice(&counts);
+        o.extend((0..17u8).collect::<Vec<_>>());
+        if ri > 0 {
+            o.extend_from_slice(&[0xFF, 0xDD, 0, 4]);
+            o.extend_from_slice(&(ri as u16).to_be_bytes());
+        }
+        // SOS
+        o.extend_from_slice(&[0xFF, 0xDA]);
+        o.extend_from_slice(&((6 + 2 * nc) as u16).to_be_bytes());
+        o.push(nc as u8);
+        for c in 0..nc {
+            o.extend_from_slice(&[c as u8 + 1, 0x00]);
+        }
+        o.extend_from_slice(&[pred, 0, pt]);
+        let mut bw = BitW::default();
+        let rl = w * nc;
+        let x: Vec<i32> = samples.iter().map(|&s| (s >> pt) as i32).collect();
+        let mut left = ri;
+        let mut rst = 0u8;
+        let mut rcol: Option<usize> = Some(0);
+        let mut first = true;
+        for r in 0..h {
+            for col in 0..w {
+                if ri > 0 {
+                    if left == 0 {
+                        bw.flush(&mut o);
+                        o.extend_from_slice(&[0xFF, 0xD0 + rst]);
+                        rst = (rst + 1) & 7;
+                        left = ri;
+                        rcol = Some(col);
+                        first = true;
+                    }
+                    left -= 1;
+                }
+                for c in 0..nc {
+                    let i = r * rl + col * nc + c;
+                    let prd = if rcol == Some(col) && first {
+                        1 << (p - pt - 1)
+                    } else if first {
+                        x[i - nc]
+                    } else if col == 0 {
+                        x[i - rl]
+                    } else {
+                        let (ra, rb, rc) = (x[i - nc], x[i - rl], x[i - rl - nc]);
+                        match pred {
+                            1 => ra,
+                            2 => rb,
+                            3 => rc,
+                            4 => ra + rb - rc,
+                            5 => ra + ((rb - rc) >> 1),
+                            6 => rb + ((ra - rc) >> 1),
+                            _ => (ra + rb) >> 1,
+                        }
+                    };
+                    let mut d = (x[i] - prd) & 0xFFFF;
+                    if d >= 32768 {
+                        d -= 65536;
+                    }
+                    if d == -32768 {
+                        bw.put(16, 5);
+                        continue;
+                    }
+                    let s = if d == 0 {
+                        0
+                    } else {
+                        32 - (d.unsigned_abs()).leading_zeros()
+                    };
+                    bw.put(s, 5);
+                    if s > 0 {
+                        let v = if d < 0 { d + (1 << s) - 1 } else { d };
+                        bw.put(v as u32, s);
+                    }
+                }
+            }
+            first = false;
+            rcol = None;
+        }
+        bw.flush(&mut o);
+        o.extend_from_slice(&[0xFF, 0xD9]);
+        o
+    }
+
+    #[derive(Default)]
+    struct BitW {
+        acc: u64,
+        n: u32,
+        bytes: Vec<u8>,
+    }
+    impl BitW {
+        fn put(&mut self, v: u32, n: u32) {
+            self.acc = (self.acc << n) | (v as u64 & ((1u64 << n) - 1));
+            self.n += n;
+            while self.n >= 8 {
+                let b = (self.acc >> (self.n - 8)) as u8;
+                self.bytes.push(b);
+                if b == 0xFF {
+                    self.bytes.push(0);
+                }
+                self.n -= 8;
+            }
+        }
+        fn flush(&mut self, o: &mut Vec<u8>) {
+            if self.n > 0 {
+                let pad = 8 - self.n;
+                self.put((1 << pad) - 1, pad);
+            }
+            o.append(&mut self.bytes);
+        }
+    }
+
+    fn pseudo(n: usize, bits: u8, seed: u32) -> Vec<u16> {
+        let mut s = seed.wrapping_mul(2654435761).wrapping_add(1);
+        (0..n)
+            .map(|i| {
+                s ^= s << 13;
+                s ^= s >> 17;
+                s ^= s << 5;
+                let smooth = ((i % 37) as u32 * 50) & ((1 << bits) - 1);
+                ((smooth ^ (s & 0x3F)) & ((1u32 << bits) - 1)) as u16
+            })
+            .collect()
+    }
+
+    #[test]
+    fn round_trips_all_predictors_and_components() {
+        for nc in 1..=4 {
+            for pred in 1..=7u8 {
+                for &p in &[8u8, 12, 14, 16] {
+                    let (w, h) = (13, 7);
+                    let s = pseudo(w * h * nc, p, pred as u32 + nc as u32);
+                    let enc = encode(w, h, nc, p, pred, 0, 0, &s);
+                    let d = decode(&enc).unwrap();
+                    assert_eq!((d.width, d.height, d.components), (w, h, nc));
+                    assert_eq!(d.data, s, "nc {nc} pred {pred} p {p}");
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn restart_intervals_and_point_transform() {
+        for &ri in &[1usize, 5, 13, 26] {
+            let (w, h, nc) = (13, 6, 2);
+            let s: Vec<u16> = pseudo(w * h * nc, 12, ri as u32)
+                .into_iter()
+                .map(|v| v & !3)
+                .collect();
+            let enc = encode(w, h, nc, 12, 6, 2, ri, &s);
+            let d = decode(&enc).unwrap();
+            assert_eq!(d.data, s, "ri {ri}");
+        }
+    }
+
+    #[test]
+    fn truncated_and_garbage_streams_fail_cleanly() {
+        let s = pseudo(64 * 8, 14, 3);
+        let enc = encode(64, 8, 1, 14, 1, 0, 0, &s);
+        for cut in [0, 1, 2, 10, 30, enc.len() / 2, enc.len() - 3] {
+            assert!(decode(&enc[..cut]).is_err(), "cut {cut}");
+        }
+        let mut bad = enc.clone();
+        for i in (40..bad.len()).step_by(7) {
+            bad[i] ^= 0x5A;
+        }
+        let _ = decode(&bad); // must not panic
+    }
+
+    #[test]
+    fn huge_frame_header_is_refused_before_allocation() {
+        let mut enc = encode(4, 4, 1, 12, 1, 0, 0, &[0; 16]);
+        // SOF3 height/width at bytes 7..11.
+        enc[7..11].copy_from_slice(&[0xFF, 0xFF, 0xFF, 0xFF]);
+        assert!(decode(&enc).is_err());
+    }
+}

@@ -1,8 +1,48 @@
-//! DNG writer (in progress: owned by the writer work).
+//! DNG writer: a [`RawImage`] -> a DNG 1.4 file (backward version 1.1, or 1.3 when opcode
+//! lists are written) through the hand-written TIFF layer in [`crate::tiff::write`].
+//!
+//! Layouts: raw in IFD0 (default) or in a SubIFD behind a small RGB thumbnail rendered from
+//! the raw being written ([`RawIfd::Sub`]); uncompressed strips (default; 16-bit container
+//! samples, or 8-bit for 8-bit sources) or lossless-JPEG tiles ([`Compression::Ljpeg`], 256x256,
+//! two-component half-width encoding, precision = BitsPerSample). Fixture-only options:
+//! big-endian files, packed 10/12/14-bit samples, uncompressed tiles, chosen strip height.
+//!
+//! What is carried and what is dropped is documented in docs/dng-writing.md and in
+//! [`is_dropped`].
+
+use crate::dng::ljpeg_encode;
+use crate::dng::meta::{ByteOrder, RawMeta};
+use crate::dng::thumbnail;
 use crate::error::{Error, Result};
 use crate::output::OutputPolicy;
 use crate::raw::RawImage;
+use crate::tiff::tags as t;
+use crate::tiff::value::{Entry, Value};
+use crate::tiff::write::{encode_tiff, Chunks, Ifd};
+use rayon::prelude::*;
+use sha2::{Digest, Sha256};
 use std::path::Path;
+
+/// Exif ISOSpeed (34867), written with SensitivityType 3.
+const ISO_SPEED: u16 = 34867;
+/// Exif StandardOutputSensitivity.
+const STANDARD_OUTPUT_SENSITIVITY: u16 = 34865;
+/// Exif ShutterSpeedValue / ApertureValue / BrightnessValue (APEX, derived from the exposure).
+const SHUTTER_SPEED_VALUE: u16 = 37377;
+const APERTURE_VALUE: u16 = 37378;
+const BRIGHTNESS_VALUE: u16 = 37379;
+/// Exif PixelXDimension / PixelYDimension / InteroperabilityIFD.
+const PIXEL_X_DIMENSION: u16 = 40962;
+const PIXEL_Y_DIMENSION: u16 = 40963;
+const INTEROP_IFD: u16 = 40965;
+/// TIFF JPEGInterchangeFormat / Length (old-style thumbnails).
+const JPEG_IF_OFFSET: u16 = 513;
+const JPEG_IF_LENGTH: u16 = 514;
+const SUBFILE_TYPE: u16 = 255;
+/// Tile edge of lossless-JPEG tiles (as Adobe's converter writes).
+const LJPEG_TILE: usize = 256;
+/// Target size of one uncompressed strip.
+const STRIP_BYTES: usize = 1 << 20;
 
 /// Raw image compression of written DNGs.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
@@ -31,12 +71,80 @@ pub struct WriteOptions {
     pub compression: Compression,
     /// IFD holding the raw image.
     pub raw_ifd: RawIfd,
+    /// Fixture option: write a big-endian ("MM") file.
+    pub big_endian: bool,
+    /// Fixture option: uncompressed samples packed at `meta.bits_per_sample` bits (MSB
+    /// first, rows padded to a byte) instead of a 16-bit container. Ignored for 8/16 bits.
+    pub packed: bool,
+    /// Fixture option: uncompressed tiles of this size (multiple of 16) instead of strips.
+    pub uncompressed_tiles: Option<(u32, u32)>,
+    /// Fixture option: rows per uncompressed strip (default: about 1 MiB per strip).
+    pub rows_per_strip: Option<u32>,
 }
 
 /// Encode a DNG into memory.
 pub fn encode_dng(img: &RawImage, opts: &WriteOptions) -> Result<Vec<u8>> {
-    let _ = (img, opts);
-    Err(Error::unsupported("DNG writing is not implemented yet"))
+    img.validate()?;
+    let m = &img.meta;
+    check_meta(img)?;
+    let order = if opts.big_endian {
+        ByteOrder::Big
+    } else {
+        ByteOrder::Little
+    };
+
+    let (raw_chunks, bits, compression, layout_tags) = encode_pixels(img, opts, order)?;
+
+    let mut raw = Ifd::new();
+    raw.set(t::NEW_SUBFILE_TYPE, Value::Long(vec![0]));
+    raw.set(t::IMAGE_WIDTH, Value::Long(vec![img.width as u32]));
+    raw.set(t::IMAGE_LENGTH, Value::Long(vec![img.height as u32]));
+    raw.set(t::BITS_PER_SAMPLE, Value::Short(vec![bits]));
+    raw.set(t::COMPRESSION, Value::Short(vec![compression]));
+    raw.set(t::PHOTOMETRIC_INTERPRETATION, Value::Short(vec![32803]));
+    raw.set(t::SAMPLES_PER_PIXEL, Value::Short(vec![1]));
+    raw.set(t::PLANAR_CONFIGURATION, Value::Short(vec![1]));
+    for (tag, v) in layout_tags {
+        raw.set(tag, v);
+    }
+    raw.set_chunks(raw_chunks);
+    set_raw_tags(&mut raw, m);
+
+    let mut ifd0 = match opts.raw_ifd {
+        RawIfd::Main => {
+            for e in &m.raw_extra {
+                if !is_dropped(e.tag) {
+                    raw.set_if_absent(e.tag, e.value.clone());
+                }
+            }
+            raw
+        }
+        RawIfd::Sub => {
+            let th = thumbnail::render(img, 256)?;
+            let mut ifd0 = Ifd::new();
+            ifd0.set(t::NEW_SUBFILE_TYPE, Value::Long(vec![1]));
+            ifd0.set(t::IMAGE_WIDTH, Value::Long(vec![th.width as u32]));
+            ifd0.set(t::IMAGE_LENGTH, Value::Long(vec![th.height as u32]));
+            ifd0.set(t::BITS_PER_SAMPLE, Value::Short(vec![8, 8, 8]));
+            ifd0.set(t::COMPRESSION, Value::Short(vec![1]));
+            ifd0.set(t::PHOTOMETRIC_INTERPRETATION, Value::Short(vec![2]));
+            ifd0.set(t::SAMPLES_PER_PIXEL, Value::Short(vec![3]));
+            ifd0.set(t::PLANAR_CONFIGURATION, Value::Short(vec![1]));
+            ifd0.set(t::ROWS_PER_STRIP, Value::Long(vec![th.height as u32]));
+            ifd0.set_chunks(Chunks::Strips(vec![th.rgb]));
+            let mut raw = raw;
+            for e in &m.raw_extra {
+                if !is_dropped(e.tag) {
+                    raw.set_if_absent(e.tag, e.value.clone());
+                }
+            }
+            ifd0.set_children(t::SUB_IFDS, vec![raw]);
+            ifd0
+        }
+    };
+    set_ifd0_tags(&mut ifd0, img, opts)?;
+    ifd0.set_children(t::EXIF_IFD, vec![exif_ifd(m)]);
+    encode_tiff(order, &[ifd0])
 }
 
 /// Encode and write a DNG atomically under `policy`.
@@ -46,6 +154,692 @@ pub fn write_dng(
     opts: &WriteOptions,
     policy: &OutputPolicy,
 ) -> Result<()> {
-    let bytes = encode_dng(img, opts)?;
+    let bytes = encode_dng(img, opts).map_err(|e| e.in_file(path))?;
     crate::output::write_bytes_atomic(path, policy, &bytes)
+}
+
+/// Tags never copied from the source's carried entries: structural tags the writer
+/// generates, and tags that become false or dangling once the file is re-laid out or its
+/// pixels change (see docs/dng-writing.md).
+pub fn is_dropped(tag: u16) -> bool {
+    matches!(
+        tag,
+        // Structure, regenerated for the new layout.
+        t::NEW_SUBFILE_TYPE
+            | SUBFILE_TYPE
+            | t::IMAGE_WIDTH
+            | t::IMAGE_LENGTH
+            | t::BITS_PER_SAMPLE
+            | t::COMPRESSION
+            | t::PHOTOMETRIC_INTERPRETATION
+            | t::STRIP_OFFSETS
+            | t::SAMPLES_PER_PIXEL
+            | t::ROWS_PER_STRIP
+            | t::STRIP_BYTE_COUNTS
+            | t::PLANAR_CONFIGURATION
+            | t::PREDICTOR
+            | t::TILE_WIDTH
+            | t::TILE_LENGTH
+            | t::TILE_OFFSETS
+            | t::TILE_BYTE_COUNTS
+            | t::SUB_IFDS
+            | t::SAMPLE_FORMAT
+            | t::JPEG_TABLES
+            | JPEG_IF_OFFSET
+            | JPEG_IF_LENGTH
+            | t::EXIF_IFD
+            | t::GPS_IFD
+            | INTEROP_IFD
+            // Regenerated from the typed metadata / by this writer.
+            | t::SOFTWARE
+            | t::RAW_DATA_UNIQUE_ID
+            // Stale once pixels or layout change.
+            | t::RAW_IMAGE_DIGEST
+            | t::NEW_RAW_IMAGE_DIGEST
+            | t::ORIGINAL_RAW_FILE_DATA
+            | t::ORIGINAL_RAW_FILE_DIGEST
+            | t::MAKER_NOTE
+            | t::DNG_PRIVATE_DATA
+            | t::MAKER_NOTE_SAFETY
+            | t::XMP
+            | t::ICC_PROFILE
+            | t::PREVIEW_APPLICATION_NAME
+            | t::PREVIEW_APPLICATION_VERSION
+            | t::PREVIEW_SETTINGS_NAME
+            | t::PREVIEW_SETTINGS_DIGEST
+            | t::PREVIEW_COLOR_SPACE
+            | t::PREVIEW_DATE_TIME
+            | t::RAW_TO_PREVIEW_GAIN
+            // Exif exposure/sensitivity fields that are rewritten from (or derived from) the
+            // typed exposure metadata, or that describe the scene brightness.
+            | t::ISO_SPEED_RATINGS
+            | t::SENSITIVITY_TYPE
+            | t::RECOMMENDED_EXPOSURE_INDEX
+            | STANDARD_OUTPUT_SENSITIVITY
+            | ISO_SPEED
+            | t::EXPOSURE_TIME
+            | t::F_NUMBER
+            | t::DATE_TIME_ORIGINAL
+            | t::EXIF_VERSION
+            | SHUTTER_SPEED_VALUE
+            | APERTURE_VALUE
+            | BRIGHTNESS_VALUE
+            | PIXEL_X_DIMENSION
+            | PIXEL_Y_DIMENSION
+            // Typed fields of RawMeta: written from the typed value, never twice.
+            | t::MAKE
+            | t::MODEL
+            | t::ORIENTATION
+            | t::CFA_REPEAT_PATTERN_DIM
+            | t::CFA_PATTERN
+            | t::DNG_VERSION
+            | t::DNG_BACKWARD_VERSION
+            | t::UNIQUE_CAMERA_MODEL
+            | t::CFA_PLANE_COLOR
+            | t::CFA_LAYOUT
+            | t::LINEARIZATION_TABLE
+            | t::BLACK_LEVEL_REPEAT_DIM
+            | t::BLACK_LEVEL
+            | t::BLACK_LEVEL_DELTA_H
+            | t::BLACK_LEVEL_DELTA_V
+            | t::WHITE_LEVEL
+            | t::DEFAULT_CROP_ORIGIN
+            | t::DEFAULT_CROP_SIZE
+            | t::COLOR_MATRIX1
+            | t::COLOR_MATRIX2
+            | t::CAMERA_CALIBRATION1
+            | t::CAMERA_CALIBRATION2
+            | t::FORWARD_MATRIX1
+            | t::FORWARD_MATRIX2
+            | t::CALIBRATION_ILLUMINANT1
+            | t::CALIBRATION_ILLUMINANT2
+            | t::ANALOG_BALANCE
+            | t::AS_SHOT_NEUTRAL
+            | t::AS_SHOT_WHITE_XY
+            | t::BASELINE_EXPOSURE
+            | t::ACTIVE_AREA
+            | t::OPCODE_LIST1
+            | t::OPCODE_LIST2
+            | t::OPCODE_LIST3
+            | t::NOISE_PROFILE
+    )
+}
+
+fn check_meta(img: &RawImage) -> Result<()> {
+    let m = &img.meta;
+    if !(1..=16).contains(&m.bits_per_sample) {
+        return Err(Error::invalid(format!(
+            "BitsPerSample {} outside 1..=16",
+            m.bits_per_sample
+        )));
+    }
+    let c = &m.cfa;
+    if c.rows == 0 || c.cols == 0 || c.rows * c.cols != c.pattern.len() || c.rows > 255 {
+        return Err(Error::invalid(format!(
+            "CFA pattern of {} values for a {}x{} repeat",
+            c.pattern.len(),
+            c.rows,
+            c.cols
+        )));
+    }
+    if img.width > u32::MAX as usize || img.height > u32::MAX as usize {
+        return Err(Error::limits("image dimensions exceed 32 bits"));
+    }
+    Ok(())
+}
+
+type Pixels = (Chunks, u16, u16, Vec<(u16, Value)>);
+
+/// Encode the samples: (chunks, BitsPerSample, Compression, layout tags).
+fn encode_pixels(img: &RawImage, opts: &WriteOptions, order: ByteOrder) -> Result<Pixels> {
+    let (w, h) = (img.width, img.height);
+    let max = img.data.iter().copied().max().unwrap_or(0);
+    let src_bits = img.meta.bits_per_sample;
+    // Bits actually written: the source depth unless a sample does not fit in it.
+    let fit_bits = if (max as u32) < (1u32 << src_bits) {
+        src_bits
+    } else {
+        16
+    };
+    match opts.compression {
+        Compression::Ljpeg => {
+            let precision = fit_bits.max(2);
+            let tw = if w >= LJPEG_TILE {
+                LJPEG_TILE
+            } else {
+                w.div_ceil(16) * 16
+            };
+            let th = if h >= LJPEG_TILE {
+                LJPEG_TILE
+            } else {
+                h.div_ceil(16) * 16
+            };
+            let (nx, ny) = (w.div_ceil(tw), h.div_ceil(th));
+            let tiles: Vec<Vec<u8>> = (0..nx * ny)
+                .into_par_iter()
+                .map(|i| {
+                    let tile = extract_tile(img, (i % nx) * tw, (i / nx) * th, tw, th);
+                    ljpeg_encode::encode(&tile, tw / 2, th, 2, precision as u8)
+                })
+                .collect::<Result<_>>()?;
+            Ok((
+                Chunks::Tiles(tiles),
+                precision,
+                7,
+                vec![
+                    (t::TILE_WIDTH, Value::Long(vec![tw as u32])),
+                    (t::TILE_LENGTH, Value::Long(vec![th as u32])),
+                ],
+            ))
+        }
+        Compression::None => {
+            let bits = if opts.packed && fit_bits != 8 && fit_bits != 16 {
+                fit_bits
+            } else if fit_bits <= 8 {
+                8
+            } else {
+                16
+            };
+            let big = order == ByteOrder::Big;
+            if let Some((tw, th)) = opts.uncompressed_tiles {
+                let (tw, th) = (tw as usize, th as usize);
+                if tw == 0 || th == 0 || tw % 16 != 0 || th % 16 != 0 {
+                    return Err(Error::invalid(format!(
+                        "tile size {tw}x{th} is not a positive multiple of 16"
+                    )));
+                }
+                let (nx, ny) = (w.div_ceil(tw), h.div_ceil(th));
+                let tiles = (0..nx * ny)
+                    .map(|i| {
+                        let tile = extract_tile(img, (i % nx) * tw, (i / nx) * th, tw, th);
+                        pack_rows(&tile, tw, bits, big)
+                    })
+                    .collect();
+                return Ok((
+                    Chunks::Tiles(tiles),
+                    bits,
+                    1,
+                    vec![
+                        (t::TILE_WIDTH, Value::Long(vec![tw as u32])),
+                        (t::TILE_LENGTH, Value::Long(vec![th as u32])),
+                    ],
+                ));
+            }
+            let row_bytes = (w * bits as usize).div_ceil(8).max(1);
+            let rps = match opts.rows_per_strip {
+                Some(0) => return Err(Error::invalid("rows per strip must be positive")),
+                Some(r) => (r as usize).min(h),
+                None => STRIP_BYTES.div_ceil(row_bytes).clamp(1, h),
+            };
+            let strips: Vec<Vec<u8>> = img
+                .data
+                .par_chunks(rps * w)
+                .map(|rows| pack_rows(rows, w, bits, big))
+                .collect();
+            Ok((
+                Chunks::Strips(strips),
+                bits,
+                1,
+                vec![(t::ROWS_PER_STRIP, Value::Long(vec![rps as u32]))],
+            ))
+        }
+    }
+}
+
+/// A `tw x th` tile at (x0, y0), edges padded by replicating the last column/row.
+fn extract_tile(img: &RawImage, x0: usize, y0: usize, tw: usize, th: usize) -> Vec<u16> {
+    let mut out = Vec::with_capacity(tw * th);
+    for y in 0..th {
+        let sy = (y0 + y).min(img.height - 1);
+        let row = &img.data[sy * img.width..(sy + 1) * img.width];
+        for x in 0..tw {
+            // Replicate with the same CFA parity so predictors stay within one colour.
+            let mut sx = x0 + x;
+            while sx >= img.width {
+                sx = sx.saturating_sub(2).min(img.width - 1);
+                if img.width == 1 {
+                    sx = 0;
+                }
+            }
+            out.push(row[sx]);
+        }
+    }
+    out
+}
+
+/// Rows of `w` samples at `bits` bits: 8 -> bytes, 16 -> 16-bit words in file byte order,
+/// other depths -> MSB-first packed, each row padded to a byte boundary.
+fn pack_rows(samples: &[u16], w: usize, bits: u16, big: bool) -> Vec<u8> {
+    match bits {
+        16 => {
+            let mut out = vec![0u8; samples.len() * 2];
+            if big {
+                for (o, &s) in out.chunks_exact_mut(2).zip(samples) {
+                    o.copy_from_slice(&s.to_be_bytes());
+                }
+            } else {
+                for (o, &s) in out.chunks_exact_mut(2).zip(samples) {
+                    o.copy_from_slice(&s.to_le_bytes());
+                }
+            }
+            out
+        }
+        8 => samples.iter().map(|&s| s as u8).collect(),
+        _ => {
+            let row_bytes = (w * bits as usize).div_ceil(8);
+            let mut out = Vec::with_capacity(row_bytes * samples.len() / w.max(1));
+            for row in samples.chunks(w.max(1)) {
+                let mut acc: u64 = 0;
+                let mut n = 0u32;
+                for &s in row {
+                    acc = (acc << bits) | (s as u64 & ((1u64 << bits) - 1));
+                    n += bits as u32;
+                    while n >= 8 {
+                        n -= 8;
+                        out.push((acc >> n) as u8);
+                    }
+                    acc &= (1u64 << n) - 1;
+                }
+                if n > 0 {
+                    out.push((acc << (8 - n)) as u8);
+                }
+            }
+            out
+        }
+    }
+}
+
+/// Best rational approximation of `x >= 0` with numerator and denominator <= `max`
+/// (continued fractions; exact for values that were read from rationals).
+fn cf_rational(x: f64, max: u64) -> (u64, u64) {
+    if !x.is_finite() || x <= 0.0 {
+        return (0, 1);
+    }
+    if x >= max as f64 {
+        return (max, 1);
+    }
+    let (mut h0, mut h1) = (0u64, 1u64);
+    let (mut k0, mut k1) = (1u64, 0u64);
+    let mut best = (0u64, 1u64);
+    let mut r = x;
+    for _ in 0..64 {
+        let a = r.floor();
+        if a > max as f64 {
+            break;
+        }
+        let a = a as u64;
+        let h = a.checked_mul(h1).and_then(|v| v.checked_add(h0));
+        let k = a.checked_mul(k1).and_then(|v| v.checked_add(k0));
+        let (h, k) = match (h, k) {
+            (Some(h), Some(k)) if h <= max && k <= max => (h, k),
+            _ => break,
+        };
+        best = (h, k);
+        if h as f64 / k as f64 == x {
+            break;
+        }
+        (h0, h1, k0, k1) = (h1, h, k1, k);
+        let frac = r - a as f64;
+        if frac <= 0.0 {
+            break;
+        }
+        r = 1.0 / frac;
+    }
+    if best.1 == 0 {
+        (0, 1)
+    } else {
+        best
+    }
+}
+
+fn urational(values: &[f64]) -> Value {
+    Value::Rational(
+        values
+            .iter()
+            .map(|&x| {
+                let (n, d) = cf_rational(x, u32::MAX as u64);
+                (n as u32, d as u32)
+            })
+            .collect(),
+    )
+}
+
+fn srational(values: &[f64]) -> Value {
+    Value::SRational(
+        values
+            .iter()
+            .map(|&x| {
+                let (n, d) = cf_rational(x.abs(), i32::MAX as u64);
+                let n = n as i32;
+                (if x < 0.0 { -n } else { n }, d as i32)
+            })
+            .collect(),
+    )
+}
+
+/// Integers as SHORT/LONG when exact, otherwise RATIONAL.
+fn levels_value(values: &[f64]) -> Value {
+    let ints = values
+        .iter()
+        .all(|&v| v >= 0.0 && v.fract() == 0.0 && v <= u32::MAX as f64);
+    if ints && values.iter().all(|&v| v <= u16::MAX as f64) {
+        Value::Short(values.iter().map(|&v| v as u16).collect())
+    } else if ints {
+        Value::Long(values.iter().map(|&v| v as u32).collect())
+    } else {
+        urational(values)
+    }
+}
+
+fn ascii_or_default(s: &Option<String>, default: &str) -> Value {
+    match s.as_deref().map(str::trim) {
+        Some(s) if !s.is_empty() => Value::ascii(s),
+        _ => Value::ascii(default),
+    }
+}
+
+/// Tags that describe the raw image (raw IFD).
+fn set_raw_tags(ifd: &mut Ifd, m: &RawMeta) {
+    let c = &m.cfa;
+    ifd.set(
+        t::CFA_REPEAT_PATTERN_DIM,
+        Value::Short(vec![c.rows as u16, c.cols as u16]),
+    );
+    ifd.set(t::CFA_PATTERN, Value::Byte(c.pattern.clone()));
+    let planes = if c.plane_color.is_empty() {
+        vec![0, 1, 2]
+    } else {
+        c.plane_color.clone()
+    };
+    ifd.set(t::CFA_PLANE_COLOR, Value::Byte(planes));
+    ifd.set(t::CFA_LAYOUT, Value::Short(vec![c.layout.max(1)]));
+    if let Some(lt) = &m.linearization_table {
+        ifd.set(t::LINEARIZATION_TABLE, Value::Short(lt.clone()));
+    }
+    let l = &m.levels;
+    if l.black_repeat != (1, 1) {
+        ifd.set(
+            t::BLACK_LEVEL_REPEAT_DIM,
+            Value::Short(vec![l.black_repeat.0 as u16, l.black_repeat.1 as u16]),
+        );
+    }
+    ifd.set(t::BLACK_LEVEL, levels_value(&l.black));
+    if !l.black_delta_h.is_empty() {
+        ifd.set(t::BLACK_LEVEL_DELTA_H, srational(&l.black_delta_h));
+    }
+    if !l.black_delta_v.is_empty() {
+        ifd.set(t::BLACK_LEVEL_DELTA_V, srational(&l.black_delta_v));
+    }
+    let white = if l.white.fract() == 0.0 && l.white >= 0.0 && l.white <= u32::MAX as f64 {
+        Value::Long(vec![l.white as u32])
+    } else {
+        urational(&[l.white])
+    };
+    ifd.set(t::WHITE_LEVEL, white);
+    if let Some(a) = m.active_area {
+        ifd.set(
+            t::ACTIVE_AREA,
+            Value::Long(vec![a.top, a.left, a.bottom, a.right]),
+        );
+    }
+    if let Some(o) = m.default_crop_origin {
+        ifd.set(t::DEFAULT_CROP_ORIGIN, levels_value(&o));
+    }
+    if let Some(s) = m.default_crop_size {
+        ifd.set(t::DEFAULT_CROP_SIZE, levels_value(&s));
+    }
+    for (i, tag) in [t::OPCODE_LIST1, t::OPCODE_LIST2, t::OPCODE_LIST3]
+        .into_iter()
+        .enumerate()
+    {
+        if let Some(Some(bytes)) = m.opcode_lists.get(i) {
+            ifd.set(tag, Value::Undefined(bytes.clone()));
+        }
+    }
+    if let Some(np) = &m.noise_profile {
+        ifd.set(
+            t::NOISE_PROFILE,
+            Value::Double(np.iter().flat_map(|&(s, o)| [s, o]).collect()),
+        );
+    }
+}
+
+/// Tags of IFD0 (camera, colour, version, provenance).
+fn set_ifd0_tags(ifd: &mut Ifd, img: &RawImage, opts: &WriteOptions) -> Result<()> {
+    let m = &img.meta;
+    let has_opcodes = m.opcode_lists.iter().any(|o| o.is_some());
+    ifd.set(t::DNG_VERSION, Value::Byte(vec![1, 4, 0, 0]));
+    ifd.set(
+        t::DNG_BACKWARD_VERSION,
+        Value::Byte(if has_opcodes {
+            vec![1, 3, 0, 0]
+        } else {
+            vec![1, 1, 0, 0]
+        }),
+    );
+    let ucm = m
+        .unique_camera_model
+        .clone()
+        .filter(|s| !s.trim().is_empty())
+        .or_else(|| match (&m.make, &m.model) {
+            (Some(a), Some(b)) => Some(format!("{a} {b}")),
+            (None, Some(b)) => Some(b.clone()),
+            _ => None,
+        });
+    ifd.set(t::UNIQUE_CAMERA_MODEL, ascii_or_default(&ucm, "Unknown"));
+    ifd.set(t::MAKE, ascii_or_default(&m.make, "Unknown"));
+    ifd.set(t::MODEL, ascii_or_default(&m.model, "Unknown"));
+    ifd.set(
+        t::ORIENTATION,
+        Value::Short(vec![m.orientation.clamp(1, 8)]),
+    );
+    ifd.set(t::SOFTWARE, Value::ascii(&crate::software_name()));
+    let c = &m.color;
+    // ColorMatrix1 is required: an identity-like default only when the source had none.
+    let cm1 = c
+        .color_matrix1
+        .clone()
+        .unwrap_or_else(|| vec![1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0]);
+    ifd.set(t::COLOR_MATRIX1, srational(&cm1));
+    let mats = [
+        (t::COLOR_MATRIX2, &c.color_matrix2),
+        (t::CAMERA_CALIBRATION1, &c.camera_calibration1),
+        (t::CAMERA_CALIBRATION2, &c.camera_calibration2),
+        (t::FORWARD_MATRIX1, &c.forward_matrix1),
+        (t::FORWARD_MATRIX2, &c.forward_matrix2),
+    ];
+    for (tag, v) in mats {
+        if let Some(v) = v {
+            ifd.set(tag, srational(v));
+        }
+    }
+    if let Some(i) = c.calibration_illuminant1 {
+        ifd.set(t::CALIBRATION_ILLUMINANT1, Value::Short(vec![i]));
+    }
+    if let Some(i) = c.calibration_illuminant2 {
+        ifd.set(t::CALIBRATION_ILLUMINANT2, Value::Short(vec![i]));
+    }
+    if let Some(ab) = &c.analog_balance {
+        ifd.set(t::ANALOG_BALANCE, urational(ab));
+    }
+    if let Some(be) = c.baseline_exposure {
+        ifd.set(t::BASELINE_EXPOSURE, srational(&[be]));
+    }
+    if let Some(n) = m.as_shot_neutral {
+        ifd.set(t::AS_SHOT_NEUTRAL, urational(&n));
+    } else if let Some(xy) = m.as_shot_white_xy {
+        ifd.set(t::AS_SHOT_WHITE_XY, urational(&xy));
+    }
+    ifd.set(t::RAW_DATA_UNIQUE_ID, Value::Byte(raw_data_unique_id(img)));
+    for e in &m.ifd0_extra {
+        if !is_dropped(e.tag) {
+            ifd.set_if_absent(e.tag, e.value.clone());
+        }
+    }
+    ifd.set_if_absent(t::X_RESOLUTION, Value::Rational(vec![(72, 1)]));
+    ifd.set_if_absent(t::Y_RESOLUTION, Value::Rational(vec![(72, 1)]));
+    ifd.set_if_absent(t::RESOLUTION_UNIT, Value::Short(vec![2]));
+    let _ = opts;
+    Ok(())
+}
+
+fn exif_ifd(m: &RawMeta) -> Ifd {
+    let mut ifd = Ifd::new();
+    ifd.set(t::EXIF_VERSION, Value::Undefined(b"0230".to_vec()));
+    let e = &m.exif;
+    if let Some(iso) = e.iso.filter(|&i| i > 0) {
+        ifd.set(
+            t::ISO_SPEED_RATINGS,
+            Value::Short(vec![iso.min(65535) as u16]),
+        );
+        ifd.set(t::SENSITIVITY_TYPE, Value::Short(vec![3]));
+        ifd.set(ISO_SPEED, Value::Long(vec![iso]));
+    }
+    if let Some(et) = e.exposure_time.filter(|&x| x > 0.0 && x.is_finite()) {
+        ifd.set(t::EXPOSURE_TIME, urational(&[et]));
+    }
+    if let Some(f) = e.f_number.filter(|&x| x > 0.0 && x.is_finite()) {
+        ifd.set(t::F_NUMBER, urational(&[f]));
+    }
+    if let Some(d) = &e.date_time_original {
+        ifd.set(t::DATE_TIME_ORIGINAL, Value::ascii(d));
+    }
+    for en in &m.exif_extra {
+        if !is_dropped(en.tag) {
+            ifd.set_if_absent(en.tag, en.value.clone());
+        }
+    }
+    ifd
+}
+
+/// RawDataUniqueID: the first 16 bytes of SHA-256 over the pixel data (little-endian
+/// u16), the dimensions and the metadata (JSON, without the source storage description).
+/// Deterministic: the same image always gets the same ID, a changed image a new one.
+pub fn raw_data_unique_id(img: &RawImage) -> Vec<u8> {
+    let mut h = Sha256::new();
+    h.update(b"day2night RawDataUniqueID v1\0");
+    h.update((img.width as u64).to_le_bytes());
+    h.update((img.height as u64).to_le_bytes());
+    let mut buf = Vec::with_capacity(1 << 16);
+    for chunk in img.data.chunks(1 << 15) {
+        buf.clear();
+        for &s in chunk {
+            buf.extend_from_slice(&s.to_le_bytes());
+        }
+        h.update(&buf);
+    }
+    let mut meta = img.meta.clone();
+    meta.storage = None;
+    if let Ok(json) = serde_json::to_vec(&meta) {
+        h.update(&json);
+    }
+    h.finalize()[..16].to_vec()
+}
+
+/// Entries of an IFD that the writer will carry (helper for docs/tests).
+pub fn carried(entries: &[Entry]) -> Vec<&Entry> {
+    entries.iter().filter(|e| !is_dropped(e.tag)).collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::raw::Bayer;
+
+    fn sample_image(w: usize, h: usize, bits: u16) -> RawImage {
+        let meta = RawMeta::new_bayer(Bayer::RGGB, bits, 64.0, ((1u32 << bits) - 1) as f64);
+        let max = (1u32 << bits) - 1;
+        let data = (0..w * h)
+            .map(|i| (((i as u32).wrapping_mul(2654435761u32) >> 7) & max) as u16)
+            .collect();
+        RawImage {
+            width: w,
+            height: h,
+            data,
+            meta,
+        }
+    }
+
+    #[test]
+    fn rationals_are_exact_for_simple_fractions() {
+        assert_eq!(cf_rational(1.0 / 60.0, u32::MAX as u64), (1, 60));
+        assert_eq!(cf_rational(2.477, u32::MAX as u64), (2477, 1000));
+        assert_eq!(cf_rational(0.6461, i32::MAX as u64), (6461, 10000));
+        assert_eq!(cf_rational(0.0, 100), (0, 1));
+        assert_eq!(cf_rational(1e12, u32::MAX as u64), (u32::MAX as u64, 1));
+        let v = srational(&[-0.3825]);
+        assert_eq!(v, Value::SRational(vec![(-153, 400)]));
+        for x in [std::f64::consts::PI, 1e-7, 12345.678] {
+            let (n, d) = cf_rational(x, u32::MAX as u64);
+            assert!((n as f64 / d as f64 - x).abs() / x < 1e-9);
+        }
+    }
+
+    #[test]
+    fn packing_is_msb_first_and_row_padded() {
+        // Two 12-bit samples 0xABC, 0xDEF -> AB CD EF.
+        assert_eq!(
+            pack_rows(&[0xABC, 0xDEF], 2, 12, false),
+            vec![0xAB, 0xCD, 0xEF]
+        );
+        // 10-bit, width 1: 0x3FF -> 11111111 11000000, each row padded.
+        assert_eq!(
+            pack_rows(&[0x3FF, 0x001], 1, 10, false),
+            vec![0xFF, 0xC0, 0x00, 0x40]
+        );
+        assert_eq!(pack_rows(&[0x0102], 1, 16, true), vec![1, 2]);
+        assert_eq!(pack_rows(&[0x0102], 1, 16, false), vec![2, 1]);
+    }
+
+    #[test]
+    fn encodes_deterministically_in_all_modes() {
+        let img = sample_image(40, 30, 12);
+        for compression in [Compression::None, Compression::Ljpeg] {
+            for raw_ifd in [RawIfd::Main, RawIfd::Sub] {
+                let o = WriteOptions {
+                    compression,
+                    raw_ifd,
+                    ..Default::default()
+                };
+                let a = encode_dng(&img, &o).unwrap();
+                let b = encode_dng(&img, &o).unwrap();
+                assert_eq!(a, b);
+                assert_eq!(&a[..4], b"II*\0");
+            }
+        }
+        let o = WriteOptions {
+            big_endian: true,
+            packed: true,
+            uncompressed_tiles: Some((16, 16)),
+            ..Default::default()
+        };
+        let a = encode_dng(&img, &o).unwrap();
+        assert_eq!(&a[..4], b"MM\0*");
+    }
+
+    #[test]
+    fn unique_id_changes_with_pixels() {
+        let a = sample_image(8, 8, 12);
+        let mut b = a.clone();
+        b.data[5] ^= 1;
+        assert_ne!(raw_data_unique_id(&a), raw_data_unique_id(&b));
+        assert_eq!(raw_data_unique_id(&a), raw_data_unique_id(&a.clone()));
+        assert_eq!(raw_data_unique_id(&a).len(), 16);
+    }
+
+    #[test]
+    fn drop_list_covers_stale_tags() {
+        for tag in [
+            t::RAW_IMAGE_DIGEST,
+            t::NEW_RAW_IMAGE_DIGEST,
+            t::ORIGINAL_RAW_FILE_DATA,
+            t::MAKER_NOTE,
+            t::STRIP_OFFSETS,
+            t::SUB_IFDS,
+        ] {
+            assert!(is_dropped(tag));
+        }
+        assert!(!is_dropped(t::COPYRIGHT));
+        assert!(!is_dropped(t::BASELINE_NOISE));
+    }
 }

@@ -1,0 +1,32 @@
+//! Bilinear demosaicing: each missing sample is the mean of its nearest same-colour
+//! neighbours (2 or 4).
+
+use super::{per_row, Padded, PAD};
+use crate::isp::RgbImage;
+use crate::raw::Bayer;
+
+pub(super) fn run(p: &Padded, bayer: Bayer) -> RgbImage {
+    let s = p.s;
+    let d = &p.d;
+    per_row(p.w, p.h, |y, row| {
+        for (x, px) in row.chunks_exact_mut(3).enumerate() {
+            let i = p.idx(y + PAD, x + PAD);
+            let v = d[i];
+            let hz = 0.5 * (d[i - 1] + d[i + 1]);
+            let vt = 0.5 * (d[i - s] + d[i + s]);
+            let cross = 0.5 * (hz + vt);
+            let diag = 0.25 * (d[i - s - 1] + d[i - s + 1] + d[i + s - 1] + d[i + s + 1]);
+            match bayer.color_at(y, x) {
+                0 => px.copy_from_slice(&[v, cross, diag]),
+                2 => px.copy_from_slice(&[diag, cross, v]),
+                _ => {
+                    if bayer.color_at(y, x + 1) == 0 {
+                        px.copy_from_slice(&[hz, v, vt]);
+                    } else {
+                        px.copy_from_slice(&[vt, v, hz]);
+                    }
+                }
+            }
+        }
+    })
+}

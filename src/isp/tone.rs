@@ -1,0 +1,113 @@
+//! Display encodings of linear RGB: the sRGB OETF (IEC 61966-2-1), a pure 2.2 gamma, and
+//! the tone of the authors' released pipeline (gamma 2.2, then the smoothstep tone curve
+//! `3x^2 - 2x^3`, in that stage order as in the simple camera pipeline the release uses).
+
+use crate::error::{Error, Result};
+use std::str::FromStr;
+
+/// How linear values become display values.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum DisplayTone {
+    /// sRGB OETF (piecewise: 12.92 x below 0.0031308, else 1.055 x^(1/2.4) - 0.055).
+    #[default]
+    Srgb,
+    /// x^(1/2.2).
+    Gamma22,
+    /// The released code's targets: x^(1/2.2), then smoothstep 3y^2 - 2y^3.
+    Release,
+}
+
+impl FromStr for DisplayTone {
+    type Err = Error;
+    fn from_str(s: &str) -> Result<DisplayTone> {
+        match s.to_ascii_lowercase().as_str() {
+            "srgb" => Ok(DisplayTone::Srgb),
+            "gamma22" | "gamma2.2" | "gamma" => Ok(DisplayTone::Gamma22),
+            "release" => Ok(DisplayTone::Release),
+            _ => Err(Error::invalid(format!(
+                "unknown tone {s:?} (srgb, gamma22, release)"
+            ))),
+        }
+    }
+}
+
+/// sRGB OETF of a linear value (not clamped).
+#[inline]
+pub fn srgb_oetf(x: f32) -> f32 {
+    if x <= 0.003_130_8 {
+        12.92 * x
+    } else {
+        1.055 * x.powf(1.0 / 2.4) - 0.055
+    }
+}
+
+/// Inverse sRGB OETF (display value to linear).
+#[inline]
+pub fn srgb_eotf(v: f32) -> f32 {
+    if v <= 0.040_45 {
+        v / 12.92
+    } else {
+        ((v + 0.055) / 1.055).powf(2.4)
+    }
+}
+
+/// The smoothstep tone curve of the release, on [0, 1].
+#[inline]
+pub fn smoothstep(x: f32) -> f32 {
+    x * x * (3.0 - 2.0 * x)
+}
+
+impl DisplayTone {
+    /// Display value in [0, 1] of a linear value (clamped to [0, 1] first; NaN -> 0).
+    #[inline]
+    pub fn encode(self, x: f32) -> f32 {
+        let x = if x.is_nan() { 0.0 } else { x.clamp(0.0, 1.0) };
+        match self {
+            DisplayTone::Srgb => srgb_oetf(x),
+            DisplayTone::Gamma22 => x.powf(1.0 / 2.2),
+            DisplayTone::Release => smoothstep(x.powf(1.0 / 2.2)),
+        }
+        .clamp(0.0, 1.0)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn srgb_round_trip_and_known_points() {
+        assert_eq!(srgb_oetf(0.0), 0.0);
+        assert!((srgb_oetf(1.0) - 1.0).abs() < 1e-6);
+        assert!((srgb_oetf(0.18) - 0.4613561).abs() < 1e-5);
+        for i in 0..=100 {
+            let x = i as f32 / 100.0;
+            assert!((srgb_eotf(srgb_oetf(x)) - x).abs() < 1e-5);
+        }
+        // continuity at the knee
+        let k = 0.003_130_8f32;
+        assert!((12.92 * k - (1.055 * k.powf(1.0 / 2.4) - 0.055)).abs() < 1e-5);
+    }
+
+    #[test]
+    fn tones_are_monotone_and_bounded() {
+        for t in [
+            DisplayTone::Srgb,
+            DisplayTone::Gamma22,
+            DisplayTone::Release,
+        ] {
+            let mut last = -1.0;
+            for i in 0..=1000 {
+                let v = t.encode(i as f32 / 1000.0);
+                assert!((0.0..=1.0).contains(&v) && v >= last, "{t:?}");
+                last = v;
+            }
+            assert_eq!(t.encode(f32::NAN), 0.0);
+            assert_eq!(t.encode(5.0), t.encode(1.0));
+        }
+        assert!(
+            (DisplayTone::Release.encode(0.5) - smoothstep(0.5f32.powf(1.0 / 2.2))).abs() < 1e-7
+        );
+    }
+}

@@ -1,0 +1,186 @@
+//! The day neutral (SYNTHESIS.md 2): AsShotNeutral, or AsShotWhiteXY converted through the
+//! colour matrices, or the user's `--day-neutral`; always normalized so that green = 1 and
+//! refused when a component is tiny, zero, negative or not finite.
+//!
+//! AsShotWhiteXY conversion: `neutral = AnalogBalance * CameraCalibration * ColorMatrix * XYZ(x, y)`
+//! with ColorMatrix1/2 interpolated linearly in inverse correlated colour temperature (DNG
+//! chapter 6); the white's CCT comes from McCamy's formula (no iteration is needed because
+//! the white is given in xy).
+
+use crate::dng::meta::RawMeta;
+use crate::error::{Error, Result};
+
+/// Smallest accepted neutral component (relative to green).
+pub const MIN_NEUTRAL: f64 = 1e-3;
+
+/// Normalize a neutral to green = 1 and check it.
+pub fn check_neutral(n: [f64; 3], what: &str) -> Result<[f64; 3]> {
+    if n.iter().any(|v| !v.is_finite()) || !(n[1] > 0.0) {
+        return Err(Error::invalid(format!(
+            "{} {:?} has a non-finite or non-positive green component",
+            what, n
+        )));
+    }
+    let out = [n[0] / n[1], 1.0, n[2] / n[1]];
+    if out.iter().any(|&v| !(v >= MIN_NEUTRAL) || !v.is_finite()) {
+        return Err(Error::invalid(format!(
+            "{} {:?} has a tiny, zero or negative component (each must be >= {} of green)",
+            what, n, MIN_NEUTRAL
+        )));
+    }
+    Ok(out)
+}
+
+/// CCT of an EXIF LightSource code (None when unknown).
+pub fn illuminant_cct(code: u16) -> Option<f64> {
+    Some(match code {
+        1 | 4 | 9 => 5500.0,
+        2 | 14 => 4150.0,
+        3 | 17 => 2856.0,
+        10 => 6500.0,
+        11 => 7500.0,
+        12 => 6430.0,
+        13 => 5000.0,
+        15 => 3450.0,
+        16 => 2940.0,
+        18 => 4874.0,
+        19 => 6774.0,
+        20 => 5503.0,
+        21 => 6504.0,
+        22 => 7504.0,
+        23 => 5003.0,
+        24 => 3200.0,
+        _ => return None,
+    })
+}
+
+fn mat3(v: &[f64]) -> Option<[[f64; 3]; 3]> {
+    if v.len() != 9 {
+        return None;
+    }
+    Some([[v[0], v[1], v[2]], [v[3], v[4], v[5]], [v[6], v[7], v[8]]])
+}
+
+fn mul(a: &[[f64; 3]; 3], x: [f64; 3]) -> [f64; 3] {
+    let mut o = [0.0; 3];
+    for (i, oi) in o.iter_mut().enumerate() {
+        *oi = a[i][0] * x[0] + a[i][1] * x[1] + a[i][2] * x[2];
+    }
+    o
+}
+
+/// Camera neutral of a white given as CIE xy, through the metadata's colour matrices.
+pub fn neutral_from_white_xy(meta: &RawMeta, xy: [f64; 2]) -> Result<[f64; 3]> {
+    let (x, y) = (xy[0], xy[1]);
+    if !(y > 0.0) || !x.is_finite() {
+        return Err(Error::invalid(format!(
+            "AsShotWhiteXY {:?} is not a valid white",
+            xy
+        )));
+    }
+    let xyz = [x / y, 1.0, (1.0 - x - y) / y];
+    let c = &meta.color;
+    let m1 = c.color_matrix1.as_deref().and_then(mat3);
+    let m2 = c.color_matrix2.as_deref().and_then(mat3);
+    let cc1 = c.camera_calibration1.as_deref().and_then(mat3);
+    let cc2 = c.camera_calibration2.as_deref().and_then(mat3);
+    let n = (x - 0.3320) / (0.1858 - y);
+    let cct = 449.0 * n.powi(3) + 3525.0 * n.powi(2) + 6823.3 * n + 5520.33;
+    let t1 = c.calibration_illuminant1.and_then(illuminant_cct);
+    let t2 = c.calibration_illuminant2.and_then(illuminant_cct);
+    // Weight of matrix 1, linear in 1/CCT between the two calibration CCTs.
+    let w1 = match (m1.is_some(), m2.is_some(), t1, t2) {
+        (true, true, Some(a), Some(b)) if a != b && cct.is_finite() && cct > 0.0 => {
+            let (ia, ib, ic) = (1.0 / a, 1.0 / b, 1.0 / cct);
+            ((ic - ib) / (ia - ib)).clamp(0.0, 1.0)
+        }
+        (true, _, _, _) => 1.0,
+        (false, true, _, _) => 0.0,
+        _ => {
+            return Err(Error::unsupported(
+                "AsShotWhiteXY without a ColorMatrix cannot give a camera neutral (pass --day-neutral r,g,b)",
+            ))
+        }
+    };
+    let apply = |m: Option<[[f64; 3]; 3]>, cc: Option<[[f64; 3]; 3]>| -> [f64; 3] {
+        match m {
+            Some(m) => {
+                let v = mul(&m, xyz);
+                match cc {
+                    Some(cc) => mul(&cc, v),
+                    None => v,
+                }
+            }
+            None => [0.0; 3],
+        }
+    };
+    let a = apply(m1, cc1);
+    let b = apply(m2, cc2);
+    let mut v = [0.0; 3];
+    for i in 0..3 {
+        v[i] = w1 * a[i] + (1.0 - w1) * b[i];
+    }
+    if let Some(ab) = c.analog_balance.as_deref().filter(|ab| ab.len() == 3) {
+        for i in 0..3 {
+            v[i] *= ab[i];
+        }
+    }
+    check_neutral(v, "camera neutral from AsShotWhiteXY")
+}
+
+/// The day neutral and a word on where it came from.
+pub fn day_neutral(meta: &RawMeta, user: Option<[f64; 3]>) -> Result<([f64; 3], String)> {
+    if let Some(n) = user {
+        return Ok((check_neutral(n, "--day-neutral")?, "--day-neutral".into()));
+    }
+    if let Some(n) = meta.as_shot_neutral {
+        return Ok((check_neutral(n, "AsShotNeutral")?, "AsShotNeutral".into()));
+    }
+    if let Some(xy) = meta.as_shot_white_xy {
+        return Ok((
+            neutral_from_white_xy(meta, xy)?,
+            "AsShotWhiteXY through ColorMatrix".into(),
+        ));
+    }
+    Err(Error::unsupported(
+        "no AsShotNeutral or AsShotWhiteXY: the day illuminant is unknown (pass --day-neutral r,g,b)",
+    ))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::raw::Bayer;
+
+    #[test]
+    fn tiny_or_zero_components_are_errors() {
+        assert!(check_neutral([0.0, 1.0, 0.5], "n").is_err());
+        assert!(check_neutral([1e-9, 1.0, 0.5], "n").is_err());
+        assert!(check_neutral([0.5, 0.0, 0.5], "n").is_err());
+        assert!(check_neutral([0.5, 1.0, f64::NAN], "n").is_err());
+        assert!(check_neutral([-0.5, 1.0, 0.5], "n").is_err());
+        assert_eq!(check_neutral([1.0, 2.477, 1.462], "n").unwrap()[1], 1.0);
+    }
+
+    #[test]
+    fn white_xy_of_d65_on_srgb_camera_is_unit() {
+        // new_bayer's ColorMatrix1 is XYZ(D65) -> linear sRGB: D65 white -> (1, 1, 1).
+        let mut m = RawMeta::new_bayer(Bayer::RGGB, 12, 0.0, 4095.0);
+        m.as_shot_neutral = None;
+        m.as_shot_white_xy = Some([0.3127, 0.3290]);
+        let (n, src) = day_neutral(&m, None).unwrap();
+        assert!(src.contains("WhiteXY"));
+        for v in n {
+            assert!((v - 1.0).abs() < 2e-3, "{n:?}");
+        }
+        m.as_shot_white_xy = None;
+        assert!(day_neutral(&m, None)
+            .unwrap_err()
+            .to_string()
+            .contains("--day-neutral"));
+        assert_eq!(
+            day_neutral(&m, Some([2.0, 4.0, 1.0])).unwrap().0,
+            [0.5, 1.0, 0.25]
+        );
+    }
+}

@@ -1,0 +1,374 @@
+//! The `Plan`: every random value of one (input, variant), sampled up front from the
+//! (seed, input name, variant) stream, in a fixed order: dimming, lights (ambient, local
+//! lights, bulbs; each: illuminant, then geometry, then gains), then one noise seed per ISO.
+
+use super::dim::{sample_dim, DimPlan};
+use super::illuminant::Gaussian2;
+use super::masks::{release_sigma, Light, LightKind, MaskEval, MASK_FLOOR};
+use super::neutral::day_neutral;
+use super::rng::SynthRng;
+use super::{Calibration, Mode, RelightFormula, SynthOptions};
+use crate::error::{Error, Result};
+use crate::noise::{NoiseModel, NoiseParams};
+use crate::raw::{Bayer, RawImage};
+use serde::{Deserialize, Serialize};
+
+/// Format tag of serialized plans.
+pub const PLAN_FORMAT: &str = "day2night-plan/1";
+
+/// Noise to add for one ISO.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct NoisePlan {
+    /// Target ISO (written to Exif ISO).
+    pub iso: u32,
+    /// Seed of the per-row noise streams.
+    pub seed: u64,
+    /// The model at this ISO (per 2x2 position, normalized units).
+    pub params: NoiseParams,
+    /// True when the ISO was outside the model's calibrated range.
+    pub extrapolated: bool,
+}
+
+/// Everything needed to run synthesis on one image, with no randomness left.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Plan {
+    /// [`PLAN_FORMAT`].
+    pub format: String,
+    /// Input file name the stream was derived from.
+    pub input_name: String,
+    /// Master seed.
+    pub seed: u64,
+    /// Variant index (0-based).
+    pub variant: u32,
+    /// Active-area width the plan was made for.
+    pub active_width: usize,
+    /// Active-area height.
+    pub active_height: usize,
+    /// Bayer pattern of the active area.
+    pub bayer: Bayer,
+    /// Relighting mode.
+    pub mode: Mode,
+    /// Local relighting formula.
+    pub formula: RelightFormula,
+    /// Truncate instead of rounding when denormalizing (released code).
+    pub truncate: bool,
+    /// Keep negative normalized values (no clip at 0).
+    pub keep_negative: bool,
+    /// Keep white-balanced values above 1 (no clip at 1 after removing the day illuminant).
+    pub keep_highlights: bool,
+    /// Mask evaluation.
+    pub mask_eval: MaskEval,
+    /// Day neutral (green = 1).
+    pub day_neutral: [f64; 3],
+    /// Where the day neutral came from.
+    pub day_neutral_source: String,
+    /// Dimming.
+    pub dim: DimPlan,
+    /// Lights: ambient first, then local lights, then bulbs (empty for `day`/`dimmed`; one
+    /// ambient-kind light holding the illuminant for `global`).
+    pub lights: Vec<Light>,
+    /// Night neutral written as AsShotNeutral (green = 1).
+    pub night_neutral: [f64; 3],
+    /// How the night neutral was computed.
+    pub night_neutral_definition: String,
+    /// ISO written to the clean DNG (input ISO, or 50 when unknown).
+    pub clean_iso: u32,
+    /// NoiseProfile model of the clean DNG (the model at `clean_iso`).
+    pub clean_noise: NoiseParams,
+    /// Where the noise model came from.
+    pub noise_model_source: String,
+    /// One entry per noisy output.
+    pub noise: Vec<NoisePlan>,
+    /// The stages that run, in order.
+    pub stages: Vec<String>,
+    /// Warnings raised while planning (e.g. ISO extrapolation).
+    pub warnings: Vec<String>,
+}
+
+fn window_len(rng: &mut SynthRng, n: usize) -> f64 {
+    // Integer in [ceil(n/2), n), at least 1.
+    let lo = n.div_ceil(2).max(1) as u64;
+    rng.int_range(lo, n as u64).max(1) as f64
+}
+
+fn center(rng: &mut SynthRng, n: usize) -> f64 {
+    rng.range(0.1, 0.9) * n as f64
+}
+
+/// The noise model a plan uses: `--noise-model`, else the input's own NoiseProfile (when
+/// its ISO is known), else the embedded default.
+pub fn choose_noise_model(img: &RawImage, cal: &Calibration, bayer: Bayer) -> Result<NoiseModel> {
+    if let Some(m) = &cal.noise {
+        return Ok(m.clone());
+    }
+    if let (Some(p), Some(iso)) = (
+        &img.meta.noise_profile,
+        img.meta.exif.iso.filter(|&i| i > 0),
+    ) {
+        if let Ok(m) = NoiseModel::from_dng_profile(p, bayer, iso) {
+            return Ok(m);
+        }
+    }
+    Ok(super::dictionaries::embedded::noise_model())
+}
+
+/// Sample a plan for `img` (metadata and geometry only; pixels are not read).
+pub fn plan(
+    img: &RawImage,
+    input_name: &str,
+    seed: u64,
+    variant: u32,
+    opts: &SynthOptions,
+    cal: &Calibration,
+) -> Result<Plan> {
+    opts.validate()?;
+    img.validate()?;
+    let bayer = img.bayer()?;
+    let a = img.active_area();
+    let (w, h) = (a.width(), a.height());
+    let (dn, dn_src) = day_neutral(&img.meta, opts.day_neutral)?;
+    let mut rng = SynthRng::new(seed, input_name, variant);
+    let mut warnings = Vec::new();
+    let mut stages: Vec<String> = vec!["normalize".into(), "remove_day_illuminant".into()];
+
+    let dim = if opts.mode == Mode::Day {
+        DimPlan::None
+    } else {
+        stages.push("dim".into());
+        sample_dim(&mut rng, opts.dim_range, cal.brightness.as_ref())?
+    };
+
+    let g: &Gaussian2 = &cal.illuminants;
+    let rules = &opts.sampler;
+    let mut lights = Vec::new();
+    let (night_neutral, definition) = match opts.mode {
+        Mode::Day => {
+            stages.push("relight_day".into());
+            (dn, "day neutral (mode day)".to_string())
+        }
+        Mode::Dimmed => {
+            stages.push("relight_dimmed".into());
+            (dn, "day neutral (mode dimmed)".to_string())
+        }
+        Mode::Global => {
+            stages.push("sample_illuminants".into());
+            stages.push("relight_global".into());
+            let l = g.sample(&mut rng, rules)?;
+            lights.push(Light {
+                kind: LightKind::Ambient,
+                illuminant: l,
+                gain: 1.0,
+                weight: 1.0,
+                center: [0.0, 0.0],
+                window: None,
+                sigma: [0.0, 0.0],
+                floor: 0.0,
+            });
+            (l, "the global illuminant".to_string())
+        }
+        Mode::Local => {
+            stages.push("sample_illuminants".into());
+            let paper = opts.formula == RelightFormula::Paper;
+            stages.push(
+                if paper {
+                    "relight_local_paper"
+                } else {
+                    "relight_local_release"
+                }
+                .into(),
+            );
+            stages.push("ambient".into());
+            stages.push("masks".into());
+            // Ambient.
+            let l0 = g.sample(&mut rng, rules)?;
+            let (gain0, weight0) = if paper {
+                (1.0, rng.range(0.05, 0.10))
+            } else {
+                (opts.ambient_gain, 1.0)
+            };
+            lights.push(Light {
+                kind: LightKind::Ambient,
+                illuminant: l0,
+                gain: gain0,
+                weight: weight0,
+                center: [0.0, 0.0],
+                window: None,
+                sigma: [0.0, 0.0],
+                floor: 0.0,
+            });
+            let k = match opts.local_lights {
+                Some(k) => k as u64,
+                None if paper => rng.int_range(4, 7), // 5 to 7 lights in total
+                None => 4,
+            };
+            for _ in 0..k {
+                let l = g.sample(&mut rng, rules)?;
+                let c = [center(&mut rng, h), center(&mut rng, w)];
+                if paper {
+                    let s = [
+                        rng.range(0.5, 1.0) * h as f64,
+                        rng.range(0.5, 1.0) * w as f64,
+                    ];
+                    lights.push(Light {
+                        kind: LightKind::Local,
+                        illuminant: l,
+                        gain: 1.0,
+                        weight: 1.0,
+                        center: c,
+                        window: None,
+                        sigma: s,
+                        floor: 0.0,
+                    });
+                } else {
+                    let (wh, ww) = (window_len(&mut rng, h), window_len(&mut rng, w));
+                    lights.push(Light {
+                        kind: LightKind::Local,
+                        illuminant: l,
+                        gain: 1.0,
+                        weight: 1.0,
+                        center: c,
+                        window: Some([wh, ww]),
+                        sigma: release_sigma(wh, ww),
+                        floor: MASK_FLOOR,
+                    });
+                }
+            }
+            let bulbs = opts.bulbs.unwrap_or(if paper { 0 } else { 5 });
+            if bulbs > 0 {
+                stages.push("bulbs".into());
+            }
+            for _ in 0..bulbs {
+                let l = g.sample(&mut rng, rules)?;
+                let c = [center(&mut rng, h), center(&mut rng, w)];
+                let (wh, ww) = (window_len(&mut rng, h), window_len(&mut rng, w));
+                let u = rng.uniform();
+                let gain = rng.range(opts.bulb_gain[0], opts.bulb_gain[1]);
+                let m = wh.max(ww);
+                let s = m / (5.0 + 5.0 * u);
+                lights.push(Light {
+                    kind: LightKind::Bulb,
+                    illuminant: l,
+                    gain,
+                    weight: 1.0,
+                    center: c,
+                    window: Some([wh, ww]),
+                    sigma: [s * wh / m, s * ww / m],
+                    floor: MASK_FLOOR,
+                });
+            }
+            let used: Vec<&Light> = lights
+                .iter()
+                .filter(|l| !paper || l.kind != LightKind::Bulb)
+                .collect();
+            let mut n = [0.0; 3];
+            for l in &used {
+                for i in 0..3 {
+                    n[i] += l.illuminant[i] / used.len() as f64;
+                }
+            }
+            let def = if paper {
+                "mean of the night illuminants (ambient and local lights; paper)"
+            } else {
+                "mean of all sampled lights: ambient, local lights and bulbs (released code)"
+            };
+            (n, def.to_string())
+        }
+    };
+    let night_neutral = super::neutral::check_neutral(night_neutral, "night neutral")?;
+    stages.push("denormalize".into());
+
+    let model = choose_noise_model(img, cal, bayer)?;
+    let clean_iso = img.meta.iso_or_default();
+    let clean_noise = model.at(clean_iso)?.params;
+    let mut noise = Vec::new();
+    for &iso in &opts.isos {
+        let e = model.at(iso)?;
+        if e.extrapolated {
+            let (lo, hi) = model.iso_range();
+            warnings.push(format!(
+                "ISO {} is outside the noise model's calibrated range {}..{} ({}): extrapolated",
+                iso, lo, hi, model.source
+            ));
+        }
+        noise.push(NoisePlan {
+            iso,
+            seed: rng.next_u64(),
+            params: e.params,
+            extrapolated: e.extrapolated,
+        });
+    }
+    if !noise.is_empty() {
+        stages.push("noise".into());
+    }
+    Ok(Plan {
+        format: PLAN_FORMAT.into(),
+        input_name: input_name.into(),
+        seed,
+        variant,
+        active_width: w,
+        active_height: h,
+        bayer,
+        mode: opts.mode,
+        formula: opts.formula,
+        truncate: opts.truncate,
+        keep_negative: opts.keep_negative,
+        keep_highlights: opts.keep_highlights,
+        mask_eval: opts.mask_eval,
+        day_neutral: dn,
+        day_neutral_source: dn_src,
+        dim,
+        lights,
+        night_neutral,
+        night_neutral_definition: definition,
+        clean_iso,
+        clean_noise,
+        noise_model_source: model.source.clone(),
+        noise,
+        stages,
+        warnings,
+    })
+}
+
+impl Plan {
+    /// Error unless this plan fits `img` (geometry and CFA) and is internally sane.
+    pub fn check_against(&self, img: &RawImage) -> Result<()> {
+        if self.format != PLAN_FORMAT {
+            return Err(Error::invalid(format!(
+                "plan format {:?} (expected {:?})",
+                self.format, PLAN_FORMAT
+            )));
+        }
+        let a = img.active_area();
+        if a.width() != self.active_width || a.height() != self.active_height {
+            return Err(Error::invalid(format!(
+                "plan made for a {}x{} active area, image has {}x{}",
+                self.active_width,
+                self.active_height,
+                a.width(),
+                a.height()
+            )));
+        }
+        if img.bayer()? != self.bayer {
+            return Err(Error::invalid(format!(
+                "plan made for CFA {}, image has {}",
+                self.bayer,
+                img.bayer()?
+            )));
+        }
+        let finite = |v: &[f64]| v.iter().all(|x| x.is_finite());
+        let ok = finite(&self.day_neutral)
+            && finite(&self.night_neutral)
+            && self.lights.iter().all(|l| {
+                finite(&l.illuminant)
+                    && finite(&[l.gain, l.weight, l.floor])
+                    && finite(&l.center)
+                    && finite(&l.sigma)
+                    && l.window.map(|w| finite(&w)).unwrap_or(true)
+                    && l.weight >= 0.0
+            });
+        if !ok || self.day_neutral.iter().any(|&v| v <= 0.0) {
+            return Err(Error::invalid("plan holds non-finite or invalid values"));
+        }
+        Ok(())
+    }
+}

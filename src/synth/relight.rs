@@ -1,0 +1,262 @@
+//! Running a plan's deterministic part: one fused pass per active-area row doing normalize
+//! (SYNTHESIS.md 1), remove the day illuminant (2), dim (3), relight (5) and denormalize (6),
+//! with rayon over rows and per-thread row buffers (no whole-image temporaries per light).
+//!
+//! Local relighting per row: `num = w0 * R0`, `den = w0` for the ambient light (mask 1);
+//! each local light whose window covers the row adds `m * w * R_k` to `num` and `m * w` to
+//! `den` over its column range only (`m` its mask, `R_k = clip(y_e * l_k[c] * gain_k, 0, 1)`);
+//! `y_r = num / max(den, 1e-30)`; each bulb on the row adds `g * m * clip(y_e * l[c], 0, 1)`;
+//! finally `y_r` is clipped to [0, 1]. Arithmetic per pixel is f32 (normalize and
+//! denormalize are f64 via [`crate::normalize::Normalizer`]).
+
+use super::dim::dim_factor;
+use super::masks::{LightKind, PreparedMask};
+use super::plan::Plan;
+use super::{Mode, SynthOutput};
+use crate::error::Result;
+use crate::normalize::Normalizer;
+use crate::raw::RawImage;
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+
+/// Values computed while running (recorded in the sidecar).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct RunReport {
+    /// The dimming factor used.
+    pub dim_scale: f64,
+    /// Mean white-balanced intensity (only computed for a brightness-dictionary plan).
+    pub mean_white_balanced: Option<f64>,
+    /// Active-area sites saturated in the input (linear value >= white).
+    pub saturated_sites: u64,
+}
+
+struct Prepared {
+    mask: PreparedMask,
+    illum: [f32; 3],
+    gain: f32,
+    weight: f32,
+}
+
+struct Scratch {
+    ye: Vec<f32>,
+    num: Vec<f32>,
+    den: Vec<f32>,
+    m: Vec<f32>,
+}
+
+/// Run normalize..denormalize: the clean night raw (whole stored image; outside the
+/// ActiveArea the linearized input samples are kept). The result holds linear values and
+/// the input's metadata (see [`super::night_meta`] for the metadata of outputs).
+pub fn run_clean(img: &RawImage, plan: &Plan) -> Result<(RawImage, RunReport)> {
+    plan.check_against(img)?;
+    let norm = Normalizer::new(img)?;
+    let a = img.active_area();
+    let (top, left, aw, ah) = (a.top as usize, a.left as usize, a.width(), a.height());
+    let width = img.width;
+    let bayer = plan.bayer;
+    let inv_n = plan.day_neutral.map(|v| 1.0 / v);
+    let lo = if plan.keep_negative {
+        f64::NEG_INFINITY
+    } else {
+        0.0
+    };
+    let hi = if plan.keep_highlights {
+        f64::INFINITY
+    } else {
+        1.0
+    };
+    let y_w = |x: u16, r: usize, c: usize| -> f64 {
+        let mut y = norm.normalize(x, r, c);
+        if !plan.keep_negative && y < 0.0 {
+            y = 0.0;
+        }
+        (y * inv_n[bayer.color_at(r, c) as usize]).clamp(lo, hi)
+    };
+    let mut mean_wb = None;
+    let s = dim_factor(&plan.dim, || {
+        let sums: Vec<f64> = (0..ah)
+            .into_par_iter()
+            .map(|r| {
+                let row = &img.data[(r + top) * width + left..][..aw];
+                row.iter()
+                    .enumerate()
+                    .map(|(c, &x)| y_w(x, r, c))
+                    .sum::<f64>()
+            })
+            .collect();
+        let m = sums.iter().sum::<f64>() / (aw * ah) as f64;
+        mean_wb = Some(m);
+        m
+    });
+    let s32 = s as f32;
+
+    let prep = |kind: LightKind| -> Vec<Prepared> {
+        plan.lights
+            .iter()
+            .filter(|l| l.kind == kind)
+            .map(|l| Prepared {
+                mask: PreparedMask::new(l, aw, ah, plan.mask_eval),
+                illum: l.illuminant.map(|v| v as f32),
+                gain: l.gain as f32,
+                weight: l.weight as f32,
+            })
+            .collect()
+    };
+    let ambient = prep(LightKind::Ambient);
+    let locals = prep(LightKind::Local);
+    let bulbs = prep(LightKind::Bulb);
+    let day_n = plan.day_neutral.map(|v| v as f32);
+    let white = norm.white;
+
+    // Whole stored image, linearized (so a dropped LinearizationTable stays truthful).
+    let mut data: Vec<u16> = img
+        .data
+        .iter()
+        .map(|&x| norm.linearize(x).clamp(0.0, u16::MAX as f64) as u16)
+        .collect();
+    let saturated: u64 = data
+        .par_chunks_mut(width)
+        .enumerate()
+        .skip(top)
+        .take(ah)
+        .map_init(
+            || Scratch {
+                ye: vec![0.0; aw],
+                num: vec![0.0; aw],
+                den: vec![0.0; aw],
+                m: vec![0.0; aw],
+            },
+            |scr, (srow, row)| {
+                let r = srow - top;
+                let src = &img.data[srow * width + left..][..aw];
+                let mut sat = 0u64;
+                for (c, (&x, ye)) in src.iter().zip(scr.ye.iter_mut()).enumerate() {
+                    if norm.linearize(x) >= white {
+                        sat += 1;
+                    }
+                    *ye = y_w(x, r, c) as f32 * s32;
+                }
+                let cols = [bayer.color_at(r, 0) as usize, bayer.color_at(r, 1) as usize];
+                let out = &mut scr.num;
+                match plan.mode {
+                    Mode::Day => {
+                        let k = [day_n[cols[0]], day_n[cols[1]]];
+                        for (c, (o, &y)) in out.iter_mut().zip(&scr.ye).enumerate() {
+                            *o = y * k[c & 1];
+                        }
+                    }
+                    Mode::Dimmed => {
+                        let k = [day_n[cols[0]], day_n[cols[1]]];
+                        for (c, (o, &y)) in out.iter_mut().zip(&scr.ye).enumerate() {
+                            *o = (y * k[c & 1]).clamp(0.0, 1.0);
+                        }
+                    }
+                    Mode::Global => {
+                        let l = ambient.first().map(|p| p.illum).unwrap_or([1.0; 3]);
+                        let k = [l[cols[0]], l[cols[1]]];
+                        for (c, (o, &y)) in out.iter_mut().zip(&scr.ye).enumerate() {
+                            *o = (y * k[c & 1]).clamp(0.0, 1.0);
+                        }
+                    }
+                    Mode::Local => local_row(r, cols, &ambient, &locals, &bulbs, scr),
+                }
+                let seg = &mut row[left..left + aw];
+                for (c, (d, &y)) in seg.iter_mut().zip(scr.num.iter()).enumerate() {
+                    *d = norm.denormalize(y as f64, r, c, plan.truncate);
+                }
+                sat
+            },
+        )
+        .sum();
+    let mut meta = img.meta.clone();
+    meta.linearization_table = None;
+    Ok((
+        RawImage {
+            width,
+            height: img.height,
+            data,
+            meta,
+        },
+        RunReport {
+            dim_scale: s,
+            mean_white_balanced: mean_wb,
+            saturated_sites: saturated,
+        },
+    ))
+}
+
+fn local_row(
+    r: usize,
+    cols: [usize; 2],
+    ambient: &[Prepared],
+    locals: &[Prepared],
+    bulbs: &[Prepared],
+    scr: &mut Scratch,
+) {
+    let Scratch { ye, num, den, m } = scr;
+    // Ambient: mask 1 everywhere.
+    match ambient.first() {
+        Some(a) => {
+            let k = [a.illum[cols[0]] * a.gain, a.illum[cols[1]] * a.gain];
+            let w = a.weight;
+            for (c, ((n, d), &y)) in num
+                .iter_mut()
+                .zip(den.iter_mut())
+                .zip(ye.iter())
+                .enumerate()
+            {
+                *n = w * (y * k[c & 1]).clamp(0.0, 1.0);
+                *d = w;
+            }
+        }
+        None => {
+            num.fill(0.0);
+            den.fill(0.0);
+        }
+    }
+    for p in locals.iter().filter(|p| p.mask.on_row(r)) {
+        let (c0, c1) = p.mask.cols;
+        let mm = &mut m[..c1 - c0];
+        p.mask.fill_row(r, mm);
+        let k = [p.illum[cols[0]] * p.gain, p.illum[cols[1]] * p.gain];
+        let w = p.weight;
+        for (i, &mv) in mm.iter().enumerate() {
+            let c = c0 + i;
+            let wm = w * mv;
+            num[c] += wm * (ye[c] * k[c & 1]).clamp(0.0, 1.0);
+            den[c] += wm;
+        }
+    }
+    for (n, &d) in num.iter_mut().zip(den.iter()) {
+        *n /= d.max(1e-30);
+    }
+    for p in bulbs.iter().filter(|p| p.mask.on_row(r)) {
+        let (c0, c1) = p.mask.cols;
+        let mm = &mut m[..c1 - c0];
+        p.mask.fill_row(r, mm);
+        let k = [p.illum[cols[0]], p.illum[cols[1]]];
+        for (i, &mv) in mm.iter().enumerate() {
+            let c = c0 + i;
+            num[c] += p.gain * mv * (ye[c] * k[c & 1]).clamp(0.0, 1.0);
+        }
+    }
+    for n in num.iter_mut() {
+        *n = if n.is_nan() { 0.0 } else { n.clamp(0.0, 1.0) };
+    }
+}
+
+/// Run the whole plan: clean night raw plus one noisy raw per planned ISO, with output
+/// metadata set (see [`super::night_meta`]).
+pub fn run(img: &RawImage, plan: &Plan) -> Result<SynthOutput> {
+    let (mut clean, report) = run_clean(img, plan)?;
+    clean.meta = super::night_meta(&img.meta, plan, plan.clean_iso, &plan.clean_noise);
+    let mut noisy = Vec::with_capacity(plan.noise.len());
+    for i in 0..plan.noise.len() {
+        noisy.push(super::run_noise(&clean, plan, i)?);
+    }
+    Ok(SynthOutput {
+        clean,
+        noisy,
+        report,
+    })
+}

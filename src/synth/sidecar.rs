@@ -1,0 +1,112 @@
+//! The JSON sidecar written next to each (input, variant)'s outputs: every sampled value
+//! (the whole [`Plan`]), the options, calibration summary, values computed while running,
+//! the stages that ran, the tool version, the input's name and SHA-256, and the output
+//! names. `--replay` rebuilds the plan from it and reproduces the outputs byte for byte.
+//! Its content is deterministic (no timestamps), so a replay rewrites it identically.
+
+use super::illuminant::Gaussian2;
+use super::plan::Plan;
+use super::relight::RunReport;
+use super::SynthOptions;
+use crate::error::{Error, Result};
+use serde::{Deserialize, Serialize};
+use sha2::{Digest, Sha256};
+use std::path::Path;
+
+/// Format tag of sidecars.
+pub const SIDECAR_FORMAT: &str = "day2night-sidecar/1";
+
+/// The input file.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct InputInfo {
+    /// File name (the RNG stream is derived from it).
+    pub name: String,
+    /// SHA-256 of the file's bytes, lowercase hex.
+    pub sha256: String,
+}
+
+/// Calibration summary.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct CalibrationInfo {
+    /// The illuminant Gaussian sampled from.
+    pub illuminants: Gaussian2,
+    /// Brightness dictionary (name, mean, std), if used.
+    pub brightness: Option<super::dictionaries::BrightnessDict>,
+    /// Noise model source.
+    pub noise_model: String,
+}
+
+/// Output settings and names (relative to the output directory).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct OutputInfo {
+    /// Number of variants of the run (decides the `_vK` part of names).
+    pub variants: u32,
+    /// DNG compression ("none" or "ljpeg").
+    pub compression: String,
+    /// Target kind ("exr", "png", "both" or "none").
+    pub target: String,
+    /// Whether the network input EXR was requested.
+    pub input_exr: bool,
+    /// Names of the files written.
+    pub files: Vec<String>,
+}
+
+/// The sidecar document.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Sidecar {
+    /// [`SIDECAR_FORMAT`].
+    pub format: String,
+    /// "day2night".
+    pub tool: String,
+    /// Tool version.
+    pub version: String,
+    /// Input.
+    pub input: InputInfo,
+    /// Options.
+    pub options: SynthOptions,
+    /// Calibration.
+    pub calibration: CalibrationInfo,
+    /// Every sampled value.
+    pub plan: Plan,
+    /// Values computed while running.
+    pub run: RunReport,
+    /// Stages that ran (plan stages plus the outputs written).
+    pub stages: Vec<String>,
+    /// Outputs.
+    pub outputs: OutputInfo,
+}
+
+impl Sidecar {
+    /// Pretty JSON with a trailing newline.
+    pub fn to_json(&self) -> Result<String> {
+        let mut s = serde_json::to_string_pretty(self)
+            .map_err(|e| Error::invalid(format!("sidecar serialization: {}", e)))?;
+        s.push('\n');
+        Ok(s)
+    }
+    /// Parse and check the format tag.
+    pub fn from_json(text: &str) -> Result<Sidecar> {
+        let s: Sidecar = serde_json::from_str(text)
+            .map_err(|e| Error::malformed(format!("sidecar JSON: {}", e)))?;
+        if s.format != SIDECAR_FORMAT {
+            return Err(Error::malformed(format!(
+                "sidecar format {:?} (expected {:?})",
+                s.format, SIDECAR_FORMAT
+            )));
+        }
+        Ok(s)
+    }
+    /// Read a sidecar file.
+    pub fn read(path: &Path) -> Result<Sidecar> {
+        let text = std::fs::read_to_string(path).map_err(|e| Error::from(e).in_file(path))?;
+        Sidecar::from_json(&text).map_err(|e| e.in_file(path))
+    }
+}
+
+/// SHA-256 of bytes as lowercase hex.
+pub fn sha256_hex(bytes: &[u8]) -> String {
+    Sha256::digest(bytes)
+        .iter()
+        .map(|b| format!("{:02x}", b))
+        .collect()
+}

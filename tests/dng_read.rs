@@ -1,0 +1,316 @@
+//! DNG reader: the real Canon file (compared with LibRaw through rawpy) and hand-built small
+//! DNGs covering byte orders, packed bit depths, tiles, SubIFD raws, linearization and
+//! per-site black levels.
+mod common;
+mod dngbuild;
+
+use day2night::dng::meta::{ByteOrder, Layout};
+use day2night::dng::read::{inspect_bytes, read_dng, read_dng_bytes};
+use day2night::{Bayer, Rect};
+use dngbuild::{Builder, Pixels};
+
+const CANON: &str = "dng/canon_kissx4_magiclantern_rggb14_strips.dng";
+
+#[test]
+fn canon_metadata() {
+    let Some(d) = common::shared_data() else {
+        return;
+    };
+    let img = read_dng(&d.join(CANON)).unwrap();
+    assert_eq!((img.width, img.height), (1888, 1182));
+    let m = &img.meta;
+    assert_eq!(
+        m.active_area,
+        Some(Rect {
+            top: 26,
+            left: 152,
+            bottom: 1182,
+            right: 1886
+        })
+    );
+    assert_eq!(m.default_crop_origin, Some([0.0, 0.0]));
+    assert_eq!(m.default_crop_size, Some([1734.0, 1156.0]));
+    assert_eq!(img.bayer().unwrap(), Bayer::RGGB);
+    assert_eq!(m.bits_per_sample, 14);
+    assert_eq!(m.levels.black, vec![2056.0]);
+    assert_eq!(m.levels.black_repeat, (1, 1));
+    assert_eq!(m.levels.white, 15000.0);
+    let n = m.as_shot_neutral.unwrap();
+    assert!((n[0] - 1.0 / 2.477).abs() < 1e-9, "{n:?}");
+    assert_eq!(n[1], 1.0);
+    assert!((n[2] - 1.462 / 2.477).abs() < 1e-9, "{n:?}");
+    assert_eq!(m.make.as_deref(), Some("Canon"));
+    assert_eq!(m.model.as_deref(), Some("Canon EOS Kiss X4"));
+    assert_eq!(m.unique_camera_model.as_deref(), Some("Canon EOS Kiss X4"));
+    assert_eq!(m.dng_version, [1, 1, 0, 0]);
+    let cm = m.color.color_matrix1.as_ref().unwrap();
+    assert_eq!(cm.len(), 9);
+    assert!((cm[0] - 0.6461).abs() < 1e-12);
+    assert_eq!(m.color.analog_balance, Some(vec![1.0, 1.0, 1.0]));
+    // ISO 0 and ExposureTime 0 mean "unknown".
+    assert_eq!(m.exif.iso, None);
+    assert_eq!(m.exif.exposure_time, None);
+    assert_eq!(m.noise_profile, None);
+    assert_eq!(m.orientation, 1);
+    let st = m.storage.as_ref().unwrap();
+    assert_eq!(st.byte_order, ByteOrder::Little);
+    assert_eq!(st.sub_ifd, None);
+    assert_eq!(st.compression, 1);
+    assert_eq!(
+        st.layout,
+        Layout::Strips {
+            rows_per_strip: 1182
+        }
+    );
+    // Carried entries: Software, XResolution, BaselineNoise, ... but never structural ones.
+    let tags: Vec<u16> = m.ifd0_extra.iter().map(|e| e.tag).collect();
+    assert!(tags.contains(&305) && tags.contains(&50731), "{tags:?}");
+    for s in [273u16, 279, 256, 257, 258, 259, 34665, 50714, 50728] {
+        assert!(!tags.contains(&s), "tag {s} must not be carried");
+    }
+    assert!(!m.exif_extra.is_empty());
+    img.validate().unwrap();
+}
+
+#[test]
+fn canon_pixels_match_libraw() {
+    let Some(d) = common::shared_data() else {
+        return;
+    };
+    let Some(py) = common::python() else { return };
+    let path = d.join(CANON);
+    let img = read_dng(&path).unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let pix = dir.path().join("pix.u16");
+    let bytes: Vec<u8> = img.data.iter().flat_map(|v| v.to_le_bytes()).collect();
+    std::fs::write(&pix, bytes).unwrap();
+    let a = img.active_area();
+    let exp = serde_json::json!({
+        "width": img.width, "height": img.height,
+        "active_area": [a.top, a.left, a.bottom, a.right],
+        "bayer": img.bayer().unwrap().name(),
+        "black": img.meta.levels.black[0], "white": img.meta.levels.white,
+        "neutral": img.meta.as_shot_neutral,
+    });
+    let ej = dir.path().join("exp.json");
+    std::fs::write(&ej, exp.to_string()).unwrap();
+    let out = common::run_validator(
+        &py,
+        "read_compare.py",
+        &[path.as_os_str(), pix.as_os_str(), ej.as_os_str()],
+    );
+    assert!(
+        out.status.success(),
+        "rawpy comparison failed:\n{}{}",
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
+
+#[test]
+fn canon_info_cli() {
+    let Some(d) = common::shared_data() else {
+        return;
+    };
+    let out = common::bin()
+        .args(["info", "--json"])
+        .arg(d.join(CANON))
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let o = &v[0];
+    assert_eq!(o["synth_ready"], true);
+    assert_eq!(o["raw"]["cfa"], "RGGB");
+    assert_eq!(o["raw"]["width"], 1888);
+    assert_eq!(o["raw"]["meta"]["levels"]["white"], 15000.0);
+    let out = common::bin()
+        .arg("info")
+        .arg(d.join(CANON))
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        text.contains("RGGB") && text.contains("26,152,1182,1886"),
+        "{text}"
+    );
+    assert!(out.stderr.is_empty());
+}
+
+fn check_same(b: &Builder) -> day2night::RawImage {
+    let bytes = b.build();
+    let img = read_dng_bytes(&bytes).unwrap_or_else(|e| panic!("{b:?}: {e}"));
+    assert_eq!((img.width, img.height), (b.width, b.height));
+    assert!(img.data == b.pixels, "pixels differ for {:?}", b.layout);
+    img
+}
+
+#[test]
+fn byte_orders_and_bit_depths_strips_and_tiles() {
+    for big in [false, true] {
+        for bits in [8u16, 10, 12, 14, 16] {
+            for layout in [
+                Pixels::Strips { rows: 1 },
+                Pixels::Strips { rows: 5 },
+                Pixels::Tiles { w: 16, h: 16 },
+                Pixels::Tiles { w: 32, h: 48 },
+            ] {
+                for (w, h) in [(37, 23), (64, 48), (1, 1), (7, 9)] {
+                    let mut b = Builder::new(w, h, bits);
+                    b.big_endian = big;
+                    b.layout = layout;
+                    let img = check_same(&b);
+                    assert_eq!(img.meta.bits_per_sample, bits);
+                    assert_eq!(img.meta.levels.white, ((1u32 << bits) - 1) as f64);
+                    let want = if big {
+                        ByteOrder::Big
+                    } else {
+                        ByteOrder::Little
+                    };
+                    assert_eq!(img.meta.storage.as_ref().unwrap().byte_order, want);
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn lossless_jpeg_tiles_and_strips() {
+    for bits in [10u16, 12, 14, 16] {
+        for layout in [
+            Pixels::LjpegTiles {
+                w: 16,
+                h: 16,
+                two_components: false,
+            },
+            Pixels::LjpegTiles {
+                w: 32,
+                h: 16,
+                two_components: true,
+            },
+            Pixels::LjpegStrips { rows: 8 },
+            Pixels::LjpegStrips { rows: 100 },
+        ] {
+            let mut b = Builder::new(70, 35, bits);
+            b.layout = layout;
+            let img = check_same(&b);
+            assert_eq!(img.meta.storage.as_ref().unwrap().compression, 7);
+        }
+    }
+}
+
+#[test]
+fn raw_in_subifd() {
+    let mut b = Builder::new(40, 30, 12).set(
+        50829,
+        day2night::tiff::value::Value::Long(vec![2, 4, 30, 40]),
+    );
+    b.raw_in_sub = true;
+    b.big_endian = true;
+    let img = check_same(&b);
+    let st = img.meta.storage.as_ref().unwrap();
+    assert_eq!(st.sub_ifd, Some(vec![0]));
+    assert_eq!(
+        img.meta.active_area,
+        Some(Rect {
+            top: 2,
+            left: 4,
+            bottom: 30,
+            right: 40
+        })
+    );
+    assert_eq!(img.meta.make.as_deref(), Some("TestMake"));
+    // The preview IFD's structural tags are not carried; IFD0 DNG tags are modelled.
+    assert!(img
+        .meta
+        .ifd0_extra
+        .iter()
+        .all(|e| e.tag != 273 && e.tag != 330));
+    let info = inspect_bytes(&b.build()).unwrap();
+    assert_eq!(info.raw_ifd.as_deref(), Some("IFD0/SubIFD0"));
+    assert!(info.synth_ready);
+    assert_eq!(info.ifds.len(), 2);
+}
+
+#[test]
+fn linearization_and_per_site_black_and_deltas() {
+    use day2night::tiff::value::Value;
+    let (w, h) = (20, 10);
+    let table: Vec<u16> = (0..4096u32).map(|i| (i * 3 / 2) as u16).collect();
+    let dh: Vec<(i32, i32)> = (0..w).map(|i| (i as i32, 4)).collect();
+    let dv: Vec<(i32, i32)> = (0..h).map(|i| (-(i as i32), 2)).collect();
+    let b = Builder::new(w, h, 12)
+        .set(50712, Value::Short(table.clone()))
+        .set(50713, Value::Short(vec![2, 2]))
+        .set(
+            50714,
+            Value::Rational(vec![(200, 1), (201, 1), (405, 2), (203, 1)]),
+        )
+        .set(50715, Value::SRational(dh))
+        .set(50716, Value::SRational(dv))
+        .set(50717, Value::Long(vec![6000]));
+    let img = check_same(&b);
+    let l = &img.meta.levels;
+    assert_eq!(img.meta.linearization_table.as_deref(), Some(&table[..]));
+    assert_eq!(l.black_repeat, (2, 2));
+    assert_eq!(l.black, vec![200.0, 201.0, 202.5, 203.0]);
+    assert_eq!(l.black_delta_h.len(), w);
+    assert_eq!(l.black_delta_h[3], 0.75);
+    assert_eq!(l.black_delta_v[4], -2.0);
+    assert_eq!(l.white, 6000.0);
+    assert_eq!(l.black_at(1, 3), 203.0 + 0.75 - 0.5);
+}
+
+#[test]
+fn other_phases_and_non_bayer_cfa_still_read() {
+    use day2night::tiff::value::Value;
+    for bayer in Bayer::ALL {
+        let b = Builder::new(8, 8, 12).set(33422, Value::Byte(bayer.0.to_vec()));
+        assert_eq!(check_same(&b).bayer().unwrap(), bayer);
+    }
+    // 2x4 pattern: readable, but not a Bayer mosaic.
+    let b = Builder::new(8, 8, 12)
+        .set(33421, Value::Short(vec![2, 4]))
+        .set(33422, Value::Byte(vec![0, 1, 0, 1, 1, 2, 1, 2]));
+    let img = check_same(&b);
+    let e = img.bayer().unwrap_err().to_string();
+    assert!(e.contains("2x4"), "{e}");
+    let info = inspect_bytes(&b.build()).unwrap();
+    assert!(!info.synth_ready && info.error.is_none());
+    assert!(info.reason.unwrap().contains("2x4"));
+}
+
+#[test]
+fn exif_and_colour_fields() {
+    use day2night::tiff::value::Value;
+    let mut b = Builder::new(8, 8, 12)
+        .set(51041, Value::Double(vec![1e-4, 2e-6]))
+        .set(50730, Value::SRational(vec![(-1, 2)]))
+        .set(50728, Value::Rational(vec![(1, 2), (2, 1), (3, 2)]))
+        .set(51009, Value::Undefined(vec![0, 0, 0, 0]));
+    b.exif = vec![
+        (34855, Value::Short(vec![800])),
+        (33434, Value::Rational(vec![(1, 50)])),
+        (33437, Value::Rational(vec![(28, 10)])),
+        (36867, Value::ascii("2024:01:02 03:04:05")),
+        (37386, Value::Rational(vec![(50, 1)])),
+    ];
+    let m = check_same(&b).meta;
+    assert_eq!(m.exif.iso, Some(800));
+    assert_eq!(m.exif.exposure_time, Some(0.02));
+    assert_eq!(m.exif.f_number, Some(2.8));
+    assert_eq!(
+        m.exif.date_time_original.as_deref(),
+        Some("2024:01:02 03:04:05")
+    );
+    assert_eq!(m.exif_extra.len(), 1);
+    assert_eq!(m.noise_profile, Some(vec![(1e-4, 2e-6)]));
+    assert_eq!(m.color.baseline_exposure, Some(-0.5));
+    assert_eq!(m.as_shot_neutral, Some([0.25, 1.0, 0.75]));
+    assert_eq!(m.opcode_lists[1].as_deref(), Some(&[0u8, 0, 0, 0][..]));
+    assert_eq!(m.color.calibration_illuminant1, Some(21));
+}
