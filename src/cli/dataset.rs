@@ -1,16 +1,241 @@
-//! `day2night dataset` (in progress).
-use super::CmdResult;
+//! `day2night dataset`: a whole dataset from a folder of day DNGs (see docs/dataset.md).
+use super::{usage, CmdResult, Failure};
+use day2night::dataset::run::ProgressMode;
+use day2night::dataset::synthesis::{SynthProcessor, Target};
+use day2night::dataset::{self, RunOptions, Shard, SplitRule};
+use day2night::dng::write::Compression;
+use day2night::synth::{Calibration, Gaussian2, Mode, RelightFormula, SynthOptions};
+use std::path::PathBuf;
+
+/// Synthesis options forwarded to the synthesis of every input (same names and meanings as
+/// `day2night synth`).
+#[derive(Debug, Clone, clap::Args)]
+pub struct SynthForward {
+    /// Run seed: each (input, variant) derives its own seed from it and the input's path.
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// ISOs of the noisy outputs, comma-separated, or `none`.
+    #[arg(long, default_value = "1600,3200")]
+    pub iso: String,
+    /// Relighting mode.
+    #[arg(long, default_value = "local", value_parser = ["local", "global", "dimmed", "day"])]
+    pub mode: String,
+    /// Local relighting formula.
+    #[arg(long, default_value = "release", value_parser = ["release", "paper"])]
+    pub relight_formula: String,
+    /// Saturated bulbs per image (default: 5 for release, 0 for paper).
+    #[arg(long)]
+    pub bulbs: Option<u32>,
+    /// Night illuminant dictionary (JSON from `calibrate illuminants`).
+    #[arg(long, value_name = "FILE.json")]
+    pub illuminants: Option<PathBuf>,
+    /// Night brightness dictionary (JSON from `calibrate brightness`).
+    #[arg(long, value_name = "FILE.json")]
+    pub brightness: Option<PathBuf>,
+    /// Noise model (JSON from `calibrate noise`).
+    #[arg(long, value_name = "FILE.json")]
+    pub noise_model: Option<PathBuf>,
+    /// Rendered targets.
+    #[arg(long, default_value = "exr", value_parser = ["exr", "png", "both", "none"])]
+    pub target: String,
+    /// DNG compression of the raw outputs.
+    #[arg(long, default_value = "none", value_parser = ["none", "ljpeg"])]
+    pub compression: String,
+}
 
 /// Arguments of `day2night dataset`.
 #[derive(Debug, clap::Args)]
+#[command(after_help = "Examples:
+  day2night dataset day/ -o night_set/ --val 10 --jobs 4
+  day2night dataset day/ -o night_set/ --val-fraction 0.1 --variants 3 --shard 0/8
+
+A rerun resumes: (input, variant) units whose outputs exist and match manifest.jsonl (same
+input bytes, options and seed) are skipped. Exit code 1 if any input failed.")]
 pub struct DatasetArgs {
-    /// Arguments (not implemented yet).
-    #[arg(trailing_var_arg = true, allow_hyphen_values = true)]
-    pub rest: Vec<String>,
+    /// Folder of day DNGs (searched recursively for *.dng in any letter case).
+    #[arg(value_name = "DAY_DIR")]
+    pub day_dir: PathBuf,
+    /// Output folder (train/ and val/ layouts, manifest.jsonl).
+    #[arg(short = 'o', long = "output", value_name = "OUT_DIR")]
+    pub out_dir: PathBuf,
+    /// Put the last N inputs (by sorted relative path) in val, as the paper (60/10).
+    #[arg(long, value_name = "N", conflicts_with = "val_fraction")]
+    pub val: Option<usize>,
+    /// Put each input in val with probability F, by a seeded hash of its path.
+    #[arg(long, value_name = "F")]
+    pub val_fraction: Option<f64>,
+    /// Synthesized variants per input.
+    #[arg(long, default_value_t = 1, value_name = "K")]
+    pub variants: u32,
+    /// Process only shard I of N (0-based), by a stable hash of each input's path.
+    #[arg(long, value_name = "I/N")]
+    pub shard: Option<String>,
+    /// Inputs processed in parallel (= images in memory); default: number of CPUs.
+    #[arg(long, value_name = "N")]
+    pub jobs: Option<usize>,
+    /// Recompute everything, ignoring the manifest (and accept a non-empty OUT_DIR).
+    #[arg(long)]
+    pub overwrite: bool,
+    /// Also write the HTML report (OUT_DIR/report/index.html) at the end.
+    #[arg(long)]
+    pub report: bool,
+    /// Print the run summary as JSON on stdout.
+    #[arg(long)]
+    pub json: bool,
+    /// No progress output (the summary is still printed on stderr).
+    #[arg(long, short = 'q')]
+    pub quiet: bool,
+    #[command(flatten)]
+    pub synth: SynthForward,
+}
+
+fn parse_isos(s: &str) -> Result<Vec<u32>, Failure> {
+    if s.trim().eq_ignore_ascii_case("none") {
+        return Ok(vec![]);
+    }
+    s.split(',')
+        .map(|p| {
+            p.trim()
+                .parse::<u32>()
+                .ok()
+                .filter(|&v| v > 0)
+                .ok_or_else(|| {
+                    usage(format!(
+                        "--iso: {p:?} is not a positive integer (or use `none`)"
+                    ))
+                })
+        })
+        .collect()
+}
+
+/// Build the synthesis processor from the forwarded options.
+pub fn processor(f: &SynthForward) -> Result<SynthProcessor, Failure> {
+    let mut options = SynthOptions {
+        isos: parse_isos(&f.iso)?,
+        bulbs: f.bulbs,
+        ..SynthOptions::default()
+    };
+    options.mode = match f.mode.as_str() {
+        "global" => Mode::Global,
+        "dimmed" => Mode::Dimmed,
+        "day" => Mode::Day,
+        _ => Mode::Local,
+    };
+    options.formula = match f.relight_formula.as_str() {
+        "paper" => RelightFormula::Paper,
+        _ => RelightFormula::Release,
+    };
+    options.validate().map_err(usage)?;
+    let mut calibration = Calibration::embedded(&options)?;
+    if let Some(p) = &f.illuminants {
+        let src = day2night::synth::dictionaries::load_illuminants(p)?;
+        calibration.illuminants = Gaussian2::from_source(&src, options.covariance)?;
+    }
+    if let Some(p) = &f.brightness {
+        calibration.brightness = Some(day2night::synth::dictionaries::load_brightness(p)?);
+    }
+    if let Some(p) = &f.noise_model {
+        calibration.noise = Some(day2night::noise::NoiseModel::from_file(p)?);
+    }
+    let target = match f.target.as_str() {
+        "png" => Target::Png,
+        "both" => Target::Both,
+        "none" => Target::None,
+        _ => Target::Exr,
+    };
+    let compression = match f.compression.as_str() {
+        "ljpeg" => Compression::Ljpeg,
+        _ => Compression::None,
+    };
+    Ok(SynthProcessor {
+        options,
+        calibration,
+        target,
+        compression,
+    })
 }
 
 /// Run `day2night dataset`.
 pub fn run(args: DatasetArgs) -> CmdResult {
-    let _ = args;
-    Err(super::usage("`dataset` is not implemented yet"))
+    let split = match (args.val, args.val_fraction) {
+        (Some(n), _) => SplitRule::LastN(n),
+        (None, Some(f)) => {
+            if !(0.0..=1.0).contains(&f) {
+                return Err(usage(format!("--val-fraction {f} is not within [0, 1]")));
+            }
+            SplitRule::Fraction {
+                fraction: f,
+                seed: args.synth.seed,
+            }
+        }
+        (None, None) => SplitRule::AllTrain,
+    };
+    let shard = match &args.shard {
+        Some(s) => Shard::parse(s).map_err(usage)?,
+        None => Shard::ALL,
+    };
+    if args.variants == 0 {
+        return Err(usage("--variants must be at least 1"));
+    }
+    let jobs = match args.jobs {
+        Some(0) => return Err(usage("--jobs must be at least 1")),
+        Some(n) => n,
+        None => std::thread::available_parallelism()
+            .map(|n| n.get())
+            .unwrap_or(1),
+    };
+    let proc = processor(&args.synth)?;
+    let opts = RunOptions {
+        day_dir: args.day_dir.clone(),
+        out_dir: args.out_dir.clone(),
+        split,
+        variants: args.variants,
+        seed: args.synth.seed,
+        shard,
+        jobs,
+        overwrite: args.overwrite,
+        progress: if args.quiet {
+            ProgressMode::Quiet
+        } else {
+            ProgressMode::Auto
+        },
+    };
+    let summary = match dataset::run(&opts, &proc) {
+        Ok(s) => s,
+        Err(e) => {
+            // "--val N" larger than the inputs is a usage error.
+            let code = if matches!(e.root(), day2night::Error::InvalidParam(m) if m.starts_with("--val"))
+            {
+                2
+            } else {
+                1
+            };
+            return Err(Failure {
+                code,
+                error: e.into(),
+            });
+        }
+    };
+    eprintln!("{}", summary.describe());
+    if args.json {
+        let text = serde_json::to_string_pretty(&summary)
+            .map_err(|e| anyhow::anyhow!("summary JSON: {e}"))?;
+        println!("{text}");
+    }
+    if args.report {
+        let r = super::report::build_report(&args.out_dir, Some(args.day_dir.clone()), 12, 320)?;
+        eprintln!("dataset: report written to {}", r.page.display());
+    }
+    if summary.failed > 0 {
+        return Err(Failure {
+            code: 1,
+            error: anyhow::anyhow!(
+                "{}: {} of {} units failed (see the summary above and the manifest)",
+                args.out_dir.display(),
+                summary.failed,
+                summary.units
+            ),
+        });
+    }
+    Ok(())
 }

@@ -25,6 +25,7 @@ pub mod resume;
 pub mod run;
 pub mod shard;
 pub mod split;
+pub mod synthesis;
 
 use crate::error::{Error, Result, ResultExt};
 use crate::output::{write_atomic, OutputPolicy};

@@ -102,7 +102,10 @@ impl Summary {
                 .iter()
                 .map(|(k, v)| format!("{v} {k}"))
                 .collect();
-            s.push_str(&format!("\ndataset: computed: {}", parts.join(", ")));
+            s.push_str(&format!(
+                "\ndataset: work done, by reason: {}",
+                parts.join(", ")
+            ));
         }
         if self.stale_records_dropped > 0 {
             s.push_str(&format!(
@@ -464,6 +467,9 @@ fn process_input<P: Processor>(
                     Ok(Ok(info)) => {
                         rec.status = Status::Ok;
                         rec.outputs = sink.into_outputs();
+                        if let Some(prev) = previous.get(&(u.rel.clone(), u.variant)) {
+                            remove_replaced_outputs(&opts.out_dir, prev, &rec);
+                        }
                         rec.iso = info.iso;
                         rec.night_neutral = info.night_neutral;
                         rec.stages = info.stages;
@@ -483,6 +489,22 @@ fn process_input<P: Processor>(
         out.push(finish(rec, Did::Computed(reason)));
     }
     out
+}
+
+/// Delete the files a unit's previous record listed that its new outputs no longer include
+/// (e.g. `.exr` targets after switching to `--target png`, or outputs under the other split),
+/// so a recomputed unit leaves exactly its current files. Only plain relative paths inside
+/// OUT_DIR are touched.
+fn remove_replaced_outputs(out_dir: &Path, prev: &Record, now: &Record) {
+    for o in &prev.outputs {
+        let p = Path::new(&o.path);
+        let plain = p
+            .components()
+            .all(|c| matches!(c, std::path::Component::Normal(_)));
+        if plain && !now.outputs.iter().any(|n| n.path == o.path) {
+            let _ = std::fs::remove_file(out_dir.join(p));
+        }
+    }
 }
 
 fn want<'a>(u: &Unit, input_sha: &'a str, options_sha: &'a str) -> Want<'a> {

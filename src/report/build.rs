@@ -216,8 +216,9 @@ pub fn build(opts: &ReportOptions, vis: &dyn Visuals) -> Result<ReportSummary> {
             Ok(ms) => {
                 for (name, img) in ms {
                     let title = format!("Mask: {name}");
+                    let file_name = name.split(" (").next().unwrap_or(&name).to_string();
                     png(
-                        &format!("mask_{}", safe(&name)),
+                        &format!("mask_{}", safe(&file_name)),
                         &title,
                         Ok(img),
                         &mut summary,

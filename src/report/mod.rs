@@ -5,3 +5,4 @@ pub mod plot;
 pub mod thumb;
 
 pub use build::{build, Illuminants, LightMark, ReportOptions, ReportSummary, Visuals};
+pub mod real;
