@@ -87,7 +87,7 @@ impl Processor for SynthProcessor {
             "noise": self.calibration.noise.as_ref().map(|n| n.to_json()),
         });
         format!(
-            "day2night {}\noptions {}\ncalibration {}\ntarget {}\ncompression {}",
+            "day2night {} dataset-outputs/1\noptions {}\ncalibration {}\ntarget {}\ncompression {}",
             crate::VERSION,
             serde_json::to_string(&self.options).unwrap_or_default(),
             cal,
@@ -143,7 +143,14 @@ impl Processor for SynthProcessor {
             let rgb = render_linear(&clean, &RenderOptions::default())?;
             if self.target.exr() {
                 let mut cur = std::io::Cursor::new(Vec::new());
-                let attrs = standard_attributes(Path::new(&unit.rel), plan.night_neutral);
+                // One custom attribute only: the `exr` crate keeps custom attributes in a
+                // HashMap, so with two or more their order in the header (hence the bytes)
+                // changes from process to process. The sidecar holds the rest.
+                let attrs: Vec<(String, String)> =
+                    standard_attributes(Path::new(&unit.rel), plan.night_neutral)
+                        .into_iter()
+                        .take(1)
+                        .collect();
                 encode_exr(&rgb, &mut cur, &ExrOptions::default(), &attrs)?;
                 let bytes = cur.into_inner();
                 sink.write(Kind::Target, ".exr", |w| Ok(w.write_all(&bytes)?))?;
