@@ -2,6 +2,7 @@
 //! synthesis, on copies of the committed fixture fixtures/day.dng.
 
 mod common;
+mod dataset_fake;
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -353,6 +354,11 @@ fn report_of_a_real_dataset() {
     assert_eq!(pngs.len(), 3 * 6);
     for p in &pngs {
         image::open(p).unwrap_or_else(|e| panic!("{}: {e}", p.display()));
+    }
+    if let Some(chromium) = dataset_fake::chromium() {
+        let (console, shot) = dataset_fake::load_in_browser(&chromium, &page);
+        assert!(console.is_empty(), "console output: {console:#?}");
+        image::load_from_memory(&shot).expect("screenshot is not a PNG");
     }
     // `report` alone, without DAY_DIR: the day column says why it is missing.
     let o = common::bin()

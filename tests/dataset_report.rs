@@ -4,14 +4,13 @@
 
 mod dataset_fake;
 
-use dataset_fake::{make_day_dir, opts, Fake};
+use dataset_fake::{chromium, load_in_browser, make_day_dir, opts, Fake};
 use day2night::dataset;
 use day2night::report::{
     self, plot::Ellipse, thumb::Rgb8, Illuminants, LightMark, ReportOptions, Visuals,
 };
 use day2night::Result;
-use std::path::{Path, PathBuf};
-use std::process::Command;
+use std::path::Path;
 
 struct FakeVisuals;
 
@@ -69,53 +68,6 @@ impl Visuals for FakeVisuals {
     fn dim_factor(&self, sc: &serde_json::Value) -> Option<f64> {
         Some((sc["seed"].as_u64()? % 97) as f64 / 970.0)
     }
-}
-
-fn chromium() -> Option<PathBuf> {
-    for name in ["chromium", "chromium-browser", "google-chrome"] {
-        for dir in std::env::var("PATH").unwrap_or_default().split(':') {
-            let p = Path::new(dir).join(name);
-            if p.is_file() {
-                return Some(p);
-            }
-        }
-    }
-    eprintln!("SKIP: headless browser check: chromium not installed (Debian: apt-get install -y chromium; .ci/run installs it)");
-    None
-}
-
-/// Load `page` headless; returns (console lines, screenshot bytes).
-fn load_in_browser(chromium: &Path, page: &Path) -> (Vec<String>, Vec<u8>) {
-    let profile = tempfile::tempdir().unwrap();
-    let shot = profile.path().join("shot.png");
-    let out = Command::new(chromium)
-        .args([
-            "--headless",
-            "--no-sandbox",
-            "--disable-gpu",
-            "--disable-background-networking",
-            "--disable-component-update",
-            "--disable-sync",
-            "--no-first-run",
-            "--window-size=1400,1800",
-            "--enable-logging=stderr",
-            "--v=0",
-        ])
-        .arg(format!(
-            "--user-data-dir={}",
-            profile.path().join("profile").display()
-        ))
-        .arg(format!("--screenshot={}", shot.display()))
-        .arg(format!("file://{}", page.canonicalize().unwrap().display()))
-        .output()
-        .expect("cannot start chromium");
-    let stderr = String::from_utf8_lossy(&out.stderr);
-    let console: Vec<String> = stderr
-        .lines()
-        .filter(|l| l.contains(":CONSOLE"))
-        .map(String::from)
-        .collect();
-    (console, std::fs::read(&shot).unwrap_or_default())
 }
 
 #[test]

@@ -86,7 +86,7 @@ pub struct DatasetArgs {
     #[arg(long, short = 'q')]
     pub quiet: bool,
     #[command(flatten)]
-    pub synth: SynthForward,
+    pub synth: Box<SynthForward>,
 }
 
 fn parse_isos(s: &str) -> Result<Vec<u32>, Failure> {

@@ -388,7 +388,7 @@ fn noisy_output(r: &Record) -> Option<&str> {
             let tag = format!("_iso{iso}.");
             noisy().find(|o| o.path.contains(&tag))
         })
-        .or_else(|| noisy().last())
+        .or_else(|| noisy().next_back())
         .map(|o| o.path.as_str())
 }
 

@@ -6,7 +6,8 @@ use day2night::dataset::{
 };
 use day2night::{Error, Result};
 use std::collections::BTreeMap;
-use std::path::Path;
+use std::path::{Path, PathBuf};
+use std::process::Command;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
 /// Fake synthesis: refuses inputs not starting with "DAY"; writes a clean raw, two noisy
@@ -123,4 +124,52 @@ pub fn tree(dir: &Path, with_manifests: bool) -> BTreeMap<String, Vec<u8>> {
         m.retain(|k, _| !k.starts_with("manifest"));
     }
     m
+}
+
+/// Debian `chromium` (or another Chromium) on PATH; prints why when absent.
+pub fn chromium() -> Option<PathBuf> {
+    for name in ["chromium", "chromium-browser", "google-chrome"] {
+        for dir in std::env::var("PATH").unwrap_or_default().split(':') {
+            let p = Path::new(dir).join(name);
+            if p.is_file() {
+                return Some(p);
+            }
+        }
+    }
+    eprintln!("SKIP: headless browser check: chromium not installed (Debian: apt-get install -y chromium; .ci/run installs it)");
+    None
+}
+
+/// Load `page` headless; returns (console lines, screenshot bytes).
+pub fn load_in_browser(chromium: &Path, page: &Path) -> (Vec<String>, Vec<u8>) {
+    let profile = tempfile::tempdir().unwrap();
+    let shot = profile.path().join("shot.png");
+    let out = Command::new(chromium)
+        .args([
+            "--headless",
+            "--no-sandbox",
+            "--disable-gpu",
+            "--disable-background-networking",
+            "--disable-component-update",
+            "--disable-sync",
+            "--no-first-run",
+            "--window-size=1400,1800",
+            "--enable-logging=stderr",
+            "--v=0",
+        ])
+        .arg(format!(
+            "--user-data-dir={}",
+            profile.path().join("profile").display()
+        ))
+        .arg(format!("--screenshot={}", shot.display()))
+        .arg(format!("file://{}", page.canonicalize().unwrap().display()))
+        .output()
+        .expect("cannot start chromium");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    let console: Vec<String> = stderr
+        .lines()
+        .filter(|l| l.contains(":CONSOLE"))
+        .map(String::from)
+        .collect();
+    (console, std::fs::read(&shot).unwrap_or_default())
 }
