@@ -191,7 +191,7 @@ impl NoiseModel {
         white: f64,
     ) -> Result<NoiseModel> {
         let range = white - black;
-        if !(range > 0.0) {
+        if range.is_nan() || range <= 0.0 {
             return Err(Error::invalid("noise table: white <= black"));
         }
         let mut pts: Vec<IsoPoint> = Vec::new();
@@ -345,6 +345,7 @@ impl NoiseModel {
 }
 
 #[cfg(test)]
+#[allow(clippy::needless_range_loop)]
 mod tests {
     use super::*;
     use crate::synth::dictionaries::embedded;

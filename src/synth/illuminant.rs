@@ -200,6 +200,7 @@ impl Gaussian2 {
 }
 
 #[cfg(test)]
+#[allow(clippy::needless_range_loop)]
 mod tests {
     use super::*;
     use crate::synth::dictionaries::embedded;

@@ -85,14 +85,14 @@ pub fn axis_range(
         // |i - c| < h/2  <=>  c - h/2 < i < c + h/2
         let a = center - h / 2.0;
         let b = center + h / 2.0;
-        lo = lo.max(a.floor() as i64 + 1);
+        lo = lo.max((a.floor() as i64).saturating_add(1));
         hi = hi.min(b.ceil() as i64);
     }
     if let Some(k) = eval.k() {
         let a = center - k * sigma;
         let b = center + k * sigma;
         lo = lo.max(a.ceil() as i64);
-        hi = hi.min(b.floor() as i64 + 1);
+        hi = hi.min((b.floor() as i64).saturating_add(1));
     }
     if hi <= lo {
         return (0, 0);
@@ -106,7 +106,7 @@ pub fn gauss(d: f64, sigma: f64) -> f64 {
     if d == 0.0 {
         return 1.0;
     }
-    if !(sigma > 0.0) {
+    if sigma.is_nan() || sigma <= 0.0 {
         return 0.0;
     }
     (-(d * d) / (2.0 * sigma * sigma)).exp()
@@ -218,11 +218,18 @@ impl PreparedMask {
 /// `0.3 * ((k - 1) / 2 - 1) + 0.8` with `k = max(h, w)`, scaled per axis by `h/k`, `w/k`.
 pub fn release_sigma(h: f64, w: f64) -> [f64; 2] {
     let k = h.max(w);
-    let s = 0.3 * ((k - 1.0) / 2.0 - 1.0) + 0.8;
+    let s = opencv_sigma(k);
     [s * h / k, s * w / k]
 }
 
+/// OpenCV's default sigma of a Gaussian kernel of size `k`: `0.3 * ((k - 1) / 2 - 1) + 0.8`
+/// (at least 0.35 for k >= 0).
+pub fn opencv_sigma(k: f64) -> f64 {
+    0.3 * ((k - 1.0) / 2.0 - 1.0) + 0.8
+}
+
 #[cfg(test)]
+#[allow(clippy::needless_range_loop)]
 mod tests {
     use super::*;
 

@@ -135,8 +135,9 @@ impl SynthOptions {
             return Err(Error::invalid("ISO 0"));
         }
         let fin = |v: &[f64]| v.iter().all(|x| x.is_finite());
-        if !fin(&self.dim_range)
-            || !(self.dim_range[0] > 0.0 && self.dim_range[0] <= self.dim_range[1])
+        if !(fin(&self.dim_range)
+            && self.dim_range[0] > 0.0
+            && self.dim_range[0] <= self.dim_range[1])
         {
             return Err(Error::invalid("dimming range must satisfy 0 < lo <= hi"));
         }
@@ -153,7 +154,11 @@ impl SynthOptions {
             }
         }
         let s = &self.sampler;
-        if !(s.max_mahalanobis > 0.0) || !s.floor.is_finite() || s.max_tries == 0 {
+        if s.max_mahalanobis.is_nan()
+            || s.max_mahalanobis <= 0.0
+            || !s.floor.is_finite()
+            || s.max_tries == 0
+        {
             return Err(Error::invalid(
                 "illuminant sampler: radius must be > 0, floor finite, tries >= 1",
             ));

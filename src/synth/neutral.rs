@@ -15,14 +15,17 @@ pub const MIN_NEUTRAL: f64 = 1e-3;
 
 /// Normalize a neutral to green = 1 and check it.
 pub fn check_neutral(n: [f64; 3], what: &str) -> Result<[f64; 3]> {
-    if n.iter().any(|v| !v.is_finite()) || !(n[1] > 0.0) {
+    if n.iter().any(|v| !v.is_finite()) || n[1] <= 0.0 {
         return Err(Error::invalid(format!(
             "{} {:?} has a non-finite or non-positive green component",
             what, n
         )));
     }
     let out = [n[0] / n[1], 1.0, n[2] / n[1]];
-    if out.iter().any(|&v| !(v >= MIN_NEUTRAL) || !v.is_finite()) {
+    if out
+        .iter()
+        .any(|&v| v.is_nan() || v < MIN_NEUTRAL || !v.is_finite())
+    {
         return Err(Error::invalid(format!(
             "{} {:?} has a tiny, zero or negative component (each must be >= {} of green)",
             what, n, MIN_NEUTRAL
@@ -72,7 +75,7 @@ fn mul(a: &[[f64; 3]; 3], x: [f64; 3]) -> [f64; 3] {
 /// Camera neutral of a white given as CIE xy, through the metadata's colour matrices.
 pub fn neutral_from_white_xy(meta: &RawMeta, xy: [f64; 2]) -> Result<[f64; 3]> {
     let (x, y) = (xy[0], xy[1]);
-    if !(y > 0.0) || !x.is_finite() {
+    if y.is_nan() || y <= 0.0 || !x.is_finite() {
         return Err(Error::invalid(format!(
             "AsShotWhiteXY {:?} is not a valid white",
             xy
@@ -148,6 +151,7 @@ pub fn day_neutral(meta: &RawMeta, user: Option<[f64; 3]>) -> Result<([f64; 3], 
 }
 
 #[cfg(test)]
+#[allow(clippy::needless_range_loop)]
 mod tests {
     use super::*;
     use crate::raw::Bayer;

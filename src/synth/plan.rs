@@ -4,7 +4,7 @@
 
 use super::dim::{sample_dim, DimPlan};
 use super::illuminant::Gaussian2;
-use super::masks::{release_sigma, Light, LightKind, MaskEval, MASK_FLOOR};
+use super::masks::{opencv_sigma, release_sigma, Light, LightKind, MaskEval, MASK_FLOOR};
 use super::neutral::day_neutral;
 use super::rng::SynthRng;
 use super::{Calibration, Mode, RelightFormula, SynthOptions};
@@ -243,8 +243,10 @@ pub fn plan(
                 let (wh, ww) = (window_len(&mut rng, h), window_len(&mut rng, w));
                 let u = rng.uniform();
                 let gain = rng.range(opts.bulb_gain[0], opts.bulb_gain[1]);
+                // Released code: OpenCV's size-to-sigma rule applied to a kernel size of
+                // max(h, w) / (5 + 5u), then scaled per axis like the local lights.
                 let m = wh.max(ww);
-                let s = m / (5.0 + 5.0 * u);
+                let s = opencv_sigma(m / (5.0 + 5.0 * u));
                 lights.push(Light {
                     kind: LightKind::Bulb,
                     illuminant: l,
@@ -262,8 +264,8 @@ pub fn plan(
                 .collect();
             let mut n = [0.0; 3];
             for l in &used {
-                for i in 0..3 {
-                    n[i] += l.illuminant[i] / used.len() as f64;
+                for (ni, li) in n.iter_mut().zip(l.illuminant) {
+                    *ni += li / used.len() as f64;
                 }
             }
             let def = if paper {
@@ -285,10 +287,17 @@ pub fn plan(
         let e = model.at(iso)?;
         if e.extrapolated {
             let (lo, hi) = model.iso_range();
-            warnings.push(format!(
-                "ISO {} is outside the noise model's calibrated range {}..{} ({}): extrapolated",
-                iso, lo, hi, model.source
-            ));
+            warnings.push(if lo == hi {
+                format!(
+                    "ISO {} scaled from the single calibrated ISO {} ({}): S in proportion to ISO, O to ISO^2",
+                    iso, lo, model.source
+                )
+            } else {
+                format!(
+                    "ISO {} is outside the noise model's calibrated range {}..{} ({}): extrapolated",
+                    iso, lo, hi, model.source
+                )
+            });
         }
         noise.push(NoisePlan {
             iso,
@@ -366,7 +375,20 @@ impl Plan {
                     && l.window.map(|w| finite(&w)).unwrap_or(true)
                     && l.weight >= 0.0
             });
-        if !ok || self.day_neutral.iter().any(|&v| v <= 0.0) {
+        let dim_ok = match &self.dim {
+            super::dim::DimPlan::None => true,
+            super::dim::DimPlan::Uniform { s, .. } => s.is_finite() && *s >= 0.0,
+            super::dim::DimPlan::TargetMean { target_mean, .. } => {
+                target_mean.is_finite() && *target_mean >= 0.0
+            }
+        };
+        let noise_ok = self.noise.iter().all(|n| {
+            n.params
+                .positions
+                .iter()
+                .all(|p| p[0].is_finite() && p[1].is_finite())
+        });
+        if !ok || !dim_ok || !noise_ok || self.day_neutral.iter().any(|&v| v <= 0.0) {
             return Err(Error::invalid("plan holds non-finite or invalid values"));
         }
         Ok(())

@@ -2,6 +2,8 @@
 //! all four Bayer phases, the numerical stability matrix, geometry ranges (proptest),
 //! noise statistics and determinism.
 
+#![allow(clippy::needless_range_loop)]
+
 use super::dictionaries::IlluminantDict;
 use super::dim::DimPlan;
 use super::masks::{Light, LightKind, MaskEval, MASK_FLOOR};
@@ -289,8 +291,10 @@ fn stability_white_65535_no_overflow() {
 #[test]
 fn stability_iso_25_and_204800_extrapolate_finite() {
     let img = frame(Bayer::RGGB, 16, 16, [500, 700, 300]);
-    let mut o = SynthOptions::default();
-    o.isos = vec![25, 204800];
+    let o = SynthOptions {
+        isos: vec![25, 204800],
+        ..SynthOptions::default()
+    };
     let cal = Calibration::embedded(&o).unwrap();
     let p = plan(&img, "x", 0, 0, &o, &cal).unwrap();
     assert_eq!(p.warnings.len(), 2, "{:?}", p.warnings);
@@ -330,9 +334,11 @@ fn stability_single_illuminant_dictionary() {
 fn no_nan_anywhere_in_plan_and_sidecar_values() {
     for mode in [Mode::Day, Mode::Dimmed, Mode::Global, Mode::Local] {
         let img = frame(Bayer::GBRG, 7, 9, [1023, 64, 0]);
-        let mut o = SynthOptions::default();
-        o.mode = mode;
-        o.isos = vec![25, 1600, 204800];
+        let o = SynthOptions {
+            mode,
+            isos: vec![25, 1600, 204800],
+            ..SynthOptions::default()
+        };
         let cal = Calibration::embedded(&o).unwrap();
         let p = plan(&img, "x", 9, 0, &o, &cal).unwrap();
         let j = serde_json::to_string(&p).unwrap();
@@ -523,7 +529,8 @@ proptest! {
                     if l.kind == LightKind::Local {
                         prop_assert!((s - (0.3 * ((m - 1.0) / 2.0 - 1.0) + 0.8)).abs() < 1e-9);
                     } else {
-                        prop_assert!(s > m / 10.0 - 1e-9 && s <= m / 5.0 + 1e-9);
+                        let f = |k: f64| 0.3 * ((k - 1.0) / 2.0 - 1.0) + 0.8;
+                        prop_assert!(s > f(m / 10.0) - 1e-9 && s <= f(m / 5.0) + 1e-9);
                         prop_assert!((50.0..100.0).contains(&l.gain));
                     }
                 }
@@ -560,4 +567,33 @@ fn truncated_and_exact_masks_close_to_separable() {
             .unwrap();
         assert!(maxd <= 2, "{eval:?}: {maxd}");
     }
+}
+
+#[test]
+fn tampered_plans_are_refused_not_panicking() {
+    let img = frame(Bayer::RGGB, 8, 8, [500, 700, 300]);
+    let o = SynthOptions::default();
+    let p = plan_for(&img, &o);
+    let mut q = p.clone();
+    q.dim = DimPlan::Uniform {
+        s: f64::NAN,
+        range: [0.0, 1.0],
+    };
+    assert!(run(&img, &q).is_err());
+    let mut q = p.clone();
+    q.noise[0].params.positions[0][0] = f64::INFINITY;
+    assert!(run(&img, &q).is_err());
+    let mut q = p.clone();
+    q.lights[1].window = Some([f64::NAN, 3.0]);
+    assert!(run(&img, &q).is_err());
+    let mut q = p.clone();
+    q.active_width = 9;
+    assert!(run(&img, &q).is_err());
+    // Extreme but finite geometry runs.
+    let mut q = p.clone();
+    for l in &mut q.lights {
+        l.center = [1e300, -1e300];
+        l.sigma = [0.0, 1e-300];
+    }
+    run(&img, &q).unwrap();
 }

@@ -128,6 +128,7 @@ pub fn noise_model() -> NoiseModel {
 }
 
 #[cfg(test)]
+#[allow(clippy::needless_range_loop)]
 mod tests {
     use super::*;
     use crate::synth::illuminant::{Covariance, Gaussian2};
