@@ -47,7 +47,7 @@ impl Visuals for FakeVisuals {
         ])
     }
     fn illuminants(&self, sc: &serde_json::Value) -> Result<Illuminants> {
-        let seed = sc["seed"].as_u64().unwrap_or(0);
+        let seed = sc["h"].as_u64().unwrap_or(0);
         let f = (seed % 1000) as f64 / 10000.0;
         Ok(Illuminants {
             kinds: vec!["ambient".into(), "local".into(), "bulb".into()],
@@ -66,7 +66,7 @@ impl Visuals for FakeVisuals {
         })
     }
     fn dim_factor(&self, sc: &serde_json::Value) -> Option<f64> {
-        Some((sc["seed"].as_u64()? % 97) as f64 / 970.0)
+        Some((sc["h"].as_u64()? % 97) as f64 / 970.0)
     }
 }
 

@@ -1,46 +1,51 @@
 //! `day2night dataset`: a whole dataset from a folder of day DNGs (see docs/dataset.md).
+use super::synth::{CompressionArg, CovArg, ExtraArgs, FormulaArg, ModeArg, TargetArg};
 use super::{usage, CmdResult, Failure};
 use day2night::dataset::run::ProgressMode;
 use day2night::dataset::synthesis::{SynthProcessor, Target};
 use day2night::dataset::{self, RunOptions, Shard, SplitRule};
 use day2night::dng::write::Compression;
-use day2night::synth::{Calibration, Gaussian2, Mode, RelightFormula, SynthOptions};
+use day2night::synth::dictionaries;
+use day2night::synth::{
+    Calibration, Covariance, Gaussian2, MaskEval, Mode, RelightFormula, SynthOptions,
+};
 use std::path::PathBuf;
 
-/// Synthesis options forwarded to the synthesis of every input (same names and meanings as
-/// `day2night synth`).
-#[derive(Debug, Clone, clap::Args)]
+/// Synthesis options forwarded to every input: the same names, values and defaults as
+/// `day2night synth` (its value enums and `ExtraArgs` are reused; `--replay` does not apply).
+#[derive(Debug, clap::Args)]
 pub struct SynthForward {
-    /// Run seed: each (input, variant) derives its own seed from it and the input's path.
+    /// Run seed; each (input, variant) has its own stream keyed by (seed, relative path,
+    /// variant), so results never depend on position, shard or thread count.
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
     /// ISOs of the noisy outputs, comma-separated, or `none`.
-    #[arg(long, default_value = "1600,3200")]
+    #[arg(long, default_value = "1600,3200", value_name = "LIST|none")]
     pub iso: String,
     /// Relighting mode.
-    #[arg(long, default_value = "local", value_parser = ["local", "global", "dimmed", "day"])]
-    pub mode: String,
+    #[arg(long, value_enum, default_value = "local")]
+    pub mode: ModeArg,
     /// Local relighting formula.
-    #[arg(long, default_value = "release", value_parser = ["release", "paper"])]
-    pub relight_formula: String,
-    /// Saturated bulbs per image (default: 5 for release, 0 for paper).
+    #[arg(long = "relight-formula", value_enum, default_value = "release")]
+    pub relight_formula: FormulaArg,
+    /// Saturated bulbs (default 5 with the release formula, 0 with the paper's).
     #[arg(long)]
     pub bulbs: Option<u32>,
-    /// Night illuminant dictionary (JSON from `calibrate illuminants`).
-    #[arg(long, value_name = "FILE.json")]
-    pub illuminants: Option<PathBuf>,
-    /// Night brightness dictionary (JSON from `calibrate brightness`).
-    #[arg(long, value_name = "FILE.json")]
-    pub brightness: Option<PathBuf>,
-    /// Noise model (JSON from `calibrate noise`).
-    #[arg(long, value_name = "FILE.json")]
-    pub noise_model: Option<PathBuf>,
-    /// Rendered targets.
-    #[arg(long, default_value = "exr", value_parser = ["exr", "png", "both", "none"])]
-    pub target: String,
-    /// DNG compression of the raw outputs.
-    #[arg(long, default_value = "none", value_parser = ["none", "ljpeg"])]
-    pub compression: String,
+    /// Calibration files and finer options (as `synth`).
+    #[command(flatten)]
+    pub extra: ExtraArgs,
+    /// Targets to render from the clean night raw.
+    #[arg(long, value_enum, default_value = "exr")]
+    pub target: TargetArg,
+    /// Also write the network input (normalized, white-balanced, demosaiced noisy raw).
+    #[arg(long = "input-exr")]
+    pub input_exr: bool,
+    /// DNG compression.
+    #[arg(long, value_enum, default_value = "none")]
+    pub compression: CompressionArg,
+    /// Truncate instead of rounding when denormalizing (released code, -0.5 DN bias).
+    #[arg(long)]
+    pub truncate: bool,
 }
 
 /// Arguments of `day2night dataset`.
@@ -56,7 +61,12 @@ pub struct DatasetArgs {
     #[arg(value_name = "DAY_DIR")]
     pub day_dir: PathBuf,
     /// Output folder (train/ and val/ layouts, manifest.jsonl).
-    #[arg(short = 'o', long = "output", value_name = "OUT_DIR")]
+    #[arg(
+        short = 'o',
+        long = "output",
+        visible_alias = "out",
+        value_name = "OUT_DIR"
+    )]
     pub out_dir: PathBuf,
     /// Put the last N inputs (by sorted relative path) in val, as the paper (60/10).
     #[arg(long, value_name = "N", conflicts_with = "val_fraction")]
@@ -108,50 +118,105 @@ fn parse_isos(s: &str) -> Result<Vec<u32>, Failure> {
         .collect()
 }
 
-/// Build the synthesis processor from the forwarded options.
+fn parse_neutral(s: &str) -> Result<[f64; 3], Failure> {
+    let v: Vec<f64> = s
+        .split(',')
+        .map(|p| p.trim().parse::<f64>())
+        .collect::<Result<_, _>>()
+        .map_err(|_| usage(format!("--day-neutral: {s:?} is not r,g,b")))?;
+    match v.as_slice() {
+        [r, g, b] => Ok([*r, *g, *b]),
+        _ => Err(usage(format!("--day-neutral: {s:?} is not r,g,b"))),
+    }
+}
+
+fn parse_mask_eval(s: &str) -> Result<MaskEval, Failure> {
+    match s {
+        "separable" => Ok(MaskEval::Separable),
+        "exact" => Ok(MaskEval::Exact),
+        _ => match s
+            .strip_prefix("truncated:")
+            .and_then(|k| k.parse::<f64>().ok())
+        {
+            Some(k) if k > 0.0 && k.is_finite() => Ok(MaskEval::Truncated { k }),
+            _ => Err(usage(format!(
+                "--mask-eval: {s:?} (use separable, exact or truncated:K)"
+            ))),
+        },
+    }
+}
+
+/// Build the synthesis processor from the forwarded options (the same mapping as `synth`).
 pub fn processor(f: &SynthForward) -> Result<SynthProcessor, Failure> {
-    let mut options = SynthOptions {
-        isos: parse_isos(&f.iso)?,
+    if f.extra.replay.is_some() {
+        return Err(usage(
+            "--replay applies to `synth` only (replay one sidecar with `day2night synth DAY.dng --replay meta/<id>.json`)",
+        ));
+    }
+    let options = SynthOptions {
+        mode: match f.mode {
+            ModeArg::Local => Mode::Local,
+            ModeArg::Global => Mode::Global,
+            ModeArg::Dimmed => Mode::Dimmed,
+            ModeArg::Day => Mode::Day,
+        },
+        formula: match f.relight_formula {
+            FormulaArg::Release => RelightFormula::Release,
+            FormulaArg::Paper => RelightFormula::Paper,
+        },
         bulbs: f.bulbs,
+        local_lights: f.extra.lights,
+        isos: parse_isos(&f.iso)?,
+        truncate: f.truncate,
+        covariance: match f.extra.covariance {
+            CovArg::Unbiased => Covariance::Unbiased,
+            CovArg::Ml => Covariance::MaximumLikelihood,
+        },
+        day_neutral: f
+            .extra
+            .day_neutral
+            .as_deref()
+            .map(parse_neutral)
+            .transpose()?,
+        mask_eval: parse_mask_eval(&f.extra.mask_eval)?,
         ..SynthOptions::default()
     };
-    options.mode = match f.mode.as_str() {
-        "global" => Mode::Global,
-        "dimmed" => Mode::Dimmed,
-        "day" => Mode::Day,
-        _ => Mode::Local,
-    };
-    options.formula = match f.relight_formula.as_str() {
-        "paper" => RelightFormula::Paper,
-        _ => RelightFormula::Release,
-    };
     options.validate().map_err(usage)?;
-    let mut calibration = Calibration::embedded(&options)?;
-    if let Some(p) = &f.illuminants {
-        let src = day2night::synth::dictionaries::load_illuminants(p)?;
-        calibration.illuminants = Gaussian2::from_source(&src, options.covariance)?;
-    }
-    if let Some(p) = &f.brightness {
-        calibration.brightness = Some(day2night::synth::dictionaries::load_brightness(p)?);
-    }
-    if let Some(p) = &f.noise_model {
-        calibration.noise = Some(day2night::noise::NoiseModel::from_file(p)?);
-    }
-    let target = match f.target.as_str() {
-        "png" => Target::Png,
-        "both" => Target::Both,
-        "none" => Target::None,
-        _ => Target::Exr,
+    let illuminants = match &f.extra.illuminants {
+        Some(p) => Gaussian2::from_source(&dictionaries::load_illuminants(p)?, options.covariance)
+            .map_err(|e| e.in_file(p))?,
+        None => Gaussian2::fit(&dictionaries::embedded::illuminants(), options.covariance)?,
     };
-    let compression = match f.compression.as_str() {
-        "ljpeg" => Compression::Ljpeg,
-        _ => Compression::None,
-    };
+    let brightness = f
+        .extra
+        .brightness
+        .as_deref()
+        .map(dictionaries::load_brightness)
+        .transpose()?;
+    let noise = f
+        .extra
+        .noise_model
+        .as_deref()
+        .map(day2night::noise::NoiseModel::from_file)
+        .transpose()?;
     Ok(SynthProcessor {
         options,
-        calibration,
-        target,
-        compression,
+        calibration: Calibration {
+            illuminants,
+            brightness,
+            noise,
+        },
+        target: match f.target {
+            TargetArg::Exr => Target::Exr,
+            TargetArg::Png => Target::Png,
+            TargetArg::Both => Target::Both,
+            TargetArg::None => Target::None,
+        },
+        compression: match f.compression {
+            CompressionArg::None => Compression::None,
+            CompressionArg::Ljpeg => Compression::Ljpeg,
+        },
+        input_exr: f.input_exr,
     })
 }
 

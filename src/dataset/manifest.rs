@@ -50,7 +50,7 @@ pub struct Record {
     pub status: Status,
     /// SHA-256 of the input file, hex.
     pub input_sha256: String,
-    /// Seed of this (input, variant).
+    /// Run seed; the unit's random stream is keyed by (seed, input, variant).
     pub seed: u64,
     /// SHA-256 of the processing options' fingerprint, hex.
     pub options_sha256: String,

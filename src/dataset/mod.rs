@@ -70,12 +70,6 @@ pub fn stable_u64(parts: &[&str]) -> u64 {
     u64::from_le_bytes(b)
 }
 
-/// The seed of one (input, variant): a hash of the run seed, the input's relative path and
-/// the variant, so it depends on the file and never on its position, shard or thread.
-pub fn unit_seed(run_seed: u64, rel: &str, variant: u32) -> u64 {
-    stable_u64(&["seed", &run_seed.to_string(), rel, &variant.to_string()])
-}
-
 /// Kind of output file, i.e. the folder it goes to inside a split.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
@@ -127,7 +121,8 @@ pub struct Unit {
     pub variant: u32,
     /// Number of variants per input in this run.
     pub variants: u32,
-    /// The unit's seed (see [`unit_seed`]).
+    /// The run seed. A processor must key its random stream by (seed, `rel`, `variant`),
+    /// never by position, so results do not depend on the shard or the thread count.
     pub seed: u64,
     /// Output id: `<stem>` or `<stem>_vK`.
     pub id: String,

@@ -7,7 +7,7 @@ use super::discover::{discover, sample_stem, Input};
 use super::manifest::{self, Appender, Record, Status};
 use super::resume::{decide, Decision, Reason, Want};
 use super::split::{assign, Split, SplitRule};
-use super::{sha256_hex, unit_seed, Processor, Shard, Sink, Unit};
+use super::{sha256_hex, Processor, Shard, Sink, Unit};
 use crate::error::{Error, Result, ResultExt};
 use crate::output::OutputPolicy;
 use serde::Serialize;
@@ -361,7 +361,7 @@ fn process_input<P: Processor>(
             split: task.split,
             variant,
             variants: opts.variants,
-            seed: unit_seed(opts.seed, rel, variant),
+            seed: opts.seed,
             id: if opts.variants > 1 {
                 format!("{}_v{variant}", task.stem)
             } else {

@@ -2,14 +2,16 @@
 //! library (`synth::plan` -> `synth::run_clean` -> `synth::run_noise`, `dng::write`,
 //! `isp::render_linear`), written into the dataset layout, plus the synth sidecar.
 //!
-//! The random stream of a unit is keyed by (unit seed, relative input path, variant - 1), so
-//! it depends on the file, never on its position, shard or the thread count.
+//! The random stream of a unit is keyed by (run seed, relative input path, variant - 1), as
+//! `synth` keys it by (seed, file name, variant): it depends on the file, never on its
+//! position, shard or the thread count. For a file directly in DAY_DIR the relative path is
+//! the file name, so its plan (sidecar `plan`) equals what `day2night synth` samples.
 
 use super::{Kind, Processor, Sink, Unit, UnitInfo};
 use crate::dng::write::{encode_dng, Compression, WriteOptions};
 use crate::error::Result;
 use crate::exr::{encode_exr, standard_attributes, ExrOptions};
-use crate::isp::{render_linear, RenderOptions};
+use crate::isp::{render_input, render_linear, RenderOptions};
 use crate::raw::RawImage;
 use crate::synth::sidecar::{CalibrationInfo, InputInfo, OutputInfo, Sidecar, SIDECAR_FORMAT};
 use crate::synth::{self, Calibration, SynthOptions};
@@ -58,6 +60,8 @@ pub struct SynthProcessor {
     pub target: Target,
     /// DNG compression of the raw outputs.
     pub compression: Compression,
+    /// Also write the network input render (`input/<id>.exr`).
+    pub input_exr: bool,
 }
 
 /// A decoded input and its SHA-256.
@@ -87,11 +91,12 @@ impl Processor for SynthProcessor {
             "noise": self.calibration.noise.as_ref().map(|n| n.to_json()),
         });
         format!(
-            "day2night {} dataset-outputs/1\noptions {}\ncalibration {}\ntarget {}\ncompression {}",
+            "day2night {} dataset-outputs/1\noptions {}\ncalibration {}\ntarget {}\ninput_exr {}\ncompression {}",
             crate::VERSION,
             serde_json::to_string(&self.options).unwrap_or_default(),
             cal,
             self.target.name(),
+            self.input_exr,
             self.compression_name()
         )
     }
@@ -104,6 +109,8 @@ impl Processor for SynthProcessor {
     }
 
     fn process(&self, input: &LoadedInput, unit: &Unit, sink: &Sink) -> Result<UnitInfo> {
+        // Mirrors `day2night synth` (src/cli/synth.rs, process_variant) output for output,
+        // with the dataset's names and folders.
         let day = &input.raw;
         let plan = synth::plan(
             day,
@@ -127,35 +134,50 @@ impl Processor for SynthProcessor {
         files.push(sink.rel_path(Kind::CleanRaw, ".dng"));
         stages.push("write_clean_dng".into());
         let mut isos = Vec::new();
+        let mut first_noisy = None;
         for i in 0..plan.noise.len() {
             let (iso, noisy) = synth::run_noise(&clean, &plan, i)?;
             let bytes = encode_dng(&noisy, &wopts)?;
-            drop(noisy);
             let suffix = format!("_iso{iso}.dng");
             sink.write(Kind::NoisyRaw, &suffix, |w| Ok(w.write_all(&bytes)?))?;
             files.push(sink.rel_path(Kind::NoisyRaw, &suffix));
             isos.push(iso);
+            if first_noisy.is_none() && self.input_exr {
+                first_noisy = Some(noisy);
+            }
         }
         if !isos.is_empty() {
-            stages.push("write_noisy_dngs".into());
+            stages.push("write_noisy_dng".into());
         }
+        let neutral = plan.night_neutral;
+        // One custom attribute only: the `exr` crate keeps custom attributes in a HashMap, so
+        // with several their order in the header (hence the bytes) changes per process.
+        let summary = standard_attributes(Path::new(&unit.rel), neutral)
+            .into_iter()
+            .map(|(k, v)| format!("{}={}", k.trim_start_matches("day2night:"), v))
+            .chain([
+                format!("seed={}", plan.seed),
+                format!("variant={}", plan.variant),
+            ])
+            .collect::<Vec<_>>()
+            .join("; ");
+        let attrs = vec![("day2night:synth".to_string(), summary)];
+        let exr_bytes = |rgb: &crate::isp::RgbImage| -> Result<Vec<u8>> {
+            let mut cur = std::io::Cursor::new(Vec::new());
+            encode_exr(rgb, &mut cur, &ExrOptions::default(), &attrs)?;
+            Ok(cur.into_inner())
+        };
         if self.target.exr() || self.target.png() {
-            let rgb = render_linear(&clean, &RenderOptions::default())?;
+            let ropts = RenderOptions {
+                neutral: Some(neutral),
+                ..RenderOptions::default()
+            };
+            let rgb = render_linear(&clean, &ropts)?;
             if self.target.exr() {
-                let mut cur = std::io::Cursor::new(Vec::new());
-                // One custom attribute only: the `exr` crate keeps custom attributes in a
-                // HashMap, so with two or more their order in the header (hence the bytes)
-                // changes from process to process. The sidecar holds the rest.
-                let attrs: Vec<(String, String)> =
-                    standard_attributes(Path::new(&unit.rel), plan.night_neutral)
-                        .into_iter()
-                        .take(1)
-                        .collect();
-                encode_exr(&rgb, &mut cur, &ExrOptions::default(), &attrs)?;
-                let bytes = cur.into_inner();
+                let bytes = exr_bytes(&rgb)?;
                 sink.write(Kind::Target, ".exr", |w| Ok(w.write_all(&bytes)?))?;
                 files.push(sink.rel_path(Kind::Target, ".exr"));
-                stages.push("render_target_exr".into());
+                stages.push("target_exr".into());
             }
             if self.target.png() {
                 let path = sink.path(Kind::Target, ".png");
@@ -167,10 +189,18 @@ impl Processor for SynthProcessor {
                 )?;
                 sink.adopt(Kind::Target, ".png")?;
                 files.push(sink.rel_path(Kind::Target, ".png"));
-                stages.push("render_target_png".into());
+                stages.push("target_png".into());
             }
         }
-        stages.push("write_sidecar".into());
+        if self.input_exr {
+            let src = first_noisy.as_ref().unwrap_or(&clean);
+            let rgb = render_input(src, Some(neutral), Default::default())?;
+            let bytes = exr_bytes(&rgb)?;
+            sink.write(Kind::Input, ".exr", |w| Ok(w.write_all(&bytes)?))?;
+            files.push(sink.rel_path(Kind::Input, ".exr"));
+            stages.push("input_exr".into());
+        }
+        drop(first_noisy);
         files.push(sink.rel_path(Kind::Meta, ".json"));
         let sidecar = Sidecar {
             format: SIDECAR_FORMAT.into(),
@@ -193,7 +223,7 @@ impl Processor for SynthProcessor {
                 variants: unit.variants,
                 compression: self.compression_name().into(),
                 target: self.target.name().into(),
-                input_exr: false,
+                input_exr: self.input_exr,
                 files,
             },
         };

@@ -44,10 +44,13 @@ impl Processor for Fake {
     }
     fn process(&self, input: &Vec<u8>, unit: &Unit, sink: &Sink) -> Result<UnitInfo> {
         self.units.fetch_add(1, Ordering::SeqCst);
+        // Keyed like the real synthesis: (seed, relative path, variant), plus the content.
         let body = format!(
-            "{}|{}|{}",
+            "{}|{}|{}|{}|{}",
             dataset::sha256_hex(input),
             unit.seed,
+            unit.rel,
+            unit.variant,
             self.option
         );
         sink.write(Kind::CleanRaw, ".dng", |w| {
@@ -65,7 +68,8 @@ impl Processor for Fake {
             })?;
         }
         sink.write(Kind::Meta, ".json", |w| {
-            Ok(w.write_all(format!("{{\"seed\":{}}}", unit.seed).as_bytes())?)
+            let h = dataset::stable_u64(&[&body]);
+            Ok(w.write_all(format!("{{\"seed\":{},\"h\":{h}}}", unit.seed).as_bytes())?)
         })?;
         Ok(UnitInfo {
             iso: vec![1600, 3200],
