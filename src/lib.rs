@@ -15,6 +15,7 @@ pub mod dataset;
 pub mod dng;
 pub mod error;
 pub mod exr;
+pub mod imageio;
 pub mod isp;
 pub mod metrics;
 pub mod noise;

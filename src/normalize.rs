@@ -104,6 +104,41 @@ impl Normalizer {
         let v = if v.is_nan() { 0.0 } else { v };
         v.clamp(0.0, self.white.min(u16::MAX as f64)) as u16
     }
+    /// Fill `out[c]` with [`black_at`](Self::black_at)`(row, c)` for `c in 0..out.len()`
+    /// (same values, bit for bit, without a division per sample).
+    pub fn black_row(&self, row: usize, out: &mut [f64]) {
+        let (rr, rc) = self.black_repeat;
+        let base = &self.black[(row % rr) * rc..][..rc];
+        let dv = self.delta_v.get(row).copied();
+        let mut k = 0;
+        for (col, o) in out.iter_mut().enumerate() {
+            let mut b = base[k];
+            k += 1;
+            if k == rc {
+                k = 0;
+            }
+            if let Some(d) = self.delta_h.get(col) {
+                b += d;
+            }
+            if let Some(d) = dv {
+                b += d;
+            }
+            *o = b;
+        }
+    }
+    /// [`normalize`](Self::normalize) with the site's black level given (from [`black_row`](Self::black_row)).
+    #[inline]
+    pub fn normalize_with_black(&self, x: u16, black: f64) -> f64 {
+        (self.linearize(x) - black) / self.scale
+    }
+    /// [`denormalize`](Self::denormalize) with the site's black level given.
+    #[inline]
+    pub fn denormalize_with_black(&self, y: f64, black: f64, truncate: bool) -> u16 {
+        let v = y * self.scale + black;
+        let v = if truncate { v.trunc() } else { v.round() };
+        let v = if v.is_nan() { 0.0 } else { v };
+        v.clamp(0.0, self.white.min(u16::MAX as f64)) as u16
+    }
 }
 
 /// Normalize the active area of `img` into a [`Plane`].
@@ -183,6 +218,30 @@ mod tests {
         i.meta.levels.black = vec![4095.0];
         let e = normalize(&i, NormalizeOptions::default()).unwrap_err();
         assert!(e.to_string().contains(">= white"), "{e}");
+    }
+
+    #[test]
+    fn black_row_and_with_black_variants_match() {
+        let mut i = img(5, 4, (0..20).map(|v| 900 + 37 * v).collect());
+        i.meta.levels.black_repeat = (2, 2);
+        i.meta.levels.black = vec![60.0, 61.5, 62.25, 63.0];
+        i.meta.levels.black_delta_h = vec![0.1, 0.2, 0.3, 0.4, 0.5];
+        i.meta.levels.black_delta_v = vec![0.7, 0.0, 1.3, 0.9];
+        let n = Normalizer::new(&i).unwrap();
+        let mut row = vec![0.0; 5];
+        for r in 0..4 {
+            n.black_row(r, &mut row);
+            for (c, &b) in row.iter().enumerate() {
+                assert_eq!(b.to_bits(), n.black_at(r, c).to_bits());
+                let x = i.get(r, c);
+                assert_eq!(n.normalize_with_black(x, b), n.normalize(x, r, c));
+                for y in [-0.1, 0.3, 0.77, 1.5, f64::NAN] {
+                    for t in [false, true] {
+                        assert_eq!(n.denormalize_with_black(y, b, t), n.denormalize(y, r, c, t));
+                    }
+                }
+            }
+        }
     }
 
     #[test]

@@ -1,16 +1,133 @@
-//! `day2night eval` (in progress).
-use super::CmdResult;
+//! `day2night eval PRED TARGET [--json]`: PSNR, SSIM and mean Delta E 2000.
+use super::{usage, CmdResult};
+use day2night::imageio::{read_image, LoadedImage};
+use day2night::isp::tone::srgb_oetf;
+use day2night::metrics::{mean_delta_e_2000, psnr, ssim, SsimOptions, SsimWindow};
+use std::path::PathBuf;
 
 /// Arguments of `day2night eval`.
 #[derive(Debug, clap::Args)]
+#[command(
+    after_help = "PNG/TIFF integers are read as display sRGB in [0, 1], EXR and float \
+TIFF as linear light. When one image is linear and the other display-encoded, the linear one \
+is sRGB-encoded (clipped to [0, 1]) for PSNR and SSIM; Delta E always decodes each image to \
+linear sRGB -> XYZ -> Lab (D65). SSIM is scikit-image's default (7x7 uniform window, sample \
+covariance); --ssim-window gaussian gives Wang et al. 2004's 11x11 Gaussian. PSNR of identical \
+images is infinite (null in JSON). NaN/Inf samples are replaced by 0 (with a warning).\n\n\
+Examples:\n  day2night eval pred.png target.png\n  day2night eval out.exr ref.exr --json"
+)]
 pub struct EvalArgs {
-    /// Arguments (not implemented yet).
-    #[arg(trailing_var_arg = true, allow_hyphen_values = true)]
-    pub rest: Vec<String>,
+    /// Predicted image (PNG, TIFF or EXR).
+    #[arg(value_name = "PRED")]
+    pub pred: PathBuf,
+    /// Reference image (PNG, TIFF or EXR).
+    #[arg(value_name = "TARGET")]
+    pub target: PathBuf,
+    /// Print JSON {"psnr", "ssim", "delta_e_2000", ...} instead of text.
+    #[arg(long)]
+    pub json: bool,
+    /// Data range for PSNR and SSIM.
+    #[arg(long, default_value_t = 1.0, value_name = "R")]
+    pub data_range: f64,
+    /// SSIM window: uniform (default, scikit-image) or gaussian.
+    #[arg(long, default_value = "uniform", value_name = "W")]
+    pub ssim_window: String,
+}
+
+fn load(path: &std::path::Path) -> Result<LoadedImage, super::Failure> {
+    let mut l = read_image(path).map_err(lib)?;
+    if l.non_finite > 0 {
+        eprintln!(
+            "day2night: {}: warning: {} NaN/Inf samples replaced by 0 or the largest finite value",
+            path.display(),
+            l.non_finite
+        );
+        l.image.sanitize(f32::MAX);
+    }
+    Ok(l)
+}
+
+/// A library error as a failure with exit code 1 (its Display already names the file and
+/// the whole cause chain).
+fn lib(e: day2night::Error) -> super::Failure {
+    super::Failure {
+        code: 1,
+        error: anyhow::Error::msg(e.to_string()),
+    }
 }
 
 /// Run `day2night eval`.
 pub fn run(args: EvalArgs) -> CmdResult {
-    let _ = args;
-    Err(super::usage("`eval` is not implemented yet"))
+    let window = match args.ssim_window.to_ascii_lowercase().as_str() {
+        "uniform" => SsimWindow::Uniform7,
+        "gaussian" => SsimWindow::Gaussian,
+        w => {
+            return Err(usage(format!(
+                "--ssim-window {w:?}: use uniform or gaussian"
+            )))
+        }
+    };
+    if !(args.data_range.is_finite() && args.data_range > 0.0) {
+        return Err(usage(format!(
+            "--data-range {}: must be positive",
+            args.data_range
+        )));
+    }
+    let p = load(&args.pred)?;
+    let t = load(&args.target)?;
+    if (p.image.width, p.image.height) != (t.image.width, t.image.height) {
+        return Err(anyhow::anyhow!(
+            "{}: size {}x{} differs from {} ({}x{})",
+            args.pred.display(),
+            p.image.width,
+            p.image.height,
+            args.target.display(),
+            t.image.width,
+            t.image.height
+        )
+        .into());
+    }
+    let de = mean_delta_e_2000(&p.image, &t.image, p.linear, t.linear).map_err(lib)?;
+    let (mut a, mut b) = (p.image, t.image);
+    if p.linear != t.linear {
+        let enc = |img: &mut day2night::isp::RgbImage| {
+            img.data
+                .iter_mut()
+                .for_each(|v| *v = srgb_oetf(v.clamp(0.0, 1.0)))
+        };
+        if p.linear {
+            enc(&mut a)
+        } else {
+            enc(&mut b)
+        }
+    }
+    let ps = psnr(&a, &b, args.data_range).map_err(lib)?;
+    let ss = ssim(
+        &a,
+        &b,
+        &SsimOptions {
+            data_range: args.data_range,
+            window,
+        },
+    )
+    .map_err(lib)?;
+    if args.json {
+        let v = serde_json::json!({
+            "psnr": if ps.is_finite() { Some(ps) } else { None },
+            "ssim": ss,
+            "delta_e_2000": de,
+            "pred": args.pred.display().to_string(),
+            "target": args.target.display().to_string(),
+            "width": a.width,
+            "height": a.height,
+            "data_range": args.data_range,
+            "ssim_window": if window == SsimWindow::Gaussian { "gaussian" } else { "uniform" },
+        });
+        println!("{}", serde_json::to_string_pretty(&v)?);
+    } else {
+        println!("psnr: {ps:.4} dB");
+        println!("ssim: {ss:.6}");
+        println!("delta_e_2000: {de:.4}");
+    }
+    Ok(())
 }

@@ -1,16 +1,209 @@
-//! `day2night render` (in progress).
-use super::CmdResult;
+//! `day2night render IN.dng -o OUT.exr|png|tif`: the software ISP on one DNG.
+use super::{usage, CmdResult};
+use day2night::exr::{standard_attributes, write_exr, ExrCompression, ExrOptions};
+use day2night::isp::render::{render_input, render_linear, resolve_neutral, RenderOptions};
+use day2night::isp::tone::DisplayTone;
+use day2night::isp::Demosaic;
+use day2night::output::OutputPolicy;
+use day2night::png::{write_png, write_tiff, PngOptions};
+use std::path::PathBuf;
 
 /// Arguments of `day2night render`.
 #[derive(Debug, clap::Args)]
+#[command(
+    after_help = "Output format from the extension: .exr = linear Rec.709/sRGB (D65) \
+half floats (or --float); .png = display sRGB, 8-bit (or --bits 16); .tif/.tiff = display \
+sRGB, 16-bit (or --bits 8).\n\nExamples:\n  day2night render day.dng -o day.exr\n  \
+day2night render day.dng -o day.png --demosaic menon --tone release\n  \
+day2night render day.dng -o input.exr --camera-rgb --neutral 0.5,1,0.7"
+)]
 pub struct RenderArgs {
-    /// Arguments (not implemented yet).
-    #[arg(trailing_var_arg = true, allow_hyphen_values = true)]
-    pub rest: Vec<String>,
+    /// Input DNG.
+    #[arg(value_name = "IN.dng")]
+    pub input: PathBuf,
+    /// Output file (.exr, .png, .tif or .tiff).
+    #[arg(short, long, value_name = "OUT")]
+    pub output: PathBuf,
+    /// Demosaicing method: bilinear, mhc (default) or menon.
+    #[arg(long, default_value = "mhc", value_name = "METHOD")]
+    pub demosaic: String,
+    /// White balance by this camera neutral instead of the file's AsShotNeutral.
+    #[arg(long, value_name = "R,G,B")]
+    pub neutral: Option<String>,
+    /// EXR: 16-bit half samples (the default).
+    #[arg(long, conflicts_with = "float")]
+    pub half: bool,
+    /// EXR: 32-bit float samples.
+    #[arg(long)]
+    pub float: bool,
+    /// EXR compression: none, rle, zips, zip (default), piz, pxr24, b44, b44a.
+    #[arg(long, default_value = "zip", value_name = "C")]
+    pub exr_compression: String,
+    /// PNG/TIFF display encoding: srgb (default), gamma22, release (gamma 2.2 + smoothstep).
+    #[arg(long, default_value = "srgb", value_name = "TONE")]
+    pub tone: String,
+    /// PNG/TIFF bits per sample: 8 or 16 (default: 8 for PNG, 16 for TIFF).
+    #[arg(long, value_name = "N")]
+    pub bits: Option<u8>,
+    /// Write the network input instead: white-balanced demosaiced camera RGB, no colour matrix.
+    #[arg(long)]
+    pub camera_rgb: bool,
+    /// Do not apply DefaultCrop (keep the whole active area).
+    #[arg(long)]
+    pub no_crop: bool,
+    /// Do not apply the Orientation tag.
+    #[arg(long)]
+    pub no_orient: bool,
+    /// Replace an existing output.
+    #[arg(long)]
+    pub overwrite: bool,
+}
+
+fn parse_neutral(s: &str) -> Result<[f64; 3], String> {
+    let v: Vec<f64> = s
+        .split(',')
+        .map(|t| t.trim().parse::<f64>())
+        .collect::<Result<_, _>>()
+        .map_err(|_| format!("--neutral {s:?}: expected three numbers R,G,B"))?;
+    match v.as_slice() {
+        [r, g, b] if [r, g, b].iter().all(|x| x.is_finite() && **x > 0.0) => Ok([*r, *g, *b]),
+        _ => Err(format!(
+            "--neutral {s:?}: expected three positive numbers R,G,B"
+        )),
+    }
+}
+
+enum Format {
+    Exr,
+    Png,
+    Tiff,
+}
+
+/// A library error as a failure with exit code 1 (its Display already names the file and
+/// the whole cause chain).
+fn lib(e: day2night::Error) -> super::Failure {
+    super::Failure {
+        code: 1,
+        error: anyhow::Error::msg(e.to_string()),
+    }
 }
 
 /// Run `day2night render`.
 pub fn run(args: RenderArgs) -> CmdResult {
-    let _ = args;
-    Err(super::usage("`render` is not implemented yet"))
+    let demosaic: Demosaic = args.demosaic.parse().map_err(usage)?;
+    let neutral = args
+        .neutral
+        .as_deref()
+        .map(parse_neutral)
+        .transpose()
+        .map_err(usage)?;
+    let compression: ExrCompression = args.exr_compression.parse().map_err(usage)?;
+    let tone: DisplayTone = args.tone.parse().map_err(usage)?;
+    let ext = args
+        .output
+        .extension()
+        .map(|e| e.to_string_lossy().to_ascii_lowercase())
+        .unwrap_or_default();
+    let format = match ext.as_str() {
+        "exr" => Format::Exr,
+        "png" => Format::Png,
+        "tif" | "tiff" => Format::Tiff,
+        _ => {
+            return Err(usage(format!(
+                "{}: output must end in .exr, .png, .tif or .tiff",
+                args.output.display()
+            )))
+        }
+    };
+    let sixteen = match (args.bits, &format) {
+        (Some(8), _) => false,
+        (Some(16), _) => true,
+        (Some(b), _) => return Err(usage(format!("--bits {b}: use 8 or 16"))),
+        (None, Format::Tiff) => true,
+        (None, _) => false,
+    };
+    let policy = OutputPolicy {
+        overwrite: args.overwrite,
+        inputs: vec![args.input.clone()],
+    };
+    // Refuse an existing output before the (slow) render.
+    policy.check(&args.output).map_err(lib)?;
+    let img = day2night::dng::read::read_dng(&args.input).map_err(lib)?;
+    let in_file = |e: day2night::Error| lib(e.in_file(&args.input));
+    let n = resolve_neutral(&img.meta, neutral).map_err(in_file)?;
+    let rgb = if args.camera_rgb {
+        let mut r = render_input(&img, Some(n), demosaic).map_err(in_file)?;
+        if args.no_crop || args.no_orient {
+            // render_input applies both; redo geometry from the uncropped camera render
+            let cam = day2night::isp::render::render_camera(&img, n, demosaic).map_err(in_file)?;
+            r = day2night::isp::render::apply_geometry(
+                cam,
+                &img.meta,
+                !args.no_crop,
+                !args.no_orient,
+            );
+        }
+        r
+    } else {
+        let opts = RenderOptions {
+            demosaic,
+            neutral: Some(n),
+            crop: !args.no_crop,
+            orient: !args.no_orient,
+        };
+        render_linear(&img, &opts).map_err(in_file)?
+    };
+    match format {
+        Format::Exr => {
+            let mut attrs = standard_attributes(&args.input, n);
+            attrs.push(("day2night:demosaic".into(), demosaic.name().into()));
+            attrs.push((
+                "day2night:content".into(),
+                if args.camera_rgb {
+                    "white-balanced camera RGB (network input)".into()
+                } else {
+                    "linear Rec.709/sRGB, D65".into()
+                },
+            ));
+            let opts = ExrOptions {
+                half: !args.float,
+                compression,
+            };
+            write_exr(&rgb, &args.output, &opts, &attrs, &policy).map_err(lib)?;
+        }
+        Format::Png => write_png(
+            &rgb,
+            &args.output,
+            &PngOptions {
+                sixteen_bit: sixteen,
+                tone,
+            },
+            &policy,
+        )
+        .map_err(lib)?,
+        Format::Tiff => write_tiff(
+            &rgb,
+            &args.output,
+            &PngOptions {
+                sixteen_bit: sixteen,
+                tone,
+            },
+            &policy,
+        )
+        .map_err(lib)?,
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn neutral_parsing() {
+        assert_eq!(parse_neutral("0.5, 1,0.7").unwrap(), [0.5, 1.0, 0.7]);
+        assert!(parse_neutral("0.5,1").is_err());
+        assert!(parse_neutral("0.5,0,1").is_err());
+        assert!(parse_neutral("a,b,c").is_err());
+    }
 }

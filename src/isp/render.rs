@@ -1,12 +1,12 @@
 //! The render pipeline: normalize -> white balance -> demosaic -> camera -> XYZ -> linear
 //! sRGB -> DefaultCrop -> orientation. Every stage is parallel over rows and deterministic.
 
-use super::color::{mul_vec, normalize_neutral, CameraColor, Mat3};
-use super::demosaic::{demosaic, Demosaic};
+use super::color::{normalize_neutral, CameraColor, Mat3};
+use super::demosaic::{demosaic_rows, Demosaic, Post};
 use super::RgbImage;
 use crate::dng::meta::RawMeta;
 use crate::error::{Error, Result};
-use crate::normalize::{normalize, NormalizeOptions};
+use crate::normalize::Normalizer;
 use crate::raw::RawImage;
 use rayon::prelude::*;
 
@@ -53,28 +53,55 @@ pub fn resolve_neutral(meta: &RawMeta, override_neutral: Option<[f64; 3]>) -> Re
 }
 
 /// Normalized, white-balanced (clipped to [0, 1]) and demosaiced camera RGB of the whole
-/// active area, clipped to [0, 1]: no colour matrix, no crop, no orientation.
-pub fn render_camera(img: &RawImage, neutral: [f64; 3], method: Demosaic) -> Result<RgbImage> {
+/// active area, not clipped after demosaicing: no colour matrix, no crop, no orientation.
+/// Normalization uses the shared [`Normalizer`] (DNG chapter 5), fused with the white
+/// balance into the demosaicer's input, in parallel over rows.
+fn render_camera_with(
+    img: &RawImage,
+    neutral: [f64; 3],
+    method: Demosaic,
+    post: &Post,
+) -> Result<RgbImage> {
     let bayer = img.bayer()?;
     let n = normalize_neutral(neutral)?;
-    let mut plane = normalize(img, NormalizeOptions::default())?;
-    let w = plane.width;
-    let inv = [1.0 / n[0] as f32, 1.0, 1.0 / n[2] as f32];
-    plane
-        .data
-        .par_chunks_mut(w.max(1))
-        .enumerate()
-        .for_each(|(y, row)| {
-            for (x, v) in row.iter_mut().enumerate() {
-                *v = (*v * inv[bayer.color_at(y, x) as usize]).clamp(0.0, 1.0);
+    let norm = Normalizer::new(img)?;
+    let a = img.active_area();
+    let (w, h) = (a.width(), a.height());
+    let (top, left) = (a.top as usize, a.left as usize);
+    let inv = [1.0 / n[0], 1.0, 1.0 / n[2]];
+    let data = &img.data;
+    let stride = img.width;
+    Ok(demosaic_rows(
+        w,
+        h,
+        bayer,
+        method,
+        |r, out| {
+            let src = &data[(r + top) * stride + left..][..w];
+            for (c, (o, &x)) in out.iter_mut().zip(src).enumerate() {
+                let y = norm.normalize(x, r, c) * inv[bayer.color_at(r, c) as usize];
+                *o = y.clamp(0.0, 1.0) as f32;
             }
-        });
-    let mut rgb = demosaic(&plane.data, plane.width, plane.height, bayer, method)?;
-    drop(plane);
-    rgb.data
-        .par_chunks_mut(3 * w.max(1))
-        .for_each(|row| row.iter_mut().for_each(|v| *v = v.clamp(0.0, 1.0)));
-    Ok(rgb)
+        },
+        post,
+    ))
+}
+
+/// White-balanced demosaiced camera RGB of the whole active area, not clipped after
+/// demosaicing (see [`render_camera`]).
+pub fn render_camera_unclipped(
+    img: &RawImage,
+    neutral: [f64; 3],
+    method: Demosaic,
+) -> Result<RgbImage> {
+    render_camera_with(img, neutral, method, &|_| {})
+}
+
+/// [`render_camera_unclipped`] clipped to [0, 1]: the network input before geometry.
+pub fn render_camera(img: &RawImage, neutral: [f64; 3], method: Demosaic) -> Result<RgbImage> {
+    render_camera_with(img, neutral, method, &|row: &mut [f32]| {
+        row.iter_mut().for_each(|v| *v = v.clamp(0.0, 1.0))
+    })
 }
 
 /// The network input of the paper: normalized, white-balanced, demosaiced camera RGB
@@ -99,25 +126,33 @@ pub fn color_matrix(meta: &RawMeta, neutral: [f64; 3]) -> Result<Mat3> {
 pub fn render_linear(img: &RawImage, opts: &RenderOptions) -> Result<RgbImage> {
     let n = resolve_neutral(&img.meta, opts.neutral)?;
     let m = color_matrix(&img.meta, n)?;
-    let mut rgb = render_camera(img, n, opts.demosaic)?;
-    apply_matrix(&mut rgb, &m);
+    let mf = m.map(|r| r.map(|v| v as f32));
+    let rgb = render_camera_with(img, n, opts.demosaic, &move |row: &mut [f32]| {
+        matrix_row(row, &mf)
+    })?;
     Ok(apply_geometry(rgb, &img.meta, opts.crop, opts.orient))
 }
 
-/// Apply a 3x3 matrix to every pixel and clip to [0, 1].
+/// Clip every pixel to [0, 1], apply a 3x3 matrix and clip the result to [0, 1].
 pub fn apply_matrix(rgb: &mut RgbImage, m: &Mat3) {
     let mf = m.map(|r| r.map(|v| v as f32));
     let w = rgb.width.max(1);
-    rgb.data.par_chunks_mut(3 * w).for_each(|row| {
-        for px in row.chunks_exact_mut(3) {
-            let (r, g, b) = (px[0], px[1], px[2]);
-            for (c, out) in px.iter_mut().enumerate() {
-                let v = mf[c][0] * r + mf[c][1] * g + mf[c][2] * b;
-                *out = if v.is_nan() { 0.0 } else { v.clamp(0.0, 1.0) };
-            }
+    rgb.data
+        .par_chunks_mut(3 * w)
+        .for_each(|row| matrix_row(row, &mf));
+}
+
+/// [`apply_matrix`] on one interleaved row.
+#[inline]
+fn matrix_row(row: &mut [f32], mf: &[[f32; 3]; 3]) {
+    for px in row.chunks_exact_mut(3) {
+        let cl = |v: f32| v.clamp(0.0, 1.0);
+        let (r, g, b) = (cl(px[0]), cl(px[1]), cl(px[2]));
+        for (c, out) in px.iter_mut().enumerate() {
+            let v = mf[c][0] * r + mf[c][1] * g + mf[c][2] * b;
+            *out = if v.is_nan() { 0.0 } else { v.clamp(0.0, 1.0) };
         }
-    });
-    let _ = mul_vec;
+    }
 }
 
 /// DefaultCrop rectangle (x, y, width, height) within an active area of `w x h`: origin and

@@ -46,23 +46,27 @@ pub fn apply_noise(clean: &RawImage, params: &NoiseParams, seed: u64) -> Result<
         .enumerate()
         .skip(top)
         .take(a.height())
-        .for_each(|(srow, row)| {
-            let r = srow - top;
-            let mut rng = row_rng(&key, r);
-            let seg = &mut row[left..left + aw];
-            for (c, x) in seg.iter_mut().enumerate() {
-                let xf = *x as f64;
-                let y = (xf - norm.black_at(r, c)) / scale;
-                let var = params.var_norm(Bayer::position(r, c), y) * scale2;
-                let n: f64 = StandardNormal.sample(&mut rng);
-                let v = (xf + var.sqrt() * n).round();
-                *x = if v.is_nan() {
-                    0
-                } else {
-                    v.clamp(0.0, white) as u16
-                };
-            }
-        });
+        .for_each_init(
+            || vec![0.0f64; aw],
+            |blk, (srow, row)| {
+                let r = srow - top;
+                let mut rng = row_rng(&key, r);
+                norm.black_row(r, blk);
+                let seg = &mut row[left..left + aw];
+                for (c, (x, &b)) in seg.iter_mut().zip(blk.iter()).enumerate() {
+                    let xf = *x as f64;
+                    let y = (xf - b) / scale;
+                    let var = params.var_norm(Bayer::position(r, c), y) * scale2;
+                    let n: f64 = StandardNormal.sample(&mut rng);
+                    let v = (xf + var.sqrt() * n).round();
+                    *x = if v.is_nan() {
+                        0
+                    } else {
+                        v.clamp(0.0, white) as u16
+                    };
+                }
+            },
+        );
     Ok(RawImage {
         width,
         height: clean.height,

@@ -42,6 +42,7 @@ struct Scratch {
     num: Vec<f32>,
     den: Vec<f32>,
     m: Vec<f32>,
+    blk: Vec<f64>,
 }
 
 /// Run normalize..denormalize: the clean night raw (whole stored image; outside the
@@ -65,24 +66,37 @@ pub fn run_clean(img: &RawImage, plan: &Plan) -> Result<(RawImage, RunReport)> {
     } else {
         1.0
     };
-    let y_w = |x: u16, r: usize, c: usize| -> f64 {
-        let mut y = norm.normalize(x, r, c);
+    // White-balanced value of a sample whose black level is `black` (from black_row).
+    let y_w = |x: u16, black: f64, inv: f64| -> f64 {
+        let mut y = norm.normalize_with_black(x, black);
         if !plan.keep_negative && y < 0.0 {
             y = 0.0;
         }
-        (y * inv_n[bayer.color_at(r, c) as usize]).clamp(lo, hi)
+        (y * inv).clamp(lo, hi)
+    };
+    let inv_row = |r: usize| {
+        [
+            inv_n[bayer.color_at(r, 0) as usize],
+            inv_n[bayer.color_at(r, 1) as usize],
+        ]
     };
     let mut mean_wb = None;
     let s = dim_factor(&plan.dim, || {
         let sums: Vec<f64> = (0..ah)
             .into_par_iter()
-            .map(|r| {
-                let row = &img.data[(r + top) * width + left..][..aw];
-                row.iter()
-                    .enumerate()
-                    .map(|(c, &x)| y_w(x, r, c))
-                    .sum::<f64>()
-            })
+            .map_init(
+                || vec![0.0f64; aw],
+                |blk, r| {
+                    norm.black_row(r, blk);
+                    let k = inv_row(r);
+                    let row = &img.data[(r + top) * width + left..][..aw];
+                    row.iter()
+                        .zip(blk.iter())
+                        .enumerate()
+                        .map(|(c, (&x, &b))| y_w(x, b, k[c & 1]))
+                        .sum::<f64>()
+                },
+            )
             .collect();
         let m = sums.iter().sum::<f64>() / (aw * ah) as f64;
         mean_wb = Some(m);
@@ -125,16 +139,24 @@ pub fn run_clean(img: &RawImage, plan: &Plan) -> Result<(RawImage, RunReport)> {
                 num: vec![0.0; aw],
                 den: vec![0.0; aw],
                 m: vec![0.0; aw],
+                blk: vec![0.0; aw],
             },
             |scr, (srow, row)| {
                 let r = srow - top;
                 let src = &img.data[srow * width + left..][..aw];
                 let mut sat = 0u64;
-                for (c, (&x, ye)) in src.iter().zip(scr.ye.iter_mut()).enumerate() {
+                norm.black_row(r, &mut scr.blk);
+                let k = inv_row(r);
+                for (c, ((&x, ye), &b)) in src
+                    .iter()
+                    .zip(scr.ye.iter_mut())
+                    .zip(scr.blk.iter())
+                    .enumerate()
+                {
                     if norm.linearize(x) >= white {
                         sat += 1;
                     }
-                    *ye = y_w(x, r, c) as f32 * s32;
+                    *ye = y_w(x, b, k[c & 1]) as f32 * s32;
                 }
                 let cols = [bayer.color_at(r, 0) as usize, bayer.color_at(r, 1) as usize];
                 let out = &mut scr.num;
@@ -161,8 +183,8 @@ pub fn run_clean(img: &RawImage, plan: &Plan) -> Result<(RawImage, RunReport)> {
                     Mode::Local => local_row(r, cols, &ambient, &locals, &bulbs, scr),
                 }
                 let seg = &mut row[left..left + aw];
-                for (c, (d, &y)) in seg.iter_mut().zip(scr.num.iter()).enumerate() {
-                    *d = norm.denormalize(y as f64, r, c, plan.truncate);
+                for ((d, &y), &b) in seg.iter_mut().zip(scr.num.iter()).zip(scr.blk.iter()) {
+                    *d = norm.denormalize_with_black(y as f64, b, plan.truncate);
                 }
                 sat
             },
@@ -193,7 +215,9 @@ fn local_row(
     bulbs: &[Prepared],
     scr: &mut Scratch,
 ) {
-    let Scratch { ye, num, den, m } = scr;
+    let Scratch {
+        ye, num, den, m, ..
+    } = scr;
     // Ambient: mask 1 everywhere.
     match ambient.first() {
         Some(a) => {

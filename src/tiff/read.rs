@@ -324,17 +324,18 @@ impl<'a> Parser<'a> {
                 "IFD at offset {off} has no entries"
             )));
         }
+        let table = self.r.slice(base + 2, n * 12).map_err(|_| {
+            Error::malformed(format!(
+                "IFD at offset {off} with {n} entries runs past the end of the {}-byte file",
+                self.r.bytes.len()
+            ))
+        })?;
         if n > self.limits.max_entries_per_ifd {
             return Err(Error::limits(format!(
                 "IFD at offset {off} claims {n} entries (limit {})",
                 self.limits.max_entries_per_ifd
             )));
         }
-        let table = self.r.slice(base + 2, n * 12).map_err(|_| {
-            Error::malformed(format!(
-                "IFD at offset {off} with {n} entries runs past the end of the file"
-            ))
-        })?;
         let next = self.r.u32_at(base + 2 + n * 12).unwrap_or(0);
         let mut ifd = Ifd {
             offset: off,
@@ -466,6 +467,7 @@ mod tests {
     fn huge_entry_count_is_refused() {
         let mut b = b"II*\0\x08\0\0\0".to_vec();
         b.extend_from_slice(&0xffffu16.to_le_bytes());
+        b.resize(8 + 2 + 0xffff * 12, 0);
         let e = parse(&b).unwrap_err();
         assert!(matches!(e, Error::Limits(_)), "{e}");
     }

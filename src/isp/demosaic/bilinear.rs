@@ -1,14 +1,14 @@
 //! Bilinear demosaicing: each missing sample is the mean of its nearest same-colour
 //! neighbours (2 or 4).
 
-use super::{per_row, Padded, PAD};
+use super::{per_row, Padded, Post, PAD};
 use crate::isp::RgbImage;
 use crate::raw::Bayer;
 
-pub(super) fn run(p: &Padded, bayer: Bayer) -> RgbImage {
+pub(super) fn run(p: &Padded, bayer: Bayer, post: &Post) -> RgbImage {
     let s = p.s;
     let d = &p.d;
-    per_row(p.w, p.h, |y, row| {
+    per_row(p.w, p.h, post, |y, row| {
         for (x, px) in row.chunks_exact_mut(3).enumerate() {
             let i = p.idx(y + PAD, x + PAD);
             let v = d[i];

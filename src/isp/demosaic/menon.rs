@@ -9,11 +9,11 @@
 //! green sites and of R/B at blue/red sites with 3-tap means along the decided direction.
 //! Each stage is one parallel pass over rows producing a mirror-padded plane.
 
-use super::{interleave, Padded, PAD};
+use super::{interleave, Padded, Post, PAD};
 use crate::isp::RgbImage;
 use crate::raw::Bayer;
 
-pub(super) fn run(c: &Padded, bayer: Bayer) -> RgbImage {
+pub(super) fn run(c: &Padded, bayer: Bayer, post: &Post) -> RgbImage {
     let (w, h, s) = (c.w, c.h, c.s);
     // Colour at padded coordinates: PAD is even, so the phase is unchanged.
     let col = |pr: usize, pc: usize| bayer.color_at(pr, pc);
@@ -220,5 +220,5 @@ pub(super) fn run(c: &Padded, bayer: Bayer) -> RgbImage {
     };
     let r4 = refine_rb(0);
     let b4 = refine_rb(2);
-    interleave(&r4, &g2, &b4)
+    interleave(&r4, &g2, &b4, post)
 }

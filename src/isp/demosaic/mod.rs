@@ -83,12 +83,37 @@ pub fn demosaic(
             height
         )));
     }
-    let cfa = Padded::from_plane(plane, width, height);
-    Ok(match method {
-        Demosaic::Bilinear => bilinear::run(&cfa, bayer),
-        Demosaic::Mhc => mhc::run(&cfa, bayer),
-        Demosaic::Menon => menon::run(&cfa, bayer),
-    })
+    Ok(demosaic_rows(
+        width,
+        height,
+        bayer,
+        method,
+        |r, out| out.copy_from_slice(&plane[r * width..(r + 1) * width]),
+        &|_| {},
+    ))
+}
+
+/// Demosaic a CFA plane produced row by row by `fill(row, out)` (rows are filled in
+/// parallel): lets the caller fuse normalization and white balance into the copy that the
+/// demosaicer needs anyway. `post` is applied to every finished interleaved RGB row while
+/// it is still in cache (e.g. the colour matrix). `width` and `height` must be non-zero.
+pub fn demosaic_rows<F>(
+    width: usize,
+    height: usize,
+    bayer: Bayer,
+    method: Demosaic,
+    fill: F,
+    post: &Post,
+) -> RgbImage
+where
+    F: Fn(usize, &mut [f32]) + Sync + Send,
+{
+    let cfa = Padded::build(width, height, fill);
+    match method {
+        Demosaic::Bilinear => bilinear::run(&cfa, bayer, post),
+        Demosaic::Mhc => mhc::run(&cfa, bayer, post),
+        Demosaic::Menon => menon::run(&cfa, bayer, post),
+    }
 }
 
 /// Border width of [`Padded`] planes (even, so the CFA phase is the same in padded and
@@ -128,12 +153,6 @@ impl Padded {
             s,
             d: vec![0.0; s * (h + 2 * PAD)],
         }
-    }
-
-    pub fn from_plane(plane: &[f32], w: usize, h: usize) -> Padded {
-        Padded::build(w, h, |r, out| {
-            out.copy_from_slice(&plane[r * w..(r + 1) * w])
-        })
     }
 
     /// Compute the interior row by row in parallel (`f(row, out_row)`), then mirror the border.
@@ -189,8 +208,11 @@ impl Padded {
     }
 }
 
+/// A per-row transform of finished interleaved RGB rows.
+pub type Post = dyn Fn(&mut [f32]) + Sync;
+
 /// Interleave three padded planes into an RGB image.
-pub(crate) fn interleave(r: &Padded, g: &Padded, b: &Padded) -> RgbImage {
+pub(crate) fn interleave(r: &Padded, g: &Padded, b: &Padded, post: &Post) -> RgbImage {
     let (w, h) = (r.w, r.h);
     let mut out = RgbImage::new(w, h);
     out.data
@@ -203,12 +225,13 @@ pub(crate) fn interleave(r: &Padded, g: &Padded, b: &Padded) -> RgbImage {
                 px[1] = g.d[o + x];
                 px[2] = b.d[o + x];
             }
+            post(row);
         });
     out
 }
 
 /// Per-row output driver for single-pass methods: `f(row, out_rgb_row)`.
-pub(crate) fn per_row<F>(w: usize, h: usize, f: F) -> RgbImage
+pub(crate) fn per_row<F>(w: usize, h: usize, post: &Post, f: F) -> RgbImage
 where
     F: Fn(usize, &mut [f32]) + Sync + Send,
 {
@@ -216,7 +239,10 @@ where
     out.data
         .par_chunks_mut(3 * w)
         .enumerate()
-        .for_each(|(y, row)| f(y, row));
+        .for_each(|(y, row)| {
+            f(y, row);
+            post(row);
+        });
     out
 }
 

@@ -1,0 +1,192 @@
+//! ISP benchmarks on a generated 12 MP (4000x3000) RGGB frame: demosaic per method, the
+//! colour stage, the whole default render, EXR writing per compression (sizes printed
+//! once) and PNG writing. Run: `cargo bench --bench isp` (or a filter such as
+//! `cargo bench --bench isp -- render`).
+use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
+use day2night::dng::meta::RawMeta;
+use day2night::exr::{encode_exr, ExrCompression, ExrOptions};
+use day2night::isp::demosaic::{demosaic, Demosaic};
+use day2night::isp::render::{apply_matrix, color_matrix, render_linear, RenderOptions};
+use day2night::isp::RgbImage;
+use day2night::raw::{Bayer, RawImage};
+use std::hint::black_box;
+use std::io::Cursor;
+use std::time::Duration;
+
+const W: usize = 4000;
+const H: usize = 3000;
+
+/// A deterministic photo-like frame: smooth shading, edges, texture and a little noise.
+fn frame() -> RawImage {
+    let mut meta = RawMeta::new_bayer(Bayer::RGGB, 12, 64.0, 4095.0);
+    meta.as_shot_neutral = Some([0.5, 1.0, 0.6]);
+    let mut data = vec![0u16; W * H];
+    let mut s: u64 = 1;
+    for y in 0..H {
+        for x in 0..W {
+            s = s
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            let n = ((s >> 40) as f64 / (1u64 << 24) as f64 - 0.5) * 0.01;
+            let (fx, fy) = (x as f64 / W as f64, y as f64 / H as f64);
+            let base = 0.3 + 0.2 * (fx * 9.0).sin() * (fy * 7.0).cos();
+            let edge = if ((x / 250) + (y / 250)) % 2 == 0 {
+                0.15
+            } else {
+                0.0
+            };
+            let tex = 0.05 * ((x as f64 * 0.7).sin() * (y as f64 * 0.3).cos());
+            let gain = [0.5, 1.0, 0.6][Bayer::RGGB.color_at(y, x) as usize];
+            let v = ((base + edge + tex) * gain + n).clamp(0.0, 1.0);
+            data[y * W + x] = (64.0 + v * 4031.0) as u16;
+        }
+    }
+    RawImage {
+        width: W,
+        height: H,
+        data,
+        meta,
+    }
+}
+
+/// CPU time (user + system) of this process in seconds, from /proc/self/stat (Linux).
+fn cpu_seconds() -> Option<f64> {
+    let s = std::fs::read_to_string("/proc/self/stat").ok()?;
+    let rest = s.rsplit(')').next()?;
+    let f: Vec<&str> = rest.split_whitespace().collect();
+    // fields 14 and 15 of stat (utime, stime) are at 11 and 12 after the ')'
+    let ticks: f64 = f.get(11)?.parse::<f64>().ok()? + f.get(12)?.parse::<f64>().ok()?;
+    Some(ticks / 100.0)
+}
+
+/// On a shared, loaded machine wall time overstates the cost; print the CPU time of the
+/// default render as well (on an idle 2-core machine the wall time is at least half of it).
+fn print_cpu_time(raw: &RawImage) {
+    for d in Demosaic::ALL {
+        let opts = RenderOptions {
+            demosaic: d,
+            ..RenderOptions::default()
+        };
+        let n = 5;
+        let (c0, t0) = (cpu_seconds(), std::time::Instant::now());
+        for _ in 0..n {
+            black_box(render_linear(raw, &opts).unwrap());
+        }
+        let wall = t0.elapsed().as_secs_f64() / n as f64;
+        if let (Some(a), Some(b)) = (c0, cpu_seconds()) {
+            eprintln!(
+                "render_linear 12 MP {d}: wall {:.0} ms, CPU {:.0} ms per render (threads {})",
+                wall * 1e3,
+                (b - a) / n as f64 * 1e3,
+                rayon::current_num_threads()
+            );
+        }
+    }
+}
+
+fn benches(c: &mut Criterion) {
+    let raw = frame();
+    if std::env::var("D2N_BENCH_CPU").is_ok() {
+        print_cpu_time(&raw);
+    }
+    let plane: Vec<f32> = raw
+        .data
+        .iter()
+        .map(|&v| (v as f32 - 64.0) / 4031.0)
+        .collect();
+
+    let mut g = c.benchmark_group("demosaic_12mp");
+    g.sample_size(10).warm_up_time(Duration::from_secs(1));
+    for m in Demosaic::ALL {
+        g.bench_with_input(BenchmarkId::from_parameter(m), &m, |b, &m| {
+            b.iter(|| black_box(demosaic(&plane, W, H, Bayer::RGGB, m).unwrap()))
+        });
+    }
+    g.finish();
+
+    let rgb = demosaic(&plane, W, H, Bayer::RGGB, Demosaic::Mhc).unwrap();
+    let m = color_matrix(&raw.meta, [0.5, 1.0, 0.6]).unwrap();
+    let mut g = c.benchmark_group("stages_12mp");
+    g.sample_size(10).warm_up_time(Duration::from_secs(1));
+    g.bench_function("color", |b| {
+        b.iter_batched(
+            || rgb.clone(),
+            |mut x| {
+                apply_matrix(&mut x, &m);
+                x
+            },
+            criterion::BatchSize::LargeInput,
+        )
+    });
+    g.bench_function("normalize", |b| {
+        b.iter(|| black_box(day2night::normalize::normalize(&raw, Default::default()).unwrap()))
+    });
+    for d in Demosaic::ALL {
+        g.bench_with_input(BenchmarkId::new("render_linear", d), &d, |b, &d| {
+            let opts = RenderOptions {
+                demosaic: d,
+                ..RenderOptions::default()
+            };
+            b.iter(|| black_box(render_linear(&raw, &opts).unwrap()))
+        });
+    }
+    g.finish();
+
+    let lin: RgbImage = render_linear(&raw, &RenderOptions::default()).unwrap();
+    let mut g = c.benchmark_group("write_12mp");
+    g.sample_size(10).warm_up_time(Duration::from_millis(500));
+    let configs = ExrCompression::ALL.iter().map(|&c| (c, true)).chain(
+        [
+            ExrCompression::None,
+            ExrCompression::Zip,
+            ExrCompression::Piz,
+        ]
+        .into_iter()
+        .map(|c| (c, false)),
+    );
+    for (comp, half) in configs {
+        {
+            let opts = ExrOptions {
+                half,
+                compression: comp,
+            };
+            let mut buf = Cursor::new(Vec::new());
+            encode_exr(&lin, &mut buf, &opts, &[]).unwrap();
+            eprintln!(
+                "exr size {} {}: {} bytes ({:.2} bytes/pixel)",
+                comp,
+                if half { "half" } else { "float" },
+                buf.get_ref().len(),
+                buf.get_ref().len() as f64 / (W * H) as f64
+            );
+            let id = format!("exr_{}_{}", comp, if half { "half" } else { "float" });
+            g.bench_function(id, |b| {
+                b.iter(|| {
+                    let mut buf = Cursor::new(Vec::with_capacity(1 << 26));
+                    encode_exr(&lin, &mut buf, &opts, &[]).unwrap();
+                    black_box(buf.into_inner().len())
+                })
+            });
+        }
+    }
+    g.bench_function("png8", |b| {
+        b.iter(|| {
+            let bytes = day2night::png::encode_u8(&lin, Default::default());
+            let mut out = Vec::new();
+            let enc = image::codecs::png::PngEncoder::new(&mut out);
+            image::ImageEncoder::write_image(
+                enc,
+                &bytes,
+                W as u32,
+                H as u32,
+                image::ExtendedColorType::Rgb8,
+            )
+            .unwrap();
+            black_box(out.len())
+        })
+    });
+    g.finish();
+}
+
+criterion_group!(isp, benches);
+criterion_main!(isp);

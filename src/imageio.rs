@@ -1,0 +1,255 @@
+//! Reading images for `day2night eval`: PNG (8/16-bit), TIFF (8/16-bit, float) and OpenEXR
+//! (any compression the `exr` crate decodes: ZIP, PIZ, B44, PXR24, ...; scan lines or tiles,
+//! the largest mip level, the data window) into an [`RgbImage`] of `f32`.
+//!
+//! Integer images are scaled to [0, 1] and flagged display-referred (sRGB-encoded); float
+//! images (EXR, float TIFF) are flagged linear. Grey images are replicated to RGB and alpha
+//! is dropped. Non-finite EXR samples are kept as they are and counted, so that callers can
+//! decide (eval replaces them and says so). Damaged files are refused with an error, never a
+//! panic; absurd sizes are refused before allocating.
+
+use crate::error::{Error, Result, ResultExt};
+use crate::isp::RgbImage;
+use std::io::Read;
+use std::path::Path;
+
+/// Largest image accepted, in pixels (a 1 GiB f32 RGB buffer is 89 MP).
+pub const MAX_PIXELS: usize = 1 << 27;
+
+/// An image read from disk.
+#[derive(Debug, Clone)]
+pub struct LoadedImage {
+    /// The pixels.
+    pub image: RgbImage,
+    /// True for linear-light data (EXR, float TIFF), false for display-encoded integers.
+    pub linear: bool,
+    /// "png", "tiff" or "exr".
+    pub format: &'static str,
+    /// Number of NaN/Inf samples.
+    pub non_finite: usize,
+}
+
+/// Read `path` (format from its magic bytes).
+pub fn read_image(path: &Path) -> Result<LoadedImage> {
+    let mut magic = [0u8; 8];
+    let n = std::fs::File::open(path)
+        .and_then(|mut f| f.read(&mut magic))
+        .map_err(Error::from)
+        .in_file(path)?;
+    let m = &magic[..n];
+    let r = if m.starts_with(&[0x76, 0x2f, 0x31, 0x01]) {
+        read_exr(path)
+    } else if m.starts_with(b"\x89PNG") || m.starts_with(b"II*\0") || m.starts_with(b"MM\0*") {
+        read_raster(path)
+    } else {
+        Err(Error::unsupported(
+            "not a PNG, TIFF or OpenEXR file (by its first bytes)",
+        ))
+    };
+    r.in_file(path)
+}
+
+fn read_raster(path: &Path) -> Result<LoadedImage> {
+    let reader = image::ImageReader::open(path)?
+        .with_guessed_format()
+        .map_err(Error::from)?;
+    let format = match reader.format() {
+        Some(image::ImageFormat::Png) => "png",
+        Some(image::ImageFormat::Tiff) => "tiff",
+        _ => return Err(Error::unsupported("image format")),
+    };
+    let img = reader.decode().map_err(|e| match e {
+        image::ImageError::IoError(io) => Error::Io(io),
+        image::ImageError::Unsupported(u) => Error::unsupported(u.to_string()),
+        image::ImageError::Limits(l) => Error::limits(l.to_string()),
+        other => Error::malformed(other.to_string()),
+    })?;
+    let linear = matches!(
+        img,
+        image::DynamicImage::ImageRgb32F(_) | image::DynamicImage::ImageRgba32F(_)
+    );
+    let (w, h) = (img.width() as usize, img.height() as usize);
+    if w.saturating_mul(h) > MAX_PIXELS {
+        return Err(Error::limits(format!("{w}x{h} image is too large")));
+    }
+    let data = img.to_rgb32f().into_raw();
+    let image = RgbImage {
+        width: w,
+        height: h,
+        data,
+    };
+    let non_finite = image.count_non_finite();
+    Ok(LoadedImage {
+        image,
+        linear,
+        format,
+        non_finite,
+    })
+}
+
+fn exr_err(e: exr::error::Error) -> Error {
+    match e {
+        exr::error::Error::Io(io) if io.kind() == std::io::ErrorKind::UnexpectedEof => {
+            Error::malformed("EXR: file is truncated")
+        }
+        exr::error::Error::Io(io) => Error::Io(io),
+        exr::error::Error::NotSupported(m) => Error::unsupported(format!("EXR: {m}")),
+        exr::error::Error::Invalid(m) => Error::malformed(format!("EXR: {m}")),
+        exr::error::Error::Aborted => Error::malformed("EXR: reading aborted"),
+    }
+}
+
+fn read_exr(path: &Path) -> Result<LoadedImage> {
+    use crate::error::Error;
+    use exr::prelude::*;
+    // Headers first: refuse absurd sizes before the decoder allocates.
+    let meta = exr::meta::MetaData::read_from_file(path, false).map_err(exr_err)?;
+    let header = meta
+        .headers
+        .first()
+        .ok_or_else(|| Error::malformed("EXR: no header"))?;
+    let size = header.layer_size;
+    if size.0.saturating_mul(size.1) > MAX_PIXELS {
+        return Err(Error::limits(format!(
+            "EXR data window of {}x{} is too large",
+            size.0, size.1
+        )));
+    }
+    if header.deep {
+        return Err(Error::unsupported("EXR: deep data"));
+    }
+    let p = path.to_path_buf();
+    // The decoder of a third-party crate on untrusted data: contain any panic as an error.
+    let decoded = std::panic::catch_unwind(move || {
+        read()
+            .no_deep_data()
+            .largest_resolution_level()
+            .all_channels()
+            .first_valid_layer()
+            .all_attributes()
+            .from_file(&p)
+    })
+    .map_err(|_| Error::malformed("EXR: the decoder failed on damaged data"))?
+    .map_err(exr_err)?;
+    let layer = decoded.layer_data;
+    let (w, h) = (layer.size.0, layer.size.1);
+    let channels = &layer.channel_data.list;
+    let find = |name: &str| {
+        channels.iter().find(|c| {
+            let n = c.name.to_string();
+            n == name || n.ends_with(&format!(".{name}"))
+        })
+    };
+    let picked: Vec<&AnyChannel<FlatSamples>> = match (find("R"), find("G"), find("B")) {
+        (Some(r), Some(g), Some(b)) => vec![r, g, b],
+        _ => match find("Y") {
+            Some(y) => vec![y, y, y],
+            None if channels.len() == 1 => vec![&channels[0]; 3],
+            None if !channels.is_empty() => {
+                // e.g. a single named channel plus alpha: take the first non-alpha one
+                match channels.iter().find(|c| c.name.to_string() != "A") {
+                    Some(c) => vec![c; 3],
+                    None => return Err(Error::unsupported("EXR: no colour channel")),
+                }
+            }
+            None => return Err(Error::unsupported("EXR: no channels")),
+        },
+    };
+    for c in &picked {
+        if c.sampling != Vec2(1, 1) {
+            return Err(Error::unsupported(format!(
+                "EXR: subsampled channel {}",
+                c.name
+            )));
+        }
+    }
+    let planes: Vec<Vec<f32>> = picked
+        .iter()
+        .map(|c| c.sample_data.values_as_f32().collect())
+        .collect();
+    if planes.iter().any(|p| p.len() != w * h) {
+        return Err(Error::malformed(
+            "EXR: channel sample count does not match the data window",
+        ));
+    }
+    let mut data = Vec::with_capacity(3 * w * h);
+    for i in 0..w * h {
+        data.extend([planes[0][i], planes[1][i], planes[2][i]]);
+    }
+    let image = RgbImage {
+        width: w,
+        height: h,
+        data,
+    };
+    let non_finite = image.count_non_finite();
+    Ok(LoadedImage {
+        image,
+        linear: true,
+        format: "exr",
+        non_finite,
+    })
+}
+
+impl From<image::ImageError> for Error {
+    fn from(e: image::ImageError) -> Error {
+        match e {
+            image::ImageError::IoError(io) => Error::Io(io),
+            other => Error::malformed(other.to_string()),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::exr::{write_exr, ExrOptions};
+    use crate::output::OutputPolicy;
+    use crate::png::{write_png, PngOptions};
+
+    #[test]
+    fn reads_back_what_we_write() {
+        let dir = tempfile::tempdir().unwrap();
+        let mut img = RgbImage::new(6, 4);
+        for (i, v) in img.data.iter_mut().enumerate() {
+            *v = (i % 7) as f32 / 8.0;
+        }
+        let e = dir.path().join("a.exr");
+        write_exr(
+            &img,
+            &e,
+            &ExrOptions {
+                half: false,
+                ..Default::default()
+            },
+            &[],
+            &OutputPolicy::default(),
+        )
+        .unwrap();
+        let back = read_image(&e).unwrap();
+        assert!(back.linear && back.format == "exr");
+        assert_eq!(back.image, img);
+        let p = dir.path().join("a.png");
+        write_png(
+            &img,
+            &p,
+            &PngOptions {
+                sixteen_bit: true,
+                ..Default::default()
+            },
+            &OutputPolicy::default(),
+        )
+        .unwrap();
+        let back = read_image(&p).unwrap();
+        assert!(!back.linear);
+        assert_eq!((back.image.width, back.image.height), (6, 4));
+        let bad = dir.path().join("x.exr");
+        std::fs::write(&bad, b"v/1\x01garbage").unwrap();
+        assert!(read_image(&bad).is_err());
+        let txt = dir.path().join("x.txt");
+        std::fs::write(&txt, b"hello").unwrap();
+        assert!(read_image(&txt)
+            .unwrap_err()
+            .to_string()
+            .contains("not a PNG"));
+    }
+}

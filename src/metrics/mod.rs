@@ -1,0 +1,32 @@
+//! Image quality metrics of `day2night eval`: PSNR, SSIM (scikit-image's default and the
+//! Gaussian-window variant of Wang et al. 2004) and mean CIEDE2000 colour difference.
+//!
+//! All take two [`RgbImage`]s of the same size; a size mismatch is an
+//! [`Error::InvalidParam`](crate::Error::InvalidParam) naming both sizes.
+
+pub mod deltae;
+pub mod psnr;
+pub mod ssim;
+
+pub use deltae::{ciede2000, mean_delta_e_2000, Lab};
+pub use psnr::psnr;
+pub use ssim::{ssim, SsimOptions, SsimWindow};
+
+use crate::error::{Error, Result};
+use crate::isp::RgbImage;
+
+/// Error unless `a` and `b` are valid images of the same size.
+pub fn check_same_size(a: &RgbImage, b: &RgbImage) -> Result<()> {
+    a.validate()?;
+    b.validate()?;
+    if a.width != b.width || a.height != b.height {
+        return Err(Error::invalid(format!(
+            "image sizes differ: {}x{} vs {}x{}",
+            a.width, a.height, b.width, b.height
+        )));
+    }
+    if a.width == 0 || a.height == 0 {
+        return Err(Error::invalid("empty images"));
+    }
+    Ok(())
+}

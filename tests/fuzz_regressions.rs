@@ -1,0 +1,45 @@
+//! Replays every committed fuzzer reproducer (tests/fuzz_regressions/) and the fuzz files of
+//! ../shared/data/dng-bad: each must give an error (or a valid image), never a panic.
+mod common;
+
+use day2night::dng::read::{inspect_bytes, read_dng_bytes};
+
+fn replay(p: &std::path::Path) {
+    let bytes = std::fs::read(p).unwrap();
+    let r = read_dng_bytes(&bytes);
+    let _ = inspect_bytes(&bytes);
+    if let Err(e) = r {
+        assert!(!e.to_string().is_empty(), "{}", p.display());
+    }
+}
+
+#[test]
+fn committed_reproducers() {
+    let dir = common::root().join("tests/fuzz_regressions");
+    let mut n = 0;
+    for e in std::fs::read_dir(&dir).unwrap() {
+        let p = e.unwrap().path();
+        if p.extension().is_some_and(|x| x == "bin") {
+            replay(&p);
+            n += 1;
+        }
+    }
+    eprintln!("replayed {n} reproducers from {}", dir.display());
+}
+
+#[test]
+fn shared_fuzz_files() {
+    let Some(d) = common::shared_data() else {
+        return;
+    };
+    for e in std::fs::read_dir(d.join("dng-bad")).unwrap() {
+        let p = e.unwrap().path();
+        let bytes = std::fs::read(&p).unwrap();
+        assert!(
+            read_dng_bytes(&bytes).is_err(),
+            "{} must be refused",
+            p.display()
+        );
+        replay(&p);
+    }
+}
