@@ -24,7 +24,12 @@ fn make_12mp(dir: &Path, n: usize) {
     meta.active_area = None;
     meta.default_crop_origin = None;
     meta.default_crop_size = None;
-    let img = day2night::RawImage { width: w, height: h, data, meta };
+    let img = day2night::RawImage {
+        width: w,
+        height: h,
+        data,
+        meta,
+    };
     let bytes = day2night::dng::write::encode_dng(&img, &Default::default()).unwrap();
     for i in 0..n {
         std::fs::write(dir.join(format!("IMG_{i:02}.dng")), &bytes).unwrap();
@@ -48,7 +53,10 @@ fn peak_rss_kib(day: &Path, out: &Path, jobs: usize) -> (u64, f64) {
     assert!(o.status.success(), "{err}");
     let kib = err
         .lines()
-        .find_map(|l| l.trim().strip_prefix("Maximum resident set size (kbytes): "))
+        .find_map(|l| {
+            l.trim()
+                .strip_prefix("Maximum resident set size (kbytes): ")
+        })
         .and_then(|v| v.trim().parse().ok())
         .expect("no RSS line from /usr/bin/time");
     (kib, secs)
@@ -76,6 +84,10 @@ fn peak_memory_on_12mp_inputs() {
     // Bounded memory: peak grows with jobs (images in flight), not with the input count;
     // each job holds at most a few 12 MP images.
     for (jobs, kib) in results {
-        assert!(kib / 1024 < 1200 * jobs as u64, "--jobs {jobs}: {} MiB", kib / 1024);
+        assert!(
+            kib / 1024 < 1200 * jobs as u64,
+            "--jobs {jobs}: {} MiB",
+            kib / 1024
+        );
     }
 }
