@@ -129,6 +129,16 @@ fn bad_input_fails_the_run_but_not_the_others_then_resume_does_nothing() {
         err.contains("FAILED IMG_bad.dng") && err.contains("day2night: "),
         "{err}"
     );
+    // Not a terminal: one plain progress line per input, then the summary.
+    assert_eq!(
+        err.lines().filter(|l| l.starts_with("dataset: [")).count(),
+        5,
+        "{err}"
+    );
+    assert!(
+        err.contains("dataset: 5 images (4 train, 1 val; 5 found)"),
+        "{err}"
+    );
     validate_layout(out.path(), 4);
     let manifest = std::fs::read_to_string(out.path().join("manifest.jsonl")).unwrap();
     assert_eq!(manifest.lines().count(), 5);
