@@ -438,3 +438,45 @@ fn outputs_equal_synth_for_top_level_files() {
         assert_eq!(a[key], b[key], "sidecar {key} differs");
     }
 }
+
+#[test]
+fn real_camera_files_among_unusable_ones() {
+    // A real Canon capture is synthesized; the LG LinearRaw DNG is refused with its reason
+    // and recorded as failed; the GoPro .gpr (not a .dng name) is not an input at all.
+    let Some(shared) = common::shared_data() else {
+        return;
+    };
+    let day = tempfile::tempdir().unwrap();
+    for (dir, name) in [
+        ("dng", "canon_kissx4_magiclantern_rggb14_strips.dng"),
+        ("dng-bad", "lg_g4_linearraw_lossyjpeg_subifd.dng"),
+        ("dng-bad", "gopro_hero7_vc5_compression9.gpr"),
+    ] {
+        std::fs::copy(shared.join(dir).join(name), day.path().join(name)).unwrap();
+    }
+    let out = tempfile::tempdir().unwrap();
+    let o = dataset(day.path(), out.path(), &["--report"]);
+    assert_eq!(
+        o.status.code(),
+        Some(1),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let s = summary(&o);
+    assert_eq!(
+        (
+            s["found"].as_u64(),
+            s["done"].as_u64(),
+            s["failed"].as_u64()
+        ),
+        (Some(2), Some(1), Some(1))
+    );
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("lg_g4_linearraw_lossyjpeg_subifd.dng") && err.contains("LinearRaw"),
+        "{err}"
+    );
+    validate_layout(out.path(), 1);
+    let html = std::fs::read_to_string(out.path().join("report/index.html")).unwrap();
+    assert!(html.contains("LinearRaw") && !html.contains("not available"));
+}
