@@ -11,6 +11,7 @@
 #![warn(missing_docs)]
 
 pub mod calibrate;
+pub mod dataset;
 pub mod dng;
 pub mod error;
 pub mod exr;
@@ -22,6 +23,7 @@ pub mod normalize;
 pub mod output;
 pub mod png;
 pub mod raw;
+pub mod report;
 pub mod synth;
 pub mod tiff;
 

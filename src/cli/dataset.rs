@@ -1,16 +1,306 @@
-//! `day2night dataset` (in progress).
-use super::CmdResult;
+//! `day2night dataset`: a whole dataset from a folder of day DNGs (see docs/dataset.md).
+use super::synth::{CompressionArg, CovArg, ExtraArgs, FormulaArg, ModeArg, TargetArg};
+use super::{usage, CmdResult, Failure};
+use day2night::dataset::run::ProgressMode;
+use day2night::dataset::synthesis::{SynthProcessor, Target};
+use day2night::dataset::{self, RunOptions, Shard, SplitRule};
+use day2night::dng::write::Compression;
+use day2night::synth::dictionaries;
+use day2night::synth::{
+    Calibration, Covariance, Gaussian2, MaskEval, Mode, RelightFormula, SynthOptions,
+};
+use std::path::PathBuf;
+
+/// Synthesis options forwarded to every input: the same names, values and defaults as
+/// `day2night synth` (its value enums and `ExtraArgs` are reused; `--replay` does not apply).
+#[derive(Debug, clap::Args)]
+pub struct SynthForward {
+    /// Run seed; each (input, variant) has its own stream keyed by (seed, relative path,
+    /// variant), so results never depend on position, shard or thread count.
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// ISOs of the noisy outputs, comma-separated, or `none`.
+    #[arg(long, default_value = "1600,3200", value_name = "LIST|none")]
+    pub iso: String,
+    /// Relighting mode.
+    #[arg(long, value_enum, default_value = "local")]
+    pub mode: ModeArg,
+    /// Local relighting formula.
+    #[arg(long = "relight-formula", value_enum, default_value = "release")]
+    pub relight_formula: FormulaArg,
+    /// Saturated bulbs (default 5 with the release formula, 0 with the paper's).
+    #[arg(long)]
+    pub bulbs: Option<u32>,
+    /// Calibration files and finer options (as `synth`).
+    #[command(flatten)]
+    pub extra: ExtraArgs,
+    /// Targets to render from the clean night raw.
+    #[arg(long, value_enum, default_value = "exr")]
+    pub target: TargetArg,
+    /// Also write the network input (normalized, white-balanced, demosaiced noisy raw).
+    #[arg(long = "input-exr")]
+    pub input_exr: bool,
+    /// DNG compression.
+    #[arg(long, value_enum, default_value = "none")]
+    pub compression: CompressionArg,
+    /// Truncate instead of rounding when denormalizing (released code, -0.5 DN bias).
+    #[arg(long)]
+    pub truncate: bool,
+}
 
 /// Arguments of `day2night dataset`.
 #[derive(Debug, clap::Args)]
+#[command(after_help = "Examples:
+  day2night dataset day/ -o night_set/ --val 10 --jobs 4
+  day2night dataset day/ -o night_set/ --val-fraction 0.1 --variants 3 --shard 0/8
+
+A rerun resumes: (input, variant) units whose outputs exist and match manifest.jsonl (same
+input bytes, options and seed) are skipped. Exit code 1 if any input failed.")]
 pub struct DatasetArgs {
-    /// Arguments (not implemented yet).
-    #[arg(trailing_var_arg = true, allow_hyphen_values = true)]
-    pub rest: Vec<String>,
+    /// Folder of day DNGs (searched recursively for *.dng in any letter case).
+    #[arg(value_name = "DAY_DIR")]
+    pub day_dir: PathBuf,
+    /// Output folder (train/ and val/ layouts, manifest.jsonl).
+    #[arg(
+        short = 'o',
+        long = "output",
+        visible_alias = "out",
+        value_name = "OUT_DIR"
+    )]
+    pub out_dir: PathBuf,
+    /// Put the last N inputs (by sorted relative path) in val, as the paper (60/10).
+    #[arg(long, value_name = "N", conflicts_with = "val_fraction")]
+    pub val: Option<usize>,
+    /// Put each input in val with probability F, by a seeded hash of its path.
+    #[arg(long, value_name = "F")]
+    pub val_fraction: Option<f64>,
+    /// Synthesized variants per input.
+    #[arg(long, default_value_t = 1, value_name = "K")]
+    pub variants: u32,
+    /// Process only shard I of N (0-based), by a stable hash of each input's path.
+    #[arg(long, value_name = "I/N")]
+    pub shard: Option<String>,
+    /// Inputs processed in parallel (= images in memory); default: number of CPUs.
+    #[arg(long, value_name = "N")]
+    pub jobs: Option<usize>,
+    /// Recompute everything, ignoring the manifest (and accept a non-empty OUT_DIR).
+    #[arg(long)]
+    pub overwrite: bool,
+    /// Also write the HTML report (OUT_DIR/report/index.html) at the end.
+    #[arg(long)]
+    pub report: bool,
+    /// Print the run summary as JSON on stdout.
+    #[arg(long)]
+    pub json: bool,
+    /// No progress output (the summary is still printed on stderr).
+    #[arg(long, short = 'q')]
+    pub quiet: bool,
+    #[command(flatten)]
+    pub synth: Box<SynthForward>,
+}
+
+fn parse_isos(s: &str) -> Result<Vec<u32>, Failure> {
+    if s.trim().eq_ignore_ascii_case("none") {
+        return Ok(vec![]);
+    }
+    s.split(',')
+        .map(|p| {
+            p.trim()
+                .parse::<u32>()
+                .ok()
+                .filter(|&v| v > 0)
+                .ok_or_else(|| {
+                    usage(format!(
+                        "--iso: {p:?} is not a positive integer (or use `none`)"
+                    ))
+                })
+        })
+        .collect()
+}
+
+fn parse_neutral(s: &str) -> Result<[f64; 3], Failure> {
+    let v: Vec<f64> = s
+        .split(',')
+        .map(|p| p.trim().parse::<f64>())
+        .collect::<Result<_, _>>()
+        .map_err(|_| usage(format!("--day-neutral: {s:?} is not r,g,b")))?;
+    match v.as_slice() {
+        [r, g, b] => Ok([*r, *g, *b]),
+        _ => Err(usage(format!("--day-neutral: {s:?} is not r,g,b"))),
+    }
+}
+
+fn parse_mask_eval(s: &str) -> Result<MaskEval, Failure> {
+    match s {
+        "separable" => Ok(MaskEval::Separable),
+        "exact" => Ok(MaskEval::Exact),
+        _ => match s
+            .strip_prefix("truncated:")
+            .and_then(|k| k.parse::<f64>().ok())
+        {
+            Some(k) if k > 0.0 && k.is_finite() => Ok(MaskEval::Truncated { k }),
+            _ => Err(usage(format!(
+                "--mask-eval: {s:?} (use separable, exact or truncated:K)"
+            ))),
+        },
+    }
+}
+
+/// Build the synthesis processor from the forwarded options (the same mapping as `synth`).
+pub fn processor(f: &SynthForward) -> Result<SynthProcessor, Failure> {
+    if f.extra.replay.is_some() {
+        return Err(usage(
+            "--replay applies to `synth` only (replay one sidecar with `day2night synth DAY.dng --replay meta/<id>.json`)",
+        ));
+    }
+    let options = SynthOptions {
+        mode: match f.mode {
+            ModeArg::Local => Mode::Local,
+            ModeArg::Global => Mode::Global,
+            ModeArg::Dimmed => Mode::Dimmed,
+            ModeArg::Day => Mode::Day,
+        },
+        formula: match f.relight_formula {
+            FormulaArg::Release => RelightFormula::Release,
+            FormulaArg::Paper => RelightFormula::Paper,
+        },
+        bulbs: f.bulbs,
+        local_lights: f.extra.lights,
+        isos: parse_isos(&f.iso)?,
+        truncate: f.truncate,
+        covariance: match f.extra.covariance {
+            CovArg::Unbiased => Covariance::Unbiased,
+            CovArg::Ml => Covariance::MaximumLikelihood,
+        },
+        day_neutral: f
+            .extra
+            .day_neutral
+            .as_deref()
+            .map(parse_neutral)
+            .transpose()?,
+        mask_eval: parse_mask_eval(&f.extra.mask_eval)?,
+        ..SynthOptions::default()
+    };
+    options.validate().map_err(usage)?;
+    let illuminants = match &f.extra.illuminants {
+        Some(p) => Gaussian2::from_source(&dictionaries::load_illuminants(p)?, options.covariance)
+            .map_err(|e| e.in_file(p))?,
+        None => Gaussian2::fit(&dictionaries::embedded::illuminants(), options.covariance)?,
+    };
+    let brightness = f
+        .extra
+        .brightness
+        .as_deref()
+        .map(dictionaries::load_brightness)
+        .transpose()?;
+    let noise = f
+        .extra
+        .noise_model
+        .as_deref()
+        .map(day2night::noise::NoiseModel::from_file)
+        .transpose()?;
+    Ok(SynthProcessor {
+        options,
+        calibration: Calibration {
+            illuminants,
+            brightness,
+            noise,
+        },
+        target: match f.target {
+            TargetArg::Exr => Target::Exr,
+            TargetArg::Png => Target::Png,
+            TargetArg::Both => Target::Both,
+            TargetArg::None => Target::None,
+        },
+        compression: match f.compression {
+            CompressionArg::None => Compression::None,
+            CompressionArg::Ljpeg => Compression::Ljpeg,
+        },
+        input_exr: f.input_exr,
+    })
 }
 
 /// Run `day2night dataset`.
 pub fn run(args: DatasetArgs) -> CmdResult {
-    let _ = args;
-    Err(super::usage("`dataset` is not implemented yet"))
+    let split = match (args.val, args.val_fraction) {
+        (Some(n), _) => SplitRule::LastN(n),
+        (None, Some(f)) => {
+            if !(0.0..=1.0).contains(&f) {
+                return Err(usage(format!("--val-fraction {f} is not within [0, 1]")));
+            }
+            SplitRule::Fraction {
+                fraction: f,
+                seed: args.synth.seed,
+            }
+        }
+        (None, None) => SplitRule::AllTrain,
+    };
+    let shard = match &args.shard {
+        Some(s) => Shard::parse(s).map_err(usage)?,
+        None => Shard::ALL,
+    };
+    if args.variants == 0 {
+        return Err(usage("--variants must be at least 1"));
+    }
+    let jobs = match args.jobs {
+        Some(0) => return Err(usage("--jobs must be at least 1")),
+        Some(n) => n,
+        None => std::thread::available_parallelism()
+            .map(|n| n.get())
+            .unwrap_or(1),
+    };
+    let proc = processor(&args.synth)?;
+    let opts = RunOptions {
+        day_dir: args.day_dir.clone(),
+        out_dir: args.out_dir.clone(),
+        split,
+        variants: args.variants,
+        seed: args.synth.seed,
+        shard,
+        jobs,
+        overwrite: args.overwrite,
+        progress: if args.quiet {
+            ProgressMode::Quiet
+        } else {
+            ProgressMode::Auto
+        },
+    };
+    let summary = match dataset::run(&opts, &proc) {
+        Ok(s) => s,
+        Err(e) => {
+            // "--val N" larger than the inputs is a usage error.
+            let code = if matches!(e.root(), day2night::Error::InvalidParam(m) if m.starts_with("--val"))
+            {
+                2
+            } else {
+                1
+            };
+            return Err(Failure {
+                code,
+                error: e.into(),
+            });
+        }
+    };
+    eprintln!("{}", summary.describe());
+    if args.json {
+        let text = serde_json::to_string_pretty(&summary)
+            .map_err(|e| anyhow::anyhow!("summary JSON: {e}"))?;
+        println!("{text}");
+    }
+    if args.report {
+        let r = super::report::build_report(&args.out_dir, Some(args.day_dir.clone()), 12, 320)?;
+        eprintln!("dataset: report written to {}", r.page.display());
+    }
+    if summary.failed > 0 {
+        return Err(Failure {
+            code: 1,
+            error: anyhow::anyhow!(
+                "{}: {} of {} units failed (see the summary above and the manifest)",
+                args.out_dir.display(),
+                summary.failed,
+                summary.units
+            ),
+        });
+    }
+    Ok(())
 }

@@ -11,6 +11,7 @@ mod eval;
 mod info;
 mod merge;
 mod render;
+mod report;
 mod synth;
 
 /// Turn daytime camera raw photos (DNG) into realistic nighttime raw photos.
@@ -40,6 +41,8 @@ enum Command {
     Merge(merge::MergeArgs),
     /// Generate a whole dataset: split, manifest, resumable, shardable.
     Dataset(dataset::DatasetArgs),
+    /// Write an HTML report of a dataset (renders, masks, illuminants, histograms).
+    Report(report::ReportArgs),
 }
 
 /// Error reported by a subcommand, with the exit code it maps to.
@@ -82,6 +85,7 @@ pub fn main() -> ExitCode {
         Command::Calibrate(c) => calibrate::run(c),
         Command::Merge(a) => merge::run(a),
         Command::Dataset(a) => dataset::run(a),
+        Command::Report(a) => report::run(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

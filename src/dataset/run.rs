@@ -1,0 +1,595 @@
+//! The driver: discover, split, shard, decide (resume), then process the inputs in parallel
+//! on a rayon pool of `jobs` threads, with at most `jobs` inputs in flight (each worker
+//! takes the next input only when it has finished the previous one), appending a manifest
+//! record as each unit completes. One failing input never stops the run.
+
+use super::discover::{discover, sample_stem, Input};
+use super::manifest::{self, Appender, Record, Status};
+use super::resume::{decide, Decision, Reason, Want};
+use super::split::{assign, Split, SplitRule};
+use super::{sha256_hex, Processor, Shard, Sink, Unit};
+use crate::error::{Error, Result, ResultExt};
+use crate::output::OutputPolicy;
+use serde::Serialize;
+use std::collections::{BTreeMap, HashMap};
+use std::io::IsTerminal;
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::Mutex;
+use std::time::Instant;
+
+/// How progress is shown on stderr.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ProgressMode {
+    /// A bar with ETA when stderr is a terminal, plain lines otherwise.
+    Auto,
+    /// One plain line per input.
+    Plain,
+    /// Nothing.
+    Quiet,
+}
+
+/// Everything a run needs besides the processor.
+#[derive(Debug, Clone)]
+pub struct RunOptions {
+    /// Folder searched (recursively) for day DNGs.
+    pub day_dir: PathBuf,
+    /// Output folder.
+    pub out_dir: PathBuf,
+    /// Train/val rule.
+    pub split: SplitRule,
+    /// Variants per input (>= 1).
+    pub variants: u32,
+    /// Run seed (unit seeds derive from it and the file).
+    pub seed: u64,
+    /// Which shard to process.
+    pub shard: Shard,
+    /// Worker threads = inputs in flight (>= 1).
+    pub jobs: usize,
+    /// Recompute everything, ignoring the manifest, and allow a non-empty OUT_DIR without
+    /// a manifest.
+    pub overwrite: bool,
+    /// Progress display.
+    pub progress: ProgressMode,
+}
+
+/// What a run did.
+#[derive(Debug, Clone, Default, Serialize)]
+pub struct Summary {
+    /// DNGs found under DAY_DIR.
+    pub found: usize,
+    /// Inputs in this shard.
+    pub images: usize,
+    /// Of which in train.
+    pub train: usize,
+    /// Of which in val.
+    pub val: usize,
+    /// Units (input x variant) in this shard.
+    pub units: usize,
+    /// Units computed in this run.
+    pub done: usize,
+    /// Units skipped because their outputs were up to date.
+    pub skipped: usize,
+    /// Units that failed.
+    pub failed: usize,
+    /// Output files written in this run.
+    pub outputs_written: usize,
+    /// Output files listed by the final manifest.
+    pub outputs_total: usize,
+    /// Why units were computed: reason -> count.
+    pub recomputed: BTreeMap<String, usize>,
+    /// Failures: (input, variant, error).
+    pub failures: Vec<(String, u32, String)>,
+    /// Records of units no longer in the dataset dropped from the manifest.
+    pub stale_records_dropped: usize,
+    /// Manifest written.
+    pub manifest: PathBuf,
+    /// Wall time in seconds.
+    pub seconds: f64,
+}
+
+impl Summary {
+    /// Human summary, several lines, for stderr.
+    pub fn describe(&self) -> String {
+        let mut s = format!(
+            "dataset: {} images ({} train, {} val; {} found), {} units: {} computed, {} skipped (up to date), {} failed; {} outputs written ({} in manifest); {:.1} s",
+            self.images, self.train, self.val, self.found, self.units, self.done,
+            self.skipped, self.failed, self.outputs_written, self.outputs_total, self.seconds
+        );
+        if !self.recomputed.is_empty() {
+            let parts: Vec<String> = self
+                .recomputed
+                .iter()
+                .map(|(k, v)| format!("{v} {k}"))
+                .collect();
+            s.push_str(&format!(
+                "\ndataset: work done, by reason: {}",
+                parts.join(", ")
+            ));
+        }
+        if self.stale_records_dropped > 0 {
+            s.push_str(&format!(
+                "\ndataset: dropped {} manifest records of inputs/variants no longer in the dataset (their files were left in place)",
+                self.stale_records_dropped
+            ));
+        }
+        for (input, v, e) in &self.failures {
+            s.push_str(&format!("\ndataset: FAILED {input} variant {v}: {e}"));
+        }
+        s
+    }
+}
+
+struct Task {
+    input: Input,
+    split: Split,
+    stem: String,
+}
+
+/// Run the dataset generation with `processor`.
+pub fn run<P: Processor>(opts: &RunOptions, processor: &P) -> Result<Summary> {
+    let start = Instant::now();
+    if opts.variants == 0 {
+        return Err(Error::invalid("--variants must be at least 1"));
+    }
+    let jobs = opts.jobs.max(1);
+    let out_dir = &opts.out_dir;
+    let inputs = discover(&opts.day_dir, std::slice::from_ref(out_dir))?;
+    // Two inputs must not map to the same output names.
+    let mut stems: HashMap<String, &str> = HashMap::new();
+    for inp in &inputs {
+        let stem = sample_stem(&inp.rel);
+        if let Some(other) = stems.insert(stem.clone(), &inp.rel) {
+            return Err(Error::invalid(format!(
+                "inputs {other} and {} would both be named {stem} in the dataset; rename one",
+                inp.rel
+            ))
+            .in_file(&opts.day_dir));
+        }
+    }
+    let splits = assign(&inputs, opts.split)?;
+    let found = inputs.len();
+    let tasks: Vec<Task> = inputs
+        .into_iter()
+        .zip(splits)
+        .filter(|(inp, _)| opts.shard.selects(&inp.rel))
+        .map(|(input, split)| Task {
+            stem: sample_stem(&input.rel),
+            input,
+            split,
+        })
+        .collect();
+
+    // Safety: only reuse an OUT_DIR that is empty or already a dataset.
+    let manifests = manifest::all_manifests(out_dir)?;
+    if manifests.is_empty() && !opts.overwrite && dir_has_entries(out_dir) {
+        return Err(Error::invalid(
+            "output folder is not empty and holds no manifest*.jsonl (not a dataset); pass --overwrite to write into it anyway",
+        )
+        .in_file(out_dir));
+    }
+    std::fs::create_dir_all(out_dir)
+        .map_err(Error::Io)
+        .in_file(out_dir)?;
+    let own_manifest = out_dir.join(manifest::file_name(opts.shard));
+    // Previous records from every manifest; this shard's own file read last so it wins.
+    let mut previous = Vec::new();
+    for m in manifests.iter().filter(|m| **m != own_manifest) {
+        previous.extend(manifest::read(m)?.records);
+    }
+    let own_loaded = manifest::read(&own_manifest)?;
+    let own_keys: Vec<(String, u32)> = own_loaded.records.iter().map(|r| r.key()).collect();
+    previous.extend(own_loaded.records);
+    let previous = manifest::latest(previous);
+    let appender = Appender::open(&own_manifest)?;
+    remove_stale_temp_files(out_dir, &tasks, opts.variants);
+
+    let options_sha = sha256_hex(processor.fingerprint().as_bytes());
+    let policy = OutputPolicy {
+        overwrite: true,
+        inputs: vec![],
+    };
+
+    let n_units = tasks.len() * opts.variants as usize;
+    let final_records: Mutex<Vec<Record>> = Mutex::new(Vec::with_capacity(n_units));
+    let stats = Mutex::new(Summary::default());
+    let progress = Progress::new(opts.progress, tasks.len());
+    let next = AtomicUsize::new(0);
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(jobs)
+        .thread_name(|i| format!("dataset-{i}"))
+        .build()
+        .map_err(|e| Error::invalid(format!("cannot start {jobs} worker threads: {e}")))?;
+    pool.scope(|s| {
+        for _ in 0..jobs {
+            s.spawn(|_| loop {
+                let i = next.fetch_add(1, Ordering::SeqCst);
+                let Some(task) = tasks.get(i) else { break };
+                let t0 = Instant::now();
+                let outcome = process_input(
+                    task,
+                    opts,
+                    processor,
+                    &previous,
+                    &options_sha,
+                    &policy,
+                    &appender,
+                );
+                let (mut done, mut skipped, mut failed) = (0, 0, 0);
+                {
+                    let mut st = stats.lock().unwrap_or_else(|e| e.into_inner());
+                    for (rec, what) in &outcome {
+                        match what {
+                            Did::Skipped => {
+                                st.skipped += 1;
+                                skipped += 1;
+                            }
+                            Did::Computed(reason) => {
+                                *st.recomputed
+                                    .entry(reason.describe().to_string())
+                                    .or_default() += 1;
+                                if rec.status == Status::Ok {
+                                    st.done += 1;
+                                    done += 1;
+                                    st.outputs_written += rec.outputs.len();
+                                } else {
+                                    st.failed += 1;
+                                    failed += 1;
+                                    st.failures.push((
+                                        rec.input.clone(),
+                                        rec.variant,
+                                        rec.error.clone().unwrap_or_default(),
+                                    ));
+                                }
+                            }
+                        }
+                    }
+                }
+                progress.input_done(task, done, skipped, failed, t0.elapsed().as_secs_f64());
+                final_records
+                    .lock()
+                    .unwrap_or_else(|e| e.into_inner())
+                    .extend(outcome.into_iter().map(|(r, _)| r));
+            });
+        }
+    });
+    progress.finish();
+    drop(appender);
+
+    let final_records = final_records
+        .into_inner()
+        .unwrap_or_else(|e| e.into_inner());
+    let keep: std::collections::HashSet<(String, u32)> =
+        final_records.iter().map(|r| r.key()).collect();
+    let stale = own_keys
+        .into_iter()
+        .collect::<std::collections::HashSet<_>>()
+        .into_iter()
+        .filter(|k| !keep.contains(k))
+        .count();
+    let mut summary = stats.into_inner().unwrap_or_else(|e| e.into_inner());
+    summary.outputs_total = final_records.iter().map(|r| r.outputs.len()).sum();
+    manifest::write_compacted(&own_manifest, final_records)?;
+    summary.failures.sort();
+    summary.found = found;
+    summary.images = tasks.len();
+    summary.train = tasks.iter().filter(|t| t.split == Split::Train).count();
+    summary.val = summary.images - summary.train;
+    summary.units = n_units;
+    summary.stale_records_dropped = stale;
+    summary.manifest = own_manifest;
+    summary.seconds = start.elapsed().as_secs_f64();
+    Ok(summary)
+}
+
+/// Remove the hidden temporary files (`.<name>.tmp-<pid>`, see `crate::output`) that a
+/// killed run left for the outputs of this run's units: each unit belongs to exactly one
+/// shard, so no live process can own them. Other shards' files are left alone.
+fn remove_stale_temp_files(out_dir: &Path, tasks: &[Task], variants: u32) {
+    let mut ids = std::collections::HashSet::new();
+    for t in tasks {
+        if variants > 1 {
+            for v in 1..=variants {
+                ids.insert(format!("{}_v{v}", t.stem));
+            }
+        } else {
+            ids.insert(t.stem.clone());
+        }
+    }
+    for split in [Split::Train, Split::Val] {
+        for kind in super::ALL_KINDS {
+            let dir = out_dir.join(split.name()).join(kind.dir());
+            let Ok(rd) = std::fs::read_dir(&dir) else {
+                continue;
+            };
+            for e in rd.flatten() {
+                let name = e.file_name();
+                let Some(name) = name.to_str() else { continue };
+                if let Some(id) = temp_file_id(name) {
+                    if ids.contains(id) {
+                        let _ = std::fs::remove_file(e.path());
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// The output id a temporary file `.<id><suffix>.tmp-<pid>` belongs to, where the suffix is
+/// an extension optionally preceded by `_iso<N>`.
+fn temp_file_id(name: &str) -> Option<&str> {
+    let rest = name.strip_prefix('.')?;
+    let (out_name, pid) = rest.rsplit_once(".tmp-")?;
+    if pid.is_empty() || !pid.bytes().all(|b| b.is_ascii_digit()) {
+        return None;
+    }
+    let (base, _ext) = out_name.rsplit_once('.')?;
+    if let Some((id, iso)) = base.rsplit_once("_iso") {
+        if !iso.is_empty() && iso.bytes().all(|b| b.is_ascii_digit()) {
+            return Some(id);
+        }
+    }
+    Some(base)
+}
+
+fn dir_has_entries(p: &Path) -> bool {
+    std::fs::read_dir(p)
+        .map(|mut rd| rd.next().is_some())
+        .unwrap_or(false)
+}
+
+enum Did {
+    Skipped,
+    Computed(Reason),
+}
+
+/// Process every variant of one input; returns the final record of each unit.
+fn process_input<P: Processor>(
+    task: &Task,
+    opts: &RunOptions,
+    processor: &P,
+    previous: &BTreeMap<(String, u32), Record>,
+    options_sha: &str,
+    policy: &OutputPolicy,
+    appender: &Appender,
+) -> Vec<(Record, Did)> {
+    let rel = &task.input.rel;
+    let units: Vec<Unit> = (1..=opts.variants)
+        .map(|variant| Unit {
+            rel: rel.clone(),
+            path: task.input.path.clone(),
+            split: task.split,
+            variant,
+            variants: opts.variants,
+            seed: opts.seed,
+            id: if opts.variants > 1 {
+                format!("{}_v{variant}", task.stem)
+            } else {
+                task.stem.clone()
+            },
+        })
+        .collect();
+    let blank = |u: &Unit, input_sha256: &str| Record {
+        input: u.rel.clone(),
+        variant: u.variant,
+        split: u.split,
+        status: Status::Failed,
+        input_sha256: input_sha256.to_string(),
+        seed: u.seed,
+        options_sha256: options_sha.to_string(),
+        outputs: vec![],
+        iso: vec![],
+        night_neutral: None,
+        stages: vec![],
+        error: None,
+    };
+    let finish = |mut rec: Record, what: Did| -> (Record, Did) {
+        if !matches!(what, Did::Skipped) {
+            if let Err(e) = appender.append(&rec) {
+                // The manifest itself failed: report it on the unit.
+                rec.status = Status::Failed;
+                rec.error = Some(format!("writing the manifest: {e}"));
+            }
+        }
+        (rec, what)
+    };
+
+    let bytes = match std::fs::read(&task.input.path) {
+        Ok(b) => b,
+        Err(e) => {
+            let msg = Error::Io(e).in_file(&task.input.path).to_string();
+            return units
+                .iter()
+                .map(|u| {
+                    let prev = previous.get(&(u.rel.clone(), u.variant));
+                    let reason = match decide(
+                        prev,
+                        want(u, "", options_sha),
+                        &opts.out_dir,
+                        opts.overwrite,
+                    ) {
+                        Decision::Redo(r) => r,
+                        Decision::Skip => Reason::InputChanged,
+                    };
+                    let mut r = blank(u, "");
+                    r.error = Some(msg.clone());
+                    finish(r, Did::Computed(reason))
+                })
+                .collect();
+        }
+    };
+    let input_sha = sha256_hex(&bytes);
+    let decisions: Vec<Decision> = units
+        .iter()
+        .map(|u| {
+            let prev = previous.get(&(u.rel.clone(), u.variant));
+            decide(
+                prev,
+                want(u, &input_sha, options_sha),
+                &opts.out_dir,
+                opts.overwrite,
+            )
+        })
+        .collect();
+    let mut out = Vec::with_capacity(units.len());
+    let mut loaded: Option<std::result::Result<P::Loaded, String>> = None;
+    for (u, d) in units.iter().zip(decisions) {
+        let reason = match d {
+            Decision::Skip => {
+                if let Some(prev) = previous.get(&(u.rel.clone(), u.variant)) {
+                    out.push((prev.clone(), Did::Skipped));
+                }
+                continue;
+            }
+            Decision::Redo(r) => r,
+        };
+        if loaded.is_none() {
+            let l = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+                processor.load(&task.input.path, &bytes)
+            }));
+            loaded = Some(match l {
+                Ok(Ok(x)) => Ok(x),
+                Ok(Err(e)) => Err(e.in_file(&task.input.path).to_string()),
+                Err(_) => Err(format!(
+                    "{}: internal error (panic) while loading",
+                    task.input.path.display()
+                )),
+            });
+        }
+        let mut rec = blank(u, &input_sha);
+        match loaded.as_ref() {
+            Some(Ok(input)) => {
+                let sink = Sink::new(&opts.out_dir, u.split, &u.id, policy.clone());
+                let res = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+                    processor.process(input, u, &sink)
+                }));
+                match res {
+                    Ok(Ok(info)) => {
+                        rec.status = Status::Ok;
+                        rec.outputs = sink.into_outputs();
+                        if let Some(prev) = previous.get(&(u.rel.clone(), u.variant)) {
+                            remove_replaced_outputs(&opts.out_dir, prev, &rec);
+                        }
+                        rec.iso = info.iso;
+                        rec.night_neutral = info.night_neutral;
+                        rec.stages = info.stages;
+                    }
+                    Ok(Err(e)) => rec.error = Some(e.in_file(&task.input.path).to_string()),
+                    Err(_) => {
+                        rec.error = Some(format!(
+                            "{}: internal error (panic) while processing",
+                            task.input.path.display()
+                        ))
+                    }
+                }
+            }
+            Some(Err(msg)) => rec.error = Some(msg.clone()),
+            None => rec.error = Some("not loaded".into()),
+        }
+        out.push(finish(rec, Did::Computed(reason)));
+    }
+    out
+}
+
+/// Delete the files a unit's previous record listed that its new outputs no longer include
+/// (e.g. `.exr` targets after switching to `--target png`, or outputs under the other split),
+/// so a recomputed unit leaves exactly its current files. Only plain relative paths inside
+/// OUT_DIR are touched.
+fn remove_replaced_outputs(out_dir: &Path, prev: &Record, now: &Record) {
+    for o in &prev.outputs {
+        let p = Path::new(&o.path);
+        let plain = p
+            .components()
+            .all(|c| matches!(c, std::path::Component::Normal(_)));
+        if plain && !now.outputs.iter().any(|n| n.path == o.path) {
+            let _ = std::fs::remove_file(out_dir.join(p));
+        }
+    }
+}
+
+fn want<'a>(u: &Unit, input_sha: &'a str, options_sha: &'a str) -> Want<'a> {
+    Want {
+        split: u.split,
+        input_sha256: input_sha,
+        seed: u.seed,
+        options_sha256: options_sha,
+    }
+}
+
+/// Progress on stderr: indicatif bar on a terminal, plain lines otherwise.
+struct Progress {
+    bar: Option<indicatif::ProgressBar>,
+    plain: bool,
+    total: usize,
+    count: AtomicUsize,
+}
+
+impl Progress {
+    fn new(mode: ProgressMode, total: usize) -> Progress {
+        let terminal = std::io::stderr().is_terminal();
+        let (bar, plain) = match mode {
+            ProgressMode::Quiet => (None, false),
+            ProgressMode::Plain => (None, true),
+            ProgressMode::Auto if terminal => {
+                let b = indicatif::ProgressBar::new(total as u64);
+                if let Ok(style) = indicatif::ProgressStyle::with_template(
+                    "{spinner} [{elapsed_precise}] {bar:40} {pos}/{len} images, ETA {eta} {msg}",
+                ) {
+                    b.set_style(style);
+                }
+                (Some(b), false)
+            }
+            ProgressMode::Auto => (None, true),
+        };
+        Progress {
+            bar,
+            plain,
+            total,
+            count: AtomicUsize::new(0),
+        }
+    }
+
+    fn input_done(&self, task: &Task, done: usize, skipped: usize, failed: usize, secs: f64) {
+        let k = self.count.fetch_add(1, Ordering::SeqCst) + 1;
+        if let Some(b) = &self.bar {
+            b.inc(1);
+            if failed > 0 {
+                b.println(format!("dataset: {} failed", task.input.rel));
+            }
+        } else if self.plain {
+            let state = if failed > 0 {
+                format!("{done} done, {failed} FAILED")
+            } else if done == 0 {
+                format!("up to date ({skipped} skipped)")
+            } else {
+                format!("{done} done, {skipped} skipped")
+            };
+            eprintln!(
+                "dataset: [{k}/{}] {} {}: {state} ({secs:.1} s)",
+                self.total,
+                task.split.name(),
+                task.input.rel
+            );
+        }
+    }
+
+    fn finish(&self) {
+        if let Some(b) = &self.bar {
+            b.finish_and_clear();
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn temp_file_ids() {
+        assert_eq!(temp_file_id(".a_v2_iso1600.dng.tmp-123"), Some("a_v2"));
+        assert_eq!(temp_file_id(".a__b.json.tmp-9"), Some("a__b"));
+        assert_eq!(temp_file_id(".a_isox.exr.tmp-9"), Some("a_isox"));
+        assert_eq!(temp_file_id("a.dng"), None);
+        assert_eq!(temp_file_id(".a.dng.tmp-"), None);
+    }
+}
