@@ -1,7 +1,7 @@
 //! Generate the committed DNG fixtures (deterministic: same code, same bytes).
 //!
 //! ```text
-//! cargo run --release --example make_fixtures -- fixtures/
+//! cargo run --release --example make_fixtures -- fixtures/ [SOURCE.png]
 //! ```
 //!
 //! Writes every fixture listed in `fixtures/README.md`; the default day image `day.dng` is
@@ -270,9 +270,20 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             .nth(1)
             .unwrap_or_else(|| "fixtures".to_string()),
     );
-    std::fs::create_dir_all(&dir)?;
-    let packed = |big: bool| WriteOptions {
-        packed: true,
+    let source = std::env::args()
+        .nth(2)
+        .map(PathBuf::from)
+        .unwrap_or_else(|| {
+            Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/source/astronaut.png")
+        });
+    generate(&dir, &source)
+}
+
+/// Write every fixture into `dir`; `source` is the photograph behind `day.dng`.
+/// (Also used by tests/fixtures_reproducible.rs.)
+pub fn generate(dir: &Path, source: &Path) -> Result<(), Box<dyn std::error::Error>> {
+    std::fs::create_dir_all(dir)?;
+    let order = |big: bool| WriteOptions {
         big_endian: big,
         ..Default::default()
     };
@@ -293,12 +304,27 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             border: None,
         },
         Spec {
+            name: "rggb_12bit_in16_le_strips.dng",
+            width: 320,
+            height: 240,
+            bayer: Bayer::RGGB,
+            bits: 12,
+            opts: WriteOptions {
+                unpacked16: true,
+                ..Default::default()
+            },
+            per_site_black: false,
+            black_deltas: false,
+            linearization: false,
+            border: None,
+        },
+        Spec {
             name: "grbg_12bit_packed_be_strips.dng",
             width: 320,
             height: 240,
             bayer: Bayer::GRBG,
             bits: 12,
-            opts: packed(true),
+            opts: order(true),
             per_site_black: false,
             black_deltas: false,
             linearization: false,
@@ -311,7 +337,6 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             bayer: Bayer::GBRG,
             bits: 10,
             opts: WriteOptions {
-                packed: true,
                 uncompressed_tiles: Some((64, 48)),
                 ..Default::default()
             },
@@ -327,7 +352,6 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             bayer: Bayer::BGGR,
             bits: 14,
             opts: WriteOptions {
-                packed: true,
                 raw_ifd: RawIfd::Sub,
                 ..Default::default()
             },
@@ -374,7 +398,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             height: 240,
             bayer: Bayer::GBRG,
             bits: 10,
-            opts: packed(true),
+            opts: order(true),
             per_site_black: false,
             black_deltas: false,
             linearization: true,
@@ -398,7 +422,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             height: 9,
             bayer: Bayer::BGGR,
             bits: 12,
-            opts: packed(false),
+            opts: order(false),
             per_site_black: false,
             black_deltas: false,
             linearization: false,
@@ -423,11 +447,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     for s in &specs {
         let img = make_synthetic(s);
         img.validate()?;
-        write(&dir, s.name, &img, &s.opts)?;
+        write(dir, s.name, &img, &s.opts)?;
     }
-    let source = dir.join("source/astronaut.png");
-    let day = make_day(&source)?;
+    let day = make_day(source)?;
     day.validate()?;
-    write(&dir, "day.dng", &day, &packed(false))?;
+    write(dir, "day.dng", &day, &order(false))?;
     Ok(())
 }

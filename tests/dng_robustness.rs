@@ -103,3 +103,30 @@ fn mutated_dngs_never_panic() {
     );
     assert!(errors > 0);
 }
+
+/// `D2N_WRITE_SEEDS=DIR cargo test --test dng_robustness write_seeds` writes the valid seed
+/// DNGs into DIR (a starting corpus for `cargo fuzz run read_dng`).
+#[test]
+fn write_seeds() {
+    let Some(dir) = std::env::var_os("D2N_WRITE_SEEDS") else {
+        return;
+    };
+    let dir = std::path::Path::new(&dir);
+    for (i, s) in seeds().iter().enumerate() {
+        std::fs::write(dir.join(format!("seed{i}.dng")), s).unwrap();
+    }
+    // Bare lossless JPEG streams (for the `ljpeg` target).
+    for (i, (nc, p)) in [(1usize, 12u8), (2, 14), (3, 16), (4, 8)]
+        .into_iter()
+        .enumerate()
+    {
+        let px: Vec<u16> = (0..16 * 8 * nc)
+            .map(|k| (k * 37 % (1 << p)) as u16)
+            .collect();
+        std::fs::write(
+            dir.join(format!("seed{i}.ljpeg")),
+            dngbuild::lj92(16, 8, nc, p, &px),
+        )
+        .unwrap();
+    }
+}

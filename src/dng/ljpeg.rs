@@ -112,6 +112,24 @@ impl<'a> Bits<'a> {
     }
     #[inline]
     fn refill(&mut self) {
+        // Fast path: eight bytes without 0xFF are taken in one go.
+        if self.marker.is_none() {
+            if let Some(chunk) = self.data.get(self.pos..self.pos + 8) {
+                let mut b = [0u8; 8];
+                b.copy_from_slice(chunk);
+                let w = u64::from_be_bytes(b);
+                let x = !w;
+                let has_ff = x.wrapping_sub(0x0101_0101_0101_0101) & !x & 0x8080_8080_8080_8080;
+                let take = (64 - self.nbits) / 8;
+                if has_ff == 0 && take > 0 {
+                    let add = w >> (64 - 8 * take);
+                    self.acc |= add << (64 - self.nbits - 8 * take);
+                    self.pos += take as usize;
+                    self.nbits += 8 * take;
+                    return;
+                }
+            }
+        }
         while self.nbits <= 56 {
             let mut byte = 0u8;
             if self.marker.is_none() {
@@ -442,6 +460,18 @@ fn scan(data: &[u8], pos: usize, sp: ScanParams, hts: &[&Huffman]) -> Result<Dec
     let mut out = vec![0u16; total];
     let mut bits = Bits::new(data, pos);
     let default_pred: i32 = 1 << (sp.precision - sp.pt - 1);
+    if sp.restart_interval == 0 {
+        scan_simple(
+            &mut bits,
+            &mut out,
+            row_len,
+            nc,
+            sp.predictor,
+            default_pred,
+            hts,
+        )?;
+        return finish(out, sp, nc);
+    }
     let mask: i32 = 0xFFFF;
     let mut mcus_left = sp.restart_interval;
     // Row in which the current restart interval began and column: the first line of an
@@ -519,6 +549,10 @@ fn scan(data: &[u8], pos: usize, sp: ScanParams, hts: &[&Huffman]) -> Result<Dec
         restart_col = None;
         prev_start = start;
     }
+    finish(out, sp, nc)
+}
+
+fn finish(mut out: Vec<u16>, sp: ScanParams, nc: usize) -> Result<Decoded> {
     if sp.pt > 0 {
         for v in &mut out {
             *v <<= sp.pt;
@@ -531,6 +565,99 @@ fn scan(data: &[u8], pos: usize, sp: ScanParams, hts: &[&Huffman]) -> Result<Dec
         precision: sp.precision,
         data: out,
     })
+}
+
+/// One difference value.
+#[inline(always)]
+fn read_diff(bits: &mut Bits<'_>, h: &Huffman) -> Result<i32> {
+    let s = bits.decode(h)?;
+    Ok(match s {
+        0 => 0,
+        16 => 32768,
+        1..=15 => {
+            let v = bits.get(s as u32) as i32;
+            if v < (1 << (s - 1)) {
+                v - (1 << s) + 1
+            } else {
+                v
+            }
+        }
+        _ => {
+            return Err(Error::malformed(format!(
+                "lossless JPEG: difference category {s} > 16"
+            )))
+        }
+    })
+}
+
+/// Decode a scan without restart intervals: row 0 predicts from the left, column 0 from
+/// above, the rest with the selected predictor (one tight loop per predictor).
+fn scan_simple(
+    bits: &mut Bits<'_>,
+    out: &mut [u16],
+    row_len: usize,
+    nc: usize,
+    predictor: u8,
+    default_pred: i32,
+    hts: &[&Huffman],
+) -> Result<()> {
+    let ended =
+        || Error::malformed("lossless JPEG: entropy-coded data ends before the frame is complete");
+    let mut rows = out.chunks_exact_mut(row_len);
+    let Some(first) = rows.next() else {
+        return Ok(());
+    };
+    for (i, ht) in hts.iter().enumerate() {
+        if let Some(v) = first.get_mut(i) {
+            *v = ((default_pred + read_diff(bits, ht)?) & 0xFFFF) as u16;
+        }
+    }
+    for i in nc..row_len {
+        let ra = i32::from(first[i - nc]);
+        first[i] = ((ra + read_diff(bits, hts[i % nc])?) & 0xFFFF) as u16;
+    }
+    if bits.too_far() {
+        return Err(ended());
+    }
+    let mut prev: &[u16] = first;
+    for cur in rows {
+        for (i, ht) in hts.iter().enumerate() {
+            if let (Some(v), Some(&b)) = (cur.get_mut(i), prev.get(i)) {
+                *v = ((i32::from(b) + read_diff(bits, ht)?) & 0xFFFF) as u16;
+            }
+        }
+        macro_rules! run {
+            (|$ra:ident, $rb:ident, $rc:ident| $e:expr) => {{
+                let mut c = 0usize;
+                for i in nc..row_len {
+                    let $ra = i32::from(cur[i - nc]);
+                    let $rb = i32::from(prev[i]);
+                    let $rc = i32::from(prev[i - nc]);
+                    let _ = (&$ra, &$rb, &$rc);
+                    cur[i] = (($e + read_diff(bits, hts[c])?) & 0xFFFF) as u16;
+                    c += 1;
+                    if c == nc {
+                        c = 0;
+                    }
+                }
+            }};
+        }
+        match predictor {
+            1 => run!(|ra, rb, rc| ra),
+            2 => run!(|ra, rb, rc| rb),
+            3 => run!(|ra, rb, rc| rc),
+            4 => run!(|ra, rb, rc| ra + rb - rc),
+            5 => run!(|ra, rb, rc| ra + ((rb - rc) >> 1)),
+            6 => run!(|ra, rb, rc| rb + ((ra - rc) >> 1)),
+            7 => run!(|ra, rb, rc| (ra + rb) >> 1),
+            _ => run!(|ra, rb, rc| 0),
+        }
+        if bits.too_far() {
+            return Err(ended());
+        }
+        prev = cur;
+    }
+    Ok(())
 }
 
 #[cfg(test)]

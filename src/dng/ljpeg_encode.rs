@@ -116,10 +116,13 @@ pub fn encode(
     };
     for &d in &diffs {
         let s = category(d);
-        bw.put(codes[s as usize] as u32, sizes[s as usize]);
+        let (code, size) = (codes[s as usize] as u64, sizes[s as usize]);
         if s > 0 && s < 16 {
-            let v = if d < 0 { d - 1 } else { d } as u32 & ((1u32 << s) - 1);
-            bw.put(v, s);
+            // Code and magnitude bits in one go (at most 16 + 15 bits).
+            let v = (if d < 0 { d - 1 } else { d }) as u64 & ((1u64 << s) - 1);
+            bw.put((code << s) | v, size + s);
+        } else {
+            bw.put(code, size);
         }
     }
     bw.flush();
@@ -141,11 +144,11 @@ struct BitWriter<'a> {
 
 impl BitWriter<'_> {
     #[inline]
-    fn put(&mut self, bits: u32, len: u8) {
+    fn put(&mut self, bits: u64, len: u8) {
         if len == 0 {
             return;
         }
-        self.acc = (self.acc << len) | (bits as u64 & ((1u64 << len) - 1));
+        self.acc = (self.acc << len) | (bits & ((1u64 << len) - 1));
         self.n += len as u32;
         while self.n >= 8 {
             self.n -= 8;
@@ -160,7 +163,7 @@ impl BitWriter<'_> {
     fn flush(&mut self) {
         if self.n > 0 {
             let pad = 8 - self.n as u8;
-            self.put((1u32 << pad) - 1, pad);
+            self.put((1u64 << pad) - 1, pad);
         }
     }
 }

@@ -114,37 +114,43 @@ fn is_main_image(ifd: &Ifd) -> bool {
     ifd.u32(NEW_SUBFILE_TYPE).unwrap_or(0) == 0
 }
 
-fn find_in_subs<'a>(ifd: &'a Ifd, path: &mut Vec<usize>) -> Option<(&'a Ifd, Vec<usize>)> {
+fn collect_main<'a>(ifd: &'a Ifd, path: &mut Vec<usize>, out: &mut Vec<(&'a Ifd, Vec<usize>)>) {
     for (i, s) in ifd.sub_ifds.iter().enumerate() {
         path.push(i);
         if is_main_image(s) {
-            return Some((s, path.clone()));
+            out.push((s, path.clone()));
         }
-        if let Some(found) = find_in_subs(s, path) {
-            return Some(found);
-        }
+        collect_main(s, path, out);
         path.pop();
     }
-    None
 }
 
+/// The raw IFD: among IFD0 and its SubIFD tree (depth first) the IFDs with NewSubFileType 0,
+/// the first one with CFA photometric, else the first one (e.g. LinearRaw, reported later).
 fn locate(tiff: &Tiff) -> Result<Located<'_>> {
     let ifd0 = tiff.ifd0();
     if ifd0.get(DNG_VERSION).is_none() {
         return Err(Error::unsupported("not a DNG: IFD0 has no DNGVersion tag"));
     }
+    let mut candidates = Vec::new();
     if is_main_image(ifd0) {
-        return Ok(Located {
-            ifd0,
-            raw: ifd0,
-            path: None,
-        });
+        candidates.push((ifd0, Vec::new()));
     }
-    match find_in_subs(ifd0, &mut Vec::new()) {
+    collect_main(ifd0, &mut Vec::new(), &mut candidates);
+    let is_cfa = |i: &Ifd| i.u32(PHOTOMETRIC_INTERPRETATION) == Some(u32::from(PHOTOMETRIC_CFA));
+    let chosen = candidates
+        .iter()
+        .find(|(i, _)| is_cfa(i))
+        .or_else(|| candidates.first());
+    match chosen {
         Some((raw, path)) => Ok(Located {
             ifd0,
             raw,
-            path: Some(path),
+            path: if path.is_empty() {
+                None
+            } else {
+                Some(path.clone())
+            },
         }),
         None => Err(Error::malformed(
             "no raw image: no IFD with NewSubFileType 0 (IFD0 or SubIFDs)",
@@ -413,20 +419,76 @@ pub fn unpack_row(src: &[u8], dst: &mut [u16], bits: usize, order: ByteOrder) {
                 }
             }
         }
+        10 => unpack_quads::<10>(src, dst),
+        14 => unpack_quads::<14>(src, dst),
         _ => {
-            let mut acc: u64 = 0;
-            let mut n = 0usize;
-            let mut it = src.iter();
-            let mask = (1u64 << bits) - 1;
-            for d in dst.iter_mut() {
-                while n < bits {
-                    acc = (acc << 8) | u64::from(it.next().copied().unwrap_or(0));
-                    n += 8;
+            // Eight samples of `bits` bits fill exactly `bits` bytes: decode whole groups
+            // from a 128-bit big-endian word, then the tail bit by bit.
+            let groups = (dst.len() / 8).min(src.len() / bits);
+            let mask = (1u128 << bits) - 1;
+            for (d, s) in dst
+                .chunks_exact_mut(8)
+                .zip(src.chunks_exact(bits))
+                .take(groups)
+            {
+                let mut word = [0u8; 16];
+                word[..bits].copy_from_slice(s);
+                let v = u128::from_be_bytes(word);
+                for (k, o) in d.iter_mut().enumerate() {
+                    *o = ((v >> (128 - bits * (k + 1))) & mask) as u16;
                 }
-                n -= bits;
-                *d = ((acc >> n) & mask) as u16;
             }
+            unpack_bits(
+                &src[(groups * bits).min(src.len())..],
+                &mut dst[groups * 8..],
+                bits,
+            );
         }
+    }
+}
+
+/// Four `BITS`-bit samples fill exactly BITS/2 bytes (BITS even): decode whole groups from
+/// a 64-bit big-endian word (constant-size copies, no per-sample branches), then the tail.
+fn unpack_quads<const BITS: usize>(src: &[u8], dst: &mut [u16]) {
+    let gb = BITS / 2;
+    let groups = (dst.len() / 4).min(src.len() / gb);
+    let mask = (1u64 << BITS) - 1;
+    for (d, s) in dst
+        .chunks_exact_mut(4)
+        .zip(src.chunks_exact(gb))
+        .take(groups)
+    {
+        let mut word = [0u8; 8];
+        for (w, b) in word.iter_mut().zip(s) {
+            *w = *b;
+        }
+        let v = u64::from_be_bytes(word);
+        d[0] = ((v >> (64 - BITS)) & mask) as u16;
+        d[1] = ((v >> (64 - 2 * BITS)) & mask) as u16;
+        d[2] = ((v >> (64 - 3 * BITS)) & mask) as u16;
+        d[3] = ((v >> (64 - 4 * BITS)) & mask) as u16;
+    }
+    let (s_done, d_done) = (groups * gb, groups * 4);
+    unpack_bits(
+        src.get(s_done..).unwrap_or(&[]),
+        dst.get_mut(d_done..).unwrap_or(&mut []),
+        BITS,
+    );
+}
+
+/// Generic MSB-first unpacking (missing source bytes read as zero).
+fn unpack_bits(src: &[u8], dst: &mut [u16], bits: usize) {
+    let mut acc: u64 = 0;
+    let mut n = 0usize;
+    let mut it = src.iter();
+    let mask = (1u64 << bits) - 1;
+    for d in dst.iter_mut() {
+        while n < bits {
+            acc = (acc << 8) | u64::from(it.next().copied().unwrap_or(0));
+            n += 8;
+        }
+        n -= bits;
+        *d = ((acc >> n) & mask) as u16;
     }
 }
 
@@ -851,7 +913,9 @@ fn build_meta(tiff: &Tiff, d: &Located<'_>, g: &Geometry) -> Result<RawMeta> {
     let opcode = |tag: u16| raw.get(tag).and_then(|v| v.as_bytes()).map(|b| b.to_vec());
     let dng_version = version4(ifd0.get(DNG_VERSION)).unwrap_or([1, 0, 0, 0]);
     let raw_in_sub = d.path.is_some();
-    let ifd0_extra = carried(ifd0, if raw_in_sub { &[] } else { MODELLED_EXIF_TAGS });
+    // TIFF/EP copies of the Exif fields in IFD0 are modelled too (the writer puts the
+    // current values in the Exif IFD; a stale IFD0 copy would contradict them).
+    let ifd0_extra = carried(ifd0, MODELLED_EXIF_TAGS);
     let raw_extra = if raw_in_sub {
         carried(raw, &[])
     } else {
@@ -1165,6 +1229,22 @@ mod tests {
         let mut d = [0u16; 2];
         unpack_row(&src, &mut d, 10, ByteOrder::Big);
         assert_eq!(d, [0x3FF, 0x001]);
+        // 11-bit (generic path), 8 samples + 1 tail
+        let vals: Vec<u16> = (0..9).map(|i| (i * 229 + 5) as u16 & 0x7FF).collect();
+        let mut packed = Vec::new();
+        let (mut acc, mut n) = (0u64, 0);
+        for &v in &vals {
+            acc = (acc << 11) | v as u64;
+            n += 11;
+            while n >= 8 {
+                packed.push((acc >> (n - 8)) as u8);
+                n -= 8;
+            }
+        }
+        packed.push((acc << (8 - n)) as u8);
+        let mut d = [0u16; 9];
+        unpack_row(&packed, &mut d, 11, ByteOrder::Little);
+        assert_eq!(&d[..], &vals[..]);
         // 14-bit: 0x2AAA, 0x1555 -> 10101010 10101001 01010101 0101(0000)
         let src = [0xAA, 0xA9, 0x55, 0x50];
         let mut d = [0u16; 2];

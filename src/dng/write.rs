@@ -3,9 +3,11 @@
 //!
 //! Layouts: raw in IFD0 (default) or in a SubIFD behind a small RGB thumbnail rendered from
 //! the raw being written ([`RawIfd::Sub`]); uncompressed strips (default; 16-bit container
-//! samples, or 8-bit for 8-bit sources) or lossless-JPEG tiles ([`Compression::Ljpeg`], 256x256,
-//! two-component half-width encoding, precision = BitsPerSample). Fixture-only options:
-//! big-endian files, packed 10/12/14-bit samples, uncompressed tiles, chosen strip height.
+//! or packed samples) or lossless-JPEG tiles ([`Compression::Ljpeg`], 256x256,
+//! two-component half-width encoding, precision = BitsPerSample). Uncompressed samples keep
+//! the source's BitsPerSample (10/12/14-bit packed MSB-first, as camera firmwares write);
+//! `unpacked16` stores them in a 16-bit container instead. Fixture-only options: big-endian
+//! files, uncompressed tiles, chosen strip height.
 //!
 //! What is carried and what is dropped is documented in docs/dng-writing.md and in
 //! [`is_dropped`].
@@ -18,7 +20,7 @@ use crate::output::OutputPolicy;
 use crate::raw::RawImage;
 use crate::tiff::tags as t;
 use crate::tiff::value::{Entry, Value};
-use crate::tiff::write::{encode_tiff, Chunks, Ifd};
+use crate::tiff::write::{encode_tiff, write_tiff, Chunks, Ifd};
 use rayon::prelude::*;
 use sha2::{Digest, Sha256};
 use std::path::Path;
@@ -73,9 +75,10 @@ pub struct WriteOptions {
     pub raw_ifd: RawIfd,
     /// Fixture option: write a big-endian ("MM") file.
     pub big_endian: bool,
-    /// Fixture option: uncompressed samples packed at `meta.bits_per_sample` bits (MSB
-    /// first, rows padded to a byte) instead of a 16-bit container. Ignored for 8/16 bits.
-    pub packed: bool,
+    /// Write uncompressed 9..15-bit samples in a 16-bit container instead of packing them
+    /// at `meta.bits_per_sample` bits (MSB first, rows padded to a byte; the default, which
+    /// keeps BitsPerSample as the source had it, as Magic Lantern and camera firmwares do).
+    pub unpacked16: bool,
     /// Fixture option: uncompressed tiles of this size (multiple of 16) instead of strips.
     pub uncompressed_tiles: Option<(u32, u32)>,
     /// Fixture option: rows per uncompressed strip (default: about 1 MiB per strip).
@@ -84,6 +87,25 @@ pub struct WriteOptions {
 
 /// Encode a DNG into memory.
 pub fn encode_dng(img: &RawImage, opts: &WriteOptions) -> Result<Vec<u8>> {
+    let (order, ifd0) = build(img, opts)?;
+    encode_tiff(order, &[ifd0])
+}
+
+/// Encode and write a DNG atomically under `policy` (strips/tiles are streamed to the
+/// temporary file, not assembled in memory first).
+pub fn write_dng(
+    img: &RawImage,
+    path: &Path,
+    opts: &WriteOptions,
+    policy: &OutputPolicy,
+) -> Result<()> {
+    policy.check(path)?;
+    let (order, ifd0) = build(img, opts).map_err(|e| e.in_file(path))?;
+    crate::output::write_atomic(path, policy, |w| write_tiff(order, &[ifd0], w))
+}
+
+/// The IFD tree of a DNG: byte order and IFD0 (with its SubIFD/Exif children and data).
+fn build(img: &RawImage, opts: &WriteOptions) -> Result<(ByteOrder, Ifd)> {
     img.validate()?;
     let m = &img.meta;
     check_meta(img)?;
@@ -93,7 +115,9 @@ pub fn encode_dng(img: &RawImage, opts: &WriteOptions) -> Result<Vec<u8>> {
         ByteOrder::Little
     };
 
-    let (raw_chunks, bits, compression, layout_tags) = encode_pixels(img, opts, order)?;
+    let (raw_chunks, digests, bits, compression, layout_tags) = encode_pixels(img, opts, order)?;
+    let tiled = matches!(raw_chunks, Chunks::Tiles(_));
+    let unique_id = raw_data_unique_id(img, tiled, &digests);
 
     let mut raw = Ifd::new();
     raw.set(t::NEW_SUBFILE_TYPE, Value::Long(vec![0]));
@@ -142,20 +166,9 @@ pub fn encode_dng(img: &RawImage, opts: &WriteOptions) -> Result<Vec<u8>> {
             ifd0
         }
     };
-    set_ifd0_tags(&mut ifd0, img, opts)?;
+    set_ifd0_tags(&mut ifd0, img, unique_id);
     ifd0.set_children(t::EXIF_IFD, vec![exif_ifd(m)]);
-    encode_tiff(order, &[ifd0])
-}
-
-/// Encode and write a DNG atomically under `policy`.
-pub fn write_dng(
-    img: &RawImage,
-    path: &Path,
-    opts: &WriteOptions,
-    policy: &OutputPolicy,
-) -> Result<()> {
-    let bytes = encode_dng(img, opts).map_err(|e| e.in_file(path))?;
-    crate::output::write_bytes_atomic(path, policy, &bytes)
+    Ok((order, ifd0))
 }
 
 /// Tags never copied from the source's carried entries: structural tags the writer
@@ -288,12 +301,24 @@ fn check_meta(img: &RawImage) -> Result<()> {
     Ok(())
 }
 
-type Pixels = (Chunks, u16, u16, Vec<(u16, Value)>);
+type Pixels = (Chunks, Vec<Digest32>, u16, u16, Vec<(u16, Value)>);
+type Digest32 = Vec<u8>;
 
-/// Encode the samples: (chunks, BitsPerSample, Compression, layout tags).
+/// A chunk with its SHA-256 (hashed while it is still in cache).
+fn hashed(bytes: Vec<u8>) -> (Vec<u8>, Digest32) {
+    let d = Sha256::digest(&bytes).to_vec();
+    (bytes, d)
+}
+
+/// Encode the samples: (chunks, their SHA-256s, BitsPerSample, Compression, layout tags).
 fn encode_pixels(img: &RawImage, opts: &WriteOptions, order: ByteOrder) -> Result<Pixels> {
     let (w, h) = (img.width, img.height);
-    let max = img.data.iter().copied().max().unwrap_or(0);
+    let max = img
+        .data
+        .par_chunks(1 << 16)
+        .map(|c| c.iter().copied().max().unwrap_or(0))
+        .max()
+        .unwrap_or(0);
     let src_bits = img.meta.bits_per_sample;
     // Bits actually written: the source depth unless a sample does not fit in it.
     let fit_bits = if (max as u32) < (1u32 << src_bits) {
@@ -315,15 +340,17 @@ fn encode_pixels(img: &RawImage, opts: &WriteOptions, order: ByteOrder) -> Resul
                 h.div_ceil(16) * 16
             };
             let (nx, ny) = (w.div_ceil(tw), h.div_ceil(th));
-            let tiles: Vec<Vec<u8>> = (0..nx * ny)
+            let tiles: Vec<(Vec<u8>, Digest32)> = (0..nx * ny)
                 .into_par_iter()
                 .map(|i| {
                     let tile = extract_tile(img, (i % nx) * tw, (i / nx) * th, tw, th);
-                    ljpeg_encode::encode(&tile, tw / 2, th, 2, precision as u8)
+                    ljpeg_encode::encode(&tile, tw / 2, th, 2, precision as u8).map(hashed)
                 })
                 .collect::<Result<_>>()?;
+            let (tiles, digests) = tiles.into_iter().unzip();
             Ok((
                 Chunks::Tiles(tiles),
+                digests,
                 precision,
                 7,
                 vec![
@@ -333,7 +360,7 @@ fn encode_pixels(img: &RawImage, opts: &WriteOptions, order: ByteOrder) -> Resul
             ))
         }
         Compression::None => {
-            let bits = if opts.packed && fit_bits != 8 && fit_bits != 16 {
+            let bits = if !opts.unpacked16 {
                 fit_bits
             } else if fit_bits <= 8 {
                 8
@@ -349,14 +376,15 @@ fn encode_pixels(img: &RawImage, opts: &WriteOptions, order: ByteOrder) -> Resul
                     )));
                 }
                 let (nx, ny) = (w.div_ceil(tw), h.div_ceil(th));
-                let tiles = (0..nx * ny)
+                let (tiles, digests) = (0..nx * ny)
                     .map(|i| {
                         let tile = extract_tile(img, (i % nx) * tw, (i / nx) * th, tw, th);
-                        pack_rows(&tile, tw, bits, big)
+                        hashed(pack_rows(&tile, tw, bits, big))
                     })
-                    .collect();
+                    .unzip();
                 return Ok((
                     Chunks::Tiles(tiles),
+                    digests,
                     bits,
                     1,
                     vec![
@@ -371,13 +399,15 @@ fn encode_pixels(img: &RawImage, opts: &WriteOptions, order: ByteOrder) -> Resul
                 Some(r) => (r as usize).min(h),
                 None => STRIP_BYTES.div_ceil(row_bytes).clamp(1, h),
             };
-            let strips: Vec<Vec<u8>> = img
+            let strips: Vec<(Vec<u8>, Digest32)> = img
                 .data
                 .par_chunks(rps * w)
-                .map(|rows| pack_rows(rows, w, bits, big))
+                .map(|rows| hashed(pack_rows(rows, w, bits, big)))
                 .collect();
+            let (strips, digests) = strips.into_iter().unzip();
             Ok((
                 Chunks::Strips(strips),
+                digests,
                 bits,
                 1,
                 vec![(t::ROWS_PER_STRIP, Value::Long(vec![rps as u32]))],
@@ -386,22 +416,27 @@ fn encode_pixels(img: &RawImage, opts: &WriteOptions, order: ByteOrder) -> Resul
     }
 }
 
-/// A `tw x th` tile at (x0, y0), edges padded by replicating the last column/row.
+/// A `tw x th` tile at (x0, y0), edges padded by replicating the last column/row of the
+/// same CFA parity (so predictors keep running over one colour).
 fn extract_tile(img: &RawImage, x0: usize, y0: usize, tw: usize, th: usize) -> Vec<u16> {
+    let clamp = |v: usize, n: usize| -> usize {
+        let last = n - 1;
+        if v <= last {
+            v
+        } else if (v - last) % 2 == 0 {
+            last
+        } else {
+            last.saturating_sub(1)
+        }
+    };
     let mut out = Vec::with_capacity(tw * th);
     for y in 0..th {
-        let sy = (y0 + y).min(img.height - 1);
+        let sy = clamp(y0 + y, img.height);
         let row = &img.data[sy * img.width..(sy + 1) * img.width];
-        for x in 0..tw {
-            // Replicate with the same CFA parity so predictors stay within one colour.
-            let mut sx = x0 + x;
-            while sx >= img.width {
-                sx = sx.saturating_sub(2).min(img.width - 1);
-                if img.width == 1 {
-                    sx = 0;
-                }
-            }
-            out.push(row[sx]);
+        let inside = img.width.saturating_sub(x0).min(tw);
+        out.extend_from_slice(&row[x0.min(img.width)..x0.min(img.width) + inside]);
+        for x in inside..tw {
+            out.push(row[clamp(x0 + x, img.width)]);
         }
     }
     out
@@ -426,25 +461,69 @@ fn pack_rows(samples: &[u16], w: usize, bits: u16, big: bool) -> Vec<u8> {
         }
         8 => samples.iter().map(|&s| s as u8).collect(),
         _ => {
+            let w = w.max(1);
             let row_bytes = (w * bits as usize).div_ceil(8);
-            let mut out = Vec::with_capacity(row_bytes * samples.len() / w.max(1));
-            for row in samples.chunks(w.max(1)) {
-                let mut acc: u64 = 0;
-                let mut n = 0u32;
-                for &s in row {
-                    acc = (acc << bits) | (s as u64 & ((1u64 << bits) - 1));
-                    n += bits as u32;
-                    while n >= 8 {
-                        n -= 8;
-                        out.push((acc >> n) as u8);
-                    }
-                    acc &= (1u64 << n) - 1;
-                }
-                if n > 0 {
-                    out.push((acc << (8 - n)) as u8);
-                }
+            let rows = samples.len().div_ceil(w);
+            let mut out = vec![0u8; row_bytes * rows];
+            for (row, orow) in samples.chunks(w).zip(out.chunks_mut(row_bytes)) {
+                pack_row(row, orow, bits);
             }
             out
+        }
+    }
+}
+
+/// Pack groups of 4 samples of `BITS` bits into `NB` bytes; returns (samples, bytes) done.
+fn pack4<const BITS: u32, const NB: usize>(row: &[u16], out: &mut [u8]) -> (usize, usize) {
+    let n = row.len() / 4;
+    let m = (1u64 << BITS) - 1;
+    for (o, g) in out.chunks_exact_mut(NB).zip(row.chunks_exact(4)) {
+        let v = (g[0] as u64 & m) << (3 * BITS)
+            | (g[1] as u64 & m) << (2 * BITS)
+            | (g[2] as u64 & m) << BITS
+            | (g[3] as u64 & m);
+        let be = v.to_be_bytes();
+        o.copy_from_slice(&be[8 - NB..]);
+    }
+    (n * 4, n * NB)
+}
+
+/// Pack one row MSB-first into `out` (exactly `ceil(len * bits / 8)` bytes).
+fn pack_row(row: &[u16], out: &mut [u8], bits: u16) {
+    // Fast paths: whole groups of samples that end on a byte boundary.
+    let (done_s, done_b) = match bits {
+        12 => {
+            let n = row.len() / 2;
+            for (o, g) in out.chunks_exact_mut(3).zip(row.chunks_exact(2)) {
+                let v = ((g[0] as u32 & 0xFFF) << 12) | (g[1] as u32 & 0xFFF);
+                o[0] = (v >> 16) as u8;
+                o[1] = (v >> 8) as u8;
+                o[2] = v as u8;
+            }
+            (n * 2, n * 3)
+        }
+        10 => pack4::<10, 5>(row, out),
+        14 => pack4::<14, 7>(row, out),
+        _ => (0, 0),
+    };
+    let mut pos = done_b;
+    let mut acc: u64 = 0;
+    let mut n = 0u32;
+    for &s in &row[done_s..] {
+        acc = (acc << bits) | (s as u64 & ((1u64 << bits) - 1));
+        n += bits as u32;
+        while n >= 8 {
+            n -= 8;
+            if let Some(b) = out.get_mut(pos) {
+                *b = (acc >> n) as u8;
+            }
+            pos += 1;
+        }
+        acc &= (1u64 << n) - 1;
+    }
+    if n > 0 {
+        if let Some(b) = out.get_mut(pos) {
+            *b = (acc << (8 - n)) as u8;
         }
     }
 }
@@ -605,7 +684,7 @@ fn set_raw_tags(ifd: &mut Ifd, m: &RawMeta) {
 }
 
 /// Tags of IFD0 (camera, colour, version, provenance).
-fn set_ifd0_tags(ifd: &mut Ifd, img: &RawImage, opts: &WriteOptions) -> Result<()> {
+fn set_ifd0_tags(ifd: &mut Ifd, img: &RawImage, unique_id: Vec<u8>) {
     let m = &img.meta;
     let has_opcodes = m.opcode_lists.iter().any(|o| o.is_some());
     ifd.set(t::DNG_VERSION, Value::Byte(vec![1, 4, 0, 0]));
@@ -670,7 +749,7 @@ fn set_ifd0_tags(ifd: &mut Ifd, img: &RawImage, opts: &WriteOptions) -> Result<(
     } else if let Some(xy) = m.as_shot_white_xy {
         ifd.set(t::AS_SHOT_WHITE_XY, urational(&xy));
     }
-    ifd.set(t::RAW_DATA_UNIQUE_ID, Value::Byte(raw_data_unique_id(img)));
+    ifd.set(t::RAW_DATA_UNIQUE_ID, Value::Byte(unique_id));
     for e in &m.ifd0_extra {
         if !is_dropped(e.tag) {
             ifd.set_if_absent(e.tag, e.value.clone());
@@ -679,8 +758,6 @@ fn set_ifd0_tags(ifd: &mut Ifd, img: &RawImage, opts: &WriteOptions) -> Result<(
     ifd.set_if_absent(t::X_RESOLUTION, Value::Rational(vec![(72, 1)]));
     ifd.set_if_absent(t::Y_RESOLUTION, Value::Rational(vec![(72, 1)]));
     ifd.set_if_absent(t::RESOLUTION_UNIT, Value::Short(vec![2]));
-    let _ = opts;
-    Ok(())
 }
 
 fn exif_ifd(m: &RawMeta) -> Ifd {
@@ -712,24 +789,37 @@ fn exif_ifd(m: &RawMeta) -> Ifd {
     ifd
 }
 
-/// RawDataUniqueID: the first 16 bytes of SHA-256 over the pixel data (little-endian
-/// u16), the dimensions and the metadata (JSON, without the source storage description).
-/// Deterministic: the same image always gets the same ID, a changed image a new one.
-pub fn raw_data_unique_id(img: &RawImage) -> Vec<u8> {
+/// RawDataUniqueID: the first 16 bytes of SHA-256 over the dimensions, the SHA-256 of every
+/// encoded strip/tile (computed in parallel right after encoding each, combined in order:
+/// independent of the thread count) and the metadata as written (JSON; no storage description, no regenerated or
+/// dropped entries). Deterministic: the same image written the same way always gets the
+/// same ID, a change of pixels or meaning a new one. Hashing the encoded (packed or
+/// compressed) data rather than the `u16` samples keeps it cheap.
+fn raw_data_unique_id(img: &RawImage, tiled: bool, digests: &[Digest32]) -> Vec<u8> {
     let mut h = Sha256::new();
-    h.update(b"day2night RawDataUniqueID v1\0");
+    h.update(b"day2night RawDataUniqueID v2\0");
     h.update((img.width as u64).to_le_bytes());
     h.update((img.height as u64).to_le_bytes());
-    let mut buf = Vec::with_capacity(1 << 16);
-    for chunk in img.data.chunks(1 << 15) {
-        buf.clear();
-        for &s in chunk {
-            buf.extend_from_slice(&s.to_le_bytes());
-        }
-        h.update(&buf);
+    h.update([tiled as u8]);
+    for d in digests {
+        h.update(d);
     }
+    // Canonical metadata: what this writer actually writes, so that re-writing a file it
+    // wrote reproduces the same ID (a fixed point) while any change of meaning changes it.
     let mut meta = img.meta.clone();
     meta.storage = None;
+    meta.dng_version = [1, 4, 0, 0];
+    meta.dng_backward_version = None;
+    let keep = |e: &Entry| {
+        !is_dropped(e.tag)
+            && !matches!(
+                e.tag,
+                t::X_RESOLUTION | t::Y_RESOLUTION | t::RESOLUTION_UNIT
+            )
+    };
+    meta.ifd0_extra.retain(keep);
+    meta.raw_extra.retain(keep);
+    meta.exif_extra.retain(keep);
     if let Ok(json) = serde_json::to_vec(&meta) {
         h.update(&json);
     }
@@ -788,6 +878,28 @@ mod tests {
             vec![0xFF, 0xC0, 0x00, 0x40]
         );
         assert_eq!(pack_rows(&[0x0102], 1, 16, true), vec![1, 2]);
+        // Fast paths agree with the generic packer (odd widths leave a generic tail).
+        for bits in [10u16, 12, 14] {
+            let row: Vec<u16> = (0..13u32)
+                .map(|i| ((i * 977) % (1 << bits)) as u16)
+                .collect();
+            let fast = pack_rows(&row, 13, bits, false);
+            let mut slow = vec![];
+            let (mut acc, mut n) = (0u64, 0u32);
+            for &s in &row {
+                acc = (acc << bits) | s as u64;
+                n += bits as u32;
+                while n >= 8 {
+                    n -= 8;
+                    slow.push((acc >> n) as u8);
+                }
+                acc &= (1 << n) - 1;
+            }
+            if n > 0 {
+                slow.push((acc << (8 - n)) as u8);
+            }
+            assert_eq!(fast, slow, "{bits}");
+        }
         assert_eq!(pack_rows(&[0x0102], 1, 16, false), vec![2, 1]);
     }
 
@@ -809,7 +921,6 @@ mod tests {
         }
         let o = WriteOptions {
             big_endian: true,
-            packed: true,
             uncompressed_tiles: Some((16, 16)),
             ..Default::default()
         };
@@ -818,13 +929,35 @@ mod tests {
     }
 
     #[test]
-    fn unique_id_changes_with_pixels() {
+    fn tiles_pad_with_same_parity() {
+        let img = sample_image(5, 3, 12);
+        let t = extract_tile(&img, 0, 0, 8, 4);
+        // Columns 5,6,7 repeat columns 3,4,3; row 3 repeats row 1.
+        for y in 0..4 {
+            let sy = [0, 1, 2, 1][y];
+            let want: Vec<u16> = [0, 1, 2, 3, 4, 3, 4, 3]
+                .iter()
+                .map(|&x| img.data[sy * 5 + x])
+                .collect();
+            assert_eq!(&t[y * 8..y * 8 + 8], &want[..], "row {y}");
+        }
+    }
+
+    #[test]
+    fn unique_id_changes_with_pixels_and_meta() {
+        let id = |img: &RawImage| {
+            let (_, ifd0) = build(img, &WriteOptions::default()).unwrap();
+            ifd0.get(t::RAW_DATA_UNIQUE_ID).cloned().unwrap()
+        };
         let a = sample_image(8, 8, 12);
         let mut b = a.clone();
         b.data[5] ^= 1;
-        assert_ne!(raw_data_unique_id(&a), raw_data_unique_id(&b));
-        assert_eq!(raw_data_unique_id(&a), raw_data_unique_id(&a.clone()));
-        assert_eq!(raw_data_unique_id(&a).len(), 16);
+        let mut c = a.clone();
+        c.meta.exif.iso = Some(3200);
+        assert_ne!(id(&a), id(&b));
+        assert_ne!(id(&a), id(&c));
+        assert_eq!(id(&a), id(&a.clone()));
+        assert_eq!(id(&a).count(), 16);
     }
 
     #[test]

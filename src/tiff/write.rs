@@ -207,8 +207,16 @@ fn flatten<'a>(ifd: &'a Ifd, nodes: &mut Vec<Node<'a>>) -> Result<usize> {
     Ok(idx)
 }
 
-/// Encode a TIFF file whose IFD chain is `chain` (IFD0, IFD1, ...).
+/// Encode a TIFF file whose IFD chain is `chain` (IFD0, IFD1, ...) into memory.
 pub fn encode_tiff(order: ByteOrder, chain: &[Ifd]) -> Result<Vec<u8>> {
+    let mut out = Vec::new();
+    write_tiff(order, chain, &mut out)?;
+    Ok(out)
+}
+
+/// Write a TIFF file whose IFD chain is `chain` to `sink`: the directories and values are
+/// assembled in memory, the (large) strips and tiles are streamed straight from the IFDs.
+pub fn write_tiff<W: std::io::Write>(order: ByteOrder, chain: &[Ifd], sink: &mut W) -> Result<()> {
     if chain.is_empty() {
         return Err(Error::invalid("a TIFF file needs at least one IFD"));
     }
@@ -305,10 +313,16 @@ pub fn encode_tiff(order: ByteOrder, chain: &[Ifd]) -> Result<Vec<u8>> {
         }
     }
 
-    // Serialize.
+    // Serialize the directories and values (everything before the first chunk).
+    let head_len = nodes
+        .iter()
+        .filter_map(|n| n.chunk_offsets.first())
+        .min()
+        .copied()
+        .unwrap_or(cursor);
     let big = order == ByteOrder::Big;
     let mut o = Out {
-        buf: Vec::with_capacity(cursor as usize),
+        buf: Vec::with_capacity(head_len as usize),
         big,
     };
     o.buf.extend_from_slice(if big { b"MM" } else { b"II" });
@@ -338,17 +352,26 @@ pub fn encode_tiff(order: ByteOrder, chain: &[Ifd]) -> Result<Vec<u8>> {
             }
         }
     }
+    o.pad_to(head_len);
+    sink.write_all(&o.buf)?;
+    // Stream the chunks, with their alignment padding.
+    let mut pos = head_len;
     for n in &nodes {
         if let Some(ch) = &n.ifd.chunks {
             let (c, _, _) = ch.parts();
             for (chunk, &off) in c.iter().zip(&n.chunk_offsets) {
-                o.pad_to(off);
-                o.buf.extend_from_slice(chunk);
+                if off > pos {
+                    sink.write_all(&vec![0u8; (off - pos) as usize])?;
+                }
+                sink.write_all(chunk)?;
+                pos = off + chunk.len() as u64;
             }
         }
     }
-    o.pad_to(cursor);
-    Ok(o.buf)
+    if cursor > pos {
+        sink.write_all(&vec![0u8; (cursor - pos) as usize])?;
+    }
+    Ok(())
 }
 
 #[cfg(test)]

@@ -37,6 +37,8 @@ pub struct Builder {
     pub overrides: Vec<(u16, Value)>,
     pub remove: Vec<u16>,
     pub exif: Vec<(u16, Value)>,
+    /// Applied last to IFD0 when the raw is in a SubIFD (e.g. to make the preview NSFT 0).
+    pub ifd0_set: Vec<(u16, Value)>,
 }
 
 impl Builder {
@@ -60,6 +62,7 @@ impl Builder {
             overrides: vec![],
             remove: vec![],
             exif: vec![],
+            ifd0_set: vec![],
         }
     }
     pub fn set(mut self, tag: u16, v: Value) -> Self {
@@ -199,7 +202,11 @@ impl Builder {
             if let Some(e) = exif_off {
                 ifd0.push((34665, Value::Long(vec![e])));
             }
-            let ifd0 = apply(ifd0, self, &|t| !raw_tag(t));
+            let mut ifd0 = apply(ifd0, self, &|t| !raw_tag(t));
+            for (t, v) in &self.ifd0_set {
+                ifd0.retain(|(x, _)| x != t);
+                ifd0.push((*t, v.clone()));
+            }
             f.ifd(ifd0)
         } else {
             ifd0.extend(raw);
