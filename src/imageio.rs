@@ -127,6 +127,8 @@ fn read_exr(path: &Path) -> Result<LoadedImage> {
             .all_channels()
             .first_valid_layer()
             .all_attributes()
+            // sequential: a panic in a worker thread could not be contained here
+            .non_parallel()
             .from_file(&p)
     })
     .map_err(|_| Error::malformed("EXR: the decoder failed on damaged data"))?
