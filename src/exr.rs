@@ -200,20 +200,14 @@ pub fn encode_exr<W: Write + Seek>(
         });
         let mut image = Image::from_layer(Layer::new(size, layer_attrs, encoding, ch));
         image.attributes.chromaticities = Some(chroma);
-        image
-            .write()
-            .to_buffered(out)
-            .map_err(map_err)
+        image.write().to_buffered(out).map_err(map_err)
     } else {
         let ch = SpecificChannels::rgb(|p: Vec2<usize>| {
             (at(p.0, p.1, 0), at(p.0, p.1, 1), at(p.0, p.1, 2))
         });
         let mut image = Image::from_layer(Layer::new(size, layer_attrs, encoding, ch));
         image.attributes.chromaticities = Some(chroma);
-        image
-            .write()
-            .to_buffered(out)
-            .map_err(map_err)
+        image.write().to_buffered(out).map_err(map_err)
     }
 }
 
@@ -314,7 +308,10 @@ mod tests {
             buf.into_inner()
         };
         let a = enc();
-        let pool = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap();
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(1)
+            .build()
+            .unwrap();
         let b = pool.install(enc);
         assert_eq!(a, b);
         assert_eq!(a, enc());
