@@ -3,6 +3,8 @@
 //! Rec.709 primaries with a D65 white, a `software` attribute and caller attributes (source
 //! file, neutral, ...). Samples are sanitized first: NaN -> 0, +-Inf and out-of-range
 //! values clamp to the largest finite value of the sample type, so no NaN/Inf is ever written.
+//! Blocks are compressed in parallel (the crate's `rayon` feature) and written in increasing
+//! line order, so the bytes do not depend on the thread count.
 
 use crate::error::{Error, Result};
 use crate::isp::RgbImage;
@@ -198,22 +200,14 @@ pub fn encode_exr<W: Write + Seek>(
         });
         let mut image = Image::from_layer(Layer::new(size, layer_attrs, encoding, ch));
         image.attributes.chromaticities = Some(chroma);
-        image
-            .write()
-            .non_parallel()
-            .to_buffered(out)
-            .map_err(map_err)
+        image.write().to_buffered(out).map_err(map_err)
     } else {
         let ch = SpecificChannels::rgb(|p: Vec2<usize>| {
             (at(p.0, p.1, 0), at(p.0, p.1, 1), at(p.0, p.1, 2))
         });
         let mut image = Image::from_layer(Layer::new(size, layer_attrs, encoding, ch));
         image.attributes.chromaticities = Some(chroma);
-        image
-            .write()
-            .non_parallel()
-            .to_buffered(out)
-            .map_err(map_err)
+        image.write().to_buffered(out).map_err(map_err)
     }
 }
 
@@ -300,6 +294,27 @@ mod tests {
                 assert!(image.attributes.chromaticities.is_some());
             }
         }
+    }
+
+    #[test]
+    fn parallel_compression_is_deterministic() {
+        let mut img = RgbImage::new(97, 83);
+        for (i, v) in img.data.iter_mut().enumerate() {
+            *v = ((i * 7919) % 1000) as f32 / 997.0;
+        }
+        let enc = || {
+            let mut buf = Cursor::new(Vec::new());
+            encode_exr(&img, &mut buf, &ExrOptions::default(), &[]).unwrap();
+            buf.into_inner()
+        };
+        let a = enc();
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(1)
+            .build()
+            .unwrap();
+        let b = pool.install(enc);
+        assert_eq!(a, b);
+        assert_eq!(a, enc());
     }
 
     #[test]

@@ -127,6 +127,8 @@ fn read_exr(path: &Path) -> Result<LoadedImage> {
             .all_channels()
             .first_valid_layer()
             .all_attributes()
+            // sequential: a panic in a worker thread could not be contained here
+            .non_parallel()
             .from_file(&p)
     })
     .map_err(|_| Error::malformed("EXR: the decoder failed on damaged data"))?
@@ -173,8 +175,8 @@ fn read_exr(path: &Path) -> Result<LoadedImage> {
         ));
     }
     let mut data = Vec::with_capacity(3 * w * h);
-    for i in 0..w * h {
-        data.extend([planes[0][i], planes[1][i], planes[2][i]]);
+    for ((r, g), b) in planes[0].iter().zip(&planes[1]).zip(&planes[2]) {
+        data.extend([*r, *g, *b]);
     }
     let image = RgbImage {
         width: w,

@@ -283,3 +283,33 @@ fn render_cli_errors_and_outputs() {
         assert!(e.contains("gopro_hero7") && !o.exists(), "{e}");
     }
 }
+
+#[test]
+fn outputs_are_byte_identical_whatever_the_thread_count() {
+    let dir = tempfile::tempdir().unwrap();
+    let day = common::fixtures().join("day.dng");
+    for ext in ["exr", "png"] {
+        let mut outs = vec![];
+        for threads in ["1", "2", "3"] {
+            let o = dir.path().join(format!("t{threads}.{ext}"));
+            let r = common::bin()
+                .env("RAYON_NUM_THREADS", threads)
+                .args([
+                    "render".as_ref(),
+                    day.as_os_str(),
+                    "-o".as_ref(),
+                    o.as_os_str(),
+                    "--demosaic".as_ref(),
+                    "menon".as_ref(),
+                ])
+                .output()
+                .unwrap();
+            assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+            outs.push(std::fs::read(&o).unwrap());
+        }
+        assert!(
+            outs.windows(2).all(|w| w[0] == w[1]),
+            "{ext} differs across thread counts"
+        );
+    }
+}
