@@ -482,27 +482,16 @@ fn process_variant(
         },
         ..WriteOptions::default()
     };
-    let mut files = Vec::new();
     let mut stages = plan.stages.clone();
     let (mut clean, report) = run_clean(img, plan)?;
     clean.meta = night_meta(&img.meta, plan, plan.clean_iso, &plan.clean_noise);
+    let clean = clean;
     let clean_name = format!("{}_clean.dng", base);
-    write_dng(&clean, &job.out.join(&clean_name), &wopts, &job.policy)?;
-    files.push(clean_name);
-    stages.push("write_clean_dng".into());
-    let mut first_noisy = None;
-    for i in 0..plan.noise.len() {
-        let (iso, noisy) = run_noise(&clean, plan, i)?;
-        let n = format!("{}_iso{}.dng", base, iso);
-        write_dng(&noisy, &job.out.join(&n), &wopts, &job.policy)?;
-        files.push(n);
-        if first_noisy.is_none() && job.input_exr {
-            first_noisy = Some(noisy);
-        }
-    }
-    if !plan.noise.is_empty() {
-        stages.push("write_noisy_dng".into());
-    }
+    let noisy_names: Vec<String> = plan
+        .noise
+        .iter()
+        .map(|np| format!("{}_iso{}.dng", base, np.iso))
+        .collect();
     let neutral = plan.night_neutral;
     // One attribute only: the exr crate keeps custom attributes in a HashMap, so several
     // would be written in a per-process random order (non-deterministic bytes).
@@ -518,30 +507,97 @@ fn process_variant(
     let attrs = vec![("day2night:synth".to_string(), summary)];
     let want_exr = matches!(job.target, TargetArg::Exr | TargetArg::Both);
     let want_png = matches!(job.target, TargetArg::Png | TargetArg::Both);
-    if want_exr || want_png {
-        let ropts = RenderOptions {
-            neutral: Some(neutral),
-            ..RenderOptions::default()
-        };
-        let rgb = render_linear(&clean, &ropts)?;
-        if want_exr {
-            let n = format!("{}_target.exr", base);
-            write_exr(
-                &rgb,
-                &job.out.join(&n),
-                &ExrOptions::default(),
-                &attrs,
+    let exr_name = format!("{}_target.exr", base);
+    let png_name = format!("{}_target.png", base);
+
+    // The clean DNG write, the noisy raws (computed and written one ISO after the other) and
+    // the target render run as concurrent rayon tasks: each output is computed exactly as
+    // before (same bytes), only the order in which files appear changes. With --jobs 1 the
+    // tasks run one after another on the single worker.
+    let mut clean_res: Option<day2night::Result<()>> = None;
+    let mut noisy_res: Option<day2night::Result<Option<day2night::RawImage>>> = None;
+    let mut target_res: Option<day2night::Result<()>> = None;
+    rayon::scope(|s| {
+        let (clean, wopts) = (&clean, &wopts);
+        let (clean_name, noisy_names) = (&clean_name, &noisy_names);
+        let (exr_name, png_name, attrs) = (&exr_name, &png_name, &attrs);
+        let (clean_res, noisy_res) = (&mut clean_res, &mut noisy_res);
+        s.spawn(move |_| {
+            *clean_res = Some(write_dng(
+                clean,
+                &job.out.join(clean_name),
+                wopts,
                 &job.policy,
-            )?;
-            files.push(n);
-            stages.push("target_exr".into());
+            ));
+        });
+        s.spawn(move |_| {
+            *noisy_res = Some((|| {
+                let mut first_noisy = None;
+                for (i, n) in noisy_names.iter().enumerate() {
+                    let (_, noisy) = run_noise(clean, plan, i)?;
+                    write_dng(&noisy, &job.out.join(n), wopts, &job.policy)?;
+                    if first_noisy.is_none() && job.input_exr {
+                        first_noisy = Some(noisy);
+                    }
+                }
+                Ok(first_noisy)
+            })());
+        });
+        if want_exr || want_png {
+            target_res = Some((|| {
+                let ropts = RenderOptions {
+                    neutral: Some(neutral),
+                    ..RenderOptions::default()
+                };
+                let rgb = render_linear(clean, &ropts)?;
+                let (e, p) = rayon::join(
+                    || {
+                        if want_exr {
+                            write_exr(
+                                &rgb,
+                                &job.out.join(exr_name),
+                                &ExrOptions::default(),
+                                attrs,
+                                &job.policy,
+                            )
+                        } else {
+                            Ok(())
+                        }
+                    },
+                    || {
+                        if want_png {
+                            write_png(
+                                &rgb,
+                                &job.out.join(png_name),
+                                &PngOptions::default(),
+                                &job.policy,
+                            )
+                        } else {
+                            Ok(())
+                        }
+                    },
+                );
+                e.and(p)
+            })());
         }
-        if want_png {
-            let n = format!("{}_target.png", base);
-            write_png(&rgb, &job.out.join(&n), &PngOptions::default(), &job.policy)?;
-            files.push(n);
-            stages.push("target_png".into());
-        }
+    });
+    // Errors in a fixed order (clean, noisy, target), whatever finished first.
+    clean_res.unwrap_or(Ok(()))?;
+    let first_noisy = noisy_res.unwrap_or(Ok(None))?;
+    target_res.unwrap_or(Ok(()))?;
+    let mut files = vec![clean_name];
+    stages.push("write_clean_dng".into());
+    files.extend(noisy_names);
+    if !plan.noise.is_empty() {
+        stages.push("write_noisy_dng".into());
+    }
+    if want_exr {
+        files.push(exr_name);
+        stages.push("target_exr".into());
+    }
+    if want_png {
+        files.push(png_name);
+        stages.push("target_png".into());
     }
     if job.input_exr {
         let src = first_noisy.as_ref().unwrap_or(&clean);
