@@ -419,8 +419,12 @@ fn process_input(
     bar: Option<&indicatif::ProgressBar>,
 ) -> day2night::Result<()> {
     let bytes = std::fs::read(input)?;
-    let sha = sha256_hex(&bytes);
-    let img = day2night::dng::read::read_dng_bytes(&bytes)?;
+    // Hash (for the sidecar) and decode at the same time: both only read `bytes`.
+    let (sha, img) = rayon::join(
+        || sha256_hex(&bytes),
+        || day2night::dng::read::read_dng_bytes(&bytes),
+    );
+    let img = img?;
     drop(bytes);
     let name = input
         .file_name()
