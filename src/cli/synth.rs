@@ -157,6 +157,10 @@ pub struct ExtraArgs {
     /// Mask evaluation: separable (default), exact, or truncated:K (K sigmas).
     #[arg(long = "mask-eval", default_value = "separable")]
     pub mask_eval: String,
+    /// EXR compression (lossless: zip (default), piz (faster, smaller on renders), zips,
+    /// rle, none; lossy for half: pxr24, b44, b44a). See docs/benchmarks.md.
+    #[arg(long = "exr-compression", default_value = "zip", value_name = "KIND")]
+    pub exr_compression: String,
 }
 
 fn parse_isos(s: &str) -> Result<Vec<u32>, Failure> {
@@ -242,6 +246,7 @@ struct Job {
     target: TargetArg,
     input_exr: bool,
     compression: CompressionArg,
+    exr: ExrOptions,
     seed: u64,
     out: PathBuf,
     policy: OutputPolicy,
@@ -282,6 +287,10 @@ pub fn run(args: SynthArgs) -> CmdResult {
                 CompressionArg::Ljpeg
             } else {
                 CompressionArg::None
+            },
+            exr: ExrOptions {
+                compression: sc.outputs.exr_compression.parse()?,
+                ..ExrOptions::default()
             },
             seed: sc.plan.seed,
             out: args.out.clone(),
@@ -351,6 +360,14 @@ pub fn run(args: SynthArgs) -> CmdResult {
                 target: args.target,
                 input_exr: args.input_exr,
                 compression: args.compression,
+                exr: ExrOptions {
+                    compression: args
+                        .extra
+                        .exr_compression
+                        .parse()
+                        .map_err(|e: Error| usage(format!("--exr-compression: {}", e)))?,
+                    ..ExrOptions::default()
+                },
                 seed: args.seed,
                 out: args.out.clone(),
                 policy: OutputPolicy {
@@ -557,13 +574,7 @@ fn process_variant(
                 let (e, p) = rayon::join(
                     || {
                         if want_exr {
-                            write_exr(
-                                &rgb,
-                                &job.out.join(exr_name),
-                                &ExrOptions::default(),
-                                attrs,
-                                &job.policy,
-                            )
+                            write_exr(&rgb, &job.out.join(exr_name), &job.exr, attrs, &job.policy)
                         } else {
                             Ok(())
                         }
@@ -607,13 +618,7 @@ fn process_variant(
         let src = first_noisy.as_ref().unwrap_or(&clean);
         let rgb = render_input(src, Some(neutral), Default::default())?;
         let n = format!("{}_input.exr", base);
-        write_exr(
-            &rgb,
-            &job.out.join(&n),
-            &ExrOptions::default(),
-            &attrs,
-            &job.policy,
-        )?;
+        write_exr(&rgb, &job.out.join(&n), &job.exr, &attrs, &job.policy)?;
         files.push(n);
         stages.push("input_exr".into());
     }
@@ -645,6 +650,7 @@ fn process_variant(
             target: target_name(job.target).into(),
             input_exr: job.input_exr,
             files,
+            exr_compression: job.exr.compression.name().into(),
         },
     };
     write_bytes_atomic(
