@@ -35,8 +35,7 @@ pub fn row_rng(key: &[u8; 32], row: usize) -> ChaCha8Rng {
 /// the exact fraction `v - trunc(v)` decide. Same results for every input, tested below.
 #[inline]
 fn round_clamp(v: f64, white: f64) -> u16 {
-    if !(v > 0.0) {
-        // negative, zero or NaN
+    if v.is_nan() || v <= 0.0 {
         0
     } else if v >= white {
         white as u16
