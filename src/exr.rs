@@ -4,7 +4,8 @@
 //! file, neutral, ...). Samples are sanitized first: NaN -> 0, +-Inf and out-of-range
 //! values clamp to the largest finite value of the sample type, so no NaN/Inf is ever written.
 //! Blocks are compressed in parallel (the crate's `rayon` feature) and written in increasing
-//! line order, so the bytes do not depend on the thread count.
+//! line order; header attributes are sorted by name; so the bytes are identical from run to
+//! run and whatever the thread count (tested).
 
 use crate::error::{Error, Result};
 use crate::isp::RgbImage;
@@ -143,8 +144,67 @@ fn text(s: &str) -> Text {
     })
 }
 
-/// Encode `img` as an EXR into `out` (see the module docs for what is written).
+/// Encode `img` as an EXR into `out` (see the module docs for what is written). The header
+/// attributes are sorted by name after encoding: the `exr` crate keeps custom attributes in
+/// a `HashMap`, whose per-process random order would otherwise make the bytes differ from
+/// run to run.
 pub fn encode_exr<W: Write + Seek>(
+    img: &RgbImage,
+    mut out: W,
+    opts: &ExrOptions,
+    attributes: &[(String, String)],
+) -> Result<()> {
+    let mut buf = std::io::Cursor::new(Vec::new());
+    encode_unsorted(img, &mut buf, opts, attributes)?;
+    let mut bytes = buf.into_inner();
+    sort_header_attributes(&mut bytes)?;
+    out.write_all(&bytes)?;
+    Ok(())
+}
+
+/// Reorder the attributes of a single-part EXR header by name, in place. The header keeps
+/// its length, so the offset table after it stays valid.
+fn sort_header_attributes(bytes: &mut [u8]) -> Result<()> {
+    let bad = || Error::malformed("EXR header produced by the encoder could not be parsed");
+    // magic (4) + version (4); multi-part/deep files are not produced here
+    let mut pos = 8usize;
+    let mut attrs: Vec<(Vec<u8>, std::ops::Range<usize>)> = Vec::new();
+    let cstr = |from: usize| -> Option<usize> {
+        bytes
+            .get(from..)?
+            .iter()
+            .position(|&b| b == 0)
+            .map(|i| from + i)
+    };
+    loop {
+        match bytes.get(pos) {
+            None => return Err(bad()),
+            Some(0) => break,
+            Some(_) => {}
+        }
+        let start = pos;
+        let name_end = cstr(pos).ok_or_else(bad)?;
+        let type_end = cstr(name_end + 1).ok_or_else(bad)?;
+        let size_bytes = bytes.get(type_end + 1..type_end + 5).ok_or_else(bad)?;
+        let size = i32::from_le_bytes([size_bytes[0], size_bytes[1], size_bytes[2], size_bytes[3]]);
+        let size = usize::try_from(size).map_err(|_| bad())?;
+        let end = type_end + 5 + size;
+        if end > bytes.len() {
+            return Err(bad());
+        }
+        attrs.push((bytes[start..name_end].to_vec(), start..end));
+        pos = end;
+    }
+    attrs.sort_by(|a, b| a.0.cmp(&b.0));
+    let mut sorted = Vec::with_capacity(pos - 8);
+    for (_, r) in &attrs {
+        sorted.extend_from_slice(&bytes[r.clone()]);
+    }
+    bytes[8..pos].copy_from_slice(&sorted);
+    Ok(())
+}
+
+fn encode_unsorted<W: Write + Seek>(
     img: &RgbImage,
     out: W,
     opts: &ExrOptions,
@@ -294,6 +354,26 @@ mod tests {
                 assert!(image.attributes.chromaticities.is_some());
             }
         }
+    }
+
+    #[test]
+    fn header_is_deterministic_with_many_attributes() {
+        let img = RgbImage::new(3, 2);
+        let attrs: Vec<(String, String)> = (0..12)
+            .map(|i| (format!("k{i}"), format!("v{i}")))
+            .collect();
+        let enc = || {
+            let mut buf = Cursor::new(Vec::new());
+            encode_exr(&img, &mut buf, &ExrOptions::default(), &attrs).unwrap();
+            buf.into_inner()
+        };
+        let first = enc();
+        // HashMap order is random per map: many encodings in one process must still agree
+        for _ in 0..20 {
+            assert_eq!(enc(), first);
+        }
+        let back = exr::meta::MetaData::read_from_buffered(Cursor::new(&first), true).unwrap();
+        assert_eq!(back.headers[0].own_attributes.other.len(), 12);
     }
 
     #[test]
