@@ -6,6 +6,7 @@
 #   DATASET=1 benches/run.sh       # also (d): `dataset` on 20 such images, --jobs 2
 #                                  # (DATASET_RUNS runs, default 3)
 #   SKIP_RUNS=1 WORK=DIR benches/run.sh  # reprint the table from DIR's recorded times
+#   D2N_BIN=/path/to/old/day2night benches/run.sh  # time another build (before/after)
 #   WORK=/tmp/d2n-bench benches/run.sh   # scratch directory (default: a fresh mktemp -d)
 #
 # Builds release, generates a deterministic 12 MP 10-bit RGGB day DNG (4032x3024, black 64,
@@ -31,7 +32,7 @@ fi
 
 cd "$ROOT"
 cargo build --release --quiet --bin day2night --example make_bench_input --example io_floor
-BIN=$CARGO_TARGET_DIR/release/day2night
+BIN=${D2N_BIN:-$CARGO_TARGET_DIR/release/day2night}
 GEN=$CARGO_TARGET_DIR/release/examples/make_bench_input
 FLOOR=$CARGO_TARGET_DIR/release/examples/io_floor
 
