@@ -6,6 +6,7 @@ use crate::isp::tone::DisplayTone;
 use crate::isp::RgbImage;
 use crate::output::{write_atomic, OutputPolicy};
 use image::ImageEncoder;
+use rayon::prelude::*;
 use std::path::Path;
 
 /// Options of [`write_png`].
@@ -29,7 +30,7 @@ impl Default for PngOptions {
 /// Display-encoded 8-bit samples.
 pub fn encode_u8(img: &RgbImage, tone: DisplayTone) -> Vec<u8> {
     img.data
-        .iter()
+        .par_iter()
         .map(|&v| (tone.encode(v) * 255.0 + 0.5) as u8)
         .collect()
 }
@@ -37,7 +38,7 @@ pub fn encode_u8(img: &RgbImage, tone: DisplayTone) -> Vec<u8> {
 /// Display-encoded 16-bit samples.
 pub fn encode_u16(img: &RgbImage, tone: DisplayTone) -> Vec<u16> {
     img.data
-        .iter()
+        .par_iter()
         .map(|&v| (tone.encode(v) * 65535.0 + 0.5) as u16)
         .collect()
 }

@@ -506,3 +506,35 @@ fn calibration_files() {
     assert_eq!(out.status.code(), Some(1));
     assert!(String::from_utf8_lossy(&out.stderr).contains("noise.json"));
 }
+
+#[test]
+fn exr_compression_option_is_recorded_and_replayed() {
+    let t = tempfile::tempdir().unwrap();
+    let (z, p, r) = (t.path().join("z"), t.path().join("p"), t.path().join("r"));
+    ok(&synth(&[s(&day()), "-o", s(&z), "--iso", "none"]));
+    ok(&synth(&[
+        s(&day()),
+        "-o",
+        s(&p),
+        "--iso",
+        "none",
+        "--exr-compression",
+        "piz",
+    ]));
+    let (fz, fp) = (files(&z), files(&p));
+    // Default sidecars do not mention the option; a non-default one is recorded.
+    assert!(!String::from_utf8_lossy(&fz["day.json"]).contains("exr_compression"));
+    assert!(String::from_utf8_lossy(&fp["day.json"]).contains("\"exr_compression\": \"piz\""));
+    assert_eq!(fz["day_clean.dng"], fp["day_clean.dng"]);
+    assert_ne!(fz["day_target.exr"], fp["day_target.exr"]);
+    ok(&synth(&[
+        s(&day()),
+        "-o",
+        s(&r),
+        "--replay",
+        s(&p.join("day.json")),
+    ]));
+    same(&fp, &files(&r), "replay of a piz run");
+    let out = synth(&[s(&day()), "-o", s(&r), "--exr-compression", "gzip"]);
+    assert_eq!(out.status.code(), Some(2));
+}

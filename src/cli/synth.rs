@@ -157,6 +157,10 @@ pub struct ExtraArgs {
     /// Mask evaluation: separable (default), exact, or truncated:K (K sigmas).
     #[arg(long = "mask-eval", default_value = "separable")]
     pub mask_eval: String,
+    /// EXR compression (lossless: zip (default), piz (faster, smaller on renders), zips,
+    /// rle, none; lossy for half: pxr24, b44, b44a). See docs/benchmarks.md.
+    #[arg(long = "exr-compression", default_value = "zip", value_name = "KIND")]
+    pub exr_compression: String,
 }
 
 fn parse_isos(s: &str) -> Result<Vec<u32>, Failure> {
@@ -242,6 +246,7 @@ struct Job {
     target: TargetArg,
     input_exr: bool,
     compression: CompressionArg,
+    exr: ExrOptions,
     seed: u64,
     out: PathBuf,
     policy: OutputPolicy,
@@ -282,6 +287,10 @@ pub fn run(args: SynthArgs) -> CmdResult {
                 CompressionArg::Ljpeg
             } else {
                 CompressionArg::None
+            },
+            exr: ExrOptions {
+                compression: sc.outputs.exr_compression.parse()?,
+                ..ExrOptions::default()
             },
             seed: sc.plan.seed,
             out: args.out.clone(),
@@ -351,6 +360,14 @@ pub fn run(args: SynthArgs) -> CmdResult {
                 target: args.target,
                 input_exr: args.input_exr,
                 compression: args.compression,
+                exr: ExrOptions {
+                    compression: args
+                        .extra
+                        .exr_compression
+                        .parse()
+                        .map_err(|e: Error| usage(format!("--exr-compression: {}", e)))?,
+                    ..ExrOptions::default()
+                },
                 seed: args.seed,
                 out: args.out.clone(),
                 policy: OutputPolicy {
@@ -419,8 +436,12 @@ fn process_input(
     bar: Option<&indicatif::ProgressBar>,
 ) -> day2night::Result<()> {
     let bytes = std::fs::read(input)?;
-    let sha = sha256_hex(&bytes);
-    let img = day2night::dng::read::read_dng_bytes(&bytes)?;
+    // Hash (for the sidecar) and decode at the same time: both only read `bytes`.
+    let (sha, img) = rayon::join(
+        || sha256_hex(&bytes),
+        || day2night::dng::read::read_dng_bytes(&bytes),
+    );
+    let img = img?;
     drop(bytes);
     let name = input
         .file_name()
@@ -482,27 +503,16 @@ fn process_variant(
         },
         ..WriteOptions::default()
     };
-    let mut files = Vec::new();
     let mut stages = plan.stages.clone();
     let (mut clean, report) = run_clean(img, plan)?;
     clean.meta = night_meta(&img.meta, plan, plan.clean_iso, &plan.clean_noise);
+    let clean = clean;
     let clean_name = format!("{}_clean.dng", base);
-    write_dng(&clean, &job.out.join(&clean_name), &wopts, &job.policy)?;
-    files.push(clean_name);
-    stages.push("write_clean_dng".into());
-    let mut first_noisy = None;
-    for i in 0..plan.noise.len() {
-        let (iso, noisy) = run_noise(&clean, plan, i)?;
-        let n = format!("{}_iso{}.dng", base, iso);
-        write_dng(&noisy, &job.out.join(&n), &wopts, &job.policy)?;
-        files.push(n);
-        if first_noisy.is_none() && job.input_exr {
-            first_noisy = Some(noisy);
-        }
-    }
-    if !plan.noise.is_empty() {
-        stages.push("write_noisy_dng".into());
-    }
+    let noisy_names: Vec<String> = plan
+        .noise
+        .iter()
+        .map(|np| format!("{}_iso{}.dng", base, np.iso))
+        .collect();
     let neutral = plan.night_neutral;
     // One attribute only: the exr crate keeps custom attributes in a HashMap, so several
     // would be written in a per-process random order (non-deterministic bytes).
@@ -518,42 +528,97 @@ fn process_variant(
     let attrs = vec![("day2night:synth".to_string(), summary)];
     let want_exr = matches!(job.target, TargetArg::Exr | TargetArg::Both);
     let want_png = matches!(job.target, TargetArg::Png | TargetArg::Both);
-    if want_exr || want_png {
-        let ropts = RenderOptions {
-            neutral: Some(neutral),
-            ..RenderOptions::default()
-        };
-        let rgb = render_linear(&clean, &ropts)?;
-        if want_exr {
-            let n = format!("{}_target.exr", base);
-            write_exr(
-                &rgb,
-                &job.out.join(&n),
-                &ExrOptions::default(),
-                &attrs,
+    let exr_name = format!("{}_target.exr", base);
+    let png_name = format!("{}_target.png", base);
+
+    // The clean DNG write, the noisy raws (computed and written one ISO after the other) and
+    // the target render run as concurrent rayon tasks: each output is computed exactly as
+    // before (same bytes), only the order in which files appear changes. With --jobs 1 the
+    // tasks run one after another on the single worker.
+    let mut clean_res: Option<day2night::Result<()>> = None;
+    let mut noisy_res: Option<day2night::Result<Option<day2night::RawImage>>> = None;
+    let mut target_res: Option<day2night::Result<()>> = None;
+    rayon::scope(|s| {
+        let (clean, wopts) = (&clean, &wopts);
+        let (clean_name, noisy_names) = (&clean_name, &noisy_names);
+        let (exr_name, png_name, attrs) = (&exr_name, &png_name, &attrs);
+        let (clean_res, noisy_res) = (&mut clean_res, &mut noisy_res);
+        s.spawn(move |_| {
+            *clean_res = Some(write_dng(
+                clean,
+                &job.out.join(clean_name),
+                wopts,
                 &job.policy,
-            )?;
-            files.push(n);
-            stages.push("target_exr".into());
+            ));
+        });
+        s.spawn(move |_| {
+            *noisy_res = Some((|| {
+                let mut first_noisy = None;
+                for (i, n) in noisy_names.iter().enumerate() {
+                    let (_, noisy) = run_noise(clean, plan, i)?;
+                    write_dng(&noisy, &job.out.join(n), wopts, &job.policy)?;
+                    if first_noisy.is_none() && job.input_exr {
+                        first_noisy = Some(noisy);
+                    }
+                }
+                Ok(first_noisy)
+            })());
+        });
+        if want_exr || want_png {
+            target_res = Some((|| {
+                let ropts = RenderOptions {
+                    neutral: Some(neutral),
+                    ..RenderOptions::default()
+                };
+                let rgb = render_linear(clean, &ropts)?;
+                let (e, p) = rayon::join(
+                    || {
+                        if want_exr {
+                            write_exr(&rgb, &job.out.join(exr_name), &job.exr, attrs, &job.policy)
+                        } else {
+                            Ok(())
+                        }
+                    },
+                    || {
+                        if want_png {
+                            write_png(
+                                &rgb,
+                                &job.out.join(png_name),
+                                &PngOptions::default(),
+                                &job.policy,
+                            )
+                        } else {
+                            Ok(())
+                        }
+                    },
+                );
+                e.and(p)
+            })());
         }
-        if want_png {
-            let n = format!("{}_target.png", base);
-            write_png(&rgb, &job.out.join(&n), &PngOptions::default(), &job.policy)?;
-            files.push(n);
-            stages.push("target_png".into());
-        }
+    });
+    // Errors in a fixed order (clean, noisy, target), whatever finished first.
+    clean_res.unwrap_or(Ok(()))?;
+    let first_noisy = noisy_res.unwrap_or(Ok(None))?;
+    target_res.unwrap_or(Ok(()))?;
+    let mut files = vec![clean_name];
+    stages.push("write_clean_dng".into());
+    files.extend(noisy_names);
+    if !plan.noise.is_empty() {
+        stages.push("write_noisy_dng".into());
+    }
+    if want_exr {
+        files.push(exr_name);
+        stages.push("target_exr".into());
+    }
+    if want_png {
+        files.push(png_name);
+        stages.push("target_png".into());
     }
     if job.input_exr {
         let src = first_noisy.as_ref().unwrap_or(&clean);
         let rgb = render_input(src, Some(neutral), Default::default())?;
         let n = format!("{}_input.exr", base);
-        write_exr(
-            &rgb,
-            &job.out.join(&n),
-            &ExrOptions::default(),
-            &attrs,
-            &job.policy,
-        )?;
+        write_exr(&rgb, &job.out.join(&n), &job.exr, &attrs, &job.policy)?;
         files.push(n);
         stages.push("input_exr".into());
     }
@@ -585,6 +650,7 @@ fn process_variant(
             target: target_name(job.target).into(),
             input_exr: job.input_exr,
             files,
+            exr_compression: job.exr.compression.name().into(),
         },
     };
     write_bytes_atomic(

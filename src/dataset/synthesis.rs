@@ -225,6 +225,7 @@ impl Processor for SynthProcessor {
                 target: self.target.name().into(),
                 input_exr: self.input_exr,
                 files,
+                exr_compression: "zip".into(),
             },
         };
         let json = sidecar.to_json()?;

@@ -190,19 +190,26 @@ pub fn apply_geometry(rgb: RgbImage, meta: &RawMeta, crop: bool, orient: bool) -
         if (x0, y0, cw, ch) == (0, 0, rgb.width, rgb.height) {
             rgb
         } else {
-            let mut out = RgbImage::new(cw, ch);
-            for (y, row) in out.data.chunks_exact_mut(3 * cw).enumerate() {
+            // In place: row y moves from 3 * ((y + y0) * width + x0) down to 3 * y * cw,
+            // never after its source, so rows copied in order do not overwrite unread data
+            // (no second full-size buffer; same pixels as copying into a new image).
+            let mut rgb = rgb;
+            for y in 0..ch {
                 let s = 3 * ((y + y0) * rgb.width + x0);
-                row.copy_from_slice(&rgb.data[s..s + 3 * cw]);
+                rgb.data.copy_within(s..s + 3 * cw, 3 * y * cw);
             }
-            out
+            rgb.data.truncate(3 * cw * ch);
+            rgb.width = cw;
+            rgb.height = ch;
+            rgb
         }
     } else {
         rgb
     };
-    if orient {
+    if orient && (2..=8).contains(&meta.orientation) {
         orient_image(&rgb, meta.orientation)
     } else {
+        // Orientation 1 (or unknown): the image as it is, not a copy.
         rgb
     }
 }

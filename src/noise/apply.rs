@@ -30,6 +30,23 @@ pub fn row_rng(key: &[u8; 32], row: usize) -> ChaCha8Rng {
     rng
 }
 
+/// `clamp(round(v), 0, white) as u16` with NaN -> 0 (round half away from zero), without
+/// calling `f64::round` (a libm call on baseline x86-64): the integer part by truncation and
+/// the exact fraction `v - trunc(v)` decide. Same results for every input, tested below.
+#[inline]
+fn round_clamp(v: f64, white: f64) -> u16 {
+    if v.is_nan() || v <= 0.0 {
+        0
+    } else if v >= white {
+        white as u16
+    } else {
+        // 0 < v < white <= 65535: the truncation and the difference are exact.
+        let t = v as u32;
+        let up = (v - t as f64 >= 0.5) as u32;
+        (t + up) as u16
+    }
+}
+
 /// A noisy copy of `clean` (which must hold linear values: no LinearizationTable).
 /// Samples outside the ActiveArea are copied unchanged.
 pub fn apply_noise(clean: &RawImage, params: &NoiseParams, seed: u64) -> Result<RawImage> {
@@ -58,12 +75,7 @@ pub fn apply_noise(clean: &RawImage, params: &NoiseParams, seed: u64) -> Result<
                     let y = (xf - b) / scale;
                     let var = params.var_norm(Bayer::position(r, c), y) * scale2;
                     let n: f64 = StandardNormal.sample(&mut rng);
-                    let v = (xf + var.sqrt() * n).round();
-                    *x = if v.is_nan() {
-                        0
-                    } else {
-                        v.clamp(0.0, white) as u16
-                    };
+                    *x = round_clamp(xf + var.sqrt() * n, white);
                 }
             },
         );
@@ -116,6 +128,54 @@ mod tests {
         assert_eq!(a.data, b.data);
         let c = apply_noise(&img, &p, 8).unwrap();
         assert_ne!(a.data, c.data);
+    }
+
+    #[test]
+    fn round_clamp_matches_round_then_clamp() {
+        let reference = |v: f64, white: f64| -> u16 {
+            let v = v.round();
+            if v.is_nan() {
+                0
+            } else {
+                v.clamp(0.0, white) as u16
+            }
+        };
+        let whites = [1023.0, 1023.5, 16383.0, 65535.0, 0.0, 0.4];
+        let mut vals = vec![
+            f64::NAN,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            -0.0,
+            0.0,
+            0.5,
+            0.49999999999999994,
+            1.5,
+            2.5,
+            -0.5,
+            -0.49,
+            1022.5,
+            1022.4999999,
+            1023.2,
+            1023.5,
+            1023.6,
+            65534.5,
+            65535.49,
+            70000.0,
+            f64::MIN_POSITIVE,
+        ];
+        let mut s = 1u64;
+        for _ in 0..20000 {
+            s = s
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            vals.push((s >> 11) as f64 / (1u64 << 53) as f64 * 70000.0 - 1000.0);
+            vals.push((s >> 40) as f64 + 0.5);
+        }
+        for &w in &whites {
+            for &v in &vals {
+                assert_eq!(round_clamp(v, w), reference(v, w), "v {v} white {w}");
+            }
+        }
     }
 
     #[test]

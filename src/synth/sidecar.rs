@@ -49,6 +49,21 @@ pub struct OutputInfo {
     pub input_exr: bool,
     /// Names of the files written.
     pub files: Vec<String>,
+    /// EXR compression of the EXR outputs (`synth --exr-compression`); absent = "zip" (the
+    /// default, not written so default sidecars stay as before).
+    #[serde(
+        default = "default_exr_compression",
+        skip_serializing_if = "is_default_exr_compression"
+    )]
+    pub exr_compression: String,
+}
+
+fn default_exr_compression() -> String {
+    "zip".into()
+}
+
+fn is_default_exr_compression(s: &str) -> bool {
+    s == "zip"
 }
 
 /// The sidecar document.
