@@ -1,14 +1,15 @@
 //! `day2night dataset`: a whole dataset from a folder of day DNGs (see docs/dataset.md).
-use super::synth::{CompressionArg, CovArg, ExtraArgs, FormulaArg, ModeArg, TargetArg};
+use super::synth::{
+    parse_isos, parse_mask_eval, parse_neutral, CompressionArg, CovArg, ExtraArgs, FormulaArg,
+    ModeArg, TargetArg,
+};
 use super::{usage, CmdResult, Failure};
 use day2night::dataset::run::ProgressMode;
 use day2night::dataset::synthesis::{SynthProcessor, Target};
 use day2night::dataset::{self, RunOptions, Shard, SplitRule};
 use day2night::dng::write::Compression;
 use day2night::synth::dictionaries;
-use day2night::synth::{
-    Calibration, Covariance, Gaussian2, MaskEval, Mode, RelightFormula, SynthOptions,
-};
+use day2night::synth::{Calibration, Covariance, Gaussian2, Mode, RelightFormula, SynthOptions};
 use std::path::PathBuf;
 
 /// Synthesis options forwarded to every input: the same names, values and defaults as
@@ -97,53 +98,6 @@ pub struct DatasetArgs {
     pub quiet: bool,
     #[command(flatten)]
     pub synth: Box<SynthForward>,
-}
-
-fn parse_isos(s: &str) -> Result<Vec<u32>, Failure> {
-    if s.trim().eq_ignore_ascii_case("none") {
-        return Ok(vec![]);
-    }
-    s.split(',')
-        .map(|p| {
-            p.trim()
-                .parse::<u32>()
-                .ok()
-                .filter(|&v| v > 0)
-                .ok_or_else(|| {
-                    usage(format!(
-                        "--iso: {p:?} is not a positive integer (or use `none`)"
-                    ))
-                })
-        })
-        .collect()
-}
-
-fn parse_neutral(s: &str) -> Result<[f64; 3], Failure> {
-    let v: Vec<f64> = s
-        .split(',')
-        .map(|p| p.trim().parse::<f64>())
-        .collect::<Result<_, _>>()
-        .map_err(|_| usage(format!("--day-neutral: {s:?} is not r,g,b")))?;
-    match v.as_slice() {
-        [r, g, b] => Ok([*r, *g, *b]),
-        _ => Err(usage(format!("--day-neutral: {s:?} is not r,g,b"))),
-    }
-}
-
-fn parse_mask_eval(s: &str) -> Result<MaskEval, Failure> {
-    match s {
-        "separable" => Ok(MaskEval::Separable),
-        "exact" => Ok(MaskEval::Exact),
-        _ => match s
-            .strip_prefix("truncated:")
-            .and_then(|k| k.parse::<f64>().ok())
-        {
-            Some(k) if k > 0.0 && k.is_finite() => Ok(MaskEval::Truncated { k }),
-            _ => Err(usage(format!(
-                "--mask-eval: {s:?} (use separable, exact or truncated:K)"
-            ))),
-        },
-    }
 }
 
 /// Build the synthesis processor from the forwarded options (the same mapping as `synth`).

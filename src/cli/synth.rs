@@ -163,7 +163,7 @@ pub struct ExtraArgs {
     pub exr_compression: String,
 }
 
-fn parse_isos(s: &str) -> Result<Vec<u32>, Failure> {
+pub(super) fn parse_isos(s: &str) -> Result<Vec<u32>, Failure> {
     if s.trim().eq_ignore_ascii_case("none") {
         return Ok(vec![]);
     }
@@ -185,7 +185,7 @@ fn parse_isos(s: &str) -> Result<Vec<u32>, Failure> {
     Ok(v)
 }
 
-fn parse_neutral(s: &str) -> Result<[f64; 3], Failure> {
+pub(super) fn parse_neutral(s: &str) -> Result<[f64; 3], Failure> {
     let v: Vec<f64> = s
         .split(',')
         .map(|p| p.trim().parse::<f64>())
@@ -197,7 +197,7 @@ fn parse_neutral(s: &str) -> Result<[f64; 3], Failure> {
     }
 }
 
-fn parse_mask_eval(s: &str) -> Result<MaskEval, Failure> {
+pub(super) fn parse_mask_eval(s: &str) -> Result<MaskEval, Failure> {
     match s {
         "separable" => Ok(MaskEval::Separable),
         "exact" => Ok(MaskEval::Exact),
