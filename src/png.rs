@@ -60,6 +60,19 @@ fn img_err(e: image::ImageError) -> Error {
     }
 }
 
+/// Display-encoded samples as the `image` encoders take them (native-endian for 16 bit).
+fn encoded(img: &RgbImage, opts: &PngOptions) -> (Vec<u8>, image::ExtendedColorType) {
+    if opts.sixteen_bit {
+        let native = encode_u16(img, opts.tone)
+            .iter()
+            .flat_map(|v| v.to_ne_bytes())
+            .collect();
+        (native, image::ExtendedColorType::Rgb16)
+    } else {
+        (encode_u8(img, opts.tone), image::ExtendedColorType::Rgb8)
+    }
+}
+
 /// Write a display-referred PNG of the linear image `img` atomically.
 pub fn write_png(
     img: &RgbImage,
@@ -69,28 +82,10 @@ pub fn write_png(
 ) -> Result<()> {
     let (w, h) = dims(img)?;
     write_atomic(path, policy, |out| {
-        let enc = image::codecs::png::PngEncoder::new(out);
-        if opts.sixteen_bit {
-            let bytes: Vec<u8> = encode_u16(img, opts.tone)
-                .iter()
-                .flat_map(|v| v.to_be_bytes())
-                .collect();
-            // PngEncoder takes native-endian u16 bytes
-            let native: Vec<u8> = bytes
-                .chunks_exact(2)
-                .flat_map(|b| u16::from_be_bytes([b[0], b[1]]).to_ne_bytes())
-                .collect();
-            enc.write_image(&native, w, h, image::ExtendedColorType::Rgb16)
-                .map_err(img_err)
-        } else {
-            enc.write_image(
-                &encode_u8(img, opts.tone),
-                w,
-                h,
-                image::ExtendedColorType::Rgb8,
-            )
+        let (bytes, color) = encoded(img, opts);
+        image::codecs::png::PngEncoder::new(out)
+            .write_image(&bytes, w, h, color)
             .map_err(img_err)
-        }
     })
 }
 
@@ -103,23 +98,10 @@ pub fn write_tiff(
 ) -> Result<()> {
     let (w, h) = dims(img)?;
     write_atomic(path, policy, |out| {
-        let enc = image::codecs::tiff::TiffEncoder::new(out);
-        if opts.sixteen_bit {
-            let native: Vec<u8> = encode_u16(img, opts.tone)
-                .iter()
-                .flat_map(|v| v.to_ne_bytes())
-                .collect();
-            enc.write_image(&native, w, h, image::ExtendedColorType::Rgb16)
-                .map_err(img_err)
-        } else {
-            enc.write_image(
-                &encode_u8(img, opts.tone),
-                w,
-                h,
-                image::ExtendedColorType::Rgb8,
-            )
+        let (bytes, color) = encoded(img, opts);
+        image::codecs::tiff::TiffEncoder::new(out)
+            .write_image(&bytes, w, h, color)
             .map_err(img_err)
-        }
     })
 }
 
