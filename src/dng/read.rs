@@ -518,9 +518,9 @@ pub const STRUCTURAL_TAGS: &[u16] = &[
     JPEG_TABLES,
     EXIF_IFD,
     GPS_IFD,
-    513,   // JPEGInterchangeFormat (thumbnail offset)
-    514,   // JPEGInterchangeFormatLength
-    40965, // Exif InteroperabilityIFD pointer
+    JPEG_IF_OFFSET, // thumbnail offset
+    JPEG_IF_LENGTH,
+    INTEROP_IFD, // Exif InteroperabilityIFD pointer
 ];
 
 /// Tags decoded into typed [`RawMeta`] fields (so not carried as extras).

@@ -25,22 +25,6 @@ use rayon::prelude::*;
 use sha2::{Digest, Sha256};
 use std::path::Path;
 
-/// Exif ISOSpeed (34867), written with SensitivityType 3.
-const ISO_SPEED: u16 = 34867;
-/// Exif StandardOutputSensitivity.
-const STANDARD_OUTPUT_SENSITIVITY: u16 = 34865;
-/// Exif ShutterSpeedValue / ApertureValue / BrightnessValue (APEX, derived from the exposure).
-const SHUTTER_SPEED_VALUE: u16 = 37377;
-const APERTURE_VALUE: u16 = 37378;
-const BRIGHTNESS_VALUE: u16 = 37379;
-/// Exif PixelXDimension / PixelYDimension / InteroperabilityIFD.
-const PIXEL_X_DIMENSION: u16 = 40962;
-const PIXEL_Y_DIMENSION: u16 = 40963;
-const INTEROP_IFD: u16 = 40965;
-/// TIFF JPEGInterchangeFormat / Length (old-style thumbnails).
-const JPEG_IF_OFFSET: u16 = 513;
-const JPEG_IF_LENGTH: u16 = 514;
-const SUBFILE_TYPE: u16 = 255;
 /// Tile edge of lossless-JPEG tiles (as Adobe's converter writes).
 const LJPEG_TILE: usize = 256;
 /// Target size of one uncompressed strip.
@@ -200,7 +184,7 @@ pub fn is_dropped(tag: u16) -> bool {
         tag,
         // Structure, regenerated for the new layout.
         t::NEW_SUBFILE_TYPE
-            | SUBFILE_TYPE
+            | t::SUBFILE_TYPE
             | t::IMAGE_WIDTH
             | t::IMAGE_LENGTH
             | t::BITS_PER_SAMPLE
@@ -219,11 +203,11 @@ pub fn is_dropped(tag: u16) -> bool {
             | t::SUB_IFDS
             | t::SAMPLE_FORMAT
             | t::JPEG_TABLES
-            | JPEG_IF_OFFSET
-            | JPEG_IF_LENGTH
+            | t::JPEG_IF_OFFSET
+            | t::JPEG_IF_LENGTH
             | t::EXIF_IFD
             | t::GPS_IFD
-            | INTEROP_IFD
+            | t::INTEROP_IFD
             // Regenerated from the typed metadata / by this writer.
             | t::SOFTWARE
             | t::RAW_DATA_UNIQUE_ID
@@ -249,17 +233,17 @@ pub fn is_dropped(tag: u16) -> bool {
             | t::ISO_SPEED_RATINGS
             | t::SENSITIVITY_TYPE
             | t::RECOMMENDED_EXPOSURE_INDEX
-            | STANDARD_OUTPUT_SENSITIVITY
-            | ISO_SPEED
+            | t::STANDARD_OUTPUT_SENSITIVITY
+            | t::ISO_SPEED
             | t::EXPOSURE_TIME
             | t::F_NUMBER
             | t::DATE_TIME_ORIGINAL
             | t::EXIF_VERSION
-            | SHUTTER_SPEED_VALUE
-            | APERTURE_VALUE
-            | BRIGHTNESS_VALUE
-            | PIXEL_X_DIMENSION
-            | PIXEL_Y_DIMENSION
+            | t::SHUTTER_SPEED_VALUE
+            | t::APERTURE_VALUE
+            | t::BRIGHTNESS_VALUE
+            | t::PIXEL_X_DIMENSION
+            | t::PIXEL_Y_DIMENSION
             // Typed fields of RawMeta: written from the typed value, never twice.
             | t::MAKE
             | t::MODEL
@@ -792,7 +776,7 @@ fn exif_ifd(m: &RawMeta) -> Ifd {
             Value::Short(vec![iso.min(65535) as u16]),
         );
         ifd.set(t::SENSITIVITY_TYPE, Value::Short(vec![3]));
-        ifd.set(ISO_SPEED, Value::Long(vec![iso]));
+        ifd.set(t::ISO_SPEED, Value::Long(vec![iso]));
     }
     if let Some(et) = e.exposure_time.filter(|&x| x > 0.0 && x.is_finite()) {
         ifd.set(t::EXPOSURE_TIME, urational(&[et]));

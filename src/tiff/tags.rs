@@ -4,6 +4,8 @@
 
 // TIFF baseline / extensions
 pub const NEW_SUBFILE_TYPE: u16 = 254;
+/// Old-style SubfileType.
+pub const SUBFILE_TYPE: u16 = 255;
 pub const IMAGE_WIDTH: u16 = 256;
 pub const IMAGE_LENGTH: u16 = 257;
 pub const BITS_PER_SAMPLE: u16 = 258;
@@ -32,6 +34,9 @@ pub const TILE_BYTE_COUNTS: u16 = 325;
 pub const SUB_IFDS: u16 = 330;
 pub const SAMPLE_FORMAT: u16 = 339;
 pub const JPEG_TABLES: u16 = 347;
+/// JPEGInterchangeFormat / Length (old-style JPEG thumbnails).
+pub const JPEG_IF_OFFSET: u16 = 513;
+pub const JPEG_IF_LENGTH: u16 = 514;
 pub const COPYRIGHT: u16 = 33432;
 pub const CFA_REPEAT_PATTERN_DIM: u16 = 33421;
 pub const CFA_PATTERN: u16 = 33422;
@@ -46,10 +51,18 @@ pub const EXPOSURE_TIME: u16 = 33434;
 pub const F_NUMBER: u16 = 33437;
 pub const ISO_SPEED_RATINGS: u16 = 34855;
 pub const SENSITIVITY_TYPE: u16 = 34864;
+pub const STANDARD_OUTPUT_SENSITIVITY: u16 = 34865;
 pub const RECOMMENDED_EXPOSURE_INDEX: u16 = 34866;
+pub const ISO_SPEED: u16 = 34867;
 pub const EXIF_VERSION: u16 = 36864;
 pub const DATE_TIME_ORIGINAL: u16 = 36867;
+pub const SHUTTER_SPEED_VALUE: u16 = 37377;
+pub const APERTURE_VALUE: u16 = 37378;
+pub const BRIGHTNESS_VALUE: u16 = 37379;
 pub const MAKER_NOTE: u16 = 37500;
+pub const PIXEL_X_DIMENSION: u16 = 40962;
+pub const PIXEL_Y_DIMENSION: u16 = 40963;
+pub const INTEROP_IFD: u16 = 40965;
 
 // DNG
 pub const DNG_VERSION: u16 = 50706;
