@@ -90,6 +90,16 @@ impl Normalizer {
         }
         b
     }
+    /// True when the black level depends only on the site's 2x2 position: BlackLevel repeat
+    /// dimensions 1 or 2 and no non-zero BlackLevelDeltaH/V. Then
+    /// `black_at(row, col) == black_at(row & 1, col & 1)` exactly.
+    pub fn black_is_2x2_periodic(&self) -> bool {
+        let (rr, rc) = self.black_repeat;
+        matches!(rr, 1 | 2)
+            && matches!(rc, 1 | 2)
+            && self.delta_h.iter().all(|&d| d == 0.0)
+            && self.delta_v.iter().all(|&d| d == 0.0)
+    }
     /// Normalize one stored sample at active-area (row, col).
     #[inline]
     pub fn normalize(&self, x: u16, row: usize, col: usize) -> f64 {

@@ -47,6 +47,38 @@ fn round_clamp(v: f64, white: f64) -> u16 {
     }
 }
 
+/// Per-site noise standard deviation in DN, `sqrt(var_norm(pos, (x - black) / scale) * scale^2)`,
+/// tabulated for every stored value `x <= white` of each 2x2 position when the black level
+/// depends on the 2x2 position only (no BlackLevelDeltaH/V, repeat dims 1 or 2: the usual
+/// case). The table entries are computed with exactly the per-sample expression, so the
+/// noisy bytes are the same as without it; it replaces a division, a multiply-add, a branch
+/// and a square root per sample by one load.
+struct SigmaTable {
+    len: usize,
+    sigma: [Vec<f64>; 4],
+}
+
+impl SigmaTable {
+    fn new(norm: &Normalizer, params: &NoiseParams, white: f64) -> Option<SigmaTable> {
+        if !norm.black_is_2x2_periodic() {
+            return None;
+        }
+        let scale = norm.scale;
+        let scale2 = scale * scale;
+        let len = (white.max(0.0) as usize).saturating_add(1).min(1 << 16);
+        let sigma = std::array::from_fn(|pos| {
+            let b = norm.black_at(pos >> 1, pos & 1);
+            (0..len)
+                .map(|x| {
+                    let y = (x as f64 - b) / scale;
+                    (params.var_norm(pos, y) * scale2).sqrt()
+                })
+                .collect()
+        });
+        Some(SigmaTable { len, sigma })
+    }
+}
+
 /// A noisy copy of `clean` (which must hold linear values: no LinearizationTable).
 /// Samples outside the ActiveArea are copied unchanged.
 pub fn apply_noise(clean: &RawImage, params: &NoiseParams, seed: u64) -> Result<RawImage> {
@@ -58,6 +90,7 @@ pub fn apply_noise(clean: &RawImage, params: &NoiseParams, seed: u64) -> Result<
     let scale = norm.scale;
     let scale2 = scale * scale;
     let key = noise_key(seed);
+    let table = SigmaTable::new(&norm, params, white);
     let mut data = clean.data.clone();
     data.par_chunks_mut(width)
         .enumerate()
@@ -68,8 +101,26 @@ pub fn apply_noise(clean: &RawImage, params: &NoiseParams, seed: u64) -> Result<
             |blk, (srow, row)| {
                 let r = srow - top;
                 let mut rng = row_rng(&key, r);
-                norm.black_row(r, blk);
                 let seg = &mut row[left..left + aw];
+                if let Some(t) = &table {
+                    // even and odd columns of this row: positions (r&1)*2 and (r&1)*2+1
+                    let p0 = Bayer::position(r, 0);
+                    let (s0, s1) = (&t.sigma[p0], &t.sigma[p0 | 1]);
+                    for (c, x) in seg.iter_mut().enumerate() {
+                        let s = if c & 1 == 0 { s0 } else { s1 };
+                        let xi = *x as usize;
+                        let sigma = if xi < t.len {
+                            s[xi]
+                        } else {
+                            let y = (*x as f64 - norm.black_at(r, c)) / scale;
+                            (params.var_norm(Bayer::position(r, c), y) * scale2).sqrt()
+                        };
+                        let n: f64 = StandardNormal.sample(&mut rng);
+                        *x = round_clamp(*x as f64 + sigma * n, white);
+                    }
+                    return;
+                }
+                norm.black_row(r, blk);
                 for (c, (x, &b)) in seg.iter_mut().zip(blk.iter()).enumerate() {
                     let xf = *x as f64;
                     let y = (xf - b) / scale;
@@ -176,6 +227,62 @@ mod tests {
                 assert_eq!(round_clamp(v, w), reference(v, w), "v {v} white {w}");
             }
         }
+    }
+
+    /// The per-sample formula without the sigma table (the pre-table implementation).
+    fn reference(clean: &RawImage, params: &NoiseParams, seed: u64) -> Vec<u16> {
+        let norm = Normalizer::new(clean).unwrap();
+        let a = clean.active_area();
+        let (top, left) = (a.top as usize, a.left as usize);
+        let white = norm.white.min(u16::MAX as f64);
+        let key = noise_key(seed);
+        let mut data = clean.data.clone();
+        for r in 0..a.height() {
+            let mut rng = row_rng(&key, r);
+            for c in 0..a.width() {
+                let x = &mut data[(top + r) * clean.width + left + c];
+                let xf = *x as f64;
+                let y = (xf - norm.black_at(r, c)) / norm.scale;
+                let var = params.var_norm(Bayer::position(r, c), y) * norm.scale * norm.scale;
+                let n: f64 = StandardNormal.sample(&mut rng);
+                *x = round_clamp(xf + var.sqrt() * n, white);
+            }
+        }
+        data
+    }
+
+    #[test]
+    fn sigma_table_gives_the_per_sample_formula_bytes() {
+        let p = NoiseParams {
+            positions: [[2e-3, 1e-5], [1e-3, -2e-5], [1.5e-3, 3e-6], [4e-3, 0.0]],
+        };
+        let mut img = flat(37, 23, 0);
+        img.meta.levels.white = 1023.0;
+        img.meta.bits_per_sample = 10;
+        // values below black, across the range, at and above white (stored > white)
+        for (i, v) in img.data.iter_mut().enumerate() {
+            *v = ((i * 7919) % 1400) as u16;
+        }
+        for (black, repeat) in [
+            (vec![64.0], (1, 1)),
+            (vec![60.0, 64.0, 66.0, 70.5], (2, 2)),
+            (vec![60.0, 64.0], (1, 2)),
+            (vec![60.0, 64.0], (2, 1)),
+        ] {
+            img.meta.levels.black = black.clone();
+            img.meta.levels.black_repeat = repeat;
+            let n = Normalizer::new(&img).unwrap();
+            assert!(n.black_is_2x2_periodic());
+            let out = apply_noise(&img, &p, 11).unwrap();
+            assert_eq!(out.data, reference(&img, &p, 11), "{black:?} {repeat:?}");
+        }
+        // per-column deltas: the table is not used, same formula
+        img.meta.levels.black = vec![64.0];
+        img.meta.levels.black_repeat = (1, 1);
+        img.meta.levels.black_delta_h = (0..37).map(|c| c as f64 * 0.25).collect();
+        assert!(!Normalizer::new(&img).unwrap().black_is_2x2_periodic());
+        let out = apply_noise(&img, &p, 11).unwrap();
+        assert_eq!(out.data, reference(&img, &p, 11));
     }
 
     #[test]
