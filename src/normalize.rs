@@ -69,6 +69,10 @@ impl Normalizer {
             delta_v: l.black_delta_v.clone(),
         })
     }
+    /// True when there is no LinearizationTable: [`linearize`](Self::linearize) is `x as f64`.
+    pub fn is_identity(&self) -> bool {
+        self.lut.is_none()
+    }
     /// Linearized value of a stored sample.
     #[inline]
     pub fn linearize(&self, x: u16) -> f64 {

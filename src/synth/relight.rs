@@ -123,11 +123,16 @@ pub fn run_clean(img: &RawImage, plan: &Plan) -> Result<(RawImage, RunReport)> {
     let white = norm.white;
 
     // Whole stored image, linearized (so a dropped LinearizationTable stays truthful).
-    let mut data: Vec<u16> = img
-        .data
-        .iter()
-        .map(|&x| norm.linearize(x).clamp(0.0, u16::MAX as f64) as u16)
-        .collect();
+    // Without a table linearizing is the identity: a plain copy (the active-area rows are
+    // overwritten below anyway).
+    let mut data: Vec<u16> = if norm.is_identity() {
+        img.data.clone()
+    } else {
+        img.data
+            .par_iter()
+            .map(|&x| norm.linearize(x).clamp(0.0, u16::MAX as f64) as u16)
+            .collect()
+    };
     let saturated: u64 = data
         .par_chunks_mut(width)
         .enumerate()
