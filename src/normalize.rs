@@ -149,9 +149,32 @@ impl Normalizer {
     #[inline]
     pub fn denormalize_with_black(&self, y: f64, black: f64, truncate: bool) -> u16 {
         let v = y * self.scale + black;
-        let v = if truncate { v.trunc() } else { v.round() };
+        let white = self.white.min(u16::MAX as f64);
+        if !truncate {
+            return round_clamp(v, white);
+        }
+        let v = v.trunc();
         let v = if v.is_nan() { 0.0 } else { v };
-        v.clamp(0.0, self.white.min(u16::MAX as f64)) as u16
+        v.clamp(0.0, white) as u16
+    }
+}
+
+/// `clamp(round(v), 0, white) as u16` with NaN -> 0 (round half away from zero), without
+/// calling `f64::round` (a libm call on baseline x86-64): the integer part by truncation and
+/// the exact fraction `v - trunc(v)` decide. Same result as the plain expression for every
+/// input, fractional whites included (tested in noise::apply).
+#[inline]
+pub fn round_clamp(v: f64, white: f64) -> u16 {
+    if v.is_nan() || v <= 0.0 {
+        0
+    } else if v >= white {
+        white as u16
+    } else {
+        // 0 < v < white <= 65535: the truncation and the difference are exact; a fractional
+        // white caps the rounded value at floor(white).
+        let t = v as u32;
+        let up = (v - t as f64 >= 0.5) as u32;
+        (t + up).min(white as u32) as u16
     }
 }
 

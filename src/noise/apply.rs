@@ -7,7 +7,7 @@
 
 use super::model::NoiseParams;
 use crate::error::Result;
-use crate::normalize::Normalizer;
+use crate::normalize::{round_clamp, Normalizer};
 use crate::raw::{Bayer, RawImage};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
@@ -28,23 +28,6 @@ pub fn row_rng(key: &[u8; 32], row: usize) -> ChaCha8Rng {
     let mut rng = ChaCha8Rng::from_seed(*key);
     rng.set_stream(row as u64);
     rng
-}
-
-/// `clamp(round(v), 0, white) as u16` with NaN -> 0 (round half away from zero), without
-/// calling `f64::round` (a libm call on baseline x86-64): the integer part by truncation and
-/// the exact fraction `v - trunc(v)` decide. Same results for every input, tested below.
-#[inline]
-fn round_clamp(v: f64, white: f64) -> u16 {
-    if v.is_nan() || v <= 0.0 {
-        0
-    } else if v >= white {
-        white as u16
-    } else {
-        // 0 < v < white <= 65535: the truncation and the difference are exact.
-        let t = v as u32;
-        let up = (v - t as f64 >= 0.5) as u32;
-        (t + up) as u16
-    }
 }
 
 /// Per-site noise standard deviation in DN, `sqrt(var_norm(pos, (x - black) / scale) * scale^2)`,
@@ -191,7 +174,7 @@ mod tests {
                 v.clamp(0.0, white) as u16
             }
         };
-        let whites = [1023.0, 1023.5, 16383.0, 65535.0, 0.0, 0.4];
+        let whites = [1023.0, 1023.5, 1023.6, 16383.0, 65535.0, 0.0, 0.4, 0.6];
         let mut vals = vec![
             f64::NAN,
             f64::INFINITY,
@@ -209,6 +192,8 @@ mod tests {
             1023.2,
             1023.5,
             1023.6,
+            1023.55,
+            0.55,
             65534.5,
             65535.49,
             70000.0,
