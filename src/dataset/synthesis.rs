@@ -111,3 +111,37 @@ impl OutputSink for Sink {
         self.adopt(k, &suffix)
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::exr::ExrCompression;
+    use crate::synth::SynthOptions;
+
+    #[test]
+    fn fingerprint_keeps_the_old_form_for_default_exr_and_changes_otherwise() {
+        let p = SynthProcessor {
+            job: SynthJob::new(SynthOptions::default()).unwrap(),
+        };
+        let f = p.fingerprint();
+        // The form datasets made before --exr-compression was honoured were keyed by.
+        assert!(f.starts_with(&format!(
+            "day2night {} dataset-outputs/1\noptions {{",
+            crate::VERSION
+        )));
+        assert!(
+            f.ends_with("\ntarget exr\ninput_exr false\ncompression none"),
+            "{f}"
+        );
+        let mut q = p.clone();
+        q.job.exr.compression = ExrCompression::Piz;
+        assert!(q.fingerprint().starts_with(&f));
+        assert!(q.fingerprint().contains("\nexr ") && q.fingerprint().contains("Piz"));
+        // Thread counts and variants are not output options.
+        q.job = SynthJob {
+            variants: 4,
+            ..p.job.clone()
+        };
+        assert_eq!(q.fingerprint(), f);
+    }
+}
