@@ -173,7 +173,7 @@ pub struct ExtraArgs {
     pub exr_compression: String,
 }
 
-pub(super) fn parse_isos(s: &str) -> Result<Vec<u32>, Failure> {
+fn parse_isos(s: &str) -> Result<Vec<u32>, Failure> {
     if s.trim().eq_ignore_ascii_case("none") {
         return Ok(vec![]);
     }
@@ -195,7 +195,7 @@ pub(super) fn parse_isos(s: &str) -> Result<Vec<u32>, Failure> {
     Ok(v)
 }
 
-pub(super) fn parse_neutral(s: &str) -> Result<[f64; 3], Failure> {
+fn parse_neutral(s: &str) -> Result<[f64; 3], Failure> {
     let v: Vec<f64> = s
         .split(',')
         .map(|p| p.trim().parse::<f64>())
@@ -207,7 +207,7 @@ pub(super) fn parse_neutral(s: &str) -> Result<[f64; 3], Failure> {
     }
 }
 
-pub(super) fn parse_mask_eval(s: &str) -> Result<MaskEval, Failure> {
+fn parse_mask_eval(s: &str) -> Result<MaskEval, Failure> {
     match s {
         "separable" => Ok(MaskEval::Separable),
         "exact" => Ok(MaskEval::Exact),
@@ -225,7 +225,7 @@ pub(super) fn parse_mask_eval(s: &str) -> Result<MaskEval, Failure> {
 }
 
 /// `--exr-compression` value.
-pub(super) fn parse_exr_compression(s: &str) -> Result<ExrCompression, Failure> {
+fn parse_exr_compression(s: &str) -> Result<ExrCompression, Failure> {
     s.parse()
         .map_err(|e: Error| usage(format!("--exr-compression: {}", e)))
 }
