@@ -395,17 +395,12 @@ fn report_of_a_real_dataset() {
     assert!(String::from_utf8_lossy(&o.stderr).contains("not a dataset folder"));
 }
 
-#[test]
-fn outputs_equal_synth_for_top_level_files() {
-    // For a file directly in DAY_DIR the random stream is keyed exactly as `synth` keys it,
-    // so the two commands produce the same bytes under their own names.
+/// Run `dataset` and `synth` with the same synthesis/output options on one top-level input
+/// and assert equal bytes for every output (`ids`: the dataset ids, `_vK` included).
+fn assert_dataset_equals_synth(args: &[&str], ids: &[&str], isos: &[u32], targets: &[&str]) {
     let day = day_dir(1, false);
     let out = tempfile::tempdir().unwrap();
-    let o = dataset(
-        day.path(),
-        out.path(),
-        &["--seed", "5", "--target", "both", "--input-exr"],
-    );
+    let o = dataset(day.path(), out.path(), args);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let syn = tempfile::tempdir().unwrap();
     let o = common::bin()
@@ -413,30 +408,158 @@ fn outputs_equal_synth_for_top_level_files() {
         .arg(day.path().join("IMG_00.dng"))
         .arg("-o")
         .arg(syn.path())
-        .args(["--seed", "5", "--target", "both", "--input-exr"])
+        .args(args)
         .output()
         .unwrap();
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    for (ours, theirs) in [
-        ("train/clean_raw/IMG_00.dng", "IMG_00_clean.dng"),
-        ("train/noisy_raw/IMG_00_iso1600.dng", "IMG_00_iso1600.dng"),
-        ("train/noisy_raw/IMG_00_iso3200.dng", "IMG_00_iso3200.dng"),
-        ("train/target/IMG_00.exr", "IMG_00_target.exr"),
-        ("train/target/IMG_00.png", "IMG_00_target.png"),
-        ("train/input/IMG_00.exr", "IMG_00_input.exr"),
-    ] {
-        let a = std::fs::read(out.path().join(ours)).unwrap();
-        let b = std::fs::read(syn.path().join(theirs)).unwrap();
-        assert!(a == b, "{ours} differs from synth's {theirs}");
+    let input_exr = args.contains(&"--input-exr");
+    let mut n = 0;
+    for id in ids {
+        let mut pairs = vec![(
+            format!("train/clean_raw/{id}.dng"),
+            format!("{id}_clean.dng"),
+        )];
+        for iso in isos {
+            pairs.push((
+                format!("train/noisy_raw/{id}_iso{iso}.dng"),
+                format!("{id}_iso{iso}.dng"),
+            ));
+        }
+        for ext in targets {
+            pairs.push((
+                format!("train/target/{id}.{ext}"),
+                format!("{id}_target.{ext}"),
+            ));
+        }
+        if input_exr {
+            pairs.push((format!("train/input/{id}.exr"), format!("{id}_input.exr")));
+        }
+        for (ours, theirs) in pairs {
+            let a = std::fs::read(out.path().join(&ours)).unwrap();
+            let b = std::fs::read(syn.path().join(&theirs)).unwrap();
+            assert!(a == b, "{ours} differs from synth's {theirs}");
+            n += 1;
+        }
+        let a: serde_json::Value = serde_json::from_slice(
+            &std::fs::read(out.path().join(format!("train/meta/{id}.json"))).unwrap(),
+        )
+        .unwrap();
+        let b: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(syn.path().join(format!("{id}.json"))).unwrap())
+                .unwrap();
+        for key in ["plan", "options", "calibration", "run", "stages", "input"] {
+            assert_eq!(a[key], b[key], "sidecar {key} differs");
+        }
+        let mut oa = a["outputs"].clone();
+        let mut ob = b["outputs"].clone();
+        assert_eq!(
+            oa["files"].as_array().unwrap().len(),
+            ob["files"].as_array().unwrap().len()
+        );
+        oa["files"] = serde_json::Value::Null;
+        ob["files"] = serde_json::Value::Null;
+        assert_eq!(oa, ob, "sidecar outputs (besides file names) differ");
     }
-    let a: serde_json::Value =
+    // Nothing else was written by either command.
+    assert_eq!(tree(syn.path()).len(), n + ids.len());
+    assert_eq!(tree(out.path()).len(), n + ids.len());
+}
+
+#[test]
+fn outputs_equal_synth_for_top_level_files() {
+    // For a file directly in DAY_DIR the random stream is keyed exactly as `synth` keys it,
+    // and both commands run the library's SynthJob, so they write the same bytes under
+    // their own names.
+    assert_dataset_equals_synth(
+        &["--seed", "5", "--target", "both", "--input-exr"],
+        &["IMG_00"],
+        &[1600, 3200],
+        &["exr", "png"],
+    );
+}
+
+#[test]
+fn every_synth_output_option_applies_to_dataset() {
+    // --exr-compression (was ignored by dataset), --compression, --variants, a PNG-only
+    // target on a fresh OUT_DIR (its folder used to be missing) and the input EXR.
+    assert_dataset_equals_synth(
+        &[
+            "--seed",
+            "2",
+            "--variants",
+            "2",
+            "--iso",
+            "800",
+            "--target",
+            "png",
+            "--compression",
+            "ljpeg",
+            "--exr-compression",
+            "piz",
+            "--input-exr",
+        ],
+        &["IMG_00_v1", "IMG_00_v2"],
+        &[800],
+        &["png"],
+    );
+    // No render at all without a target (only what the scene needs), stages say so.
+    let day = day_dir(1, false);
+    let out = tempfile::tempdir().unwrap();
+    let o = dataset(
+        day.path(),
+        out.path(),
+        &["--target", "none", "--iso", "none"],
+    );
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let files: Vec<String> = tree(out.path()).into_keys().collect();
+    assert_eq!(
+        files,
+        ["train/clean_raw/IMG_00.dng", "train/meta/IMG_00.json"]
+    );
+    let m = std::fs::read_to_string(out.path().join("manifest.jsonl")).unwrap();
+    let rec: serde_json::Value = serde_json::from_str(m.lines().next().unwrap()).unwrap();
+    let stages: Vec<&str> = rec["stages"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|s| s.as_str().unwrap())
+        .collect();
+    assert_eq!(stages.last(), Some(&"write_clean_dng"), "{stages:?}");
+    assert!(!stages
+        .iter()
+        .any(|s| s.starts_with("target") || s.contains("noisy")));
+    // Switching the EXR compression is an option change: recomputed, not skipped.
+    let o = dataset(
+        day.path(),
+        out.path(),
+        &["--target", "none", "--iso", "none"],
+    );
+    assert_eq!(summary(&o)["skipped"].as_u64(), Some(1));
+    let o = dataset(
+        day.path(),
+        out.path(),
+        &[
+            "--target",
+            "exr",
+            "--iso",
+            "none",
+            "--exr-compression",
+            "piz",
+        ],
+    );
+    let s = summary(&o);
+    assert_eq!(
+        (s["done"].as_u64(), s["skipped"].as_u64()),
+        (Some(1), Some(0))
+    );
+    let sc: serde_json::Value =
         serde_json::from_slice(&std::fs::read(out.path().join("train/meta/IMG_00.json")).unwrap())
             .unwrap();
-    let b: serde_json::Value =
-        serde_json::from_slice(&std::fs::read(syn.path().join("IMG_00.json")).unwrap()).unwrap();
-    for key in ["plan", "options", "calibration", "run", "stages", "input"] {
-        assert_eq!(a[key], b[key], "sidecar {key} differs");
-    }
+    assert_eq!(sc["outputs"]["exr_compression"], "piz");
+    // A bad value is a usage error, as in synth.
+    let o = dataset(day.path(), out.path(), &["--exr-compression", "jpeg"]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("--exr-compression"));
 }
 
 #[test]

@@ -1,53 +1,10 @@
 //! `day2night dataset`: a whole dataset from a folder of day DNGs (see docs/dataset.md).
-use super::synth::{
-    parse_isos, parse_mask_eval, parse_neutral, CompressionArg, CovArg, ExtraArgs, FormulaArg,
-    ModeArg, TargetArg,
-};
+use super::synth::SynthOpts;
 use super::{usage, CmdResult, Failure};
 use day2night::dataset::run::ProgressMode;
-use day2night::dataset::synthesis::{SynthProcessor, Target};
+use day2night::dataset::synthesis::SynthProcessor;
 use day2night::dataset::{self, RunOptions, Shard, SplitRule};
-use day2night::dng::write::Compression;
-use day2night::synth::dictionaries;
-use day2night::synth::{Calibration, Covariance, Gaussian2, Mode, RelightFormula, SynthOptions};
 use std::path::PathBuf;
-
-/// Synthesis options forwarded to every input: the same names, values and defaults as
-/// `day2night synth` (its value enums and `ExtraArgs` are reused; `--replay` does not apply).
-#[derive(Debug, clap::Args)]
-pub struct SynthForward {
-    /// Run seed; each (input, variant) has its own stream keyed by (seed, relative path,
-    /// variant), so results never depend on position, shard or thread count.
-    #[arg(long, default_value_t = 0)]
-    pub seed: u64,
-    /// ISOs of the noisy outputs, comma-separated, or `none`.
-    #[arg(long, default_value = "1600,3200", value_name = "LIST|none")]
-    pub iso: String,
-    /// Relighting mode.
-    #[arg(long, value_enum, default_value = "local")]
-    pub mode: ModeArg,
-    /// Local relighting formula.
-    #[arg(long = "relight-formula", value_enum, default_value = "release")]
-    pub relight_formula: FormulaArg,
-    /// Saturated bulbs (default 5 with the release formula, 0 with the paper's).
-    #[arg(long)]
-    pub bulbs: Option<u32>,
-    /// Calibration files and finer options (as `synth`).
-    #[command(flatten)]
-    pub extra: ExtraArgs,
-    /// Targets to render from the clean night raw.
-    #[arg(long, value_enum, default_value = "exr")]
-    pub target: TargetArg,
-    /// Also write the network input (normalized, white-balanced, demosaiced noisy raw).
-    #[arg(long = "input-exr")]
-    pub input_exr: bool,
-    /// DNG compression.
-    #[arg(long, value_enum, default_value = "none")]
-    pub compression: CompressionArg,
-    /// Truncate instead of rounding when denormalizing (released code, -0.5 DN bias).
-    #[arg(long)]
-    pub truncate: bool,
-}
 
 /// Arguments of `day2night dataset`.
 #[derive(Debug, clap::Args)]
@@ -96,81 +53,20 @@ pub struct DatasetArgs {
     /// No progress output (the summary is still printed on stderr).
     #[arg(long, short = 'q')]
     pub quiet: bool,
+    /// Synthesis and output options: `synth`'s, with the same names, values and defaults.
     #[command(flatten)]
-    pub synth: Box<SynthForward>,
+    pub synth: Box<SynthOpts>,
 }
 
-/// Build the synthesis processor from the forwarded options (the same mapping as `synth`).
-pub fn processor(f: &SynthForward) -> Result<SynthProcessor, Failure> {
+/// The synthesis processor: `synth`'s job from the same options (`--replay` excluded).
+fn processor(f: &SynthOpts, variants: u32) -> Result<SynthProcessor, Failure> {
     if f.extra.replay.is_some() {
         return Err(usage(
             "--replay applies to `synth` only (replay one sidecar with `day2night synth DAY.dng --replay meta/<id>.json`)",
         ));
     }
-    let options = SynthOptions {
-        mode: match f.mode {
-            ModeArg::Local => Mode::Local,
-            ModeArg::Global => Mode::Global,
-            ModeArg::Dimmed => Mode::Dimmed,
-            ModeArg::Day => Mode::Day,
-        },
-        formula: match f.relight_formula {
-            FormulaArg::Release => RelightFormula::Release,
-            FormulaArg::Paper => RelightFormula::Paper,
-        },
-        bulbs: f.bulbs,
-        local_lights: f.extra.lights,
-        isos: parse_isos(&f.iso)?,
-        truncate: f.truncate,
-        covariance: match f.extra.covariance {
-            CovArg::Unbiased => Covariance::Unbiased,
-            CovArg::Ml => Covariance::MaximumLikelihood,
-        },
-        day_neutral: f
-            .extra
-            .day_neutral
-            .as_deref()
-            .map(parse_neutral)
-            .transpose()?,
-        mask_eval: parse_mask_eval(&f.extra.mask_eval)?,
-        ..SynthOptions::default()
-    };
-    options.validate().map_err(usage)?;
-    let illuminants = match &f.extra.illuminants {
-        Some(p) => Gaussian2::from_source(&dictionaries::load_illuminants(p)?, options.covariance)
-            .map_err(|e| e.in_file(p))?,
-        None => Gaussian2::fit(&dictionaries::embedded::illuminants(), options.covariance)?,
-    };
-    let brightness = f
-        .extra
-        .brightness
-        .as_deref()
-        .map(dictionaries::load_brightness)
-        .transpose()?;
-    let noise = f
-        .extra
-        .noise_model
-        .as_deref()
-        .map(day2night::noise::NoiseModel::from_file)
-        .transpose()?;
     Ok(SynthProcessor {
-        options,
-        calibration: Calibration {
-            illuminants,
-            brightness,
-            noise,
-        },
-        target: match f.target {
-            TargetArg::Exr => Target::Exr,
-            TargetArg::Png => Target::Png,
-            TargetArg::Both => Target::Both,
-            TargetArg::None => Target::None,
-        },
-        compression: match f.compression {
-            CompressionArg::None => Compression::None,
-            CompressionArg::Ljpeg => Compression::Ljpeg,
-        },
-        input_exr: f.input_exr,
+        job: f.job(variants)?,
     })
 }
 
@@ -203,7 +99,7 @@ pub fn run(args: DatasetArgs) -> CmdResult {
             .map(|n| n.get())
             .unwrap_or(1),
     };
-    let proc = processor(&args.synth)?;
+    let proc = processor(&args.synth, args.variants)?;
     let opts = RunOptions {
         day_dir: args.day_dir.clone(),
         out_dir: args.out_dir.clone(),

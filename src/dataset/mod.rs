@@ -196,12 +196,12 @@ impl Sink {
     }
 
     /// Record an output that the processor wrote itself at [`Sink::path`] (it must have used
-    /// [`crate::output`] with [`Sink::policy`]); it is read back to hash it.
+    /// [`crate::output`] with [`Sink::policy`]); it is read back (in 1 MiB pieces) to hash it.
     pub fn adopt(&self, kind: Kind, suffix: &str) -> Result<()> {
         let rel = self.rel_path(kind, suffix);
         let path = self.out_dir.join(&rel);
-        let data = std::fs::read(&path).map_err(Error::Io).in_file(&path)?;
-        self.push(kind, rel, data.len() as u64, sha256_hex(&data));
+        let (bytes, sha256) = hash_file(&path).in_file(&path)?;
+        self.push(kind, rel, bytes, sha256);
         Ok(())
     }
 
@@ -227,6 +227,26 @@ impl Sink {
         v.sort_by(|a, b| a.path.cmp(&b.path));
         v
     }
+}
+
+/// Size and SHA-256 (hex) of a file, read in pieces.
+fn hash_file(path: &Path) -> Result<(u64, String)> {
+    use std::io::Read;
+    let mut f = std::fs::File::open(path).map_err(Error::Io)?;
+    let mut hasher = Sha256::new();
+    let mut buf = vec![0u8; 1 << 20];
+    let mut bytes = 0u64;
+    loop {
+        let n = match f.read(&mut buf) {
+            Ok(0) => break,
+            Ok(n) => n,
+            Err(e) if e.kind() == std::io::ErrorKind::Interrupted => continue,
+            Err(e) => return Err(Error::Io(e)),
+        };
+        hasher.update(buf.get(..n).unwrap_or(&buf));
+        bytes += n as u64;
+    }
+    Ok((bytes, hex(&hasher.finalize())))
 }
 
 /// Create the parent folder of `path`.

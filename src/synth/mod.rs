@@ -16,6 +16,7 @@
 pub mod dictionaries;
 pub mod dim;
 pub mod illuminant;
+pub mod job;
 pub mod masks;
 pub mod neutral;
 pub mod plan;

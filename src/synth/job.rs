@@ -1,0 +1,629 @@
+//! One synthesis job: every output of one (input, variant), written the same way by
+//! `day2night synth` and `day2night dataset` (both call [`SynthJob::run_variant`], so their
+//! bytes cannot drift apart).
+//!
+//! A [`SynthJob`] holds what is decided once per run: synthesis options, calibration and the
+//! output settings. For a decoded [`DayInput`], [`SynthJob::plan`] samples one variant's
+//! random values and [`SynthJob::run_variant`] makes and writes, doing only what was asked:
+//!
+//! 1. the clean night raw (always) -> [`OutputKind::CleanDng`];
+//! 2. one noisy raw per planned ISO -> [`OutputKind::NoisyDng`] (none for `isos: []`);
+//! 3. the target rendered from the clean raw -> [`OutputKind::TargetExr`] and/or
+//!    [`OutputKind::TargetPng`] (no render at all for [`Target::None`]);
+//! 4. with `input_exr`, the network input render of the first noisy raw (the clean raw when
+//!    there is no ISO) -> [`OutputKind::InputExr`];
+//! 5. last, the sidecar JSON ([`Sidecar`]: options, calibration, plan, run report, the
+//!    stages run and the files written) -> [`OutputKind::Sidecar`].
+//!
+//! Steps 1, 2 and 3 are independent rayon tasks (the noisy raws are made one after another
+//! inside theirs, so at most one is in memory); every output's bytes are the same whatever
+//! the thread count or the order in which the tasks finish. Errors are reported in a fixed
+//! order (clean, noisy, target), whatever failed first. Every file goes through
+//! [`crate::output`] (temporary file + rename) under the sink's [`OutputPolicy`].
+//!
+//! An [`OutputSink`] says where each output goes and what the sidecar calls it: [`DirSink`]
+//! gives `synth`'s flat names (`<base>_clean.dng`, `<base>_iso1600.dng`, `<base>.json`...);
+//! `dataset` uses its own per-split folders.
+//!
+//! ```no_run
+//! use day2night::synth::job::{DayInput, DirSink, SynthJob, Target};
+//! use day2night::output::OutputPolicy;
+//! # fn main() -> day2night::Result<()> {
+//! let job = SynthJob {
+//!     target: Target::Both,
+//!     ..SynthJob::new(Default::default())?
+//! };
+//! let day = DayInput::read("day.dng".as_ref())?;
+//! let policy = OutputPolicy::default();
+//! for v in 0..job.variants {
+//!     let plan = job.plan(&day, "day.dng", 0, v)?;
+//!     let sink = DirSink::new("night".as_ref(), "day", &job, &plan, &policy);
+//!     let out = job.run_variant(&day, &plan, &sink)?;
+//!     println!("{:?} ({:?})", out.files, out.stages);
+//! }
+//! # Ok(()) }
+//! ```
+
+use super::sidecar::{sha256_hex, CalibrationInfo, InputInfo, OutputInfo, Sidecar, SIDECAR_FORMAT};
+use super::{night_meta, run_clean, run_noise, Calibration, Plan, SynthOptions};
+use crate::dng::write::{write_dng, Compression, WriteOptions};
+use crate::error::{Error, Result, ResultExt};
+use crate::exr::{standard_attributes, write_exr, ExrOptions};
+use crate::isp::{render_input, render_linear, RenderOptions};
+use crate::output::{write_bytes_atomic, OutputPolicy};
+use crate::png::{write_png, PngOptions};
+use crate::raw::RawImage;
+use std::path::{Path, PathBuf};
+use std::str::FromStr;
+
+/// Which targets to render from the clean night raw.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Target {
+    /// Linear EXR (default).
+    #[default]
+    Exr,
+    /// sRGB PNG.
+    Png,
+    /// Both.
+    Both,
+    /// None: the clean raw is not rendered at all.
+    None,
+}
+
+impl Target {
+    /// Command-line and sidecar name: `exr`, `png`, `both` or `none`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Target::Exr => "exr",
+            Target::Png => "png",
+            Target::Both => "both",
+            Target::None => "none",
+        }
+    }
+    /// Whether an EXR target is written.
+    pub fn exr(self) -> bool {
+        matches!(self, Target::Exr | Target::Both)
+    }
+    /// Whether a PNG target is written.
+    pub fn png(self) -> bool {
+        matches!(self, Target::Png | Target::Both)
+    }
+}
+
+impl FromStr for Target {
+    type Err = Error;
+    fn from_str(s: &str) -> Result<Target> {
+        Ok(match s {
+            "exr" => Target::Exr,
+            "png" => Target::Png,
+            "both" => Target::Both,
+            "none" => Target::None,
+            _ => return Err(Error::malformed(format!("sidecar target {:?}", s))),
+        })
+    }
+}
+
+/// Sidecar name of a DNG compression: `none` or `ljpeg`.
+pub fn compression_name(c: Compression) -> &'static str {
+    match c {
+        Compression::None => "none",
+        Compression::Ljpeg => "ljpeg",
+    }
+}
+
+/// Everything decided once per run: what to synthesize and which outputs to write.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SynthJob {
+    /// Synthesis options (recorded in the sidecar).
+    pub options: SynthOptions,
+    /// Calibration: illuminant fit, brightness dictionary, noise model.
+    pub calibration: Calibration,
+    /// Variants made per input (recorded in the sidecar; with more than one, [`DirSink`]
+    /// names carry `_vK`).
+    pub variants: u32,
+    /// Rendered targets.
+    pub target: Target,
+    /// Also write the network input render (normalized, white-balanced, demosaiced noisy
+    /// raw).
+    pub input_exr: bool,
+    /// DNG compression of the clean and noisy raws.
+    pub compression: Compression,
+    /// EXR options of the target and input renders.
+    pub exr: ExrOptions,
+}
+
+impl SynthJob {
+    /// A job with `options`, the embedded calibration and the default outputs (one variant,
+    /// EXR target, no input EXR, uncompressed DNGs, default EXR options).
+    pub fn new(options: SynthOptions) -> Result<SynthJob> {
+        options.validate()?;
+        let calibration = Calibration::embedded(&options)?;
+        Ok(SynthJob {
+            options,
+            calibration,
+            variants: 1,
+            target: Target::default(),
+            input_exr: false,
+            compression: Compression::None,
+            exr: ExrOptions::default(),
+        })
+    }
+
+    /// The job a sidecar was made with (for `--replay`): its options, calibration (the
+    /// noise model comes from the plan) and output settings.
+    pub fn from_sidecar(sc: &Sidecar) -> Result<SynthJob> {
+        Ok(SynthJob {
+            options: sc.options.clone(),
+            calibration: Calibration {
+                illuminants: sc.calibration.illuminants.clone(),
+                brightness: sc.calibration.brightness.clone(),
+                noise: None,
+            },
+            variants: sc.outputs.variants,
+            target: sc.outputs.target.parse()?,
+            input_exr: sc.outputs.input_exr,
+            compression: if sc.outputs.compression == "ljpeg" {
+                Compression::Ljpeg
+            } else {
+                Compression::None
+            },
+            exr: ExrOptions {
+                compression: sc.outputs.exr_compression.parse()?,
+                ..ExrOptions::default()
+            },
+        })
+    }
+
+    /// Sample the plan of variant `variant` (0-based) of `day`; the random stream is keyed
+    /// by (`seed`, `name`, `variant`), and `name` is recorded as the sidecar's input name.
+    pub fn plan(&self, day: &DayInput, name: &str, seed: u64, variant: u32) -> Result<Plan> {
+        super::plan(
+            &day.raw,
+            name,
+            seed,
+            variant,
+            &self.options,
+            &self.calibration,
+        )
+    }
+
+    /// Make and write every output of one planned variant of `day` through `sink` (see the
+    /// module documentation for the steps), the sidecar last. Returns the names of the files
+    /// written (as the sidecar lists them) and the stages run.
+    pub fn run_variant(
+        &self,
+        day: &DayInput,
+        plan: &Plan,
+        sink: &dyn OutputSink,
+    ) -> Result<VariantOutputs> {
+        let wopts = WriteOptions {
+            compression: self.compression,
+            ..WriteOptions::default()
+        };
+        let mut stages = plan.stages.clone();
+        let (mut clean, report) = run_clean(&day.raw, plan)?;
+        clean.meta = night_meta(&day.raw.meta, plan, plan.clean_iso, &plan.clean_noise);
+        let clean = clean;
+        let isos: Vec<u32> = plan.noise.iter().map(|np| np.iso).collect();
+        let neutral = plan.night_neutral;
+        let attrs = exr_attributes(&day.source, plan);
+        let (want_exr, want_png) = (self.target.exr(), self.target.png());
+
+        // The clean DNG write, the noisy raws (computed and written one ISO after the other)
+        // and the target render run as concurrent rayon tasks: each output is computed the
+        // same way whatever runs first; only the order in which files appear changes. With
+        // one thread the tasks run one after another.
+        let mut clean_res: Option<Result<()>> = None;
+        let mut noisy_res: Option<Result<Option<RawImage>>> = None;
+        let mut target_res: Option<Result<()>> = None;
+        rayon::scope(|s| {
+            let (clean, wopts, isos, attrs) = (&clean, &wopts, &isos, &attrs);
+            let (clean_res, noisy_res) = (&mut clean_res, &mut noisy_res);
+            s.spawn(move |_| {
+                *clean_res = Some((|| {
+                    let kind = OutputKind::CleanDng;
+                    write_dng(clean, &sink.path(kind)?, wopts, sink.policy())?;
+                    sink.written(kind)
+                })());
+            });
+            s.spawn(move |_| {
+                *noisy_res = Some((|| {
+                    let mut first_noisy = None;
+                    for (i, &iso) in isos.iter().enumerate() {
+                        let (_, noisy) = run_noise(clean, plan, i)?;
+                        let kind = OutputKind::NoisyDng { iso };
+                        write_dng(&noisy, &sink.path(kind)?, wopts, sink.policy())?;
+                        sink.written(kind)?;
+                        if first_noisy.is_none() && self.input_exr {
+                            first_noisy = Some(noisy);
+                        }
+                    }
+                    Ok(first_noisy)
+                })());
+            });
+            if want_exr || want_png {
+                target_res = Some((|| {
+                    let ropts = RenderOptions {
+                        neutral: Some(neutral),
+                        ..RenderOptions::default()
+                    };
+                    let rgb = render_linear(clean, &ropts)?;
+                    let (e, p) = rayon::join(
+                        || {
+                            if !want_exr {
+                                return Ok(());
+                            }
+                            let kind = OutputKind::TargetExr;
+                            write_exr(&rgb, &sink.path(kind)?, &self.exr, attrs, sink.policy())?;
+                            sink.written(kind)
+                        },
+                        || {
+                            if !want_png {
+                                return Ok(());
+                            }
+                            let kind = OutputKind::TargetPng;
+                            let path = sink.path(kind)?;
+                            write_png(&rgb, &path, &PngOptions::default(), sink.policy())?;
+                            sink.written(kind)
+                        },
+                    );
+                    e.and(p)
+                })());
+            }
+        });
+        // Errors in a fixed order (clean, noisy, target), whatever finished first.
+        clean_res.unwrap_or(Ok(()))?;
+        let first_noisy = noisy_res.unwrap_or(Ok(None))?;
+        target_res.unwrap_or(Ok(()))?;
+
+        let mut files = vec![sink.name(OutputKind::CleanDng)];
+        stages.push("write_clean_dng".into());
+        files.extend(
+            isos.iter()
+                .map(|&iso| sink.name(OutputKind::NoisyDng { iso })),
+        );
+        if !isos.is_empty() {
+            stages.push("write_noisy_dng".into());
+        }
+        if want_exr {
+            files.push(sink.name(OutputKind::TargetExr));
+            stages.push("target_exr".into());
+        }
+        if want_png {
+            files.push(sink.name(OutputKind::TargetPng));
+            stages.push("target_png".into());
+        }
+        if self.input_exr {
+            let src = first_noisy.as_ref().unwrap_or(&clean);
+            let rgb = render_input(src, Some(neutral), Default::default())?;
+            let kind = OutputKind::InputExr;
+            write_exr(&rgb, &sink.path(kind)?, &self.exr, &attrs, sink.policy())?;
+            sink.written(kind)?;
+            files.push(sink.name(kind));
+            stages.push("input_exr".into());
+        }
+        drop(first_noisy);
+        drop(clean);
+        files.push(sink.name(OutputKind::Sidecar));
+        let sc = Sidecar {
+            format: SIDECAR_FORMAT.into(),
+            tool: "day2night".into(),
+            version: crate::VERSION.into(),
+            input: InputInfo {
+                name: plan.input_name.clone(),
+                sha256: day.sha256.clone(),
+            },
+            options: self.options.clone(),
+            calibration: CalibrationInfo {
+                illuminants: self.calibration.illuminants.clone(),
+                brightness: self.calibration.brightness.clone(),
+                noise_model: plan.noise_model_source.clone(),
+            },
+            plan: plan.clone(),
+            run: report,
+            stages: stages.clone(),
+            outputs: OutputInfo {
+                variants: self.variants,
+                compression: compression_name(self.compression).into(),
+                target: self.target.name().into(),
+                input_exr: self.input_exr,
+                files: files.clone(),
+                exr_compression: self.exr.compression.name().into(),
+            },
+        };
+        let kind = OutputKind::Sidecar;
+        write_bytes_atomic(&sink.path(kind)?, sink.policy(), sc.to_json()?.as_bytes())?;
+        sink.written(kind)?;
+        Ok(VariantOutputs {
+            files,
+            stages,
+            isos,
+        })
+    }
+}
+
+/// The EXR header attribute of a render: one custom attribute only, because the `exr` crate
+/// keeps custom attributes in a HashMap (several would be written in a per-process random
+/// order, hence non-deterministic bytes).
+fn exr_attributes(source: &Path, plan: &Plan) -> Vec<(String, String)> {
+    let summary = standard_attributes(source, plan.night_neutral)
+        .into_iter()
+        .map(|(k, v)| format!("{}={}", k.trim_start_matches("day2night:"), v))
+        .chain([
+            format!("seed={}", plan.seed),
+            format!("variant={}", plan.variant),
+        ])
+        .collect::<Vec<_>>()
+        .join("; ");
+    vec![("day2night:synth".to_string(), summary)]
+}
+
+/// A decoded day DNG with what the outputs record about it.
+#[derive(Debug, Clone)]
+pub struct DayInput {
+    /// The decoded raw.
+    pub raw: RawImage,
+    /// SHA-256 (lower-case hex) of the file's bytes (sidecar `input.sha256`).
+    pub sha256: String,
+    /// The file; its name goes into the EXR renders' attributes.
+    pub source: PathBuf,
+}
+
+impl DayInput {
+    /// Decode the bytes of `source` (hashing and decoding run in parallel).
+    pub fn from_bytes(source: &Path, bytes: &[u8]) -> Result<DayInput> {
+        let (sha256, raw) = rayon::join(
+            || sha256_hex(bytes),
+            || crate::dng::read::read_dng_bytes(bytes),
+        );
+        Ok(DayInput {
+            raw: raw.in_file(source)?,
+            sha256,
+            source: source.to_path_buf(),
+        })
+    }
+
+    /// Read and decode the DNG at `path`.
+    pub fn read(path: &Path) -> Result<DayInput> {
+        let bytes = std::fs::read(path).map_err(Error::Io).in_file(path)?;
+        DayInput::from_bytes(path, &bytes)
+    }
+}
+
+/// One output of a variant.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum OutputKind {
+    /// The clean night raw DNG.
+    CleanDng,
+    /// The noisy night raw DNG at `iso`.
+    NoisyDng {
+        /// Its ISO.
+        iso: u32,
+    },
+    /// The EXR target.
+    TargetExr,
+    /// The PNG target.
+    TargetPng,
+    /// The network input EXR.
+    InputExr,
+    /// The sidecar JSON.
+    Sidecar,
+}
+
+/// Where the outputs of one variant go. Called from concurrent rayon tasks (hence `Sync`).
+pub trait OutputSink: Sync {
+    /// The path to write `kind` to (a sink may create its folder here).
+    fn path(&self, kind: OutputKind) -> Result<PathBuf>;
+    /// The name the sidecar's `outputs.files` gives `kind`.
+    fn name(&self, kind: OutputKind) -> String;
+    /// The policy every write follows (overwriting, inputs never replaced).
+    fn policy(&self) -> &OutputPolicy;
+    /// Called once `kind` has been completely written at [`OutputSink::path`] (e.g. to hash
+    /// it); an error fails the variant.
+    fn written(&self, _kind: OutputKind) -> Result<()> {
+        Ok(())
+    }
+}
+
+/// `synth`'s layout: every output of a variant in one folder, named `<base>_clean.dng`,
+/// `<base>_iso<ISO>.dng`, `<base>_target.exr|png`, `<base>_input.exr`, `<base>.json`, where
+/// `<base>` is the input's stem plus `_vK` (K = variant + 1) when the job makes more than
+/// one variant.
+#[derive(Debug, Clone)]
+pub struct DirSink<'a> {
+    dir: &'a Path,
+    base: String,
+    policy: &'a OutputPolicy,
+}
+
+impl<'a> DirSink<'a> {
+    /// The sink of `plan`'s variant of the input `stem` in `dir`.
+    pub fn new(
+        dir: &'a Path,
+        stem: &str,
+        job: &SynthJob,
+        plan: &Plan,
+        policy: &'a OutputPolicy,
+    ) -> DirSink<'a> {
+        let base = if job.variants > 1 {
+            format!("{}_v{}", stem, plan.variant.saturating_add(1))
+        } else {
+            stem.to_string()
+        };
+        DirSink { dir, base, policy }
+    }
+}
+
+impl OutputSink for DirSink<'_> {
+    fn path(&self, kind: OutputKind) -> Result<PathBuf> {
+        Ok(self.dir.join(self.name(kind)))
+    }
+    fn name(&self, kind: OutputKind) -> String {
+        let b = &self.base;
+        match kind {
+            OutputKind::CleanDng => format!("{b}_clean.dng"),
+            OutputKind::NoisyDng { iso } => format!("{b}_iso{iso}.dng"),
+            OutputKind::TargetExr => format!("{b}_target.exr"),
+            OutputKind::TargetPng => format!("{b}_target.png"),
+            OutputKind::InputExr => format!("{b}_input.exr"),
+            OutputKind::Sidecar => format!("{b}.json"),
+        }
+    }
+    fn policy(&self) -> &OutputPolicy {
+        self.policy
+    }
+}
+
+/// What [`SynthJob::run_variant`] wrote.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct VariantOutputs {
+    /// Names of the files written, as the sidecar lists them (the sidecar last).
+    pub files: Vec<String>,
+    /// Stages run, in order (the plan's, then the outputs written).
+    pub stages: Vec<String>,
+    /// ISO of each noisy raw, in order.
+    pub isos: Vec<u32>,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::synth::SynthOptions;
+
+    fn small_day() -> DayInput {
+        let fix = Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/day.dng");
+        DayInput::read(&fix).unwrap()
+    }
+
+    #[test]
+    fn target_names_round_trip() {
+        for t in [Target::Exr, Target::Png, Target::Both, Target::None] {
+            assert_eq!(t.name().parse::<Target>().unwrap(), t);
+        }
+        assert!("jpeg".parse::<Target>().is_err());
+        assert!(Target::Both.exr() && Target::Both.png());
+        assert!(!Target::None.exr() && !Target::None.png());
+    }
+
+    #[test]
+    fn dir_sink_names() {
+        let day = small_day();
+        let mut job = SynthJob::new(SynthOptions::default()).unwrap();
+        let plan = job.plan(&day, "day.dng", 0, 1).unwrap();
+        let policy = OutputPolicy::default();
+        let one = DirSink::new(Path::new("o"), "day", &job, &plan, &policy);
+        assert_eq!(one.name(OutputKind::CleanDng), "day_clean.dng");
+        assert_eq!(
+            one.path(OutputKind::Sidecar).unwrap(),
+            Path::new("o/day.json")
+        );
+        job.variants = 3;
+        let v = DirSink::new(Path::new("o"), "day", &job, &plan, &policy);
+        assert_eq!(
+            v.name(OutputKind::NoisyDng { iso: 800 }),
+            "day_v2_iso800.dng"
+        );
+        assert_eq!(v.name(OutputKind::TargetPng), "day_v2_target.png");
+        assert_eq!(v.name(OutputKind::InputExr), "day_v2_input.exr");
+    }
+
+    /// Records every `written` call (and refuses one kind, to test error propagation).
+    struct Recorder<'a> {
+        inner: DirSink<'a>,
+        seen: std::sync::Mutex<Vec<OutputKind>>,
+        fail: Option<OutputKind>,
+    }
+
+    impl OutputSink for Recorder<'_> {
+        fn path(&self, kind: OutputKind) -> Result<PathBuf> {
+            self.inner.path(kind)
+        }
+        fn name(&self, kind: OutputKind) -> String {
+            self.inner.name(kind)
+        }
+        fn policy(&self) -> &OutputPolicy {
+            self.inner.policy()
+        }
+        fn written(&self, kind: OutputKind) -> Result<()> {
+            self.seen.lock().unwrap().push(kind);
+            if self.fail == Some(kind) {
+                return Err(Error::invalid("refused by the test sink"));
+            }
+            Ok(())
+        }
+    }
+
+    #[test]
+    fn does_only_what_the_job_asks_and_records_it() {
+        let day = small_day();
+        let job = SynthJob {
+            target: Target::None,
+            ..SynthJob::new(SynthOptions {
+                isos: vec![],
+                ..SynthOptions::default()
+            })
+            .unwrap()
+        };
+        let dir = tempfile::tempdir().unwrap();
+        let plan = job.plan(&day, "day.dng", 1, 0).unwrap();
+        let policy = OutputPolicy::default();
+        let sink = Recorder {
+            inner: DirSink::new(dir.path(), "day", &job, &plan, &policy),
+            seen: Default::default(),
+            fail: None,
+        };
+        let out = job.run_variant(&day, &plan, &sink).unwrap();
+        assert_eq!(out.files, ["day_clean.dng", "day.json"]);
+        assert!(out.isos.is_empty());
+        assert_eq!(
+            out.stages.last().map(String::as_str),
+            Some("write_clean_dng")
+        );
+        assert!(!out.stages.iter().any(|s| s.starts_with("target")));
+        assert_eq!(
+            *sink.seen.lock().unwrap(),
+            [OutputKind::CleanDng, OutputKind::Sidecar]
+        );
+        let mut names: Vec<String> = std::fs::read_dir(dir.path())
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        names.sort();
+        assert_eq!(names, ["day.json", "day_clean.dng"]);
+        let sc = Sidecar::read(&dir.path().join("day.json")).unwrap();
+        assert_eq!(sc.stages, out.stages);
+        assert_eq!(sc.outputs.files, out.files);
+        assert_eq!(SynthJob::from_sidecar(&sc).unwrap().target, Target::None);
+    }
+
+    #[test]
+    fn a_failed_output_fails_the_variant_before_the_sidecar() {
+        let day = small_day();
+        let job = SynthJob {
+            target: Target::Png,
+            ..SynthJob::new(SynthOptions {
+                isos: vec![800],
+                ..SynthOptions::default()
+            })
+            .unwrap()
+        };
+        let dir = tempfile::tempdir().unwrap();
+        let plan = job.plan(&day, "day.dng", 1, 0).unwrap();
+        let policy = OutputPolicy::default();
+        let sink = Recorder {
+            inner: DirSink::new(dir.path(), "day", &job, &plan, &policy),
+            seen: Default::default(),
+            fail: Some(OutputKind::TargetPng),
+        };
+        let e = job.run_variant(&day, &plan, &sink).unwrap_err();
+        assert!(e.to_string().contains("refused by the test sink"), "{e}");
+        assert!(!dir.path().join("day.json").exists());
+        // The independent outputs were still all made.
+        let seen = sink.seen.lock().unwrap();
+        assert!(seen.contains(&OutputKind::CleanDng));
+        assert!(seen.contains(&OutputKind::NoisyDng { iso: 800 }));
+        // An existing output is refused (no --overwrite), the clean DNG's error first.
+        let e = job.run_variant(&day, &plan, &sink.inner).unwrap_err();
+        assert!(e.to_string().contains("day_clean.dng"), "{e}");
+    }
+}
