@@ -149,6 +149,7 @@ fn benches(c: &mut Criterion) {
             let opts = ExrOptions {
                 half,
                 compression: comp,
+                ..ExrOptions::default()
             };
             let mut buf = Cursor::new(Vec::new());
             encode_exr(&lin, &mut buf, &opts, &[]).unwrap();
