@@ -288,6 +288,9 @@ fn encode_unsorted<W: Write + Seek>(
         white: Vec2(0.3127, 0.3290),
     };
     let size = (img.width, img.height);
+    // the crate compresses on a pool of its own (one thread per core): keep to one thread
+    // when the caller's rayon pool has one (`--jobs 1`)
+    let parallel = rayon::current_num_threads() > 1;
     if opts.half {
         let ch = SpecificChannels::rgb(|p: Vec2<usize>| {
             (
@@ -298,14 +301,30 @@ fn encode_unsorted<W: Write + Seek>(
         });
         let mut image = Image::from_layer(Layer::new(size, layer_attrs, encoding, ch));
         image.attributes.chromaticities = Some(chroma);
-        image.write().to_buffered(out).map_err(map_err)
+        if parallel {
+            image.write().to_buffered(out).map_err(map_err)
+        } else {
+            image
+                .write()
+                .non_parallel()
+                .to_buffered(out)
+                .map_err(map_err)
+        }
     } else {
         let ch = SpecificChannels::rgb(|p: Vec2<usize>| {
             (at(p.0, p.1, 0), at(p.0, p.1, 1), at(p.0, p.1, 2))
         });
         let mut image = Image::from_layer(Layer::new(size, layer_attrs, encoding, ch));
         image.attributes.chromaticities = Some(chroma);
-        image.write().to_buffered(out).map_err(map_err)
+        if parallel {
+            image.write().to_buffered(out).map_err(map_err)
+        } else {
+            image
+                .write()
+                .non_parallel()
+                .to_buffered(out)
+                .map_err(map_err)
+        }
     }
 }
 

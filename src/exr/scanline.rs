@@ -21,7 +21,6 @@
 use super::{ExrCompression, ExrOptions, HALF_MAX};
 use crate::error::{Error, Result};
 use crate::isp::RgbImage;
-use exr::prelude::f16;
 use rayon::prelude::*;
 use std::io::Write;
 
@@ -169,35 +168,72 @@ fn header(
     Ok(out)
 }
 
+/// NaN -> 0, everything else clamped to +-`limit`.
+#[inline]
+fn sane(v: f32, limit: f32) -> f32 {
+    if v.is_nan() {
+        0.0
+    } else {
+        v.clamp(-limit, limit)
+    }
+}
+
+/// The half bits of a finite `v` with `|v| <= HALF_MAX`, rounded to nearest even: the same
+/// result as `f16::from_f32` (tested) without its general Inf/NaN paths (F. Giesen,
+/// "float_to_half_fast3_rtne").
+#[inline]
+fn half_bits(v: f32) -> u16 {
+    let bits = v.to_bits();
+    let sign = ((bits >> 16) & 0x8000) as u16;
+    let abs = bits & 0x7fff_ffff;
+    let mag = if abs < 113 << 23 {
+        // subnormal half or zero: align the 10 mantissa bits at the bottom with a magic
+        // addition (round to nearest even by the FPU), then subtract the magic's bits
+        const MAGIC: u32 = ((127 - 15) + (23 - 10) + 1) << 23;
+        (f32::from_bits(abs) + f32::from_bits(MAGIC))
+            .to_bits()
+            .wrapping_sub(MAGIC)
+    } else {
+        // rebias the exponent and round to nearest even in the integer domain
+        let odd = (abs >> 13) & 1;
+        abs.wrapping_add(((15u32.wrapping_sub(127)) << 23).wrapping_add(0xfff) + odd) >> 13
+    };
+    sign | mag as u16
+}
+
 /// Fill `raw` with the little-endian planar samples (B, G, R per line) of `lines` rows
-/// starting at `y0`, sanitized: NaN -> 0, everything else clamped to +-`limit`.
+/// starting at `y0`, sanitized ([`sane`]) to the half or f32 range.
 fn fill_block(img: &RgbImage, y0: usize, lines: usize, half: bool, raw: &mut Vec<u8>) {
     let w = img.width;
     let bps = if half { 2 } else { 4 };
-    let limit = if half { HALF_MAX } else { f32::MAX };
-    let sane = |v: f32| {
-        if v.is_nan() {
-            0.0
-        } else {
-            v.clamp(-limit, limit)
-        }
-    };
     raw.clear();
     raw.resize(lines * 3 * w * bps, 0);
     let rows = img.data.chunks_exact(3 * w).skip(y0);
     for (line, row) in raw.chunks_exact_mut(3 * w * bps).zip(rows) {
-        for (c, plane) in [2usize, 1, 0]
-            .into_iter()
-            .zip(line.chunks_exact_mut(w * bps))
-        {
-            let samples = row.iter().skip(c).step_by(3);
-            if half {
-                for (o, &v) in plane.chunks_exact_mut(2).zip(samples) {
-                    o.copy_from_slice(&f16::from_f32(sane(v)).to_le_bytes());
+        let (b, gr) = line.split_at_mut(w * bps);
+        let (g, r) = gr.split_at_mut(w * bps);
+        if half {
+            let planes = b
+                .chunks_exact_mut(2)
+                .zip(g.chunks_exact_mut(2))
+                .zip(r.chunks_exact_mut(2));
+            for (((b, g), r), px) in planes.zip(row.chunks_exact(3)) {
+                if let [pr, pg, pb] = *px {
+                    r.copy_from_slice(&half_bits(sane(pr, HALF_MAX)).to_le_bytes());
+                    g.copy_from_slice(&half_bits(sane(pg, HALF_MAX)).to_le_bytes());
+                    b.copy_from_slice(&half_bits(sane(pb, HALF_MAX)).to_le_bytes());
                 }
-            } else {
-                for (o, &v) in plane.chunks_exact_mut(4).zip(samples) {
-                    o.copy_from_slice(&sane(v).to_le_bytes());
+            }
+        } else {
+            let planes = b
+                .chunks_exact_mut(4)
+                .zip(g.chunks_exact_mut(4))
+                .zip(r.chunks_exact_mut(4));
+            for (((b, g), r), px) in planes.zip(row.chunks_exact(3)) {
+                if let [pr, pg, pb] = *px {
+                    r.copy_from_slice(&sane(pr, f32::MAX).to_le_bytes());
+                    g.copy_from_slice(&sane(pg, f32::MAX).to_le_bytes());
+                    b.copy_from_slice(&sane(pb, f32::MAX).to_le_bytes());
                 }
             }
         }
@@ -297,6 +333,38 @@ pub(crate) fn encode<W: Write>(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn half_conversion_matches_the_half_crate() {
+        use exr::prelude::f16;
+        let check = |v: f32| {
+            let s = sane(v, HALF_MAX);
+            assert_eq!(
+                half_bits(s),
+                f16::from_f32(s).to_bits(),
+                "{v:e} ({:#x})",
+                v.to_bits()
+            );
+        };
+        // a stride over all f32 bit patterns (both signs, every exponent), plus the edges
+        // of rounding: halfway cases around half's subnormal/normal boundary and the max
+        for bits in (0..=u32::MAX).step_by(9973) {
+            check(f32::from_bits(bits));
+        }
+        for e in [-26i32, -25, -24, -15, -14, -13, 0, 10, 15] {
+            for k in -4i32..=4 {
+                let base = 2f32.powi(e);
+                check(base + k as f32 * base / 2048.0);
+                check(-(base + k as f32 * base / 4096.0));
+            }
+        }
+        for v in [
+            0.0, -0.0, 65504.0, 65519.0, 65520.0, 1e-8, 5.96e-8, 2.98e-8, 6.1e-5,
+        ] {
+            check(v);
+            check(-v);
+        }
+    }
 
     #[test]
     fn predictor_matches_openexr_reference() {
