@@ -511,7 +511,7 @@ mod tests {
                         as usize;
                 let y = i32::from_le_bytes(bytes[o..o + 4].try_into().unwrap());
                 let len = i32::from_le_bytes(bytes[o + 4..o + 8].try_into().unwrap());
-                assert_eq!(o + 8 + len as usize <= bytes.len(), true);
+                assert!(o + 8 + len as usize <= bytes.len());
                 (y, len as usize)
             })
             .collect()
@@ -539,10 +539,10 @@ mod tests {
                         let (rw, rh, px) = read_back(&bytes);
                         assert_eq!((rw, rh), (w, h));
                         for (i, p) in px.iter().enumerate() {
-                            for k in 0..3 {
+                            for (k, &got) in p.iter().enumerate() {
                                 let v = img.data[3 * i + k];
                                 let want = if half { f16::from_f32(v).to_f32() } else { v };
-                                assert_eq!(p[k], want, "{c} half={half} {w}x{h} at {i}/{k}");
+                                assert_eq!(got, want, "{c} half={half} {w}x{h} at {i}/{k}");
                             }
                         }
                         let lpb = if c == ExrCompression::Zip { 16 } else { 1 };
