@@ -118,8 +118,8 @@ pub struct ExrOptions {
     /// Compression (default ZIP).
     pub compression: ExrCompression,
     /// zlib level of ZIP/ZIPS blocks, 1 (fastest, default) ..= 9 (smallest); ignored by the
-    /// other compressions. The `exr` crate, used before, hard-codes 4: about 3.4x slower
-    /// than 1 for about 6 % smaller files (docs/benchmarks.md, "EXR writer").
+    /// other compressions. The `exr` crate, used before, hard-codes 4: about 2.7x slower
+    /// than 1 for 4-8 % smaller files (docs/benchmarks.md, "EXR writer").
     pub zip_level: u8,
 }
 
