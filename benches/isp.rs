@@ -1,6 +1,7 @@
 //! ISP benchmarks on a generated 12 MP (4000x3000) RGGB frame: demosaic per method, the
-//! colour stage, the whole default render, EXR writing per compression (sizes printed
-//! once) and PNG writing. Run: `cargo bench --bench isp` (or a filter such as
+//! colour stage, the whole default render, EXR writing per compression and zip level, on
+//! 1 thread and the default pool, against the exr crate's ZIP writer used before (sizes
+//! printed once), and PNG writing. Run: `cargo bench --bench isp` (or a filter such as
 //! `cargo bench --bench isp -- render`).
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
 use day2night::dng::meta::RawMeta;
@@ -12,6 +13,38 @@ use day2night::raw::{Bayer, RawImage};
 use std::hint::black_box;
 use std::io::Cursor;
 use std::time::Duration;
+
+/// The previous EXR writer (before the own encoder): the exr crate's ZIP16, level 4 fixed,
+/// pixels through a per-pixel closure; `parallel` = the crate's own thread pool.
+fn old_exr_crate_zip(img: &RgbImage, parallel: bool) -> usize {
+    use exr::prelude::*;
+    let w = img.width;
+    let d = &img.data;
+    let at = |x: usize, y: usize, c: usize| {
+        let v = d[3 * (y * w + x) + c];
+        f16::from_f32(if v.is_nan() {
+            0.0
+        } else {
+            v.clamp(-65504.0, 65504.0)
+        })
+    };
+    let ch =
+        SpecificChannels::rgb(|p: Vec2<usize>| (at(p.0, p.1, 0), at(p.0, p.1, 1), at(p.0, p.1, 2)));
+    let enc = Encoding {
+        compression: Compression::ZIP16,
+        blocks: Blocks::ScanLines,
+        line_order: LineOrder::Increasing,
+    };
+    let size = (img.width, img.height);
+    let image = Image::from_layer(Layer::new(size, LayerAttributes::default(), enc, ch));
+    let mut buf = Cursor::new(Vec::with_capacity(1 << 26));
+    if parallel {
+        image.write().to_buffered(&mut buf).unwrap();
+    } else {
+        image.write().non_parallel().to_buffered(&mut buf).unwrap();
+    }
+    buf.into_inner().len()
+}
 
 const W: usize = 4000;
 const H: usize = 3000;
@@ -135,40 +168,64 @@ fn benches(c: &mut Criterion) {
     let lin: RgbImage = render_linear(&raw, &RenderOptions::default()).unwrap();
     let mut g = c.benchmark_group("write_12mp");
     g.sample_size(10).warm_up_time(Duration::from_millis(500));
-    let configs = ExrCompression::ALL.iter().map(|&c| (c, true)).chain(
-        [
-            ExrCompression::None,
-            ExrCompression::Zip,
-            ExrCompression::Piz,
-        ]
-        .into_iter()
-        .map(|c| (c, false)),
-    );
-    for (comp, half) in configs {
-        {
-            let opts = ExrOptions {
-                half,
-                compression: comp,
-            };
-            let mut buf = Cursor::new(Vec::new());
+    // (compression, half, zip level): every compression at the default level, then the
+    // zip levels and float
+    let configs = ExrCompression::ALL
+        .iter()
+        .map(|&c| (c, true, ExrOptions::DEFAULT_ZIP_LEVEL))
+        .chain([
+            (ExrCompression::Zip, true, 4),
+            (ExrCompression::Zip, true, 6),
+            (ExrCompression::None, false, 1),
+            (ExrCompression::Zip, false, 1),
+            (ExrCompression::Piz, false, 1),
+        ]);
+    let one_thread = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .unwrap();
+    for (comp, half, zip_level) in configs {
+        let opts = ExrOptions {
+            half,
+            compression: comp,
+            zip_level,
+        };
+        let mut buf = Cursor::new(Vec::new());
+        encode_exr(&lin, &mut buf, &opts, &[]).unwrap();
+        let kind = if half { "half" } else { "float" };
+        let level = if matches!(comp, ExrCompression::Zip | ExrCompression::Zips) {
+            format!("_l{zip_level}")
+        } else {
+            String::new()
+        };
+        eprintln!(
+            "exr size {comp}{level} {kind}: {} bytes ({:.2} bytes/pixel)",
+            buf.get_ref().len(),
+            buf.get_ref().len() as f64 / (W * H) as f64
+        );
+        let enc = || {
+            let mut buf = Cursor::new(Vec::with_capacity(1 << 26));
             encode_exr(&lin, &mut buf, &opts, &[]).unwrap();
-            eprintln!(
-                "exr size {} {}: {} bytes ({:.2} bytes/pixel)",
-                comp,
-                if half { "half" } else { "float" },
-                buf.get_ref().len(),
-                buf.get_ref().len() as f64 / (W * H) as f64
-            );
-            let id = format!("exr_{}_{}", comp, if half { "half" } else { "float" });
-            g.bench_function(id, |b| {
-                b.iter(|| {
-                    let mut buf = Cursor::new(Vec::with_capacity(1 << 26));
-                    encode_exr(&lin, &mut buf, &opts, &[]).unwrap();
-                    black_box(buf.into_inner().len())
-                })
+            black_box(buf.into_inner().len())
+        };
+        g.bench_function(format!("exr_{comp}{level}_{kind}"), |b| b.iter(enc));
+        if comp == ExrCompression::Zip && half {
+            g.bench_function(format!("exr_{comp}{level}_{kind}_1thread"), |b| {
+                b.iter(|| one_thread.install(enc))
             });
         }
     }
+    // the writer used before the own encoder: the exr crate's ZIP (level 4, fixed)
+    eprintln!(
+        "exr size exr-crate zip_l4 half: {} bytes",
+        old_exr_crate_zip(&lin, true)
+    );
+    g.bench_function("exr_crate_zip_l4_half", |b| {
+        b.iter(|| black_box(old_exr_crate_zip(&lin, true)))
+    });
+    g.bench_function("exr_crate_zip_l4_half_1thread", |b| {
+        b.iter(|| black_box(old_exr_crate_zip(&lin, false)))
+    });
     g.bench_function("png8", |b| {
         b.iter(|| {
             let bytes = day2night::png::encode_u8(&lin, Default::default());

@@ -168,6 +168,7 @@ pub fn run(args: RenderArgs) -> CmdResult {
             let opts = ExrOptions {
                 half: !args.float,
                 compression,
+                ..ExrOptions::default()
             };
             write_exr(&rgb, &args.output, &opts, &attrs, &policy).map_err(lib)?;
         }

@@ -1,11 +1,17 @@
-//! Linear RGB OpenEXR targets (on the `exr` crate): half (default) or 32-bit float samples,
-//! scan lines, ZIP (16 lines) compression by default, a `chromaticities` attribute for
-//! Rec.709 primaries with a D65 white, a `software` attribute and caller attributes (source
-//! file, neutral, ...). Samples are sanitized first: NaN -> 0, +-Inf and out-of-range
-//! values clamp to the largest finite value of the sample type, so no NaN/Inf is ever written.
-//! Blocks are compressed in parallel (the crate's `rayon` feature) and written in increasing
-//! line order; header attributes are sorted by name; so the bytes are identical from run to
-//! run and whatever the thread count (tested).
+//! Linear RGB OpenEXR targets: half (default) or 32-bit float samples, scan lines, ZIP
+//! (16 lines) compression at zlib level 1 by default, a `chromaticities` attribute for
+//! Rec.709 primaries with a D65 white, a `software` attribute and caller string attributes
+//! (source file, neutral, ...). Samples are sanitized first: NaN -> 0, +-Inf and
+//! out-of-range values clamp to the largest finite value of the sample type, so no NaN/Inf is
+//! ever written.
+//!
+//! None, ZIPS and ZIP go through our own encoder ([`scanline`]: rows converted straight into
+//! each block, blocks compressed in parallel with miniz_oxide at [`ExrOptions::zip_level`]);
+//! the rarer RLE, PIZ, PXR24, B44 and B44A go through the `exr` crate. Either way blocks are
+//! written in increasing line order and header attributes are sorted by name, so the bytes
+//! are identical from run to run and whatever the thread count (tested).
+
+mod scanline;
 
 use crate::error::{Error, Result};
 use crate::isp::RgbImage;
@@ -111,6 +117,10 @@ pub struct ExrOptions {
     pub half: bool,
     /// Compression (default ZIP).
     pub compression: ExrCompression,
+    /// zlib level of ZIP/ZIPS blocks, 1 (fastest, default) ..= 9 (smallest); ignored by the
+    /// other compressions. The `exr` crate, used before, hard-codes 4: about 2.7x slower
+    /// than 1 for 4-8 % smaller files (docs/benchmarks.md, "EXR writer").
+    pub zip_level: u8,
 }
 
 impl Default for ExrOptions {
@@ -118,7 +128,24 @@ impl Default for ExrOptions {
         ExrOptions {
             half: true,
             compression: ExrCompression::Zip,
+            zip_level: ExrOptions::DEFAULT_ZIP_LEVEL,
         }
+    }
+}
+
+impl ExrOptions {
+    /// Default [`ExrOptions::zip_level`].
+    pub const DEFAULT_ZIP_LEVEL: u8 = 1;
+
+    /// Reject a zip level outside 1..=9.
+    pub fn validate(&self) -> Result<()> {
+        if !(1..=9).contains(&self.zip_level) {
+            return Err(Error::invalid(format!(
+                "EXR zip level {} is outside 1..=9",
+                self.zip_level
+            )));
+        }
+        Ok(())
     }
 }
 
@@ -144,16 +171,27 @@ fn text(s: &str) -> Text {
     })
 }
 
-/// Encode `img` as an EXR into `out` (see the module docs for what is written). The header
-/// attributes are sorted by name after encoding: the `exr` crate keeps custom attributes in
-/// a `HashMap`, whose per-process random order would otherwise make the bytes differ from
-/// run to run.
+/// Encode `img` as an EXR into `out` (see the module docs for what is written). Errors:
+/// an empty image, a zip level outside 1..=9, an attribute name that is empty, longer than
+/// 255 bytes, contains NUL, repeats or is one the encoder writes itself (`software`,
+/// `channels`, ...). On the `exr` crate path the header attributes are sorted by name after
+/// encoding: the crate keeps custom attributes in a `HashMap`, whose per-process random
+/// order would otherwise make the bytes differ from run to run.
 pub fn encode_exr<W: Write + Seek>(
     img: &RgbImage,
     mut out: W,
     opts: &ExrOptions,
     attributes: &[(String, String)],
 ) -> Result<()> {
+    opts.validate()?;
+    img.validate()?;
+    if img.width == 0 || img.height == 0 {
+        return Err(Error::invalid("cannot write an empty EXR image"));
+    }
+    scanline::check_attributes(attributes)?;
+    if scanline::lines_per_block(opts.compression).is_some() {
+        return scanline::encode(img, &mut out, opts, attributes);
+    }
     let mut buf = std::io::Cursor::new(Vec::new());
     encode_unsorted(img, &mut buf, opts, attributes)?;
     let mut bytes = buf.into_inner();
@@ -250,6 +288,9 @@ fn encode_unsorted<W: Write + Seek>(
         white: Vec2(0.3127, 0.3290),
     };
     let size = (img.width, img.height);
+    // the crate compresses on a pool of its own (one thread per core): keep to one thread
+    // when the caller's rayon pool has one (`--jobs 1`)
+    let parallel = rayon::current_num_threads() > 1;
     if opts.half {
         let ch = SpecificChannels::rgb(|p: Vec2<usize>| {
             (
@@ -260,14 +301,30 @@ fn encode_unsorted<W: Write + Seek>(
         });
         let mut image = Image::from_layer(Layer::new(size, layer_attrs, encoding, ch));
         image.attributes.chromaticities = Some(chroma);
-        image.write().to_buffered(out).map_err(map_err)
+        if parallel {
+            image.write().to_buffered(out).map_err(map_err)
+        } else {
+            image
+                .write()
+                .non_parallel()
+                .to_buffered(out)
+                .map_err(map_err)
+        }
     } else {
         let ch = SpecificChannels::rgb(|p: Vec2<usize>| {
             (at(p.0, p.1, 0), at(p.0, p.1, 1), at(p.0, p.1, 2))
         });
         let mut image = Image::from_layer(Layer::new(size, layer_attrs, encoding, ch));
         image.attributes.chromaticities = Some(chroma);
-        image.write().to_buffered(out).map_err(map_err)
+        if parallel {
+            image.write().to_buffered(out).map_err(map_err)
+        } else {
+            image
+                .write()
+                .non_parallel()
+                .to_buffered(out)
+                .map_err(map_err)
+        }
     }
 }
 
@@ -320,6 +377,7 @@ mod tests {
                 let opts = ExrOptions {
                     half,
                     compression: c,
+                    ..ExrOptions::default()
                 };
                 encode_exr(&img, &mut buf, &opts, &[("a:b".into(), "x".into())]).unwrap();
                 let bytes = buf.into_inner();
@@ -395,6 +453,211 @@ mod tests {
         let b = pool.install(enc);
         assert_eq!(a, b);
         assert_eq!(a, enc());
+    }
+
+    /// Decode EXR bytes with the `exr` crate: (width, height, RGB samples as f32).
+    fn read_back(bytes: &[u8]) -> (usize, usize, Vec<[f32; 3]>) {
+        let image = exr::prelude::read()
+            .no_deep_data()
+            .largest_resolution_level()
+            .rgba_channels(
+                |r, _| (r.0, vec![[0f32; 3]; r.area()]),
+                |v: &mut (usize, Vec<[f32; 3]>),
+                 p: Vec2<usize>,
+                 (r, g, b, _a): (f32, f32, f32, f32)| {
+                    v.1[p.1 * v.0 + p.0] = [r, g, b]
+                },
+            )
+            .first_valid_layer()
+            .all_attributes()
+            .from_buffered(Cursor::new(bytes.to_vec()))
+            .unwrap();
+        let size = image.layer_data.size;
+        (size.0, size.1, image.layer_data.channel_data.pixels.1)
+    }
+
+    /// A deterministic image with distinct, varied values (some negative, some large).
+    fn ramp(w: usize, h: usize) -> RgbImage {
+        let mut img = RgbImage::new(w, h);
+        let mut s = 0x9e37_79b9_u32;
+        for v in img.data.iter_mut() {
+            s = s.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
+            *v = ((s >> 8) as f32 / (1u32 << 24) as f32 - 0.1) * 3.0;
+        }
+        img
+    }
+
+    /// (first line, data size) of every block, parsed from the offset table.
+    fn chunks(bytes: &[u8]) -> Vec<(i32, usize)> {
+        let meta = exr::meta::MetaData::read_from_buffered(Cursor::new(bytes), true).unwrap();
+        let h = &meta.headers[0];
+        let n = h.chunk_count;
+        // header end: the offset table is the n u64 before the first chunk
+        let first = {
+            let mut pos = 8;
+            while bytes[pos] != 0 {
+                let name_end = pos + bytes[pos..].iter().position(|&b| b == 0).unwrap();
+                let ty_end =
+                    name_end + 1 + bytes[name_end + 1..].iter().position(|&b| b == 0).unwrap();
+                let size = i32::from_le_bytes(bytes[ty_end + 1..ty_end + 5].try_into().unwrap());
+                pos = ty_end + 5 + size as usize;
+            }
+            pos + 1
+        };
+        (0..n)
+            .map(|i| {
+                let o =
+                    u64::from_le_bytes(bytes[first + 8 * i..first + 8 * i + 8].try_into().unwrap())
+                        as usize;
+                let y = i32::from_le_bytes(bytes[o..o + 4].try_into().unwrap());
+                let len = i32::from_le_bytes(bytes[o + 4..o + 8].try_into().unwrap());
+                assert!(o + 8 + len as usize <= bytes.len());
+                (y, len as usize)
+            })
+            .collect()
+    }
+
+    #[test]
+    fn own_encoder_round_trips_odd_sizes() {
+        for (w, h) in [(1, 1), (1, 7), (9, 1), (17, 33), (5, 16), (4, 17)] {
+            let img = ramp(w, h);
+            for c in [
+                ExrCompression::None,
+                ExrCompression::Zips,
+                ExrCompression::Zip,
+            ] {
+                for half in [true, false] {
+                    for zip_level in [1, 6, 9] {
+                        let opts = ExrOptions {
+                            half,
+                            compression: c,
+                            zip_level,
+                        };
+                        let mut buf = Cursor::new(Vec::new());
+                        encode_exr(&img, &mut buf, &opts, &[("k".into(), "v".into())]).unwrap();
+                        let bytes = buf.into_inner();
+                        let (rw, rh, px) = read_back(&bytes);
+                        assert_eq!((rw, rh), (w, h));
+                        for (i, p) in px.iter().enumerate() {
+                            for (k, &got) in p.iter().enumerate() {
+                                let v = img.data[3 * i + k];
+                                let want = if half { f16::from_f32(v).to_f32() } else { v };
+                                assert_eq!(got, want, "{c} half={half} {w}x{h} at {i}/{k}");
+                            }
+                        }
+                        let lpb = if c == ExrCompression::Zip { 16 } else { 1 };
+                        let ch = chunks(&bytes);
+                        assert_eq!(ch.len(), h.div_ceil(lpb));
+                        for (b, (y, _)) in ch.iter().enumerate() {
+                            assert_eq!(*y as usize, b * lpb);
+                        }
+                        let meta =
+                            exr::meta::MetaData::read_from_buffered(Cursor::new(&bytes), true)
+                                .unwrap();
+                        assert_eq!(meta.headers[0].compression, c.to_exr());
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn incompressible_blocks_are_stored_raw() {
+        // a 1x1 block (6 or 12 bytes) cannot shrink under zlib's 6-byte framing + deflate
+        for half in [true, false] {
+            let mut img = RgbImage::new(1, 1);
+            img.data.copy_from_slice(&[0.5, -2.0, 7.25]);
+            let opts = ExrOptions {
+                half,
+                ..ExrOptions::default()
+            };
+            let mut buf = Cursor::new(Vec::new());
+            encode_exr(&img, &mut buf, &opts, &[]).unwrap();
+            let bytes = buf.into_inner();
+            assert_eq!(chunks(&bytes), vec![(0, if half { 6 } else { 12 })]);
+            assert_eq!(read_back(&bytes).2, vec![[0.5, -2.0, 7.25]]);
+        }
+        // a compressible image is compressed
+        let img = RgbImage::new(64, 16);
+        let mut buf = Cursor::new(Vec::new());
+        encode_exr(&img, &mut buf, &ExrOptions::default(), &[]).unwrap();
+        assert!(chunks(buf.get_ref())[0].1 < 64 * 16 * 6 / 10);
+    }
+
+    #[test]
+    fn zip_levels_trade_size_and_are_checked() {
+        // a smooth image with texture: higher levels find more matches
+        let mut img = RgbImage::new(64, 48);
+        for (i, v) in img.data.iter_mut().enumerate() {
+            *v = (i / 3 % 64 + i / 192) as f32 * 0.01 + ((i * 7) % 5) as f32 * 0.001;
+        }
+        let size = |zip_level| {
+            let mut buf = Cursor::new(Vec::new());
+            let opts = ExrOptions {
+                zip_level,
+                ..ExrOptions::default()
+            };
+            encode_exr(&img, &mut buf, &opts, &[]).map(|_| buf.into_inner().len())
+        };
+        let (s1, s9) = (size(1).unwrap(), size(9).unwrap());
+        assert!(s9 < s1, "level 9: {s9} bytes, level 1: {s1}");
+        assert!(size(0).is_err());
+        assert!(size(10).is_err());
+    }
+
+    #[test]
+    fn reserved_and_duplicate_attributes_are_rejected() {
+        let img = RgbImage::new(2, 2);
+        for c in [ExrCompression::Zip, ExrCompression::Piz] {
+            let opts = ExrOptions {
+                compression: c,
+                ..ExrOptions::default()
+            };
+            for bad in [
+                vec![("software".to_string(), "x".to_string())],
+                vec![("a".into(), "1".into()), ("a".into(), "2".into())],
+                vec![("".into(), "1".into())],
+            ] {
+                let r = encode_exr(&img, Cursor::new(Vec::new()), &opts, &bad);
+                assert!(matches!(r, Err(Error::InvalidParam(_))), "{c} {bad:?}");
+            }
+        }
+    }
+
+    #[test]
+    fn own_encoder_is_deterministic_across_thread_counts() {
+        let img = ramp(97, 83);
+        for c in [
+            ExrCompression::None,
+            ExrCompression::Zips,
+            ExrCompression::Zip,
+        ] {
+            let opts = ExrOptions {
+                compression: c,
+                ..ExrOptions::default()
+            };
+            let enc = || {
+                let mut buf = Cursor::new(Vec::new());
+                encode_exr(
+                    &img,
+                    &mut buf,
+                    &opts,
+                    &[("z".into(), "1".into()), ("a".into(), "2".into())],
+                )
+                .unwrap();
+                buf.into_inner()
+            };
+            let pool = |n| {
+                rayon::ThreadPoolBuilder::new()
+                    .num_threads(n)
+                    .build()
+                    .unwrap()
+            };
+            let one = pool(1).install(enc);
+            let two = pool(2).install(enc);
+            assert_eq!(one, two, "{c}");
+            assert_eq!(one, enc(), "{c}");
+        }
     }
 
     #[test]
