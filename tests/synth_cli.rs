@@ -538,3 +538,34 @@ fn exr_compression_option_is_recorded_and_replayed() {
     let out = synth(&[s(&day()), "-o", s(&r), "--exr-compression", "gzip"]);
     assert_eq!(out.status.code(), Some(2));
 }
+
+#[test]
+fn exr_zip_level_is_recorded_replayed_and_checked() {
+    let t = tempfile::tempdir().unwrap();
+    let (z, n, r) = (t.path().join("z"), t.path().join("n"), t.path().join("r"));
+    let d = day();
+    let base = [s(&d), "--iso", "none", "--target", "exr"];
+    ok(&synth(&[&base[..], &["-o", s(&z)]].concat()));
+    ok(&synth(
+        &[&base[..], &["-o", s(&n), "--exr-zip-level", "9"]].concat(),
+    ));
+    let (fz, fn_) = (files(&z), files(&n));
+    assert!(!String::from_utf8_lossy(&fz["day.json"]).contains("exr_zip_level"));
+    assert!(String::from_utf8_lossy(&fn_["day.json"]).contains("\"exr_zip_level\": 9"));
+    assert_eq!(fz["day_clean.dng"], fn_["day_clean.dng"]);
+    // Level 9 is smaller than level 1 (lossless both: the pixels are compared by the
+    // EXR validators elsewhere).
+    assert!(fn_["day_target.exr"].len() < fz["day_target.exr"].len());
+    ok(&synth(&[
+        s(&day()),
+        "-o",
+        s(&r),
+        "--replay",
+        s(&n.join("day.json")),
+    ]));
+    same(&fn_, &files(&r), "replay of a level-9 run");
+    for bad in ["0", "10", "x"] {
+        let out = synth(&[s(&day()), "-o", s(&r), "--exr-zip-level", bad]);
+        assert_eq!(out.status.code(), Some(2), "--exr-zip-level {bad}");
+    }
+}

@@ -39,6 +39,9 @@ pub struct RenderArgs {
     /// EXR compression: none, rle, zips, zip (default), piz, pxr24, b44, b44a.
     #[arg(long, default_value = "zip", value_name = "C")]
     pub exr_compression: String,
+    /// zlib level of zip/zips EXRs, 1 (default, fastest) to 9 (smaller, slower).
+    #[arg(long = "exr-zip-level", default_value_t = 1, value_name = "N")]
+    pub exr_zip_level: u8,
     /// PNG/TIFF display encoding: srgb (default), gamma22, release (gamma 2.2 + smoothstep).
     #[arg(long, default_value = "srgb", value_name = "TONE")]
     pub tone: String,
@@ -98,6 +101,7 @@ pub fn run(args: RenderArgs) -> CmdResult {
         .transpose()
         .map_err(usage)?;
     let compression: ExrCompression = args.exr_compression.parse().map_err(usage)?;
+    let zip_level = super::synth::parse_zip_level(args.exr_zip_level)?;
     let tone: DisplayTone = args.tone.parse().map_err(usage)?;
     let ext = args
         .output
@@ -168,6 +172,7 @@ pub fn run(args: RenderArgs) -> CmdResult {
             let opts = ExrOptions {
                 half: !args.float,
                 compression,
+                zip_level,
                 ..ExrOptions::default()
             };
             write_exr(&rgb, &args.output, &opts, &attrs, &policy).map_err(lib)?;

@@ -152,6 +152,12 @@ impl SynthJob {
     /// The job a sidecar was made with (for `--replay`): its options, calibration (the
     /// noise model comes from the plan) and output settings.
     pub fn from_sidecar(sc: &Sidecar) -> Result<SynthJob> {
+        let exr = ExrOptions {
+            compression: sc.outputs.exr_compression.parse()?,
+            zip_level: sc.outputs.exr_zip_level,
+            ..ExrOptions::default()
+        };
+        exr.validate()?;
         Ok(SynthJob {
             options: sc.options.clone(),
             calibration: Calibration {
@@ -167,10 +173,7 @@ impl SynthJob {
             } else {
                 Compression::None
             },
-            exr: ExrOptions {
-                compression: sc.outputs.exr_compression.parse()?,
-                ..ExrOptions::default()
-            },
+            exr,
         })
     }
 
@@ -329,6 +332,7 @@ impl SynthJob {
                 input_exr: self.input_exr,
                 files: files.clone(),
                 exr_compression: self.exr.compression.name().into(),
+                exr_zip_level: self.exr.zip_level,
             },
         };
         let kind = OutputKind::Sidecar;

@@ -56,6 +56,23 @@ pub struct OutputInfo {
         skip_serializing_if = "is_default_exr_compression"
     )]
     pub exr_compression: String,
+    /// zlib level of zip/zips EXR outputs (`--exr-zip-level`); absent = 1 (the default, not
+    /// written). Sidecars of 0.1.0 have no field: their EXRs were level-4 ZIP from the `exr`
+    /// crate, so a replay reproduces their raw outputs byte for byte and their EXR pixels
+    /// exactly, in a smaller-compression container.
+    #[serde(
+        default = "default_zip_level",
+        skip_serializing_if = "is_default_zip_level"
+    )]
+    pub exr_zip_level: u8,
+}
+
+fn default_zip_level() -> u8 {
+    crate::exr::ExrOptions::DEFAULT_ZIP_LEVEL
+}
+
+fn is_default_zip_level(l: &u8) -> bool {
+    *l == default_zip_level()
 }
 
 fn default_exr_compression() -> String {
