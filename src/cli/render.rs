@@ -173,7 +173,6 @@ pub fn run(args: RenderArgs) -> CmdResult {
                 half: !args.float,
                 compression,
                 zip_level,
-                ..ExrOptions::default()
             };
             write_exr(&rgb, &args.output, &opts, &attrs, &policy).map_err(lib)?;
         }
