@@ -188,5 +188,33 @@ fn benches(c: &mut Criterion) {
     g.finish();
 }
 
+/// Render and PNG quantization on the whole-program benchmark input (12 MP 10-bit RGGB DNG
+/// from `cargo run --release --example make_bench_input -- /tmp/isp2-day.dng`; path in
+/// `D2N_BENCH_DNG`). Skipped with a message when the file is missing.
+fn render_png_benches(c: &mut Criterion) {
+    let path = std::env::var("D2N_BENCH_DNG").unwrap_or_else(|_| "/tmp/isp2-day.dng".into());
+    let raw = match day2night::dng::read::read_dng(std::path::Path::new(&path)) {
+        Ok(r) => r,
+        Err(e) => {
+            eprintln!("render_png benches skipped: {path}: {e}");
+            return;
+        }
+    };
+    let mut g = c.benchmark_group("render_png_12mp_dng");
+    g.sample_size(10)
+        .warm_up_time(Duration::from_millis(500))
+        .measurement_time(Duration::from_secs(4));
+    let opts = RenderOptions::default();
+    g.bench_function("render_linear_mhc", |b| {
+        b.iter(|| black_box(render_linear(&raw, &opts).unwrap()))
+    });
+    let lin = render_linear(&raw, &opts).unwrap();
+    g.bench_function("encode_u8_srgb", |b| {
+        b.iter(|| black_box(day2night::png::encode_u8(&lin, Default::default())))
+    });
+    g.finish();
+}
+
 criterion_group!(isp, benches);
-criterion_main!(isp);
+criterion_group!(render_png, render_png_benches);
+criterion_main!(isp, render_png);
