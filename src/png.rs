@@ -370,7 +370,7 @@ mod tests {
                 assert_eq!(l.get(v), quantize_u8_slow(tone, v), "{tone:?} {v}");
             }
             // every code 0..=255 is reached and the bucket step is small
-            assert_eq!(l.thr[255] <= ONE_BITS, true, "{tone:?}");
+            assert!(l.thr[255] <= ONE_BITS, "{tone:?}");
             assert!(l.max_steps() <= 2, "{tone:?}: {}", l.max_steps());
         }
         assert_eq!(lut(DisplayTone::Srgb).max_steps(), 1);
