@@ -6,7 +6,9 @@ use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
 use day2night::dng::meta::RawMeta;
 use day2night::exr::{encode_exr, ExrCompression, ExrOptions};
 use day2night::isp::demosaic::{demosaic, Demosaic};
-use day2night::isp::render::{apply_matrix, color_matrix, render_linear, RenderOptions};
+use day2night::isp::render::{
+    apply_matrix, color_matrix, render_linear, render_linear_reference, RenderOptions,
+};
 use day2night::isp::RgbImage;
 use day2night::raw::{Bayer, RawImage};
 use std::hint::black_box;
@@ -208,9 +210,17 @@ fn render_png_benches(c: &mut Criterion) {
     g.bench_function("render_linear_mhc", |b| {
         b.iter(|| black_box(render_linear(&raw, &opts).unwrap()))
     });
+    // the unfused whole-image path the banded render replaced (same output bits)
+    g.bench_function("render_linear_mhc_reference", |b| {
+        b.iter(|| black_box(render_linear_reference(&raw, &opts).unwrap()))
+    });
     let lin = render_linear(&raw, &opts).unwrap();
     g.bench_function("encode_u8_srgb", |b| {
         b.iter(|| black_box(day2night::png::encode_u8(&lin, Default::default())))
+    });
+    // the per-sample formula the lookup replaced (same bytes)
+    g.bench_function("encode_u8_srgb_formula", |b| {
+        b.iter(|| black_box(day2night::png::encode_u8_slow(&lin, Default::default())))
     });
     g.finish();
 }

@@ -49,7 +49,17 @@ pub fn encode_u8_slow(img: &RgbImage, tone: DisplayTone) -> Vec<u8> {
 /// built for the tone.
 pub fn encode_u8(img: &RgbImage, tone: DisplayTone) -> Vec<u8> {
     match Lut8::cached(tone) {
-        Some(lut) => img.data.par_iter().map(|&v| lut.get(v)).collect(),
+        Some(lut) => {
+            let mut out = vec![0u8; img.data.len()];
+            out.par_chunks_mut(1 << 16)
+                .zip(img.data.par_chunks(1 << 16))
+                .for_each(|(o, i)| {
+                    for (o, &v) in o.iter_mut().zip(i) {
+                        *o = lut.get(v);
+                    }
+                });
+            out
+        }
         None => encode_u8_slow(img, tone),
     }
 }
@@ -59,6 +69,11 @@ const ONE_BITS: u32 = 0x3f80_0000;
 /// Bucket size of [`Lut8`]: keys `>> LUT_SHIFT` index the bucket table (16 256 buckets, each
 /// 2^16 consecutive `f32` bit patterns, i.e. 1/128 to 1/256 of an octave).
 const LUT_SHIFT: u32 = 16;
+/// Length of the bucket table: a power of two above `ONE_BITS >> LUT_SHIFT`.
+const BUCKETS: usize = 1 << 14;
+/// Thresholds a sample is compared with after the bucket lookup; tables whose buckets
+/// hold more are not built.
+const MAX_STEPS: usize = 2;
 
 /// Exact table-driven 8-bit quantizer of one [`DisplayTone`].
 ///
@@ -75,9 +90,11 @@ const LUT_SHIFT: u32 = 16;
 pub struct Lut8 {
     /// `thr[k]` for k in 1..=255: smallest key in `[0, ONE]` with `q(key) >= k`
     /// (`ONE + 1` if none); `thr[0] = 0`, `thr[256] = u32::MAX` (sentinels).
-    thr: Vec<u32>,
-    /// `q` at key `i << LUT_SHIFT`, for i in `0..=ONE >> LUT_SHIFT`.
-    base: Vec<u8>,
+    /// `thr[257]` is a second sentinel so that `thr[q + 1]` needs no bounds check.
+    thr: Box<[u32; 258]>,
+    /// `q` at key `i << LUT_SHIFT`, for i in `0..=ONE >> LUT_SHIFT` (the rest unused; the
+    /// power-of-two length lets the index be masked instead of bounds-checked).
+    base: Box<[u8; BUCKETS]>,
 }
 
 impl Lut8 {
@@ -116,7 +133,7 @@ impl Lut8 {
     /// non-decreasing quantizer or the special values do not map as the keys assume.
     pub fn build(tone: DisplayTone) -> Option<Lut8> {
         let q = |k: u32| quantize_u8_slow(tone, f32::from_bits(k));
-        let mut thr = vec![0u32; 257];
+        let mut thr = Box::new([0u32; 258]);
         for (k, t) in thr.iter_mut().enumerate().take(256).skip(1) {
             let k = k as u8;
             *t = if q(0) >= k {
@@ -138,6 +155,7 @@ impl Lut8 {
             };
         }
         thr[256] = u32::MAX;
+        thr[257] = u32::MAX;
         // Consistency: thresholds non-decreasing, and each is a step of q.
         if thr.windows(2).any(|w| w[0] > w[1]) {
             return None;
@@ -182,31 +200,33 @@ impl Lut8 {
             return None;
         }
         let count = |key: u32| thr[1..=255].iter().filter(|&&t| t <= key).count() as u8;
-        let base = (0..=ONE_BITS >> LUT_SHIFT)
-            .map(|i| count(i << LUT_SHIFT))
-            .collect();
-        Some(Lut8 { thr, base })
+        let mut base = Box::new([255u8; BUCKETS]);
+        for (i, b) in base
+            .iter_mut()
+            .enumerate()
+            .take((ONE_BITS >> LUT_SHIFT) as usize + 1)
+        {
+            *b = count((i as u32) << LUT_SHIFT);
+        }
+        let lut = Lut8 { thr, base };
+        (lut.max_steps() <= MAX_STEPS).then_some(lut)
     }
 
     /// `quantize_u8_slow(tone, v)` by table.
     #[inline(always)]
     pub fn get(&self, v: f32) -> u8 {
         let k = Lut8::key(v);
-        let mut q = self
-            .base
-            .get((k >> LUT_SHIFT) as usize)
-            .copied()
-            .unwrap_or(255);
-        // thr[256] = u32::MAX > any key, so q stops at 255 at the latest.
-        while self.thr.get(usize::from(q) + 1).is_some_and(|&t| k >= t) {
-            q += 1;
-        }
+        let mut q = self.base[(k >> LUT_SHIFT) as usize & (BUCKETS - 1)];
+        // Branch-free: at most MAX_STEPS thresholds lie inside a bucket, and
+        // thr[256] = u32::MAX exceeds every key, so q never passes 255.
+        q += u8::from(k >= self.thr[usize::from(q) + 1]);
+        q += u8::from(k >= self.thr[usize::from(q) + 1]);
         q
     }
 
     /// Largest number of thresholds inside one bucket (the compares after the lookup).
     pub fn max_steps(&self) -> usize {
-        let n = self.base.len();
+        let n = (ONE_BITS >> LUT_SHIFT) as usize + 1;
         (0..n)
             .map(|i| {
                 let next = if i + 1 < n {
