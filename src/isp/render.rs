@@ -165,11 +165,25 @@ fn render_banded(
     }
     let inv = [1.0 / n[0], 1.0, 1.0 / n[2]];
     let data = &img.data;
-    let fill = |r: usize, cs: &[usize], out: &mut [f32]| {
+    // CFA sample (r, cs[k]) into out[k]: normalized, white-balanced, clipped. Wide bands
+    // take the black levels of the whole row from `Normalizer::black_row` (bit-identical
+    // to `black_at`, without two integer divisions per sample); narrow ones (orientations
+    // 5-8) ask per sample.
+    let fill = |blacks: &mut Vec<f64>, r: usize, cs: &[usize], out: &mut [f32]| {
         let src = &data[(r + top) * stride + left..][..w];
-        for (o, &c) in out.iter_mut().zip(cs) {
-            let y = norm.normalize(src[c], r, c) * inv[bayer.color_at(r, c) as usize];
-            *o = y.clamp(0.0, 1.0) as f32;
+        if 2 * cs.len() >= w {
+            blacks.resize(w, 0.0);
+            norm.black_row(r, blacks);
+            for (o, &c) in out.iter_mut().zip(cs) {
+                let y = norm.normalize_with_black(src[c], blacks[c])
+                    * inv[bayer.color_at(r, c) as usize];
+                *o = y.clamp(0.0, 1.0) as f32;
+            }
+        } else {
+            for (o, &c) in out.iter_mut().zip(cs) {
+                let y = norm.normalize(src[c], r, c) * inv[bayer.color_at(r, c) as usize];
+                *o = y.clamp(0.0, 1.0) as f32;
+            }
         }
     };
     let (x0, y0, cw, ch) = if crop {
@@ -191,6 +205,8 @@ fn render_banded(
         .for_each(|(bi, band)| {
             let a0 = bi * BAND;
             let b0 = a0 + band.len() / (3 * ow);
+            let mut blacks = Vec::new();
+            let mut fill = |r: usize, cs: &[usize], out: &mut [f32]| fill(&mut blacks, r, cs, out);
             if !swap {
                 // Output rows [a0, b0) are crop rows [s0, s1), in reverse order for 3 and 4,
                 // mirrored left-right for 2 and 3.
@@ -204,7 +220,7 @@ fn render_banded(
                     kernel,
                     rows,
                     x0..x0 + cw,
-                    &fill,
+                    fill,
                     post,
                     |i, rgb| {
                         let yc = s0 + i;
@@ -231,7 +247,7 @@ fn render_banded(
                     kernel,
                     y0..y0 + ch,
                     cols,
-                    &fill,
+                    fill,
                     post,
                     |y, rgb| {
                         let xo = if o == 5 || o == 8 { y } else { ch - 1 - y };
@@ -595,6 +611,14 @@ mod tests {
                     let mut img = noisy_raw(w, h, bayer, inset, case);
                     let aw = w - inset.0 as usize;
                     let ah = h - inset.1 as usize;
+                    if case % 2 == 0 {
+                        // per-site black (2x2 repeat) with BlackLevelDeltaH/V
+                        let l = &mut img.meta.levels;
+                        l.black_repeat = (2, 2);
+                        l.black = vec![60.0, 64.5, 63.0, 70.25];
+                        l.black_delta_h = (0..aw).map(|c| (c % 5) as f64 * 0.3).collect();
+                        l.black_delta_v = (0..ah).map(|r| (r % 3) as f64 * 0.7 - 0.5).collect();
+                    }
                     for orientation in 0..=8u16 {
                         img.meta.orientation = orientation;
                         // crop: none, and an odd origin/size when the area allows it

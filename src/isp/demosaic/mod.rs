@@ -146,11 +146,11 @@ pub(crate) fn demosaic_rect<F, E>(
     kernel: RowKernel,
     rows: std::ops::Range<usize>,
     cols: std::ops::Range<usize>,
-    fill: &F,
+    mut fill: F,
     post: &Post,
     mut emit: E,
 ) where
-    F: Fn(usize, &[usize], &mut [f32]),
+    F: FnMut(usize, &[usize], &mut [f32]),
     E: FnMut(usize, &mut [f32]),
 {
     let (rh, rw) = (rows.len(), cols.len());
