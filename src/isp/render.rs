@@ -206,7 +206,7 @@ fn render_banded(
             let a0 = bi * BAND;
             let b0 = a0 + band.len() / (3 * ow);
             let mut blacks = Vec::new();
-            let mut fill = |r: usize, cs: &[usize], out: &mut [f32]| fill(&mut blacks, r, cs, out);
+            let fill = |r: usize, cs: &[usize], out: &mut [f32]| fill(&mut blacks, r, cs, out);
             if !swap {
                 // Output rows [a0, b0) are crop rows [s0, s1), in reverse order for 3 and 4,
                 // mirrored left-right for 2 and 3.
