@@ -95,6 +95,9 @@ pub struct Lut8 {
     /// `q` at key `i << LUT_SHIFT`, for i in `0..=ONE >> LUT_SHIFT` (the rest unused; the
     /// power-of-two length lets the index be masked instead of bounds-checked).
     base: Box<[u8; BUCKETS]>,
+    /// `[thr[base[i] + 1], thr[base[i] + 2]]`: the next two thresholds after the bucket's
+    /// start, so that a lookup's loads do not depend on each other.
+    next: Box<[[u32; 2]; BUCKETS]>,
 }
 
 impl Lut8 {
@@ -208,7 +211,12 @@ impl Lut8 {
         {
             *b = count((i as u32) << LUT_SHIFT);
         }
-        let lut = Lut8 { thr, base };
+        let mut next = Box::new([[u32::MAX; 2]; BUCKETS]);
+        for (n, &b) in next.iter_mut().zip(base.iter()) {
+            let b = usize::from(b);
+            *n = [thr[b + 1], thr[b + 2]];
+        }
+        let lut = Lut8 { thr, base, next };
         (lut.max_steps() <= MAX_STEPS).then_some(lut)
     }
 
@@ -216,12 +224,12 @@ impl Lut8 {
     #[inline(always)]
     pub fn get(&self, v: f32) -> u8 {
         let k = Lut8::key(v);
-        let mut q = self.base[(k >> LUT_SHIFT) as usize & (BUCKETS - 1)];
-        // Branch-free: at most MAX_STEPS thresholds lie inside a bucket, and
-        // thr[256] = u32::MAX exceeds every key, so q never passes 255.
-        q += u8::from(k >= self.thr[usize::from(q) + 1]);
-        q += u8::from(k >= self.thr[usize::from(q) + 1]);
-        q
+        let i = (k >> LUT_SHIFT) as usize & (BUCKETS - 1);
+        // Branch-free: at most MAX_STEPS (2) thresholds lie inside a bucket, so the third
+        // one after its start is beyond every key of the bucket; q never passes 255
+        // (thr[256] = u32::MAX exceeds every key).
+        let [t1, t2] = self.next[i];
+        self.base[i] + u8::from(k >= t1) + u8::from(k >= t2)
     }
 
     /// Largest number of thresholds inside one bucket (the compares after the lookup).
