@@ -405,8 +405,8 @@ mod tests {
     }
 
     /// All 2^32 bit patterns for every tone: `D2N_SLOW=1 cargo test --release --lib
-    /// png::tests::lookup_equals_formula_for_every_f32 -- --nocapture` (about 2 minutes on 2
-    /// shared cores in release: sRGB 32 s, gamma 2.2 84 s).
+    /// png::tests::lookup_equals_formula_for_every_f32 -- --nocapture` (20-120 s on 2 shared
+    /// cores in release, depending on their load).
     #[test]
     fn lookup_equals_formula_for_every_f32() {
         if std::env::var_os("D2N_SLOW").is_none() {
