@@ -232,6 +232,12 @@ impl Lut8 {
         self.base[i] + u8::from(k >= t1) + u8::from(k >= t2)
     }
 
+    /// The thresholds for codes 1..=255: element `k - 1` is the smallest bit pattern in
+    /// `[0, 1]` whose code is `>= k` (`0x3f80_0001` if code `k` is never reached).
+    pub fn thresholds(&self) -> &[u32] {
+        &self.thr[1..256]
+    }
+
     /// Largest number of thresholds inside one bucket (the compares after the lookup).
     pub fn max_steps(&self) -> usize {
         let n = (ONE_BITS >> LUT_SHIFT) as usize + 1;
@@ -374,7 +380,7 @@ mod tests {
             // every 97th bit pattern over all 2^32 (44 M per tone; [0, 1] is 1/4 of them)
             assert_eq!(mismatch(tone, 0, 1 << 32, 97), None, "{tone:?}");
             // both sides of every threshold, and the specials
-            for &t in &l.thr[1..256] {
+            for &t in l.thresholds() {
                 for b in t.saturating_sub(2)..=t.saturating_add(2).min(ONE_BITS + 2) {
                     let v = f32::from_bits(b);
                     assert_eq!(l.get(v), quantize_u8_slow(tone, v), "{tone:?} {b:#x}");
@@ -398,7 +404,7 @@ mod tests {
                 assert_eq!(l.get(v), quantize_u8_slow(tone, v), "{tone:?} {v}");
             }
             // every code 0..=255 is reached and the bucket step is small
-            assert!(l.thr[255] <= ONE_BITS, "{tone:?}");
+            assert!(l.thresholds()[254] <= ONE_BITS, "{tone:?}");
             assert!(l.max_steps() <= 2, "{tone:?}: {}", l.max_steps());
         }
         assert_eq!(lut(DisplayTone::Srgb).max_steps(), 1);
