@@ -7,7 +7,9 @@ use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
 use day2night::dng::meta::RawMeta;
 use day2night::exr::{encode_exr, ExrCompression, ExrOptions};
 use day2night::isp::demosaic::{demosaic, Demosaic};
-use day2night::isp::render::{apply_matrix, color_matrix, render_linear, RenderOptions};
+use day2night::isp::render::{
+    apply_matrix, color_matrix, render_linear, render_linear_reference, RenderOptions,
+};
 use day2night::isp::RgbImage;
 use day2night::raw::{Bayer, RawImage};
 use std::hint::black_box;
@@ -245,5 +247,88 @@ fn benches(c: &mut Criterion) {
     g.finish();
 }
 
+/// CPU time (user + system, all threads) per call of the banded and reference renders and
+/// of the PNG quantizer (lookup and formula), interleaved so that both see the same load.
+fn print_cpu_time_render_png(raw: &RawImage) {
+    let opts = RenderOptions::default();
+    let lin = render_linear(raw, &opts).unwrap();
+    let n = 8;
+    let mut cpu = [0.0f64; 4];
+    let mut wall = [0.0f64; 4];
+    for _ in 0..n {
+        for (k, cell) in cpu.iter_mut().enumerate() {
+            let (c0, t0) = (cpu_seconds().unwrap_or(0.0), std::time::Instant::now());
+            match k {
+                0 => drop(black_box(render_linear(raw, &opts).unwrap())),
+                1 => drop(black_box(render_linear_reference(raw, &opts).unwrap())),
+                2 => drop(black_box(day2night::png::encode_u8(
+                    &lin,
+                    Default::default(),
+                ))),
+                _ => drop(black_box(day2night::png::encode_u8_slow(
+                    &lin,
+                    Default::default(),
+                ))),
+            }
+            wall[k] += t0.elapsed().as_secs_f64();
+            *cell += cpu_seconds().unwrap_or(0.0) - c0;
+        }
+    }
+    let names = [
+        "render_linear mhc (banded)",
+        "render_linear mhc (reference)",
+        "encode_u8 srgb (lookup)",
+        "encode_u8 srgb (formula)",
+    ];
+    for k in 0..4 {
+        eprintln!(
+            "{}: wall {:.0} ms, CPU {:.0} ms per call (mean of {n}, threads {})",
+            names[k],
+            wall[k] / n as f64 * 1e3,
+            cpu[k] / n as f64 * 1e3,
+            rayon::current_num_threads()
+        );
+    }
+}
+
+/// Render and PNG quantization on the whole-program benchmark input (12 MP 10-bit RGGB DNG
+/// from `cargo run --release --example make_bench_input -- /tmp/isp2-day.dng`; path in
+/// `D2N_BENCH_DNG`). Skipped with a message when the file is missing.
+fn render_png_benches(c: &mut Criterion) {
+    let path = std::env::var("D2N_BENCH_DNG").unwrap_or_else(|_| "/tmp/isp2-day.dng".into());
+    let raw = match day2night::dng::read::read_dng(std::path::Path::new(&path)) {
+        Ok(r) => r,
+        Err(e) => {
+            eprintln!("render_png benches skipped: {path}: {e}");
+            return;
+        }
+    };
+    if std::env::var("D2N_BENCH_CPU").is_ok() {
+        print_cpu_time_render_png(&raw);
+    }
+    let mut g = c.benchmark_group("render_png_12mp_dng");
+    g.sample_size(10)
+        .warm_up_time(Duration::from_millis(500))
+        .measurement_time(Duration::from_secs(4));
+    let opts = RenderOptions::default();
+    g.bench_function("render_linear_mhc", |b| {
+        b.iter(|| black_box(render_linear(&raw, &opts).unwrap()))
+    });
+    // the unfused whole-image path the banded render replaced (same output bits)
+    g.bench_function("render_linear_mhc_reference", |b| {
+        b.iter(|| black_box(render_linear_reference(&raw, &opts).unwrap()))
+    });
+    let lin = render_linear(&raw, &opts).unwrap();
+    g.bench_function("encode_u8_srgb", |b| {
+        b.iter(|| black_box(day2night::png::encode_u8(&lin, Default::default())))
+    });
+    // the per-sample formula the lookup replaced (same bytes)
+    g.bench_function("encode_u8_srgb_formula", |b| {
+        b.iter(|| black_box(day2night::png::encode_u8_slow(&lin, Default::default())))
+    });
+    g.finish();
+}
+
 criterion_group!(isp, benches);
-criterion_main!(isp);
+criterion_group!(render_png, render_png_benches);
+criterion_main!(isp, render_png);

@@ -2,7 +2,7 @@
 //! sRGB -> DefaultCrop -> orientation. Every stage is parallel over rows and deterministic.
 
 use super::color::{normalize_neutral, CameraColor, Mat3};
-use super::demosaic::{demosaic_rows, Demosaic, Post};
+use super::demosaic::{demosaic_rect, demosaic_rows, row_kernel, Demosaic, Post, RowKernel};
 use super::RgbImage;
 use crate::dng::meta::RawMeta;
 use crate::error::{Error, Result};
@@ -94,14 +94,174 @@ pub fn render_camera_unclipped(
     neutral: [f64; 3],
     method: Demosaic,
 ) -> Result<RgbImage> {
-    render_camera_with(img, neutral, method, &|_| {})
+    render_with(img, neutral, method, &|_| {}, false, false)
+}
+
+/// Clip every sample of a row to [0, 1].
+fn clip_row(row: &mut [f32]) {
+    row.iter_mut().for_each(|v| *v = v.clamp(0.0, 1.0))
 }
 
 /// [`render_camera_unclipped`] clipped to [0, 1]: the network input before geometry.
 pub fn render_camera(img: &RawImage, neutral: [f64; 3], method: Demosaic) -> Result<RgbImage> {
-    render_camera_with(img, neutral, method, &|row: &mut [f32]| {
-        row.iter_mut().for_each(|v| *v = v.clamp(0.0, 1.0))
-    })
+    render_with(img, neutral, method, &clip_row, false, false)
+}
+
+/// Output rows per band of the banded render.
+const BAND: usize = 32;
+
+/// The render: demosaic with `post` applied to each finished row, then DefaultCrop (if
+/// `crop`) and orientation (if `orient`). Single-pass demosaicers (bilinear, MHC) run
+/// banded ([`render_banded`]); Menon runs on the whole image and is then cut and turned
+/// ([`render_camera_with`] + [`apply_geometry`]). `post` must act on each pixel on its
+/// own (both paths apply it to different row segments).
+fn render_with(
+    img: &RawImage,
+    neutral: [f64; 3],
+    method: Demosaic,
+    post: &Post,
+    crop: bool,
+    orient: bool,
+) -> Result<RgbImage> {
+    match row_kernel(method) {
+        Some(kernel) => render_banded(img, neutral, kernel, post, crop, orient),
+        None => Ok(apply_geometry(
+            render_camera_with(img, neutral, method, post)?,
+            &img.meta,
+            crop,
+            orient,
+        )),
+    }
+}
+
+/// The fused render of a single-pass demosaicer: the output image (after crop and
+/// orientation) is cut into bands of [`BAND`] rows, processed in parallel; each band maps
+/// to a rectangle of the active area (rows for orientations 1-4, columns for 5-8), whose
+/// CFA samples (normalized and white-balanced, plus the 2-sample neighbourhood the
+/// kernels read) are computed into a band-sized plane, demosaiced row by row, passed
+/// through `post` and written straight to their final place. No whole-image buffer but
+/// the output. Every pixel is computed by the same expressions as in the whole-image path
+/// ([`render_camera_with`] + [`apply_geometry`]), so the results are identical bit for
+/// bit, for any thread count.
+fn render_banded(
+    img: &RawImage,
+    neutral: [f64; 3],
+    kernel: RowKernel,
+    post: &Post,
+    crop: bool,
+    orient: bool,
+) -> Result<RgbImage> {
+    let bayer = img.bayer()?;
+    let n = normalize_neutral(neutral)?;
+    let norm = Normalizer::new(img)?;
+    let a = img.active_area();
+    let (w, h) = (a.width(), a.height());
+    let (top, left) = (a.top as usize, a.left as usize);
+    let stride = img.width;
+    if w == 0 || h == 0 || (top + h - 1) * stride + left + w > img.data.len() {
+        return Err(Error::invalid(
+            "the active area is empty or outside the pixel buffer",
+        ));
+    }
+    let inv = [1.0 / n[0], 1.0, 1.0 / n[2]];
+    let data = &img.data;
+    // CFA sample (r, cs[k]) into out[k]: normalized, white-balanced, clipped. Wide bands
+    // take the black levels of the whole row from `Normalizer::black_row` (bit-identical
+    // to `black_at`, without two integer divisions per sample); narrow ones (orientations
+    // 5-8) ask per sample.
+    let fill = |blacks: &mut Vec<f64>, r: usize, cs: &[usize], out: &mut [f32]| {
+        let src = &data[(r + top) * stride + left..][..w];
+        if 2 * cs.len() >= w {
+            blacks.resize(w, 0.0);
+            norm.black_row(r, blacks);
+            for (o, &c) in out.iter_mut().zip(cs) {
+                let y = norm.normalize_with_black(src[c], blacks[c])
+                    * inv[bayer.color_at(r, c) as usize];
+                *o = y.clamp(0.0, 1.0) as f32;
+            }
+        } else {
+            for (o, &c) in out.iter_mut().zip(cs) {
+                let y = norm.normalize(src[c], r, c) * inv[bayer.color_at(r, c) as usize];
+                *o = y.clamp(0.0, 1.0) as f32;
+            }
+        }
+    };
+    let (x0, y0, cw, ch) = if crop {
+        default_crop(&img.meta, w, h)
+    } else {
+        (0, 0, w, h)
+    };
+    let o = if orient && (2..=8).contains(&img.meta.orientation) {
+        img.meta.orientation
+    } else {
+        1
+    };
+    let swap = o >= 5;
+    let (ow, oh) = if swap { (ch, cw) } else { (cw, ch) };
+    let mut out = RgbImage::new(ow, oh);
+    out.data
+        .par_chunks_mut(3 * ow * BAND)
+        .enumerate()
+        .for_each(|(bi, band)| {
+            let a0 = bi * BAND;
+            let b0 = a0 + band.len() / (3 * ow);
+            let mut blacks = Vec::new();
+            let fill = |r: usize, cs: &[usize], out: &mut [f32]| fill(&mut blacks, r, cs, out);
+            if !swap {
+                // Output rows [a0, b0) are crop rows [s0, s1), in reverse order for 3 and 4,
+                // mirrored left-right for 2 and 3.
+                let (s0, s1) = if o <= 2 { (a0, b0) } else { (ch - b0, ch - a0) };
+                let flip = o == 2 || o == 3;
+                let rows = y0 + s0..y0 + s1;
+                demosaic_rect(
+                    w,
+                    h,
+                    bayer,
+                    kernel,
+                    rows,
+                    x0..x0 + cw,
+                    fill,
+                    post,
+                    |i, rgb| {
+                        let yc = s0 + i;
+                        let yo = if o <= 2 { yc } else { ch - 1 - yc };
+                        let dst = &mut band[3 * ow * (yo - a0)..][..3 * ow];
+                        if flip {
+                            for (d, p) in dst.chunks_exact_mut(3).zip(rgb.chunks_exact(3).rev()) {
+                                d.copy_from_slice(p);
+                            }
+                        } else {
+                            dst.copy_from_slice(rgb);
+                        }
+                    },
+                );
+            } else {
+                // Output rows [a0, b0) are crop columns [s0, s1) (reversed for 7 and 8);
+                // crop row y becomes output column y (5, 8) or ch - 1 - y (6, 7).
+                let (s0, s1) = if o <= 6 { (a0, b0) } else { (cw - b0, cw - a0) };
+                let cols = x0 + s0..x0 + s1;
+                demosaic_rect(
+                    w,
+                    h,
+                    bayer,
+                    kernel,
+                    y0..y0 + ch,
+                    cols,
+                    fill,
+                    post,
+                    |y, rgb| {
+                        let xo = if o == 5 || o == 8 { y } else { ch - 1 - y };
+                        for (k, p) in rgb.chunks_exact(3).enumerate() {
+                            let x = s0 + k;
+                            let yo = if o <= 6 { x } else { cw - 1 - x };
+                            let d = 3 * ((yo - a0) * ow + xo);
+                            band[d..d + 3].copy_from_slice(p);
+                        }
+                    },
+                );
+            }
+        });
+    Ok(out)
 }
 
 /// The network input of the paper: normalized, white-balanced, demosaiced camera RGB
@@ -113,8 +273,7 @@ pub fn render_input(
     method: Demosaic,
 ) -> Result<RgbImage> {
     let n = resolve_neutral(&img.meta, neutral)?;
-    let rgb = render_camera(img, n, method)?;
-    Ok(apply_geometry(rgb, &img.meta, true, true))
+    render_with(img, n, method, &clip_row, true, true)
 }
 
 /// The white-balanced camera -> linear sRGB matrix this render uses.
@@ -123,7 +282,21 @@ pub fn color_matrix(meta: &RawMeta, neutral: [f64; 3]) -> Result<Mat3> {
 }
 
 /// Linear sRGB (Rec.709 primaries, D65) render of a raw image, values in [0, 1].
+/// Demosaic, colour matrix, DefaultCrop and orientation are fused per band of output rows
+/// for bilinear and MHC (no whole-image intermediate buffer); see [`render_banded`].
 pub fn render_linear(img: &RawImage, opts: &RenderOptions) -> Result<RgbImage> {
+    let n = resolve_neutral(&img.meta, opts.neutral)?;
+    let m = color_matrix(&img.meta, n)?;
+    let mf = m.map(|r| r.map(|v| v as f32));
+    let post = move |row: &mut [f32]| matrix_row(row, &mf);
+    render_with(img, n, opts.demosaic, &post, opts.crop, opts.orient)
+}
+
+/// The unfused reference of [`render_linear`]: whole-image demosaic (colour matrix per
+/// row), then [`apply_geometry`]. Kept for tests and benchmarks (the banded render must
+/// equal it bit for bit).
+#[doc(hidden)]
+pub fn render_linear_reference(img: &RawImage, opts: &RenderOptions) -> Result<RgbImage> {
     let n = resolve_neutral(&img.meta, opts.neutral)?;
     let m = color_matrix(&img.meta, n)?;
     let mf = m.map(|r| r.map(|v| v as f32));
@@ -131,6 +304,18 @@ pub fn render_linear(img: &RawImage, opts: &RenderOptions) -> Result<RgbImage> {
         matrix_row(row, &mf)
     })?;
     Ok(apply_geometry(rgb, &img.meta, opts.crop, opts.orient))
+}
+
+/// The unfused reference of [`render_input`] (see [`render_linear_reference`]).
+#[doc(hidden)]
+pub fn render_input_reference(
+    img: &RawImage,
+    neutral: Option<[f64; 3]>,
+    method: Demosaic,
+) -> Result<RgbImage> {
+    let n = resolve_neutral(&img.meta, neutral)?;
+    let rgb = render_camera_with(img, n, method, &clip_row)?;
+    Ok(apply_geometry(rgb, &img.meta, true, true))
 }
 
 /// Clip every pixel to [0, 1], apply a 3x3 matrix and clip the result to [0, 1].
@@ -364,6 +549,130 @@ mod tests {
         m.default_crop_origin = Some([8.0, 100.0]);
         m.default_crop_size = Some([50.0, f64::NAN]);
         assert_eq!(default_crop(&m, 10, 8), (8, 7, 2, 1));
+    }
+
+    /// A raw of `w x h` with hash-noise samples (clipping at both ends included), an
+    /// active area inset by `inset` on the top/left, and the given pattern.
+    fn noisy_raw(w: usize, h: usize, bayer: Bayer, inset: (u32, u32), seed: u64) -> RawImage {
+        let mut meta = RawMeta::new_bayer(bayer, 12, 64.0, 4095.0);
+        meta.as_shot_neutral = Some([0.55, 1.0, 0.7]);
+        if inset != (0, 0) {
+            meta.active_area = Some(Rect {
+                top: inset.1,
+                left: inset.0,
+                bottom: h as u32,
+                right: w as u32,
+            });
+        }
+        let mut s = seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) | 1;
+        let data = (0..w * h)
+            .map(|_| {
+                s ^= s << 13;
+                s ^= s >> 7;
+                s ^= s << 17;
+                (s % 4400) as u16
+            })
+            .collect();
+        RawImage {
+            width: w,
+            height: h,
+            data,
+            meta,
+        }
+    }
+
+    fn bits(img: &RgbImage) -> (usize, usize, Vec<u32>) {
+        (
+            img.width,
+            img.height,
+            img.data.iter().map(|v| v.to_bits()).collect(),
+        )
+    }
+
+    #[test]
+    fn banded_render_equals_the_whole_image_reference() {
+        // sizes: tiny, odd, and more than one band in both directions
+        let sizes = [
+            (1, 1),
+            (2, 1),
+            (1, 3),
+            (2, 2),
+            (3, 5),
+            (7, 4),
+            (37, 70),
+            (71, 41),
+        ];
+        let mut case = 0u64;
+        for &(w, h) in &sizes {
+            for bayer in Bayer::ALL {
+                for d in [Demosaic::Bilinear, Demosaic::Mhc, Demosaic::Menon] {
+                    case += 1;
+                    let inset = if w > 3 && h > 3 { (1, 3) } else { (0, 0) };
+                    let mut img = noisy_raw(w, h, bayer, inset, case);
+                    let aw = w - inset.0 as usize;
+                    let ah = h - inset.1 as usize;
+                    if case % 2 == 0 {
+                        // per-site black (2x2 repeat) with BlackLevelDeltaH/V
+                        let l = &mut img.meta.levels;
+                        l.black_repeat = (2, 2);
+                        l.black = vec![60.0, 64.5, 63.0, 70.25];
+                        l.black_delta_h = (0..aw).map(|c| (c % 5) as f64 * 0.3).collect();
+                        l.black_delta_v = (0..ah).map(|r| (r % 3) as f64 * 0.7 - 0.5).collect();
+                    }
+                    for orientation in 0..=8u16 {
+                        img.meta.orientation = orientation;
+                        // crop: none, and an odd origin/size when the area allows it
+                        img.meta.default_crop_origin = None;
+                        img.meta.default_crop_size = None;
+                        for with_crop_tags in [false, true] {
+                            if with_crop_tags {
+                                img.meta.default_crop_origin = Some([1.0, 1.0]);
+                                img.meta.default_crop_size =
+                                    Some([(aw as f64 - 2.0).max(1.0), (ah as f64 - 3.0).max(1.0)]);
+                            }
+                            for (crop, orient) in [(true, true), (false, true), (true, false)] {
+                                let opts = RenderOptions {
+                                    demosaic: d,
+                                    crop,
+                                    orient,
+                                    neutral: None,
+                                };
+                                let a = render_linear(&img, &opts).unwrap();
+                                let b = render_linear_reference(&img, &opts).unwrap();
+                                assert_eq!(
+                                    bits(&a),
+                                    bits(&b),
+                                    "{w}x{h} {bayer} {d} o{orientation} crop {crop} orient {orient}"
+                                );
+                            }
+                            let a = render_input(&img, None, d).unwrap();
+                            let b = render_input_reference(&img, None, d).unwrap();
+                            assert_eq!(bits(&a), bits(&b), "input {w}x{h} {bayer} {d}");
+                        }
+                    }
+                    let n = resolve_neutral(&img.meta, None).unwrap();
+                    let a = render_camera_unclipped(&img, n, d).unwrap();
+                    let b = render_camera_with(&img, n, d, &|_| {}).unwrap();
+                    assert_eq!(bits(&a), bits(&b), "camera {w}x{h} {bayer} {d}");
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn banded_render_is_deterministic_across_thread_counts() {
+        let img = noisy_raw(90, 75, Bayer::GBRG, (2, 1), 7);
+        for o in [1, 6] {
+            let mut img = img.clone();
+            img.meta.orientation = o;
+            let a = render_linear(&img, &RenderOptions::default()).unwrap();
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(1)
+                .build()
+                .unwrap();
+            let b = pool.install(|| render_linear(&img, &RenderOptions::default()).unwrap());
+            assert_eq!(bits(&a), bits(&b));
+        }
     }
 
     #[test]

@@ -116,6 +116,69 @@ where
     }
 }
 
+/// A single-pass row kernel (see `mhc::rgb_row`): `(plane, stride, index of (y, x0), y,
+/// x0, bayer, out_row)`.
+pub(crate) type RowKernel = fn(&[f32], usize, usize, usize, usize, Bayer, &mut [f32]);
+
+/// The row kernel of `method` if it is a single-pass method whose neighbourhood fits in
+/// [`PAD`] samples (bilinear, MHC), so that it can run on bands of the image; `None` for
+/// Menon (several whole-image passes).
+pub(crate) fn row_kernel(method: Demosaic) -> Option<RowKernel> {
+    match method {
+        Demosaic::Bilinear => Some(bilinear::rgb_row),
+        Demosaic::Mhc => Some(mhc::rgb_row),
+        Demosaic::Menon => None,
+    }
+}
+
+/// Demosaic the rectangle `rows x cols` (image coordinates, non-empty, inside the image)
+/// of a `width x height` CFA with a row kernel. `fill(r, cs, out)` must set `out[k]` to
+/// the CFA sample at (r, cs[k]). The rectangle is read with a [`PAD`]-wide neighbourhood
+/// taken from the image, mirrored at the image edges exactly like [`Padded::mirror`]
+/// (sample (r, c) of the padded plane = sample (mirror(r), mirror(c))), so every output
+/// pixel equals the whole-image result bit for bit. `emit(i, rgb)` gets row `rows.start +
+/// i` (pixels of `cols`), after `post`, in increasing order.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn demosaic_rect<F, E>(
+    width: usize,
+    height: usize,
+    bayer: Bayer,
+    kernel: RowKernel,
+    rows: std::ops::Range<usize>,
+    cols: std::ops::Range<usize>,
+    mut fill: F,
+    post: &Post,
+    mut emit: E,
+) where
+    F: FnMut(usize, &[usize], &mut [f32]),
+    E: FnMut(usize, &mut [f32]),
+{
+    let (rh, rw) = (rows.len(), cols.len());
+    let s = rw + 2 * PAD;
+    let cs: Vec<usize> = (0..s)
+        .map(|k| mirror(cols.start as isize + k as isize - PAD as isize, width))
+        .collect();
+    let mut plane = vec![0.0f32; s * (rh + 2 * PAD)];
+    for (k, prow) in plane.chunks_exact_mut(s).enumerate() {
+        let r = mirror(rows.start as isize + k as isize - PAD as isize, height);
+        fill(r, &cs, prow);
+    }
+    let mut rgb = vec![0.0f32; 3 * rw];
+    for i in 0..rh {
+        kernel(
+            &plane,
+            s,
+            (i + PAD) * s + PAD,
+            rows.start + i,
+            cols.start,
+            bayer,
+            &mut rgb,
+        );
+        post(&mut rgb);
+        emit(i, &mut rgb);
+    }
+}
+
 /// Border width of [`Padded`] planes (even, so the CFA phase is the same in padded and
 /// unpadded coordinates).
 pub(crate) const PAD: usize = 2;
