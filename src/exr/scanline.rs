@@ -252,6 +252,49 @@ fn predict(raw: &[u8], tmp: &mut Vec<u8>) {
     for (d, s) in second.iter_mut().zip(raw.iter().skip(1).step_by(2)) {
         *d = *s;
     }
+    delta(tmp);
+}
+
+/// [`fill_block`] (half samples) followed by [`predict`]'s byte split, in one pass: the low
+/// byte of planar sample `j` goes to `tmp[j]`, the high byte to `tmp[n + j]` (`n` samples),
+/// exactly where the split of the little-endian planar bytes puts them. The delta step is
+/// left to the caller.
+fn fill_split_half(img: &RgbImage, y0: usize, lines: usize, tmp: &mut Vec<u8>) {
+    let w = img.width;
+    let n = lines * 3 * w;
+    tmp.clear();
+    tmp.resize(2 * n, 0);
+    let (lo, hi) = tmp.split_at_mut(n);
+    let rows = img.data.chunks_exact(3 * w).skip(y0);
+    for ((lo, hi), row) in lo
+        .chunks_exact_mut(3 * w)
+        .zip(hi.chunks_exact_mut(3 * w))
+        .zip(rows)
+    {
+        // planes B, G, R of this line
+        let (lb, lgr) = lo.split_at_mut(w);
+        let (lg, lr) = lgr.split_at_mut(w);
+        let (hb, hgr) = hi.split_at_mut(w);
+        let (hg, hr) = hgr.split_at_mut(w);
+        let planes = lb
+            .iter_mut()
+            .zip(lg.iter_mut())
+            .zip(lr.iter_mut())
+            .zip(hb.iter_mut())
+            .zip(hg.iter_mut())
+            .zip(hr.iter_mut());
+        for ((((((lb, lg), lr), hb), hg), hr), px) in planes.zip(row.chunks_exact(3)) {
+            if let [pr, pg, pb] = *px {
+                [*lr, *hr] = half_bits(sane(pr, HALF_MAX)).to_le_bytes();
+                [*lg, *hg] = half_bits(sane(pg, HALF_MAX)).to_le_bytes();
+                [*lb, *hb] = half_bits(sane(pb, HALF_MAX)).to_le_bytes();
+            }
+        }
+    }
+}
+
+/// OpenEXR's delta step of [`predict`], in place.
+fn delta(tmp: &mut [u8]) {
     let mut prev = match tmp.first() {
         Some(&p) => p,
         None => return,
@@ -274,6 +317,17 @@ fn encode_block(
     let (raw, tmp) = scratch;
     let y0 = b * lpb;
     let lines = lpb.min(img.height - y0);
+    if opts.half && opts.compression != ExrCompression::None {
+        fill_split_half(img, y0, lines, tmp);
+        delta(tmp);
+        let packed = miniz_oxide::deflate::compress_to_vec_zlib(tmp, opts.zip_level);
+        if packed.len() < tmp.len() {
+            return packed;
+        }
+        // incompressible: OpenEXR stores the plain samples
+        fill_block(img, y0, lines, true, raw);
+        return std::mem::take(raw);
+    }
     fill_block(img, y0, lines, opts.half, raw);
     if opts.compression == ExrCompression::None {
         return std::mem::take(raw);
@@ -379,6 +433,31 @@ mod tests {
             want.push((re[i] as i32 - re[i - 1] as i32 + 384) as u8);
         }
         assert_eq!(tmp, want);
+    }
+
+    #[test]
+    fn fused_half_split_equals_fill_then_predict() {
+        for (w, h) in [(1usize, 1usize), (7, 3), (33, 17), (4, 16)] {
+            let mut img = RgbImage::new(w, h);
+            for (i, v) in img.data.iter_mut().enumerate() {
+                *v = match i % 11 {
+                    0 => f32::NAN,
+                    1 => f32::INFINITY,
+                    2 => -1e9,
+                    3 => 6.1e-5,
+                    4 => -3.0e-8,
+                    _ => ((i * 7919) % 1000) as f32 / 97.0 - 2.0,
+                };
+            }
+            for (y0, lines) in [(0, h), (h / 2, h - h / 2)] {
+                let (mut raw, mut want, mut got) = (Vec::new(), Vec::new(), Vec::new());
+                fill_block(&img, y0, lines, true, &mut raw);
+                predict(&raw, &mut want);
+                fill_split_half(&img, y0, lines, &mut got);
+                delta(&mut got);
+                assert_eq!(got, want, "{w}x{h} from {y0}");
+            }
+        }
     }
 
     #[test]
