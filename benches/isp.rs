@@ -7,9 +7,7 @@ use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
 use day2night::dng::meta::RawMeta;
 use day2night::exr::{encode_exr, ExrCompression, ExrOptions};
 use day2night::isp::demosaic::{demosaic, Demosaic};
-use day2night::isp::render::{
-    apply_matrix, color_matrix, render_linear, render_linear_reference, RenderOptions,
-};
+use day2night::isp::render::{apply_matrix, color_matrix, render_linear, RenderOptions};
 use day2night::isp::RgbImage;
 use day2night::raw::{Bayer, RawImage};
 use std::hint::black_box;
@@ -260,7 +258,9 @@ fn print_cpu_time_render_png(raw: &RawImage) {
             let (c0, t0) = (cpu_seconds().unwrap_or(0.0), std::time::Instant::now());
             match k {
                 0 => drop(black_box(render_linear(raw, &opts).unwrap())),
-                1 => drop(black_box(render_linear_reference(raw, &opts).unwrap())),
+                1 => drop(black_box(
+                    day2night::isp::render::render_linear_reference(raw, &opts).unwrap(),
+                )),
                 2 => drop(black_box(day2night::png::encode_u8(
                     &lin,
                     Default::default(),
@@ -316,7 +316,7 @@ fn render_png_benches(c: &mut Criterion) {
     });
     // the unfused whole-image path the banded render replaced (same output bits)
     g.bench_function("render_linear_mhc_reference", |b| {
-        b.iter(|| black_box(render_linear_reference(&raw, &opts).unwrap()))
+        b.iter(|| black_box(day2night::isp::render::render_linear_reference(&raw, &opts).unwrap()))
     });
     let lin = render_linear(&raw, &opts).unwrap();
     g.bench_function("encode_u8_srgb", |b| {

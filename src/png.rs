@@ -80,9 +80,9 @@ const MAX_STEPS: usize = 2;
 /// `q(v) = quantize_u8_slow(tone, v)` depends on `v` only through the clamped input of
 /// `DisplayTone::encode`: NaN and everything `<= 0` (sign bit set) give `q(0)`, everything
 /// `>= 1` (and +inf) gives `q(1)`. For non-negative `f32` the bit patterns are ordered like
-/// the values, and `q` is non-decreasing on `[0, 1]` for every tone (proved by the
-/// exhaustive test over all 2^32 bit patterns, `D2N_SLOW=1 cargo test --release --lib
-/// png`), so `q(v) = max{k : thr[k] <= key(v)}` where `thr[k]` is the smallest key with
+/// the values, and `q` is non-decreasing on `[0, 1]` for sRGB and gamma 2.2 (proved by
+/// the exhaustive test over all 2^32 bit patterns, `D2N_SLOW=1 cargo test --release --lib
+/// png`; not for the release tone, see [`Lut8::cached`]), so `q(v) = max{k : thr[k] <= key(v)}` where `thr[k]` is the smallest key with
 /// `q >= k`, found by bisection over the bit patterns with `quantize_u8_slow` itself. A
 /// bucket table gives `q` at the start of each 2^16-pattern bucket; the few thresholds
 /// inside a bucket (at most [`Lut8::max_steps`], 1 for sRGB) are then compared.
@@ -90,7 +90,7 @@ const MAX_STEPS: usize = 2;
 pub struct Lut8 {
     /// `thr[k]` for k in 1..=255: smallest key in `[0, ONE]` with `q(key) >= k`
     /// (`ONE + 1` if none); `thr[0] = 0`, `thr[256] = u32::MAX` (sentinels).
-    /// `thr[257]` is a second sentinel so that `thr[q + 1]` needs no bounds check.
+    /// `thr[257]` is a second sentinel so that `thr[base + 2]` exists for `base = 255`.
     thr: Box<[u32; 258]>,
     /// `q` at key `i << LUT_SHIFT`, for i in `0..=ONE >> LUT_SHIFT` (the rest unused; the
     /// power-of-two length lets the index be masked instead of bounds-checked).
@@ -110,8 +110,7 @@ impl Lut8 {
     /// steps back across a code boundary for some inputs (e.g. bit pattern 0x3f432c46 gives
     /// 245 while a smaller input gives 246), so it keeps the direct formula.
     pub fn cached(tone: DisplayTone) -> Option<&'static Lut8> {
-        static LUTS: [OnceLock<Option<Lut8>>; 3] =
-            [OnceLock::new(), OnceLock::new(), OnceLock::new()];
+        static LUTS: [OnceLock<Option<Lut8>>; 2] = [OnceLock::new(), OnceLock::new()];
         let i = match tone {
             DisplayTone::Srgb => 0,
             DisplayTone::Gamma22 => 1,
