@@ -37,7 +37,13 @@ impl Visuals for FakeVisuals {
             [((r * 7 + c * 13) % 17) as f32 / 40.0; 3]
         }))
     }
-    fn masks(&self, _sc: &serde_json::Value, max: usize) -> Result<Vec<(String, Rgb8)>> {
+    fn masks(
+        &self,
+        _sc: &serde_json::Value,
+        night: Option<&Path>,
+        max: usize,
+    ) -> Result<Vec<(String, Rgb8)>> {
+        assert!(night.is_some_and(|p| p.is_file()), "{night:?}");
         let mut m = gradient(max, [1.0, 1.0, 1.0]);
         m.mark(50.0, 40.0, 6, [255, 0, 0]);
         Ok(vec![

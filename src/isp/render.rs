@@ -399,6 +399,107 @@ pub fn apply_geometry(rgb: RgbImage, meta: &RawMeta, crop: bool, orient: bool) -
     }
 }
 
+/// The pixel `(x, y)` of a `w` x `h` image that lands at `(xo, yo)` of the image displayed
+/// with the TIFF/EXIF Orientation code `orientation` (1..8; anything else is 1). For codes
+/// 5-8 the displayed image is `h` x `w`. `(xo, yo)` must be inside the displayed image.
+#[inline]
+pub fn oriented_source(
+    orientation: u16,
+    w: usize,
+    h: usize,
+    xo: usize,
+    yo: usize,
+) -> (usize, usize) {
+    match orientation {
+        2 => (w - 1 - xo, yo),
+        3 => (w - 1 - xo, h - 1 - yo),
+        4 => (xo, h - 1 - yo),
+        5 => (yo, xo),
+        6 => (yo, h - 1 - xo),
+        7 => (w - 1 - yo, h - 1 - xo),
+        8 => (w - 1 - yo, xo),
+        _ => (xo, yo),
+    }
+}
+
+/// Where the pixels of a rendered image come from: [`render_linear`]'s DefaultCrop and
+/// Orientation of an active area, as a map from displayed pixels to active-area sites (for
+/// drawing things computed in active-area coordinates, e.g. light masks, over a render).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct DisplayGeometry {
+    x0: usize,
+    y0: usize,
+    cw: usize,
+    ch: usize,
+    orientation: u16,
+}
+
+impl DisplayGeometry {
+    /// The geometry `render_linear` applies (crop and orientation on) to an active area of
+    /// `aw` x `ah` described by `meta`.
+    pub fn new(meta: &RawMeta, aw: usize, ah: usize) -> DisplayGeometry {
+        let (x0, y0, cw, ch) = default_crop(meta, aw, ah);
+        let orientation = if (2..=8).contains(&meta.orientation) {
+            meta.orientation
+        } else {
+            1
+        };
+        DisplayGeometry {
+            x0,
+            y0,
+            cw,
+            ch,
+            orientation,
+        }
+    }
+    /// The whole active area, unrotated.
+    pub fn identity(aw: usize, ah: usize) -> DisplayGeometry {
+        DisplayGeometry {
+            x0: 0,
+            y0: 0,
+            cw: aw,
+            ch: ah,
+            orientation: 1,
+        }
+    }
+    /// Width and height of the displayed image.
+    pub fn dims(&self) -> (usize, usize) {
+        if self.orientation >= 5 {
+            (self.ch, self.cw)
+        } else {
+            (self.cw, self.ch)
+        }
+    }
+    /// Active-area (column, row) shown at displayed pixel `(xo, yo)` (clamped into the
+    /// displayed image).
+    pub fn active_site(&self, xo: usize, yo: usize) -> (usize, usize) {
+        let (dw, dh) = self.dims();
+        let (xo, yo) = (xo.min(dw.saturating_sub(1)), yo.min(dh.saturating_sub(1)));
+        let (x, y) = oriented_source(self.orientation, self.cw, self.ch, xo, yo);
+        (self.x0 + x, self.y0 + y)
+    }
+    /// Displayed position of the active-area point (column `u`, row `v`) in continuous
+    /// pixel coordinates (pixel `(c, r)` covers `[c, c+1) x [r, r+1)`); `None` when the
+    /// point is outside the DefaultCrop.
+    pub fn display_point(&self, u: f64, v: f64) -> Option<(f64, f64)> {
+        let (x, y) = (u - self.x0 as f64, v - self.y0 as f64);
+        let (w, h) = (self.cw as f64, self.ch as f64);
+        if !(0.0..=w).contains(&x) || !(0.0..=h).contains(&y) {
+            return None;
+        }
+        Some(match self.orientation {
+            2 => (w - x, y),
+            3 => (w - x, h - y),
+            4 => (x, h - y),
+            5 => (y, x),
+            6 => (h - y, x),
+            7 => (h - y, w - x),
+            8 => (y, w - x),
+            _ => (x, y),
+        })
+    }
+}
+
 /// Transform an image for display according to the TIFF/EXIF Orientation code (1..8;
 /// anything else is treated as 1).
 pub fn orient_image(img: &RgbImage, orientation: u16) -> RgbImage {
@@ -414,15 +515,7 @@ pub fn orient_image(img: &RgbImage, orientation: u16) -> RgbImage {
         .enumerate()
         .for_each(|(yo, row)| {
             for (xo, px) in row.chunks_exact_mut(3).enumerate() {
-                let (x, y) = match orientation {
-                    2 => (w - 1 - xo, yo),
-                    3 => (w - 1 - xo, h - 1 - yo),
-                    4 => (xo, h - 1 - yo),
-                    5 => (yo, xo),
-                    6 => (yo, h - 1 - xo),
-                    7 => (w - 1 - yo, h - 1 - xo),
-                    _ => (w - 1 - yo, xo),
-                };
+                let (x, y) = oriented_source(orientation, w, h, xo, yo);
                 let s = 3 * (y * w + x);
                 px.copy_from_slice(&img.data[s..s + 3]);
             }
@@ -540,6 +633,47 @@ mod tests {
         // the fixture matrix is Lindbloom's (white 0.31271, 0.32902): close to (1, 1, 1)
         assert!(n.iter().all(|v| (v - 1.0).abs() < 1e-3), "{n:?}");
         assert!(resolve_neutral(&img.meta, Some([0.0, 1.0, 1.0])).is_err());
+    }
+
+    #[test]
+    fn display_geometry_matches_the_render_geometry() {
+        let (aw, ah) = (9usize, 6usize);
+        // pixel value = (column, row, 0) of the active area
+        let mut img = RgbImage::new(aw, ah);
+        for r in 0..ah {
+            for c in 0..aw {
+                img.data[3 * (r * aw + c)] = c as f32;
+                img.data[3 * (r * aw + c) + 1] = r as f32;
+            }
+        }
+        let mut meta = RawMeta::new_bayer(Bayer::RGGB, 12, 0.0, 4095.0);
+        meta.default_crop_origin = Some([1.0, 2.0]);
+        meta.default_crop_size = Some([6.0, 3.0]);
+        for o in 0..=9u16 {
+            meta.orientation = o;
+            let g = DisplayGeometry::new(&meta, aw, ah);
+            let shown = apply_geometry(img.clone(), &meta, true, true);
+            assert_eq!(g.dims(), (shown.width, shown.height), "orientation {o}");
+            for yo in 0..shown.height {
+                for xo in 0..shown.width {
+                    let p = shown.pixel(xo, yo).unwrap();
+                    let (c, r) = g.active_site(xo, yo);
+                    assert_eq!((c as f32, r as f32), (p[0], p[1]), "o {o} at {xo},{yo}");
+                    // the pixel's centre maps forward to the displayed pixel's centre
+                    let (x, y) = g.display_point(c as f64 + 0.5, r as f64 + 0.5).unwrap();
+                    assert_eq!((x, y), (xo as f64 + 0.5, yo as f64 + 0.5), "o {o}");
+                }
+            }
+        }
+        assert_eq!(
+            DisplayGeometry::new(&meta, aw, ah).display_point(0.5, 0.5),
+            None
+        );
+        let id = DisplayGeometry::identity(aw, ah);
+        assert_eq!(
+            (id.dims(), id.active_site(100, 100)),
+            ((aw, ah), (aw - 1, ah - 1))
+        );
     }
 
     #[test]

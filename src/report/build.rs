@@ -56,8 +56,16 @@ pub trait Visuals {
     fn night(&self, dng: &Path, max: usize) -> Result<Rgb8>;
     /// Full-resolution centre crop (`size` x `size`) of the render of a noisy DNG.
     fn noisy_crop(&self, dng: &Path, size: usize) -> Result<Rgb8>;
-    /// Light masks (name, thumbnail) from a sidecar, at a thumbnail of longest side `max`.
-    fn masks(&self, sidecar: &serde_json::Value, max: usize) -> Result<Vec<(String, Rgb8)>>;
+    /// Light masks (name, thumbnail) from a sidecar, at a thumbnail of longest side `max`,
+    /// in the geometry (DefaultCrop, orientation) of the render of `night_dng` (the clean
+    /// night DNG of the same unit) so they line up with the night thumbnail; the whole
+    /// active area, unrotated, when `None`.
+    fn masks(
+        &self,
+        sidecar: &serde_json::Value,
+        night_dng: Option<&Path>,
+        max: usize,
+    ) -> Result<Vec<(String, Rgb8)>>;
     /// Sampled illuminants and light centres from a sidecar.
     fn illuminants(&self, sidecar: &serde_json::Value) -> Result<Illuminants>;
     /// Dimming factor from a sidecar.
@@ -190,9 +198,11 @@ pub fn build(opts: &ReportOptions, vis: &dyn Visuals) -> Result<ReportSummary> {
             None => Err(Error::invalid("DAY_DIR unknown (pass --day-dir)")),
         };
         png("day", "Day render", day, &mut summary);
-        let clean = first_output(r, Kind::CleanRaw)
+        let clean_path = first_output(r, Kind::CleanRaw).map(|p| out.join(p));
+        let clean = clean_path
+            .as_deref()
             .ok_or_else(|| Error::invalid("no clean raw output"))
-            .and_then(|p| vis.night(&out.join(p), opts.thumb));
+            .and_then(|p| vis.night(p, opts.thumb));
         png("night", "Clean night render", clean, &mut summary);
         let noisy = noisy_output(r)
             .ok_or_else(|| Error::invalid("no noisy output"))
@@ -206,7 +216,10 @@ pub fn build(opts: &ReportOptions, vis: &dyn Visuals) -> Result<ReportSummary> {
         );
         png("noisy", &noisy_title, noisy, &mut summary);
         let (masks, ill) = match sc {
-            Some(sc) => (vis.masks(sc, opts.thumb), vis.illuminants(sc)),
+            Some(sc) => (
+                vis.masks(sc, clean_path.as_deref(), opts.thumb),
+                vis.illuminants(sc),
+            ),
             None => (
                 Err(Error::invalid("sidecar missing or unreadable")),
                 Err(Error::invalid("sidecar missing or unreadable")),

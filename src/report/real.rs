@@ -5,6 +5,7 @@ use super::build::{Illuminants, LightMark, Visuals};
 use super::plot::Ellipse;
 use super::thumb::{downscale, fit, Rgb8};
 use crate::error::{Error, Result};
+use crate::isp::render::DisplayGeometry;
 use crate::isp::{render_linear, RenderOptions, RgbImage};
 use crate::synth::masks::PreparedMask;
 use crate::synth::sidecar::Sidecar;
@@ -54,14 +55,38 @@ impl Visuals for LibraryVisuals {
         Ok(Rgb8::from_linear(w, h, |r, c| px(&img, r0 + r, c0 + c)))
     }
 
-    fn masks(&self, v: &serde_json::Value, max: usize) -> Result<Vec<(String, Rgb8)>> {
+    fn masks(
+        &self,
+        v: &serde_json::Value,
+        night_dng: Option<&Path>,
+        max: usize,
+    ) -> Result<Vec<(String, Rgb8)>> {
         let sc = sidecar(v)?;
         let plan = &sc.plan;
         let (aw, ah) = (plan.active_width, plan.active_height);
         if aw == 0 || ah == 0 {
             return Err(Error::malformed("sidecar plan has an empty active area"));
         }
-        let (tw, th) = fit(aw, ah, max);
+        let geo = match night_dng {
+            Some(p) => {
+                let raw = crate::dng::read::read_dng(p)?;
+                let a = raw.active_area();
+                if (a.width(), a.height()) != (aw, ah) {
+                    return Err(Error::invalid(format!(
+                        "{}: active area {}x{} differs from the sidecar's {}x{}",
+                        p.display(),
+                        a.width(),
+                        a.height(),
+                        aw,
+                        ah
+                    )));
+                }
+                DisplayGeometry::new(&raw.meta, aw, ah)
+            }
+            None => DisplayGeometry::identity(aw, ah),
+        };
+        let (dw, dh) = geo.dims();
+        let (tw, th) = fit(dw, dh, max);
         let mut out = Vec::new();
         for (kind, name) in [
             (LightKind::Ambient, "ambient"),
@@ -80,9 +105,11 @@ impl Visuals for LibraryVisuals {
                 if kind == LightKind::Ambient {
                     return [1.0; 3];
                 }
-                // Sample the full-resolution mask at the thumbnail pixel's centre.
-                let fr = ((r as f64 + 0.5) * ah as f64 / th as f64) as usize;
-                let fc = ((c as f64 + 0.5) * aw as f64 / tw as f64) as usize;
+                // Sample the full-resolution mask at the active-area site shown at the
+                // thumbnail pixel's centre.
+                let yo = ((r as f64 + 0.5) * dh as f64 / th as f64) as usize;
+                let xo = ((c as f64 + 0.5) * dw as f64 / tw as f64) as usize;
+                let (fc, fr) = geo.active_site(xo, yo);
                 let m = prepared
                     .iter()
                     .map(|p| p.at(fr.min(ah - 1), fc.min(aw - 1)))
@@ -91,9 +118,13 @@ impl Visuals for LibraryVisuals {
             });
             for l in &lights {
                 if kind != LightKind::Ambient {
-                    let x = l.center[1] * tw as f64 / aw as f64;
-                    let y = l.center[0] * th as f64 / ah as f64;
-                    img.mark(x, y, 5, [255, 40, 40]);
+                    // centre of site (row, col) in continuous coordinates
+                    let shown = geo.display_point(l.center[1] + 0.5, l.center[0] + 0.5);
+                    if let Some((x, y)) = shown {
+                        // `mark` takes pixel-centred coordinates (pixel i is at i)
+                        let (mx, my) = (x * tw as f64 / dw as f64, y * th as f64 / dh as f64);
+                        img.mark(mx - 0.5, my - 0.5, 5, [255, 40, 40]);
+                    }
                 }
             }
             out.push((format!("{name} ({})", lights.len()), img));
@@ -136,5 +167,93 @@ impl Visuals for LibraryVisuals {
 
     fn dim_factor(&self, v: &serde_json::Value) -> Option<f64> {
         v.pointer("/run/dim_scale").and_then(|x| x.as_f64())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::output::OutputPolicy;
+    use crate::synth::job::{DayInput, DirSink, SynthJob, Target};
+    use crate::synth::SynthOptions;
+
+    /// RGB of pixel (x, y).
+    fn at(img: &Rgb8, x: usize, y: usize) -> [u8; 3] {
+        let i = 3 * (y * img.width + x);
+        [img.data[i], img.data[i + 1], img.data[i + 2]]
+    }
+
+    #[test]
+    fn masks_follow_the_night_render_geometry() {
+        let fix = Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/day.dng");
+        let mut day = DayInput::read(&fix).unwrap();
+        let a = day.raw.active_area();
+        let (aw, ah) = (a.width(), a.height());
+        let dir = tempfile::tempdir().unwrap();
+        let mut job = SynthJob::new(SynthOptions {
+            isos: vec![],
+            ..SynthOptions::default()
+        })
+        .unwrap();
+        job.target = Target::None;
+        let vis = LibraryVisuals;
+        let mut shapes = Vec::new();
+        for orientation in [1u16, 6] {
+            day.raw.meta.orientation = orientation;
+            day.raw.meta.default_crop_origin = Some([8.0, 4.0]);
+            day.raw.meta.default_crop_size = Some([(aw - 24) as f64, (ah - 12) as f64]);
+            let plan = job.plan(&day, "day.dng", 3, 0).unwrap();
+            let out = dir.path().join(format!("o{orientation}"));
+            std::fs::create_dir_all(&out).unwrap();
+            let policy = OutputPolicy::default();
+            let sink = DirSink::new(&out, "day", &job, &plan, &policy);
+            job.run_variant(&day, &plan, &sink).unwrap();
+            let sc: serde_json::Value =
+                serde_json::from_slice(&std::fs::read(out.join("day.json")).unwrap()).unwrap();
+            let clean = out.join("day_clean.dng");
+            let night = vis.night(&clean, 64).unwrap();
+            let masks = vis.masks(&sc, Some(&clean), 64).unwrap();
+            let local = masks
+                .iter()
+                .find(|(n, _)| n.starts_with("local"))
+                .map(|(_, m)| m)
+                .expect("a local-light mask");
+            // same thumbnail shape as the night render it is shown next to
+            assert_eq!((local.width, local.height), (night.width, night.height));
+            // the unrotated whole-active-area view keeps the sidecar's shape
+            let plain = vis.masks(&sc, None, 64).unwrap();
+            assert_eq!(plain[0].1.width.max(plain[0].1.height), 64);
+            shapes.push((local.clone(), sc["plan"]["lights"].clone()));
+            // a DNG of another size is refused
+            let other = Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/tiny_1x1.dng");
+            if other.is_file() {
+                assert!(vis.masks(&sc, Some(&other), 64).is_err());
+            }
+        }
+        // Same lights (the plan does not depend on the orientation), so the orientation-6
+        // mask is the orientation-1 mask turned clockwise: displayed (xo, yo) shows what
+        // the unrotated thumbnail has at (yo, h1 - 1 - xo). The red centre marks are
+        // (red, outlined in black) are drawn with rounding of their own: compare the other
+        // pixels.
+        let ((m1, l1), (m6, l6)) = (&shapes[0], &shapes[1]);
+        assert_eq!(l1, l6);
+        assert_eq!((m1.width, m1.height), (m6.height, m6.width));
+        let (mut same, mut grey, mut levels) = (0, 0, std::collections::BTreeSet::new());
+        for yo in 0..m6.height {
+            for xo in 0..m6.width {
+                let (a, b) = (at(m6, xo, yo), at(m1, yo, m1.height - 1 - xo));
+                let plain = |p: [u8; 3]| p[0] == p[1] && p[1] == p[2] && p[0] > 0;
+                if plain(a) && plain(b) {
+                    grey += 1;
+                    same += usize::from(a == b);
+                    levels.insert(a[0]);
+                }
+            }
+        }
+        assert!(levels.len() > 8, "mask too flat to test: {levels:?}");
+        assert!(
+            grey > m6.width * m6.height / 2 && same == grey,
+            "{same}/{grey}"
+        );
     }
 }
