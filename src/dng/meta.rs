@@ -152,6 +152,10 @@ pub struct RawMeta {
     pub raw_extra: Vec<Entry>,
     /// Other Exif entries carried verbatim.
     pub exif_extra: Vec<Entry>,
+    /// The GPS IFD's entries, carried verbatim (a night raw is a drop-in replacement of
+    /// the capture, location included). Not serialized when empty.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub gps: Vec<Entry>,
     /// How the source stored the raw (for `info`; the writer chooses its own layout).
     pub storage: Option<Storage>,
 }
@@ -203,6 +207,7 @@ impl RawMeta {
             ifd0_extra: vec![],
             raw_extra: vec![],
             exif_extra: vec![],
+            gps: vec![],
             storage: None,
         }
     }

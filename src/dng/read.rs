@@ -924,6 +924,12 @@ fn build_meta(tiff: &Tiff, d: &Located<'_>, g: &Geometry) -> Result<RawMeta> {
     let exif_extra = exif_ifd
         .map(|e| carried(e, MODELLED_EXIF_TAGS))
         .unwrap_or_default();
+    // GPS tags (0..=31) have their own numbering: every readable entry is carried.
+    let gps = ifd0
+        .gps
+        .as_deref()
+        .map(|g| g.entries.clone())
+        .unwrap_or_default();
     Ok(RawMeta {
         dng_version,
         dng_backward_version: version4(ifd0.get(DNG_BACKWARD_VERSION)),
@@ -957,6 +963,7 @@ fn build_meta(tiff: &Tiff, d: &Located<'_>, g: &Geometry) -> Result<RawMeta> {
         ifd0_extra,
         raw_extra,
         exif_extra,
+        gps,
         storage: Some(Storage {
             byte_order: tiff.byte_order,
             sub_ifd: d.path.clone(),

@@ -158,6 +158,13 @@ fn build(img: &RawImage, opts: &WriteOptions) -> Result<(ByteOrder, Ifd)> {
     };
     set_ifd0_tags(&mut ifd0, img, unique_id, opts.raw_ifd == RawIfd::Sub);
     ifd0.set_children(t::EXIF_IFD, vec![exif_ifd(m)]);
+    if !m.gps.is_empty() {
+        let mut gps = Ifd::new();
+        for en in &m.gps {
+            gps.set(en.tag, en.value.clone());
+        }
+        ifd0.set_children(t::GPS_IFD, vec![gps]);
+    }
     Ok((order, ifd0))
 }
 

@@ -49,6 +49,8 @@ pub struct Ifd {
     pub sub_ifds: Vec<Ifd>,
     /// The Exif IFD (tag 34665), if any.
     pub exif: Option<Box<Ifd>>,
+    /// The GPS IFD (tag 34853), if any.
+    pub gps: Option<Box<Ifd>>,
 }
 
 impl Ifd {
@@ -343,6 +345,7 @@ impl<'a> Parser<'a> {
             bad_entries: Vec::new(),
             sub_ifds: Vec::new(),
             exif: None,
+            gps: None,
         };
         for e in table.chunks_exact(12) {
             let tag = self.r.u16(&e[0..2]);
@@ -407,6 +410,12 @@ impl<'a> Parser<'a> {
             // A broken Exif IFD loses the Exif fields, not the image.
             if let Ok((exif, _)) = self.ifd(o, depth + 1) {
                 ifd.exif = Some(Box::new(exif));
+            }
+        }
+        if let Some(o) = ifd.u32(tags::GPS_IFD) {
+            // Likewise a broken GPS IFD loses the location only.
+            if let Ok((gps, _)) = self.ifd(o, depth + 1) {
+                ifd.gps = Some(Box::new(gps));
             }
         }
         Ok((ifd, next))
