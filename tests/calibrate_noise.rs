@@ -480,3 +480,56 @@ fn pairs_against_a_merged_clean_frame() {
         assert!((fo / (o * k) - 1.0).abs() < 0.05, "{p}");
     }
 }
+
+#[test]
+fn assume_iso_fills_only_missing_isos() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut paths: Vec<PathBuf> = vec![];
+    for (iso, s) in [(0u32, 4e-4), (1600, 1.6e-3)] {
+        let mut img = frame(8, 8, vec![300; 64], 64.0, 1023.0, iso);
+        img.meta.noise_profile = Some(vec![(s, 2e-6)]);
+        paths.push(write(dir.path(), &format!("np{iso}.dng"), &img));
+    }
+    let out = dir.path().join("noise.json");
+    // Without --assume-iso the frame without ISO is an error that names the option.
+    let mut a = args!["calibrate", "noise", "--from-noise-profile"];
+    a.extend(paths.iter().map(OsString::from));
+    a.extend(args!["-o", &out]);
+    let (code, _, err) = run_os(&a);
+    assert_eq!(code, 1, "{err}");
+    assert!(
+        err.contains("np0.dng") && err.contains("--assume-iso"),
+        "{err}"
+    );
+    assert!(!out.exists());
+    // With it: the ISO-less frame is ISO 400, the other keeps its 1600.
+    a.extend(args!["--assume-iso", "400"]);
+    let (code, _, err) = run_os(&a);
+    assert_eq!(code, 0, "{err}");
+    assert!(
+        err.contains("np0.dng") && err.contains("--assume-iso 400"),
+        "{err}"
+    );
+    let model: Value = serde_json::from_slice(&std::fs::read(&out).unwrap()).unwrap();
+    let isos: Vec<u64> = model["isos"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|m| m["iso"].as_u64().unwrap())
+        .collect();
+    assert_eq!(isos, vec![400, 1600]);
+    assert!((positions(&model, 400)[0]["S"].as_f64().unwrap() - 4e-4).abs() < 1e-12);
+    assert!((positions(&model, 1600)[0]["S"].as_f64().unwrap() - 1.6e-3).abs() < 1e-12);
+    // 0 is not an ISO
+    let (code, _, err) = run_os(&args![
+        "calibrate",
+        "noise",
+        "--from-noise-profile",
+        &paths[1],
+        "--assume-iso",
+        "0",
+        "-o",
+        &out
+    ]);
+    assert_eq!(code, 2, "{err}");
+}

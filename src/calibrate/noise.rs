@@ -97,7 +97,9 @@ impl SourceStats {
 
 fn iso_of(img: &RawImage) -> Result<u32> {
     img.meta.exif.iso.filter(|&i| i > 0).ok_or_else(|| {
-        Error::invalid("the frame has no Exif ISO: the noise model is indexed by ISO")
+        Error::invalid(
+            "the frame has no Exif ISO: the noise model is indexed by ISO (calibrate noise --assume-iso N gives one)",
+        )
     })
 }
 

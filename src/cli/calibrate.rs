@@ -98,6 +98,7 @@ pub struct NoiseArgs {
     burst: Vec<Vec<PathBuf>>,
     pair: Vec<Vec<PathBuf>>,
     from_noise_profile: Vec<PathBuf>,
+    assume_iso: Option<u32>,
     out: OutArgs,
 }
 
@@ -112,6 +113,7 @@ impl clap::FromArgMatches for NoiseArgs {
             burst: occ("burst"),
             pair: occ("pair"),
             from_noise_profile: occ("from_noise_profile").into_iter().flatten().collect(),
+            assume_iso: m.get_one::<u32>("assume_iso").copied(),
             out: OutArgs::from_arg_matches(m)?,
         })
     }
@@ -151,6 +153,13 @@ impl clap::Args for NoiseArgs {
                     .value_parser(value_parser!(PathBuf))
                     .value_name("DNG")
                     .help("DNGs whose NoiseProfile tags (and Exif ISO) give the model"),
+            )
+            .arg(
+                Arg::new("assume_iso")
+                    .long("assume-iso")
+                    .value_parser(value_parser!(u32).range(1..))
+                    .value_name("ISO")
+                    .help("ISO of input frames without an Exif ISO (missing or 0); frames with one keep theirs"),
             );
         <OutArgs as clap::Args>::augment_args(cmd)
     }
@@ -287,6 +296,23 @@ fn run_brightness(a: BrightnessArgs) -> CmdResult {
 }
 
 fn run_noise(a: NoiseArgs) -> CmdResult {
+    // Frames without an Exif ISO get --assume-iso (noted once), the others keep theirs.
+    let noted = std::cell::Cell::new(false);
+    let read = |p: &Path| -> day2night::Result<RawImage> {
+        let mut img = read(p)?;
+        if let Some(iso) = a.assume_iso {
+            if img.meta.exif.iso.filter(|&i| i > 0).is_none() {
+                img.meta.exif.iso = Some(iso);
+                if !noted.replace(true) {
+                    eprintln!(
+                        "day2night: {}: no Exif ISO, using --assume-iso {iso} (and for any other such frame)",
+                        p.display()
+                    );
+                }
+            }
+        }
+        Ok(img)
+    };
     if a.burst.is_empty() && a.pair.is_empty() && a.from_noise_profile.is_empty() {
         return Err(usage(
             "give at least one --burst FRAMES..., --pair CLEAN NOISY or --from-noise-profile DNG...",
