@@ -77,6 +77,23 @@ fn gps_ifd_is_carried_by_convert_and_synth() {
     let back = read_dng(&with_gps).unwrap();
     assert_eq!(back.meta.gps, gps_entries());
 
+    // `info` reports it (text and JSON); a file without GPS has no GPS line
+    let o = common::bin().arg("info").arg(&with_gps).output().unwrap();
+    assert!(String::from_utf8_lossy(&o.stdout).contains("GPS:           8 entries"));
+    let o = common::bin()
+        .args(["info", "--json"])
+        .arg(&with_gps)
+        .output()
+        .unwrap();
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(v[0]["raw"]["meta"]["gps_entries"], 8, "{v}");
+    let o = common::bin()
+        .arg("info")
+        .arg(common::fixtures().join("day.dng"))
+        .output()
+        .unwrap();
+    assert!(!String::from_utf8_lossy(&o.stdout).contains("GPS"));
+
     // convert and synth keep it
     let conv = t.path().join("conv.dng");
     let o = common::bin()

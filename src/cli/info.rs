@@ -225,6 +225,9 @@ fn describe(out: &mut String, file: &std::path::Path, i: &DngInfo) {
                 .join("; "))
         );
         let _ = writeln!(out, "  orientation:   {}", m.orientation);
+        if m.gps_entries > 0 {
+            let _ = writeln!(out, "  GPS:           {} entries (carried)", m.gps_entries);
+        }
         let _ = writeln!(
             out,
             "  opcode lists:  {}",

@@ -1054,6 +1054,8 @@ pub struct MetaSummary {
     pub storage: Option<Storage>,
     /// Counts of carried entries (IFD0, raw IFD, Exif).
     pub carried_entries: [usize; 3],
+    /// Entries of the GPS IFD (0: none), carried into written DNGs.
+    pub gps_entries: usize,
 }
 
 /// What `day2night info` reports about a file.
@@ -1199,6 +1201,7 @@ pub fn inspect_bytes(bytes: &[u8]) -> Result<DngInfo> {
                         .collect(),
                     storage: m.storage.clone(),
                     carried_entries: [m.ifd0_extra.len(), m.raw_extra.len(), m.exif_extra.len()],
+                    gps_entries: m.gps.len(),
                 },
             });
             match bayer {
