@@ -458,6 +458,30 @@ mod tests {
     }
 
     #[test]
+    fn gps_ifd_is_read_and_a_broken_one_is_ignored() {
+        // IFD0 (8): 2 entries -> 8 + 2 + 24 + 4 = 38; GPS IFD at 38: GPSVersionID, GPSAltitudeRef.
+        let mut b = le_tiff(&[(256, 3, 1, 7), (tags::GPS_IFD, 4, 1, 38)], 0);
+        b.extend_from_slice(&2u16.to_le_bytes());
+        for (t, ty, c, v) in [(0u16, 1u16, 4u32, 0x0000_0302u32), (5, 1, 1, 1)] {
+            b.extend_from_slice(&t.to_le_bytes());
+            b.extend_from_slice(&ty.to_le_bytes());
+            b.extend_from_slice(&c.to_le_bytes());
+            b.extend_from_slice(&v.to_le_bytes());
+        }
+        b.extend_from_slice(&0u32.to_le_bytes());
+        let t = parse(&b).unwrap();
+        let gps = t.ifd0().gps.as_deref().expect("GPS IFD");
+        assert_eq!(gps.get(0), Some(&Value::Byte(vec![2, 3, 0, 0])));
+        assert_eq!(gps.get(5), Some(&Value::Byte(vec![1])));
+        // pointer past the end, or back at IFD0 (a cycle): the image still parses
+        for off in [10_000u32, 8] {
+            let b = le_tiff(&[(256, 3, 1, 7), (tags::GPS_IFD, 4, 1, off)], 0);
+            let t = parse(&b).unwrap();
+            assert_eq!(t.ifd0().u32(256), Some(7), "offset {off}");
+        }
+    }
+
+    #[test]
     fn cyclic_chain_is_cut() {
         // next IFD points back to IFD0: the chain ends after IFD0 (no loop).
         let b = le_tiff(&[(256, 3, 1, 1)], 8);
