@@ -64,6 +64,41 @@ pub fn encode_u8(img: &RgbImage, tone: DisplayTone) -> Vec<u8> {
     }
 }
 
+/// [`encode_u8`] of a slice of samples, on the calling thread (for band-wise encoding:
+/// the same bytes as the whole-image call gives for these samples).
+pub fn encode_u8_slice(src: &[f32], tone: DisplayTone) -> Vec<u8> {
+    match Lut8::cached(tone) {
+        Some(lut) => src.iter().map(|&v| lut.get(v)).collect(),
+        None => src.iter().map(|&v| quantize_u8_slow(tone, v)).collect(),
+    }
+}
+
+/// Write 8-bit interleaved RGB samples (`width` x `height`, e.g. the concatenated
+/// [`encode_u8_slice`] of an image's rows) as a PNG atomically: the same bytes as
+/// [`write_png`] of the image with 8-bit samples.
+pub fn write_png_rgb8(
+    bytes: &[u8],
+    width: usize,
+    height: usize,
+    path: &Path,
+    policy: &OutputPolicy,
+) -> Result<()> {
+    let w = u32::try_from(width).map_err(|_| Error::limits("image too wide"))?;
+    let h = u32::try_from(height).map_err(|_| Error::limits("image too tall"))?;
+    if w == 0 || h == 0 || bytes.len() != 3 * width * height {
+        return Err(Error::invalid(format!(
+            "PNG of {width}x{height} RGB needs {} bytes, got {}",
+            3 * width * height,
+            bytes.len()
+        )));
+    }
+    write_atomic(path, policy, |out| {
+        image::codecs::png::PngEncoder::new(out)
+            .write_image(bytes, w, h, image::ExtendedColorType::Rgb8)
+            .map_err(img_err)
+    })
+}
+
 /// Bit pattern of 1.0f32: every key is clamped to `[0, ONE]`.
 const ONE_BITS: u32 = 0x3f80_0000;
 /// Bucket size of [`Lut8`]: keys `>> LUT_SHIFT` index the bucket table (16 256 buckets, each
@@ -452,6 +487,33 @@ mod tests {
         for tone in TONES {
             assert_eq!(encode_u8(&img, tone), encode_u8_slow(&img, tone));
         }
+    }
+
+    #[test]
+    fn rgb8_bytes_give_the_write_png_file() {
+        let dir = tempfile::tempdir().unwrap();
+        let mut img = RgbImage::new(7, 5);
+        for (i, v) in img.data.iter_mut().enumerate() {
+            *v = (i as f32 * 0.37).sin();
+        }
+        let policy = OutputPolicy::default();
+        let a = dir.path().join("a.png");
+        write_png(&img, &a, &PngOptions::default(), &policy).unwrap();
+        let bytes: Vec<u8> = img
+            .data
+            .chunks(9)
+            .flat_map(|c| encode_u8_slice(c, DisplayTone::Srgb))
+            .collect();
+        assert_eq!(bytes, encode_u8(&img, DisplayTone::Srgb));
+        let b = dir.path().join("b.png");
+        write_png_rgb8(&bytes, 7, 5, &b, &policy).unwrap();
+        assert_eq!(std::fs::read(&a).unwrap(), std::fs::read(&b).unwrap());
+        let c = dir.path().join("c.png");
+        assert!(write_png_rgb8(&bytes[1..], 7, 5, &c, &policy).is_err());
+        assert!(!c.exists());
+        // the release tone (no lookup) goes through the formula
+        let r: Vec<u8> = encode_u8_slice(&img.data, DisplayTone::Release);
+        assert_eq!(r, encode_u8_slow(&img, DisplayTone::Release));
     }
 
     #[test]

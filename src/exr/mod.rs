@@ -341,6 +341,47 @@ pub fn write_exr(
     write_atomic(path, policy, |w| encode_exr(img, w, opts, attributes))
 }
 
+/// True when `opts` can be written band by band ([`encode_exr_rows`] +
+/// [`write_exr_blocks`]): the compressions of the own scan-line encoder (none, zips, zip).
+pub fn encodes_rows(opts: &ExrOptions) -> bool {
+    scanline::lines_per_block(opts.compression).is_some()
+}
+
+/// The stored blocks of the interleaved linear RGB `rows` (`width` pixels each) that start
+/// at image line `first_row` (a multiple of 16 for zip; any multiple of 32 works for every
+/// compression [`encodes_rows`] accepts). With [`write_exr_blocks`] this writes the same
+/// bytes as [`write_exr`] of the whole image, without holding it.
+pub fn encode_exr_rows(
+    rows: &[f32],
+    width: usize,
+    first_row: usize,
+    opts: &ExrOptions,
+) -> Result<Vec<Vec<u8>>> {
+    opts.validate()?;
+    scanline::encode_rows(rows, width, first_row, opts)
+}
+
+/// Write a `width` x `height` EXR from its stored `blocks` (all of them, in line order, from
+/// [`encode_exr_rows`] with the same `opts`) atomically at `path`.
+pub fn write_exr_blocks(
+    width: usize,
+    height: usize,
+    blocks: &[Vec<u8>],
+    path: &Path,
+    opts: &ExrOptions,
+    attributes: &[(String, String)],
+    policy: &OutputPolicy,
+) -> Result<()> {
+    opts.validate()?;
+    if width == 0 || height == 0 {
+        return Err(Error::invalid("cannot write an empty EXR image"));
+    }
+    scanline::check_attributes(attributes)?;
+    write_atomic(path, policy, |mut w| {
+        scanline::write_blocks(&mut w, width, height, opts, attributes, blocks)
+    })
+}
+
 /// The standard attributes of a day2night render: source file name, neutral, tool version.
 pub fn standard_attributes(source: &Path, neutral: [f64; 3]) -> Vec<(String, String)> {
     vec![
@@ -362,6 +403,57 @@ pub fn standard_attributes(source: &Path, neutral: [f64; 3]) -> Vec<(String, Str
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn rows_and_blocks_give_the_whole_image_bytes() {
+        let dir = tempfile::tempdir().unwrap();
+        let (w, h) = (13usize, 70usize);
+        let mut img = RgbImage::new(w, h);
+        for (i, v) in img.data.iter_mut().enumerate() {
+            *v = match i % 13 {
+                0 => f32::NAN,
+                1 => 1e9,
+                _ => ((i * 7919) % 1000) as f32 / 997.0,
+            };
+        }
+        let attrs = [("day2night:x".to_string(), "y".to_string())];
+        let policy = OutputPolicy::default();
+        for compression in [
+            ExrCompression::None,
+            ExrCompression::Zips,
+            ExrCompression::Zip,
+        ] {
+            for half in [true, false] {
+                let opts = ExrOptions {
+                    half,
+                    compression,
+                    ..ExrOptions::default()
+                };
+                assert!(encodes_rows(&opts));
+                let a = dir.path().join(format!("a{compression}{half}.exr"));
+                write_exr(&img, &a, &opts, &attrs, &policy).unwrap();
+                // bands of 32 rows (the render's), the last one short
+                let mut blocks = Vec::new();
+                for (k, rows) in img.data.chunks(3 * w * 32).enumerate() {
+                    blocks.extend(encode_exr_rows(rows, w, 32 * k, &opts).unwrap());
+                }
+                let b = dir.path().join(format!("b{compression}{half}.exr"));
+                write_exr_blocks(w, h, &blocks, &b, &opts, &attrs, &policy).unwrap();
+                assert_eq!(std::fs::read(&a).unwrap(), std::fs::read(&b).unwrap());
+                // a missing block and a misaligned band are errors, not bad files
+                let c = dir.path().join(format!("c{compression}{half}.exr"));
+                assert!(write_exr_blocks(w, h, &blocks[1..], &c, &opts, &attrs, &policy).is_err());
+                assert!(!c.exists());
+            }
+        }
+        let zip = ExrOptions::default();
+        assert!(encode_exr_rows(&img.data[..3 * w * 16], w, 8, &zip).is_err());
+        assert!(encode_exr_rows(&img.data[..3 * w * 16 + 1], w, 0, &zip).is_err());
+        assert!(!encodes_rows(&ExrOptions {
+            compression: ExrCompression::Piz,
+            ..ExrOptions::default()
+        }));
+    }
     use std::io::Cursor;
 
     #[test]

@@ -201,14 +201,14 @@ fn half_bits(v: f32) -> u16 {
     sign | mag as u16
 }
 
-/// Fill `raw` with the little-endian planar samples (B, G, R per line) of `lines` rows
-/// starting at `y0`, sanitized ([`sane`]) to the half or f32 range.
-fn fill_block(img: &RgbImage, y0: usize, lines: usize, half: bool, raw: &mut Vec<u8>) {
-    let w = img.width;
+/// Fill `raw` with the little-endian planar samples (B, G, R per line) of the interleaved
+/// RGB `rows` (`w` pixels each), sanitized ([`sane`]) to the half or f32 range.
+fn fill_block(rows: &[f32], w: usize, half: bool, raw: &mut Vec<u8>) {
+    let lines = rows.len() / (3 * w);
     let bps = if half { 2 } else { 4 };
     raw.clear();
     raw.resize(lines * 3 * w * bps, 0);
-    let rows = img.data.chunks_exact(3 * w).skip(y0);
+    let rows = rows.chunks_exact(3 * w);
     for (line, row) in raw.chunks_exact_mut(3 * w * bps).zip(rows) {
         let (b, gr) = line.split_at_mut(w * bps);
         let (g, r) = gr.split_at_mut(w * bps);
@@ -259,13 +259,13 @@ fn predict(raw: &[u8], tmp: &mut Vec<u8>) {
 /// byte of planar sample `j` goes to `tmp[j]`, the high byte to `tmp[n + j]` (`n` samples),
 /// exactly where the split of the little-endian planar bytes puts them. The delta step is
 /// left to the caller.
-fn fill_split_half(img: &RgbImage, y0: usize, lines: usize, tmp: &mut Vec<u8>) {
-    let w = img.width;
+fn fill_split_half(rows: &[f32], w: usize, tmp: &mut Vec<u8>) {
+    let lines = rows.len() / (3 * w);
     let n = lines * 3 * w;
     tmp.clear();
     tmp.resize(2 * n, 0);
     let (lo, hi) = tmp.split_at_mut(n);
-    let rows = img.data.chunks_exact(3 * w).skip(y0);
+    let rows = rows.chunks_exact(3 * w);
     for ((lo, hi), row) in lo
         .chunks_exact_mut(3 * w)
         .zip(hi.chunks_exact_mut(3 * w))
@@ -306,29 +306,26 @@ fn delta(tmp: &mut [u8]) {
     }
 }
 
-/// The stored bytes of block `b`.
+/// The stored bytes of the block made of the interleaved RGB `rows` (`w` pixels each).
 fn encode_block(
-    img: &RgbImage,
-    b: usize,
-    lpb: usize,
+    rows: &[f32],
+    w: usize,
     opts: &ExrOptions,
     scratch: &mut (Vec<u8>, Vec<u8>),
 ) -> Vec<u8> {
     let (raw, tmp) = scratch;
-    let y0 = b * lpb;
-    let lines = lpb.min(img.height - y0);
     if opts.half && opts.compression != ExrCompression::None {
-        fill_split_half(img, y0, lines, tmp);
+        fill_split_half(rows, w, tmp);
         delta(tmp);
         let packed = miniz_oxide::deflate::compress_to_vec_zlib(tmp, opts.zip_level);
         if packed.len() < tmp.len() {
             return packed;
         }
         // incompressible: OpenEXR stores the plain samples
-        fill_block(img, y0, lines, true, raw);
+        fill_block(rows, w, true, raw);
         return std::mem::take(raw);
     }
-    fill_block(img, y0, lines, opts.half, raw);
+    fill_block(rows, w, opts.half, raw);
     if opts.compression == ExrCompression::None {
         return std::mem::take(raw);
     }
@@ -349,28 +346,89 @@ pub(crate) fn encode<W: Write>(
     opts: &ExrOptions,
     attributes: &[(String, String)],
 ) -> Result<()> {
-    let lpb = lines_per_block(opts.compression).ok_or_else(|| {
-        Error::unsupported(format!("own EXR encoder: compression {}", opts.compression))
-    })?;
-    let bps = if opts.half { 2 } else { 4 };
-    // the largest block must fit the i32 size field
-    let block_bytes = 3usize
-        .checked_mul(bps * lpb.min(img.height))
-        .and_then(|v| v.checked_mul(img.width))
-        .ok_or_else(|| Error::limits("EXR block size overflows"))?;
-    i32_of(block_bytes, "block size")?;
-    let head = header(img.width, img.height, opts, attributes)?;
+    let lpb = check_blocks(img.width, img.height, opts)?;
+    let w = img.width;
     let nblocks = img.height.div_ceil(lpb);
     let blocks: Vec<Vec<u8>> = (0..nblocks)
         .into_par_iter()
         .map_init(
             || (Vec::new(), Vec::new()),
-            |scratch, b| encode_block(img, b, lpb, opts, scratch),
+            |scratch, b| {
+                let y0 = b * lpb;
+                let lines = lpb.min(img.height - y0);
+                encode_block(
+                    &img.data[3 * w * y0..3 * w * (y0 + lines)],
+                    w,
+                    opts,
+                    scratch,
+                )
+            },
         )
         .collect();
+    write_blocks(out, img.width, img.height, opts, attributes, &blocks)
+}
+
+/// Lines per block of `opts.compression` (own encoder only), after checking that the
+/// largest block of a `w` x `h` image fits the i32 size field.
+fn check_blocks(w: usize, h: usize, opts: &ExrOptions) -> Result<usize> {
+    let lpb = lines_per_block(opts.compression).ok_or_else(|| {
+        Error::unsupported(format!("own EXR encoder: compression {}", opts.compression))
+    })?;
+    let bps = if opts.half { 2 } else { 4 };
+    let block_bytes = 3usize
+        .checked_mul(bps * lpb.min(h))
+        .and_then(|v| v.checked_mul(w))
+        .ok_or_else(|| Error::limits("EXR block size overflows"))?;
+    i32_of(block_bytes, "block size")?;
+    Ok(lpb)
+}
+
+/// The stored blocks of the interleaved RGB `rows` (`w` pixels each) that start at image
+/// line `first_row`, which must be a multiple of the compression's lines per block: the
+/// same bytes [`encode`] makes for these lines of the whole image.
+pub(crate) fn encode_rows(
+    rows: &[f32],
+    w: usize,
+    first_row: usize,
+    opts: &ExrOptions,
+) -> Result<Vec<Vec<u8>>> {
+    let lpb = lines_per_block(opts.compression).ok_or_else(|| {
+        Error::unsupported(format!("own EXR encoder: compression {}", opts.compression))
+    })?;
+    if w == 0 || first_row % lpb != 0 || rows.len() % (3 * w) != 0 {
+        return Err(Error::invalid(format!(
+            "EXR rows: first row {first_row} not a multiple of {lpb} lines, or a partial line"
+        )));
+    }
+    let mut scratch = (Vec::new(), Vec::new());
+    Ok(rows
+        .chunks(3 * w * lpb)
+        .map(|block| encode_block(block, w, opts, &mut scratch))
+        .collect())
+}
+
+/// Write the header, offset table and `blocks` (all blocks of a `w` x `h` image, in line
+/// order, as made by [`encode_rows`] or [`encode`]).
+pub(crate) fn write_blocks<W: Write>(
+    out: &mut W,
+    w: usize,
+    h: usize,
+    opts: &ExrOptions,
+    attributes: &[(String, String)],
+    blocks: &[Vec<u8>],
+) -> Result<()> {
+    let lpb = check_blocks(w, h, opts)?;
+    let nblocks = h.div_ceil(lpb);
+    if blocks.len() != nblocks {
+        return Err(Error::invalid(format!(
+            "EXR of {h} lines needs {nblocks} blocks, got {}",
+            blocks.len()
+        )));
+    }
+    let head = header(w, h, opts, attributes)?;
     let mut offset = (head.len() + 8 * nblocks) as u64;
     let mut table = Vec::with_capacity(8 * nblocks);
-    for blk in &blocks {
+    for blk in blocks {
         table.extend_from_slice(&offset.to_le_bytes());
         offset += 8 + blk.len() as u64;
     }
@@ -451,9 +509,10 @@ mod tests {
             }
             for (y0, lines) in [(0, h), (h / 2, h - h / 2)] {
                 let (mut raw, mut want, mut got) = (Vec::new(), Vec::new(), Vec::new());
-                fill_block(&img, y0, lines, true, &mut raw);
+                let rows = &img.data[3 * w * y0..3 * w * (y0 + lines)];
+                fill_block(rows, w, true, &mut raw);
                 predict(&raw, &mut want);
-                fill_split_half(&img, y0, lines, &mut got);
+                fill_split_half(rows, w, &mut got);
                 delta(&mut got);
                 assert_eq!(got, want, "{w}x{h} from {y0}");
             }

@@ -108,7 +108,7 @@ pub fn render_camera(img: &RawImage, neutral: [f64; 3], method: Demosaic) -> Res
 }
 
 /// Output rows per band of the banded render.
-const BAND: usize = 32;
+pub const BAND: usize = 32;
 
 /// The render: demosaic with `post` applied to each finished row, then DefaultCrop (if
 /// `crop`) and orientation (if `orient`). Single-pass demosaicers (bilinear, MHC) run
@@ -151,6 +151,28 @@ fn render_banded(
     crop: bool,
     orient: bool,
 ) -> Result<RgbImage> {
+    banded(img, neutral, kernel, post, crop, orient, |ow, oh, body| {
+        let mut out = RgbImage::new(ow, oh);
+        out.data
+            .par_chunks_mut(3 * ow * BAND)
+            .enumerate()
+            .for_each(|(bi, band)| body(bi, band));
+        Ok(out)
+    })
+}
+
+/// The set-up of [`render_banded`]: resolves the geometry and calls `run(ow, oh, body)`,
+/// where `body(bi, band)` renders output rows `[bi * BAND, bi * BAND + band.len() / (3 *
+/// ow))` into `band` (interleaved RGB, `ow` pixels per row).
+fn banded<R>(
+    img: &RawImage,
+    neutral: [f64; 3],
+    kernel: RowKernel,
+    post: &Post,
+    crop: bool,
+    orient: bool,
+    run: impl FnOnce(usize, usize, &(dyn Fn(usize, &mut [f32]) + Sync)) -> Result<R>,
+) -> Result<R> {
     let bayer = img.bayer()?;
     let n = normalize_neutral(neutral)?;
     let norm = Normalizer::new(img)?;
@@ -198,70 +220,128 @@ fn render_banded(
     };
     let swap = o >= 5;
     let (ow, oh) = if swap { (ch, cw) } else { (cw, ch) };
-    let mut out = RgbImage::new(ow, oh);
-    out.data
-        .par_chunks_mut(3 * ow * BAND)
-        .enumerate()
-        .for_each(|(bi, band)| {
-            let a0 = bi * BAND;
-            let b0 = a0 + band.len() / (3 * ow);
-            let mut blacks = Vec::new();
-            let fill = |r: usize, cs: &[usize], out: &mut [f32]| fill(&mut blacks, r, cs, out);
-            if !swap {
-                // Output rows [a0, b0) are crop rows [s0, s1), in reverse order for 3 and 4,
-                // mirrored left-right for 2 and 3.
-                let (s0, s1) = if o <= 2 { (a0, b0) } else { (ch - b0, ch - a0) };
-                let flip = o == 2 || o == 3;
-                let rows = y0 + s0..y0 + s1;
-                demosaic_rect(
-                    w,
-                    h,
-                    bayer,
-                    kernel,
-                    rows,
-                    x0..x0 + cw,
-                    fill,
-                    post,
-                    |i, rgb| {
-                        let yc = s0 + i;
-                        let yo = if o <= 2 { yc } else { ch - 1 - yc };
-                        let dst = &mut band[3 * ow * (yo - a0)..][..3 * ow];
-                        if flip {
-                            for (d, p) in dst.chunks_exact_mut(3).zip(rgb.chunks_exact(3).rev()) {
-                                d.copy_from_slice(p);
-                            }
-                        } else {
-                            dst.copy_from_slice(rgb);
+    let body = |bi: usize, band: &mut [f32]| {
+        let a0 = bi * BAND;
+        let b0 = a0 + band.len() / (3 * ow);
+        let mut blacks = Vec::new();
+        let fill = |r: usize, cs: &[usize], out: &mut [f32]| fill(&mut blacks, r, cs, out);
+        if !swap {
+            // Output rows [a0, b0) are crop rows [s0, s1), in reverse order for 3 and 4,
+            // mirrored left-right for 2 and 3.
+            let (s0, s1) = if o <= 2 { (a0, b0) } else { (ch - b0, ch - a0) };
+            let flip = o == 2 || o == 3;
+            let rows = y0 + s0..y0 + s1;
+            demosaic_rect(
+                w,
+                h,
+                bayer,
+                kernel,
+                rows,
+                x0..x0 + cw,
+                fill,
+                post,
+                |i, rgb| {
+                    let yc = s0 + i;
+                    let yo = if o <= 2 { yc } else { ch - 1 - yc };
+                    let dst = &mut band[3 * ow * (yo - a0)..][..3 * ow];
+                    if flip {
+                        for (d, p) in dst.chunks_exact_mut(3).zip(rgb.chunks_exact(3).rev()) {
+                            d.copy_from_slice(p);
                         }
-                    },
-                );
-            } else {
-                // Output rows [a0, b0) are crop columns [s0, s1) (reversed for 7 and 8);
-                // crop row y becomes output column y (5, 8) or ch - 1 - y (6, 7).
-                let (s0, s1) = if o <= 6 { (a0, b0) } else { (cw - b0, cw - a0) };
-                let cols = x0 + s0..x0 + s1;
-                demosaic_rect(
-                    w,
-                    h,
-                    bayer,
-                    kernel,
-                    y0..y0 + ch,
-                    cols,
-                    fill,
-                    post,
-                    |y, rgb| {
-                        let xo = if o == 5 || o == 8 { y } else { ch - 1 - y };
-                        for (k, p) in rgb.chunks_exact(3).enumerate() {
-                            let x = s0 + k;
-                            let yo = if o <= 6 { x } else { cw - 1 - x };
-                            let d = 3 * ((yo - a0) * ow + xo);
-                            band[d..d + 3].copy_from_slice(p);
-                        }
-                    },
-                );
-            }
-        });
-    Ok(out)
+                    } else {
+                        dst.copy_from_slice(rgb);
+                    }
+                },
+            );
+        } else {
+            // Output rows [a0, b0) are crop columns [s0, s1) (reversed for 7 and 8);
+            // crop row y becomes output column y (5, 8) or ch - 1 - y (6, 7).
+            let (s0, s1) = if o <= 6 { (a0, b0) } else { (cw - b0, cw - a0) };
+            let cols = x0 + s0..x0 + s1;
+            demosaic_rect(
+                w,
+                h,
+                bayer,
+                kernel,
+                y0..y0 + ch,
+                cols,
+                fill,
+                post,
+                |y, rgb| {
+                    let xo = if o == 5 || o == 8 { y } else { ch - 1 - y };
+                    for (k, p) in rgb.chunks_exact(3).enumerate() {
+                        let x = s0 + k;
+                        let yo = if o <= 6 { x } else { cw - 1 - x };
+                        let d = 3 * ((yo - a0) * ow + xo);
+                        band[d..d + 3].copy_from_slice(p);
+                    }
+                },
+            );
+        }
+    };
+    run(ow, oh, &body)
+}
+
+/// Band-wise consumer of [`render_linear`]: the render is made band by band ([`BAND`]
+/// output rows each, in parallel, into a per-thread buffer) and `f(first_row, width,
+/// rows)` is called on each band (`rows` is interleaved linear RGB, `width` pixels per
+/// row); the results come back in band order with the output size ([`Bands`]). The rows are exactly those of [`render_linear`]'s
+/// image (same code), so consumers that encode them (EXR blocks, 8-bit PNG samples) write
+/// the same bytes as from the whole image, without holding it. `None` when the demosaicer
+/// is not banded (Menon): use [`render_linear`].
+pub fn render_linear_bands<T, F>(
+    img: &RawImage,
+    opts: &RenderOptions,
+    f: F,
+) -> Result<Option<Bands<T>>>
+where
+    T: Send,
+    F: Fn(usize, usize, &[f32]) -> Result<T> + Sync,
+{
+    let Some(kernel) = row_kernel(opts.demosaic) else {
+        return Ok(None);
+    };
+    let n = resolve_neutral(&img.meta, opts.neutral)?;
+    let m = color_matrix(&img.meta, n)?;
+    let mf = m.map(|r| r.map(|v| v as f32));
+    let post = move |row: &mut [f32]| matrix_row(row, &mf);
+    banded(
+        img,
+        n,
+        kernel,
+        &post,
+        opts.crop,
+        opts.orient,
+        |ow, oh, body| {
+            let nb = oh.div_ceil(BAND);
+            let results: Result<Vec<T>> = (0..nb)
+                .into_par_iter()
+                .map_init(Vec::new, |scratch: &mut Vec<f32>, bi| {
+                    let rows = BAND.min(oh - bi * BAND);
+                    scratch.clear();
+                    scratch.resize(3 * ow * rows, 0.0);
+                    body(bi, scratch);
+                    f(bi * BAND, ow, scratch)
+                })
+                .collect();
+            Ok(Some(Bands {
+                width: ow,
+                height: oh,
+                bands: results?,
+            }))
+        },
+    )
+}
+
+/// What [`render_linear_bands`] returns: the output size and one result per band, in order.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Bands<T> {
+    /// Output width.
+    pub width: usize,
+    /// Output height.
+    pub height: usize,
+    /// The consumer's result for each band of [`BAND`] rows, top to bottom.
+    pub bands: Vec<T>,
 }
 
 /// The network input of the paper: normalized, white-balanced, demosaiced camera RGB
@@ -778,6 +858,38 @@ mod tests {
                                     bits(&b),
                                     "{w}x{h} {bayer} {d} o{orientation} crop {crop} orient {orient}"
                                 );
+                                // band-wise consumers see exactly these rows, in order
+                                let f = |y0: usize, bw: usize, rows: &[f32]| {
+                                    Ok((y0, bw, rows.to_vec()))
+                                };
+                                match render_linear_bands(&img, &opts, f).unwrap() {
+                                    Some(Bands {
+                                        width: bw,
+                                        height: bh,
+                                        bands,
+                                    }) => {
+                                        assert_ne!(d, Demosaic::Menon);
+                                        assert_eq!((bw, bh), (a.width, a.height));
+                                        let mut next = 0;
+                                        for (y0, ww, _) in &bands {
+                                            assert_eq!((*y0, *ww), (next, bw));
+                                            next += BAND;
+                                        }
+                                        let rows: Vec<f32> =
+                                            bands.into_iter().flat_map(|b| b.2).collect();
+                                        let c = RgbImage {
+                                            width: bw,
+                                            height: bh,
+                                            data: rows,
+                                        };
+                                        assert_eq!(
+                                            bits(&c),
+                                            bits(&a),
+                                            "bands {w}x{h} {d} o{orientation}"
+                                        );
+                                    }
+                                    None => assert_eq!(d, Demosaic::Menon),
+                                }
                             }
                             let a = render_input(&img, None, d).unwrap();
                             let b = render_input_reference(&img, None, d).unwrap();

@@ -48,10 +48,13 @@ use super::sidecar::{sha256_hex, CalibrationInfo, InputInfo, OutputInfo, Sidecar
 use super::{night_meta, run_clean, run_noise, Calibration, Plan, SynthOptions};
 use crate::dng::write::{write_dng, Compression, WriteOptions};
 use crate::error::{Error, Result, ResultExt};
-use crate::exr::{standard_attributes, write_exr, ExrOptions};
+use crate::exr::{
+    encode_exr_rows, encodes_rows, standard_attributes, write_exr, write_exr_blocks, ExrOptions,
+};
+use crate::isp::render::{render_linear_bands, Bands};
 use crate::isp::{render_input, render_linear, RenderOptions};
 use crate::output::{write_bytes_atomic, OutputPolicy};
-use crate::png::{write_png, PngOptions};
+use crate::png::{encode_u8_slice, write_png, write_png_rgb8, PngOptions};
 use crate::raw::RawImage;
 use std::path::{Path, PathBuf};
 use std::str::FromStr;
@@ -250,6 +253,68 @@ impl SynthJob {
                         neutral: Some(neutral),
                         ..RenderOptions::default()
                     };
+                    // Band by band when every requested target can be encoded from bands
+                    // (the default ZIP/none EXRs, 8-bit PNG): same bytes, no whole f32
+                    // image, and each band is encoded while it is in cache.
+                    if !want_exr || encodes_rows(&self.exr) {
+                        let tone = PngOptions::default().tone;
+                        let f = |y0: usize, w: usize, rows: &[f32]| -> Result<Band> {
+                            Ok(Band {
+                                exr: if want_exr {
+                                    encode_exr_rows(rows, w, y0, &self.exr)?
+                                } else {
+                                    Vec::new()
+                                },
+                                png: if want_png {
+                                    encode_u8_slice(rows, tone)
+                                } else {
+                                    Vec::new()
+                                },
+                            })
+                        };
+                        if let Some(Bands {
+                            width: w,
+                            height: h,
+                            bands,
+                        }) = render_linear_bands(clean, &ropts, f)?
+                        {
+                            let mut blocks = Vec::new();
+                            let mut png = Vec::with_capacity(if want_png { 3 * w * h } else { 0 });
+                            for b in bands {
+                                blocks.extend(b.exr);
+                                png.extend_from_slice(&b.png);
+                            }
+                            let (e, p) = rayon::join(
+                                || {
+                                    if !want_exr {
+                                        return Ok(());
+                                    }
+                                    let kind = OutputKind::TargetExr;
+                                    let path = sink.path(kind)?;
+                                    write_exr_blocks(
+                                        w,
+                                        h,
+                                        &blocks,
+                                        &path,
+                                        &self.exr,
+                                        attrs,
+                                        sink.policy(),
+                                    )?;
+                                    sink.written(kind)
+                                },
+                                || {
+                                    if !want_png {
+                                        return Ok(());
+                                    }
+                                    let kind = OutputKind::TargetPng;
+                                    let path = sink.path(kind)?;
+                                    write_png_rgb8(&png, w, h, &path, sink.policy())?;
+                                    sink.written(kind)
+                                },
+                            );
+                            return e.and(p);
+                        }
+                    }
                     let rgb = render_linear(clean, &ropts)?;
                     let (e, p) = rayon::join(
                         || {
@@ -392,6 +457,12 @@ impl DayInput {
         let bytes = std::fs::read(path).map_err(Error::Io).in_file(path)?;
         DayInput::from_bytes(path, &bytes)
     }
+}
+
+/// The encoded targets of one band of the render.
+struct Band {
+    exr: Vec<Vec<u8>>,
+    png: Vec<u8>,
 }
 
 /// One output of a variant.
