@@ -232,7 +232,7 @@ impl SynthJob {
                     sink.written(kind)
                 })());
             });
-            s.spawn(move |_| {
+            let noise_job = move |_: &rayon::Scope<'_>| {
                 *noisy_res = Some((|| {
                     let mut first_noisy = None;
                     for (i, &iso) in isos.iter().enumerate() {
@@ -246,7 +246,17 @@ impl SynthJob {
                     }
                     Ok(first_noisy)
                 })());
-            });
+            };
+            // The noisy raws start once the target is rendered (or at once without a
+            // target): the render then has both threads, and the single-threaded PNG
+            // encoder overlaps with the (parallel) noise instead of running alone at the
+            // end. Only the order of work changes, not what is computed.
+            let noise_job = std::cell::RefCell::new(Some(noise_job));
+            let start_noise = || {
+                if let Some(job) = noise_job.borrow_mut().take() {
+                    s.spawn(job);
+                }
+            };
             if want_exr || want_png {
                 target_res = Some((|| {
                     let ropts = RenderOptions {
@@ -278,6 +288,7 @@ impl SynthJob {
                             bands,
                         }) = render_linear_bands(clean, &ropts, f)?
                         {
+                            start_noise();
                             let mut blocks = Vec::new();
                             let mut png = Vec::with_capacity(if want_png { 3 * w * h } else { 0 });
                             for b in bands {
@@ -316,6 +327,7 @@ impl SynthJob {
                         }
                     }
                     let rgb = render_linear(clean, &ropts)?;
+                    start_noise();
                     let (e, p) = rayon::join(
                         || {
                             if !want_exr {
@@ -338,6 +350,7 @@ impl SynthJob {
                     e.and(p)
                 })());
             }
+            start_noise();
         });
         // Errors in a fixed order (clean, noisy, target), whatever finished first.
         clean_res.unwrap_or(Ok(()))?;
