@@ -80,6 +80,13 @@ pub fn run_clean(img: &RawImage, plan: &Plan) -> Result<(RawImage, RunReport)> {
             inv_n[bayer.color_at(r, 1) as usize],
         ]
     };
+    // When the black level depends on the 2x2 position only (the usual case), y_w of every
+    // stored value up to white is tabulated per position: the same expression, so the same
+    // bits, one load instead of a division and two clamps per sample.
+    let yw_table = YwTable::new(&norm, |pos, x| {
+        let (r, c) = (pos >> 1, pos & 1);
+        y_w(x, norm.black_at(r, c), inv_row(r)[c])
+    });
     let mut mean_wb = None;
     let s = dim_factor(&plan.dim, || {
         let sums: Vec<f64> = (0..ah)
@@ -87,9 +94,21 @@ pub fn run_clean(img: &RawImage, plan: &Plan) -> Result<(RawImage, RunReport)> {
             .map_init(
                 || vec![0.0f64; aw],
                 |blk, r| {
+                    let row = &img.data[(r + top) * width + left..][..aw];
+                    if let Some(t) = &yw_table {
+                        let (t0, t1) = t.row(r);
+                        let mut sum = 0.0f64;
+                        for (c, &x) in row.iter().enumerate() {
+                            let tab = if c & 1 == 0 { t0 } else { t1 };
+                            sum += match tab.get(x as usize) {
+                                Some(&v) => v,
+                                None => y_w(x, norm.black_at(r, c), inv_row(r)[c & 1]),
+                            };
+                        }
+                        return sum;
+                    }
                     norm.black_row(r, blk);
                     let k = inv_row(r);
-                    let row = &img.data[(r + top) * width + left..][..aw];
                     row.iter()
                         .zip(blk.iter())
                         .enumerate()
@@ -116,6 +135,7 @@ pub fn run_clean(img: &RawImage, plan: &Plan) -> Result<(RawImage, RunReport)> {
             })
             .collect()
     };
+    let ye_table = yw_table.as_ref().map(|t| t.map(|v| v as f32 * s32));
     let ambient = prep(LightKind::Ambient);
     let locals = prep(LightKind::Local);
     let bulbs = prep(LightKind::Bulb);
@@ -150,18 +170,32 @@ pub fn run_clean(img: &RawImage, plan: &Plan) -> Result<(RawImage, RunReport)> {
                 let r = srow - top;
                 let src = &img.data[srow * width + left..][..aw];
                 let mut sat = 0u64;
-                norm.black_row(r, &mut scr.blk);
                 let k = inv_row(r);
-                for (c, ((&x, ye), &b)) in src
-                    .iter()
-                    .zip(scr.ye.iter_mut())
-                    .zip(scr.blk.iter())
-                    .enumerate()
-                {
-                    if norm.linearize(x) >= white {
-                        sat += 1;
+                if ye_table.is_none() {
+                    norm.black_row(r, &mut scr.blk);
+                }
+                if let Some(t) = &ye_table {
+                    let (t0, t1) = t.row(r);
+                    for (c, (&x, ye)) in src.iter().zip(scr.ye.iter_mut()).enumerate() {
+                        let tab = if c & 1 == 0 { t0 } else { t1 };
+                        *ye = match tab.get(x as usize) {
+                            Some(&v) => v,
+                            None => y_w(x, norm.black_at(r, c), k[c & 1]) as f32 * s32,
+                        };
+                        sat += (norm.linearize(x) >= white) as u64;
                     }
-                    *ye = y_w(x, b, k[c & 1]) as f32 * s32;
+                } else {
+                    for (c, ((&x, ye), &b)) in src
+                        .iter()
+                        .zip(scr.ye.iter_mut())
+                        .zip(scr.blk.iter())
+                        .enumerate()
+                    {
+                        if norm.linearize(x) >= white {
+                            sat += 1;
+                        }
+                        *ye = y_w(x, b, k[c & 1]) as f32 * s32;
+                    }
                 }
                 let cols = [bayer.color_at(r, 0) as usize, bayer.color_at(r, 1) as usize];
                 let out = &mut scr.num;
@@ -188,8 +222,18 @@ pub fn run_clean(img: &RawImage, plan: &Plan) -> Result<(RawImage, RunReport)> {
                     Mode::Local => local_row(r, cols, &ambient, &locals, &bulbs, scr),
                 }
                 let seg = &mut row[left..left + aw];
-                for ((d, &y), &b) in seg.iter_mut().zip(scr.num.iter()).zip(scr.blk.iter()) {
-                    *d = norm.denormalize_with_black(y as f64, b, plan.truncate);
+                if ye_table.is_some() {
+                    // 2x2-periodic black: the even and odd columns' levels
+                    let b = [norm.black_at(r, 0), norm.black_at(r, 1)];
+                    for (pair, y) in seg.chunks_mut(2).zip(scr.num.chunks(2)) {
+                        for ((d, &y), &b) in pair.iter_mut().zip(y).zip(&b) {
+                            *d = norm.denormalize_with_black(y as f64, b, plan.truncate);
+                        }
+                    }
+                } else {
+                    for ((d, &y), &b) in seg.iter_mut().zip(scr.num.iter()).zip(scr.blk.iter()) {
+                        *d = norm.denormalize_with_black(y as f64, b, plan.truncate);
+                    }
                 }
                 sat
             },
@@ -210,6 +254,35 @@ pub fn run_clean(img: &RawImage, plan: &Plan) -> Result<(RawImage, RunReport)> {
             saturated_sites: saturated,
         },
     ))
+}
+
+/// A per-2x2-position table of a function of the stored value, for every value up to the
+/// white level (values above it are computed by the caller). Only built when the black level
+/// is 2x2-periodic, so that the function depends on (position, value) alone.
+struct YwTable<T> {
+    tab: [Vec<T>; 4],
+}
+
+impl<T: Copy> YwTable<T> {
+    fn new(norm: &Normalizer, f: impl Fn(usize, u16) -> T) -> Option<YwTable<T>> {
+        if !norm.black_is_2x2_periodic() {
+            return None;
+        }
+        let len = (norm.white.clamp(0.0, u16::MAX as f64) as usize) + 1;
+        Some(YwTable {
+            tab: std::array::from_fn(|pos| (0..len).map(|x| f(pos, x as u16)).collect()),
+        })
+    }
+    fn map<U>(&self, f: impl Fn(T) -> U) -> YwTable<U> {
+        YwTable {
+            tab: std::array::from_fn(|pos| self.tab[pos].iter().map(|&v| f(v)).collect()),
+        }
+    }
+    /// The tables of the even and odd columns of active-area row `r`.
+    fn row(&self, r: usize) -> (&[T], &[T]) {
+        let p = (r & 1) << 1;
+        (&self.tab[p], &self.tab[p | 1])
+    }
 }
 
 /// The per-colour factors of a row segment starting at column `c0` (even/odd offsets).

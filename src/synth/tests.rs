@@ -9,6 +9,7 @@ use super::dim::DimPlan;
 use super::masks::{Light, LightKind, MaskEval, MASK_FLOOR};
 use super::*;
 use crate::dng::meta::RawMeta;
+use crate::normalize::Normalizer;
 use crate::raw::Bayer;
 use proptest::prelude::*;
 
@@ -610,4 +611,40 @@ fn non_bayer_cfa_is_a_clear_error() {
     let mut img = frame(Bayer::RGGB, 6, 6, [500, 700, 300]);
     img.meta.cfa.plane_color = vec![0, 1, 3];
     assert!(plan(&img, "x", 0, 0, &SynthOptions::default(), &cal).is_err());
+}
+
+/// The per-value tables of the clean pass (2x2-periodic black) give the bytes of the
+/// per-sample formula: the same black levels written as a 2x4 repeat pattern (which is not
+/// tabulated) must produce the same output, for every mode, dim plan and truncation, with
+/// stored values below black, across the range, at and above white.
+#[test]
+fn clean_pass_tables_match_the_per_sample_formula() {
+    for b in Bayer::ALL {
+        let mut img = frame(b, 37, 23, [0, 0, 0]);
+        for (i, v) in img.data.iter_mut().enumerate() {
+            *v = ((i * 7919) % 1400) as u16;
+        }
+        img.meta.levels.black = vec![60.0, 64.5, 66.0, 70.0];
+        img.meta.levels.black_repeat = (2, 2);
+        let mut wide = img.clone();
+        wide.meta.levels.black = vec![60.0, 64.5, 60.0, 64.5, 66.0, 70.0, 66.0, 70.0];
+        wide.meta.levels.black_repeat = (2, 4);
+        assert!(Normalizer::new(&img).unwrap().black_is_2x2_periodic());
+        assert!(!Normalizer::new(&wide).unwrap().black_is_2x2_periodic());
+        for mode in [Mode::Day, Mode::Dimmed, Mode::Global, Mode::Local] {
+            for truncate in [false, true] {
+                let mut p = plan_for(&img, &opts(mode));
+                p.truncate = truncate;
+                let (a, ra) = run_clean(&img, &p).unwrap();
+                let (w, rw) = run_clean(&wide, &p).unwrap();
+                assert_eq!(a.data, w.data, "{b} {mode:?} truncate {truncate}");
+                assert_eq!(ra, rw, "{b} {mode:?}");
+                let p = with_dim(p, 0.3);
+                assert_eq!(
+                    run_clean(&img, &p).unwrap().0.data,
+                    run_clean(&wide, &p).unwrap().0.data
+                );
+            }
+        }
+    }
 }
