@@ -159,6 +159,49 @@ impl Normalizer {
     }
 }
 
+/// A table of a function of (2x2 position, stored value) for every stored value up to the
+/// white level, built only when the black level depends on the 2x2 position alone
+/// ([`Normalizer::black_is_2x2_periodic`]): then a per-sample expression of the site's
+/// black level and stored value can be looked up instead of computed, with the same bits.
+/// Values above white are not tabulated (callers compute them).
+#[derive(Debug, Clone)]
+pub struct SiteTable<T> {
+    tab: [Vec<T>; 4],
+}
+
+impl<T: Copy> SiteTable<T> {
+    /// `f(row & 1, col & 1, x)` for every position and `x` in `0..=white`; `None` unless the
+    /// black level is 2x2-periodic.
+    pub fn new(norm: &Normalizer, f: impl Fn(usize, usize, u16) -> T) -> Option<SiteTable<T>> {
+        if !norm.black_is_2x2_periodic() {
+            return None;
+        }
+        let len = (norm.white.clamp(0.0, u16::MAX as f64) as usize) + 1;
+        Some(SiteTable {
+            tab: std::array::from_fn(|pos| {
+                (0..len).map(|x| f(pos >> 1, pos & 1, x as u16)).collect()
+            }),
+        })
+    }
+    /// The table of `g` applied to every entry.
+    pub fn map<U>(&self, g: impl Fn(T) -> U) -> SiteTable<U> {
+        SiteTable {
+            tab: std::array::from_fn(|pos| self.tab[pos].iter().map(|&v| g(v)).collect()),
+        }
+    }
+    /// The tables of the even and odd columns of active-area row `r`.
+    #[inline]
+    pub fn row(&self, r: usize) -> (&[T], &[T]) {
+        let p = (r & 1) << 1;
+        (&self.tab[p], &self.tab[p | 1])
+    }
+    /// The entry of stored value `x` at active-area (r, c), `None` above white.
+    #[inline]
+    pub fn get(&self, r: usize, c: usize, x: u16) -> Option<T> {
+        self.tab[((r & 1) << 1) | (c & 1)].get(x as usize).copied()
+    }
+}
+
 /// `clamp(round(v), 0, white) as u16` with NaN -> 0 (round half away from zero), without
 /// calling `f64::round` (a libm call on baseline x86-64): the integer part by truncation and
 /// the exact fraction `v - trunc(v)` decide. Same result as the plain expression for every

@@ -6,7 +6,7 @@ use super::demosaic::{demosaic_rect, demosaic_rows, row_kernel, Demosaic, Post, 
 use super::RgbImage;
 use crate::dng::meta::RawMeta;
 use crate::error::{Error, Result};
-use crate::normalize::Normalizer;
+use crate::normalize::{Normalizer, SiteTable};
 use crate::raw::RawImage;
 use rayon::prelude::*;
 
@@ -191,9 +191,26 @@ fn banded<R>(
     // take the black levels of the whole row from `Normalizer::black_row` (bit-identical
     // to `black_at`, without two integer divisions per sample); narrow ones (orientations
     // 5-8) ask per sample.
+    let site = |x: u16, r: usize, c: usize, black: f64| -> f32 {
+        let y = norm.normalize_with_black(x, black) * inv[bayer.color_at(r, c) as usize];
+        y.clamp(0.0, 1.0) as f32
+    };
+    // With a 2x2-periodic black level every stored value up to white is tabulated per
+    // 2x2 position (same expression, same bits).
+    let table = SiteTable::new(&norm, |r, c, x| site(x, r, c, norm.black_at(r, c)));
     let fill = |blacks: &mut Vec<f64>, r: usize, cs: &[usize], out: &mut [f32]| {
         let src = &data[(r + top) * stride + left..][..w];
-        if 2 * cs.len() >= w {
+        if let Some(t) = &table {
+            let (t0, t1) = t.row(r);
+            for (o, &c) in out.iter_mut().zip(cs) {
+                let x = src[c];
+                let tab = if c & 1 == 0 { t0 } else { t1 };
+                *o = match tab.get(x as usize) {
+                    Some(&v) => v,
+                    None => site(x, r, c, norm.black_at(r, c)),
+                };
+            }
+        } else if 2 * cs.len() >= w {
             blacks.resize(w, 0.0);
             norm.black_row(r, blacks);
             for (o, &c) in out.iter_mut().zip(cs) {
@@ -832,6 +849,11 @@ mod tests {
                         l.black = vec![60.0, 64.5, 63.0, 70.25];
                         l.black_delta_h = (0..aw).map(|c| (c % 5) as f64 * 0.3).collect();
                         l.black_delta_v = (0..ah).map(|r| (r % 3) as f64 * 0.7 - 0.5).collect();
+                    } else if case % 4 == 1 {
+                        // per-site black without deltas: the tabulated path
+                        let l = &mut img.meta.levels;
+                        l.black_repeat = (2, 2);
+                        l.black = vec![60.0, 64.5, 63.0, 70.25];
                     }
                     for orientation in 0..=8u16 {
                         img.meta.orientation = orientation;

@@ -14,7 +14,7 @@ use super::masks::{LightKind, PreparedMask};
 use super::plan::Plan;
 use super::{Mode, SynthOutput};
 use crate::error::Result;
-use crate::normalize::Normalizer;
+use crate::normalize::{Normalizer, SiteTable};
 use crate::raw::RawImage;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
@@ -83,10 +83,7 @@ pub fn run_clean(img: &RawImage, plan: &Plan) -> Result<(RawImage, RunReport)> {
     // When the black level depends on the 2x2 position only (the usual case), y_w of every
     // stored value up to white is tabulated per position: the same expression, so the same
     // bits, one load instead of a division and two clamps per sample.
-    let yw_table = YwTable::new(&norm, |pos, x| {
-        let (r, c) = (pos >> 1, pos & 1);
-        y_w(x, norm.black_at(r, c), inv_row(r)[c])
-    });
+    let yw_table = SiteTable::new(&norm, |r, c, x| y_w(x, norm.black_at(r, c), inv_row(r)[c]));
     let mut mean_wb = None;
     let s = dim_factor(&plan.dim, || {
         let sums: Vec<f64> = (0..ah)
@@ -254,35 +251,6 @@ pub fn run_clean(img: &RawImage, plan: &Plan) -> Result<(RawImage, RunReport)> {
             saturated_sites: saturated,
         },
     ))
-}
-
-/// A per-2x2-position table of a function of the stored value, for every value up to the
-/// white level (values above it are computed by the caller). Only built when the black level
-/// is 2x2-periodic, so that the function depends on (position, value) alone.
-struct YwTable<T> {
-    tab: [Vec<T>; 4],
-}
-
-impl<T: Copy> YwTable<T> {
-    fn new(norm: &Normalizer, f: impl Fn(usize, u16) -> T) -> Option<YwTable<T>> {
-        if !norm.black_is_2x2_periodic() {
-            return None;
-        }
-        let len = (norm.white.clamp(0.0, u16::MAX as f64) as usize) + 1;
-        Some(YwTable {
-            tab: std::array::from_fn(|pos| (0..len).map(|x| f(pos, x as u16)).collect()),
-        })
-    }
-    fn map<U>(&self, f: impl Fn(T) -> U) -> YwTable<U> {
-        YwTable {
-            tab: std::array::from_fn(|pos| self.tab[pos].iter().map(|&v| f(v)).collect()),
-        }
-    }
-    /// The tables of the even and odd columns of active-area row `r`.
-    fn row(&self, r: usize) -> (&[T], &[T]) {
-        let p = (r & 1) << 1;
-        (&self.tab[p], &self.tab[p | 1])
-    }
 }
 
 /// The per-colour factors of a row segment starting at column `c0` (even/odd offsets).
