@@ -58,6 +58,7 @@ fn bench(c: &mut Criterion) {
         let policy = OutputPolicy {
             overwrite: true,
             inputs: vec![src.clone()],
+            ..OutputPolicy::default()
         };
         g.bench_function(format!("copy_file_{name}"), |b| {
             b.iter(|| {

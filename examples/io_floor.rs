@@ -1,6 +1,8 @@
 //! The I/O floor of a `synth` run (issue 7): read the input DNG and write output files of
 //! the same number and sizes as a reference `synth` output directory, through the same
-//! atomic output path (temporary file, fsync, rename), with no computation.
+//! atomic output path as `synth` (temporary file; fsync on a background thread and the
+//! renames once all are synced, the sidecar `.json` last and synced at once), with no
+//! computation.
 //!
 //! ```text
 //! cargo run --release --example io_floor -- DAY.dng REFERENCE_OUT_DIR OUT_DIR
@@ -9,8 +11,9 @@
 //! Only the sizes of the reference files are looked up (metadata, not contents); the bytes
 //! written are the input's bytes repeated to each size.
 
-use day2night::output::{write_bytes_atomic, OutputPolicy};
+use day2night::output::{write_bytes_atomic, DeferredSyncs, OutputPolicy};
 use std::path::PathBuf;
+use std::sync::Arc;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut args = std::env::args_os().skip(1).map(PathBuf::from);
@@ -33,16 +36,28 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let policy = OutputPolicy {
         overwrite: true,
         inputs: vec![input.clone()],
+        ..OutputPolicy::default()
     };
+    let syncs = Arc::new(DeferredSyncs::default());
+    let deferred = policy.deferring(&syncs);
+    // The sidecar last, as synth writes it.
+    files.sort_by_key(|(name, _)| name.to_string_lossy().ends_with(".json"));
     let mut buf = Vec::new();
     for (name, size) in files {
+        let sidecar = name.to_string_lossy().ends_with(".json");
         let size = size as usize;
         buf.clear();
         while buf.len() < size {
             let take = (size - buf.len()).min(bytes.len());
             buf.extend_from_slice(&bytes[..take]);
         }
-        write_bytes_atomic(&out.join(name), &policy, &buf)?;
+        if sidecar {
+            syncs.finish(&policy)?;
+            write_bytes_atomic(&out.join(name), &policy, &buf)?;
+        } else {
+            write_bytes_atomic(&out.join(name), &deferred, &buf)?;
+        }
     }
+    syncs.finish(&policy)?;
     Ok(())
 }

@@ -569,3 +569,25 @@ fn exr_zip_level_is_recorded_replayed_and_checked() {
         assert_eq!(out.status.code(), Some(2), "--exr-zip-level {bad}");
     }
 }
+
+/// A variant that fails part-way leaves none of its outputs behind: the files written before
+/// the failure are synced but never renamed into place, and no temporary file remains.
+#[test]
+fn failed_variant_leaves_no_outputs() {
+    let t = tempfile::tempdir().unwrap();
+    let o = t.path().join("o");
+    std::fs::create_dir_all(&o).unwrap();
+    // The PNG target is refused when it is written (after the DNGs and the EXR).
+    std::fs::write(o.join("day_target.png"), b"not ours").unwrap();
+    let out = synth(&[s(&day()), "-o", s(&o), "--target", "both"]);
+    assert_eq!(out.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("day_target.png") && err.contains("--overwrite"), "{err}");
+    let mut names: Vec<String> = std::fs::read_dir(&o)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    names.sort();
+    assert_eq!(names, ["day_target.png"], "left behind: {names:?}");
+    assert_eq!(std::fs::read(o.join("day_target.png")).unwrap(), b"not ours");
+}

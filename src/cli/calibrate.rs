@@ -200,6 +200,7 @@ fn write_json<T: serde::Serialize>(out: &OutArgs, inputs: &[PathBuf], doc: &T) -
     let policy = OutputPolicy {
         overwrite: out.overwrite,
         inputs: inputs.to_vec(),
+        ..OutputPolicy::default()
     };
     write_bytes_atomic(&out.output, &policy, &bytes)?;
     if out.json {

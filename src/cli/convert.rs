@@ -53,6 +53,7 @@ pub fn run(args: ConvertArgs) -> CmdResult {
     let policy = OutputPolicy {
         overwrite: args.overwrite,
         inputs: vec![args.input.clone()],
+        ..OutputPolicy::default()
     };
     // Fail before reading a large input when the output is refused anyway.
     policy.check(&args.output)?;

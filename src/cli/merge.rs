@@ -54,6 +54,7 @@ pub fn run(args: MergeArgs) -> CmdResult {
     let policy = OutputPolicy {
         overwrite: args.overwrite,
         inputs: args.frames.clone(),
+        ..OutputPolicy::default()
     };
     // Refuse a bad output path before reading the whole burst.
     policy.check(&args.output)?;

@@ -129,6 +129,7 @@ pub fn run(args: RenderArgs) -> CmdResult {
     let policy = OutputPolicy {
         overwrite: args.overwrite,
         inputs: vec![args.input.clone()],
+        ..OutputPolicy::default()
     };
     // Refuse an existing output before the (slow) render.
     policy.check(&args.output).map_err(lib)?;

@@ -349,6 +349,7 @@ pub fn run(args: SynthArgs) -> CmdResult {
     let policy = OutputPolicy {
         overwrite: args.overwrite,
         inputs: args.inputs.clone(),
+        ..OutputPolicy::default()
     };
     std::fs::create_dir_all(&args.out).map_err(|e| Error::from(e).in_file(&args.out))?;
     let mut builder = rayon::ThreadPoolBuilder::new();

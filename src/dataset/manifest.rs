@@ -164,6 +164,7 @@ pub fn write_compacted(path: &Path, records: impl IntoIterator<Item = Record>) -
     let policy = OutputPolicy {
         overwrite: true,
         inputs: vec![],
+        ..OutputPolicy::default()
     };
     write_bytes_atomic(path, &policy, lines.concat().as_bytes())
 }

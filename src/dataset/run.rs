@@ -188,6 +188,7 @@ pub fn run<P: Processor>(opts: &RunOptions, processor: &P) -> Result<Summary> {
     let policy = OutputPolicy {
         overwrite: true,
         inputs: vec![],
+        ..OutputPolicy::default()
     };
 
     let n_units = tasks.len() * opts.variants as usize;

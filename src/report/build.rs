@@ -359,6 +359,7 @@ window.addEventListener('load', function () {{
     let policy = OutputPolicy {
         overwrite: true,
         inputs: vec![],
+        ..OutputPolicy::default()
     };
     write_bytes_atomic(&summary.page, &policy, page.as_bytes())?;
     Ok(summary)

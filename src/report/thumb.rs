@@ -90,6 +90,7 @@ impl Rgb8 {
         let policy = OutputPolicy {
             overwrite: true,
             inputs: vec![],
+            ..OutputPolicy::default()
         };
         write_atomic(path, &policy, |w| {
             use std::io::Write;

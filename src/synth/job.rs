@@ -19,7 +19,10 @@
 //! inside theirs, so at most one is in memory); every output's bytes are the same whatever
 //! the thread count or the order in which the tasks finish. Errors are reported in a fixed
 //! order (clean, noisy, target), whatever failed first. Every file goes through
-//! [`crate::output`] (temporary file + rename) under the sink's [`OutputPolicy`].
+//! [`crate::output`] (temporary file, sync, rename) under the sink's [`OutputPolicy`]; the
+//! syncs of steps 1-4 run on background threads ([`crate::output::DeferredSyncs`]) and their
+//! files are renamed into place together before the sidecar is written, so a failed variant
+//! leaves none of its outputs behind (and [`OutputSink::written`] is called for them then).
 //!
 //! An [`OutputSink`] says where each output goes and what the sidecar calls it: [`DirSink`]
 //! gives `synth`'s flat names (`<base>_clean.dng`, `<base>_iso1600.dng`, `<base>.json`...);
@@ -53,11 +56,12 @@ use crate::exr::{
 };
 use crate::isp::render::{render_linear_bands, Bands};
 use crate::isp::{render_input, render_linear, RenderOptions};
-use crate::output::{write_bytes_atomic, OutputPolicy};
+use crate::output::{write_bytes_atomic, DeferredSyncs, OutputPolicy};
 use crate::png::{encode_u8_slice, write_png, write_png_rgb8, PngOptions};
 use crate::raw::RawImage;
 use std::path::{Path, PathBuf};
 use std::str::FromStr;
+use std::sync::Arc;
 
 /// Which targets to render from the clean night raw.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -207,6 +211,11 @@ impl SynthJob {
             ..WriteOptions::default()
         };
         let mut stages = plan.stages.clone();
+        // Every output but the sidecar is synced on a background thread and renamed into
+        // place once all of them are on disk (crate::output): the compute threads never
+        // wait for the disk, and on an error no output of the variant appears.
+        let syncs = Arc::new(DeferredSyncs::default());
+        let policy = &sink.policy().deferring(&syncs);
         let (mut clean, report) = run_clean(&day.raw, plan)?;
         clean.meta = night_meta(&day.raw.meta, plan, plan.clean_iso, &plan.clean_noise);
         let clean = clean;
@@ -228,8 +237,7 @@ impl SynthJob {
             s.spawn(move |_| {
                 *clean_res = Some((|| {
                     let kind = OutputKind::CleanDng;
-                    write_dng(clean, &sink.path(kind)?, wopts, sink.policy())?;
-                    sink.written(kind)
+                    write_dng(clean, &sink.path(kind)?, wopts, policy)
                 })());
             });
             let noise_job = move |_: &rayon::Scope<'_>| {
@@ -238,8 +246,7 @@ impl SynthJob {
                     for (i, &iso) in isos.iter().enumerate() {
                         let (_, noisy) = run_noise(clean, plan, i)?;
                         let kind = OutputKind::NoisyDng { iso };
-                        write_dng(&noisy, &sink.path(kind)?, wopts, sink.policy())?;
-                        sink.written(kind)?;
+                        write_dng(&noisy, &sink.path(kind)?, wopts, policy)?;
                         if first_noisy.is_none() && self.input_exr {
                             first_noisy = Some(noisy);
                         }
@@ -302,16 +309,7 @@ impl SynthJob {
                                     }
                                     let kind = OutputKind::TargetExr;
                                     let path = sink.path(kind)?;
-                                    write_exr_blocks(
-                                        w,
-                                        h,
-                                        &blocks,
-                                        &path,
-                                        &self.exr,
-                                        attrs,
-                                        sink.policy(),
-                                    )?;
-                                    sink.written(kind)
+                                    write_exr_blocks(w, h, &blocks, &path, &self.exr, attrs, policy)
                                 },
                                 || {
                                     if !want_png {
@@ -319,8 +317,7 @@ impl SynthJob {
                                     }
                                     let kind = OutputKind::TargetPng;
                                     let path = sink.path(kind)?;
-                                    write_png_rgb8(&png, w, h, &path, sink.policy())?;
-                                    sink.written(kind)
+                                    write_png_rgb8(&png, w, h, &path, policy)
                                 },
                             );
                             return e.and(p);
@@ -334,8 +331,7 @@ impl SynthJob {
                                 return Ok(());
                             }
                             let kind = OutputKind::TargetExr;
-                            write_exr(&rgb, &sink.path(kind)?, &self.exr, attrs, sink.policy())?;
-                            sink.written(kind)
+                            write_exr(&rgb, &sink.path(kind)?, &self.exr, attrs, policy)
                         },
                         || {
                             if !want_png {
@@ -343,8 +339,7 @@ impl SynthJob {
                             }
                             let kind = OutputKind::TargetPng;
                             let path = sink.path(kind)?;
-                            write_png(&rgb, &path, &PngOptions::default(), sink.policy())?;
-                            sink.written(kind)
+                            write_png(&rgb, &path, &PngOptions::default(), policy)
                         },
                     );
                     e.and(p)
@@ -378,13 +373,27 @@ impl SynthJob {
             let src = first_noisy.as_ref().unwrap_or(&clean);
             let rgb = render_input(src, Some(neutral), Default::default())?;
             let kind = OutputKind::InputExr;
-            write_exr(&rgb, &sink.path(kind)?, &self.exr, &attrs, sink.policy())?;
-            sink.written(kind)?;
+            write_exr(&rgb, &sink.path(kind)?, &self.exr, &attrs, policy)?;
             files.push(sink.name(kind));
             stages.push("input_exr".into());
         }
         drop(first_noisy);
         drop(clean);
+        syncs.finish(sink.policy())?;
+        let mut kinds = vec![OutputKind::CleanDng];
+        kinds.extend(isos.iter().map(|&iso| OutputKind::NoisyDng { iso }));
+        for (want, kind) in [
+            (want_exr, OutputKind::TargetExr),
+            (want_png, OutputKind::TargetPng),
+            (self.input_exr, OutputKind::InputExr),
+        ] {
+            if want {
+                kinds.push(kind);
+            }
+        }
+        for kind in kinds {
+            sink.written(kind)?;
+        }
         files.push(sink.name(OutputKind::Sidecar));
         let sc = Sidecar {
             format: SIDECAR_FORMAT.into(),
