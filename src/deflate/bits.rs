@@ -64,7 +64,7 @@ impl<'a> BitWriter<'a> {
     }
 
     /// Append a table entry `code << 8 | len` (`len <= 56`).
-    #[inline(always)]
+    #[cfg(test)]
     pub(crate) fn put_entry(&mut self, e: u32) {
         self.put(u64::from(e >> 8), e & 0xff);
     }
@@ -88,42 +88,24 @@ impl<'a> BitWriter<'a> {
         self.pos = end;
     }
 
-    /// Append literal bytes through `table` (`code << 8 | len` per byte value). `K` symbols are
-    /// added between flushes, so every entry's length must be at most `56 / K` rounded down
-    /// (K = 4: 14 bits, K = 3: 18 bits) and at most 16.
-    #[inline(always)]
-    pub(crate) fn put_literals<const K: usize>(&mut self, lits: &[u8], table: &[u32; 256]) {
-        // at most 7 pending bits from here on
+    /// The writer's state as plain locals for a hot loop: flush with at most 7 pending bits
+    /// first, so the loop may add up to 57 bits between [`RawBits::flush`] calls. The buffer
+    /// must have been [`BitWriter::reserve`]d for everything the loop writes.
+    pub(crate) fn raw(&mut self) -> RawBits<'_> {
         self.flush();
-        // every code is at most 15 bits: 2 bytes per literal
-        self.reserve(lits.len() * 2);
-        let mut bits = self.bits;
-        let mut n = self.n;
-        let mut pos = self.pos;
-        let chunks = lits.chunks_exact(K);
-        let rest = chunks.remainder();
-        let buf = self.buf.as_mut_slice();
-        for c in chunks {
-            for &b in c {
-                let e = table[usize::from(b)];
-                bits |= u64::from(e >> 8) << n;
-                n += e & 0xff;
-            }
-            // pending bits are < 8 + 4 * 14 = 64 here
-            // in bounds: reserved below for 2 bytes per literal plus slack
-            let dst = &mut buf[pos..pos + 8];
-            dst.copy_from_slice(&bits.to_le_bytes());
-            let nb = n >> 3;
-            pos += nb as usize;
-            bits >>= nb * 8;
-            n &= 7;
+        RawBits {
+            buf: self.buf.as_mut_slice(),
+            pos: self.pos,
+            bits: self.bits,
+            n: self.n,
         }
+    }
+
+    /// Take back the state of a [`BitWriter::raw`] loop.
+    pub(crate) fn set_raw(&mut self, (pos, bits, n): (usize, u64, u32)) {
+        self.pos = pos;
         self.bits = bits;
         self.n = n;
-        self.pos = pos;
-        for &b in rest {
-            self.put_entry(table[usize::from(b)]);
-        }
     }
 
     /// Flush everything (padding the last byte with zeros), truncate the buffer to the written
@@ -133,6 +115,34 @@ impl<'a> BitWriter<'a> {
         self.flush();
         self.buf.truncate(self.pos);
         self.pos
+    }
+}
+
+/// Writer state in locals (see [`BitWriter::raw`]).
+pub(crate) struct RawBits<'b> {
+    buf: &'b mut [u8],
+    pos: usize,
+    pub(crate) bits: u64,
+    pub(crate) n: u32,
+}
+
+impl RawBits<'_> {
+    /// Store `bits` at the current byte (unconditional 8-byte store; panics if the buffer
+    /// was not reserved, a bug, never input-dependent).
+    #[inline(always)]
+    pub(crate) fn store(&mut self, bits: u64) {
+        self.buf[self.pos..self.pos + 8].copy_from_slice(&bits.to_le_bytes());
+    }
+
+    /// Move the byte position on by `nb` complete bytes.
+    #[inline(always)]
+    pub(crate) fn advance(&mut self, nb: u32) {
+        self.pos += nb as usize;
+    }
+
+    /// The state to hand back with [`BitWriter::set_raw`].
+    pub(crate) fn into_state(self) -> (usize, u64, u32) {
+        (self.pos, self.bits, self.n)
     }
 }
 
@@ -154,34 +164,39 @@ mod tests {
     }
 
     #[test]
-    fn literals_match_put() {
-        let mut table = [0u32; 256];
-        for (i, t) in table.iter_mut().enumerate() {
-            let len = 1 + (i as u32 % 14);
-            *t = ((i as u32 * 7919) & ((1 << len) - 1)) << 8 | len;
-        }
-        let lits: Vec<u8> = (0..1001u32).map(|i| (i * 37 % 251) as u8).collect();
+    fn raw_matches_put() {
+        let entries: Vec<u32> = (0..1001u32)
+            .map(|i| {
+                let len = 1 + (i % 14);
+                ((i * 7919) & ((1 << len) - 1)) << 8 | len
+            })
+            .collect();
         let mut a = Vec::new();
         let mut w = BitWriter::new(&mut a);
         w.put(1, 3);
-        w.reserve(lits.len() * 2);
-        w.put_literals::<4>(&lits, &table);
+        w.reserve(entries.len() * 2);
+        let mut st = w.raw();
+        for e in &entries {
+            st.bits |= u64::from(e >> 8) << st.n;
+            st.n += e & 0xff;
+            st.store(st.bits);
+            st.advance(st.n >> 3);
+            st.bits >>= (st.n >> 3) * 8;
+            st.n &= 7;
+        }
+        let state = st.into_state();
+        w.set_raw(state);
+        w.put(5, 3);
         w.finish();
         let mut b = Vec::new();
         let mut w = BitWriter::new(&mut b);
         w.put(1, 3);
-        for &l in &lits {
-            w.put_entry(table[l as usize]);
+        for &e in &entries {
+            w.put_entry(e);
         }
+        w.put(5, 3);
         w.finish();
         assert_eq!(a, b);
-        // under-reserved: still correct
-        let mut c = Vec::new();
-        let mut w = BitWriter::new(&mut c);
-        w.put(1, 3);
-        w.put_literals::<3>(&lits, &table);
-        w.finish();
-        assert_eq!(c, b);
     }
 
     #[test]

@@ -59,6 +59,8 @@ struct Run {
 /// Reusable scratch state of the encoder.
 pub(crate) struct BlockEncoder {
     runs: Vec<Run>,
+    /// Equal-to-previous bitmap of the current chunk.
+    eq: Vec<u64>,
     huff: HuffmanBuilder,
     /// Code-length stream of the current dynamic header: `symbol | extra << 8`.
     cl_stream: Vec<u16>,
@@ -129,41 +131,92 @@ fn fixed_lengths() -> [u8; 288] {
     l
 }
 
-/// Exact 0x80 in every byte of `x` that is zero, 0 elsewhere.
+/// Eight interleaved byte histograms (summed at the end): the data is concentrated on a few
+/// values, so one table would serialize on store-to-load forwarding of the same counter.
+struct Hist8([[u32; 256]; 8]);
+
+impl Hist8 {
+    #[inline(always)]
+    fn add(&mut self, data: &[u8]) {
+        let h = &mut self.0;
+        let chunks = data.chunks_exact(8);
+        let rest = chunks.remainder();
+        for c in chunks {
+            let w = u64::from_le_bytes([c[0], c[1], c[2], c[3], c[4], c[5], c[6], c[7]]);
+            h[0][(w & 0xff) as usize] += 1;
+            h[1][(w >> 8 & 0xff) as usize] += 1;
+            h[2][(w >> 16 & 0xff) as usize] += 1;
+            h[3][(w >> 24 & 0xff) as usize] += 1;
+            h[4][(w >> 32 & 0xff) as usize] += 1;
+            h[5][(w >> 40 & 0xff) as usize] += 1;
+            h[6][(w >> 48 & 0xff) as usize] += 1;
+            h[7][(w >> 56) as usize] += 1;
+        }
+        for (k, &b) in rest.iter().enumerate() {
+            h[k][usize::from(b)] += 1;
+        }
+    }
+
+    fn sum_into(&self, out: &mut [u32]) {
+        for (i, x) in out.iter_mut().enumerate().take(256) {
+            *x = self.0.iter().map(|t| t[i]).sum();
+        }
+    }
+}
+
+/// Bit k set where `a[k] == b[k]` (SWAR: exact zero-byte flags of `a ^ b`, gathered into
+/// 8 bits per word with one multiplication).
 #[inline(always)]
-fn zero_bytes(x: u64) -> u64 {
+fn eq_mask64(a: &[u8; 64], b: &[u8; 64]) -> u64 {
     const L: u64 = 0x7f7f_7f7f_7f7f_7f7f;
-    !(((x & L).wrapping_add(L)) | x | L)
+    let mut m = 0u64;
+    for (k, (x, y)) in a.chunks_exact(8).zip(b.chunks_exact(8)).enumerate() {
+        let x = u64::from_le_bytes([x[0], x[1], x[2], x[3], x[4], x[5], x[6], x[7]]);
+        let y = u64::from_le_bytes([y[0], y[1], y[2], y[3], y[4], y[5], y[6], y[7]]);
+        let d = x ^ y;
+        // 0x80 in each byte of d that is zero: no carries cross bytes since 0x7f + 0x7f < 0x100
+        let z = !(((d & L).wrapping_add(L)) | d | L);
+        // byte i's flag (bit 8i + 7 of z) to bit 56 + i: the partial products of lower bytes
+        // land on distinct bits below 56, so nothing carries into the top byte
+        let bits = ((z >> 7).wrapping_mul(0x0102_0408_1020_4080)) >> 56;
+        m |= bits << (8 * k);
+    }
+    m
 }
 
-#[inline(always)]
-fn load(b: &[u8], i: usize) -> u64 {
-    let mut a = [0u8; 8];
-    a.copy_from_slice(&b[i..i + 8]);
-    u64::from_le_bytes(a)
-}
-
-/// Byte histogram of `data` (four interleaved tables to break store-to-load dependencies).
-fn histogram(data: &[u8], hist: &mut [u32; 256]) {
-    let mut h = [[0u32; 256]; 4];
-    let chunks = data.chunks_exact(8);
-    let rest = chunks.remainder();
-    for c in chunks {
-        let w = u64::from_le_bytes([c[0], c[1], c[2], c[3], c[4], c[5], c[6], c[7]]);
-        h[0][(w & 0xff) as usize] += 1;
-        h[1][(w >> 8 & 0xff) as usize] += 1;
-        h[2][(w >> 16 & 0xff) as usize] += 1;
-        h[3][(w >> 24 & 0xff) as usize] += 1;
-        h[0][(w >> 32 & 0xff) as usize] += 1;
-        h[1][(w >> 40 & 0xff) as usize] += 1;
-        h[2][(w >> 48 & 0xff) as usize] += 1;
-        h[3][(w >> 56) as usize] += 1;
+/// `eq[w]` bit k = whether `input[start + 64 w + k]` equals the byte before it (false for
+/// position 0 and past `end`).
+#[inline(never)]
+fn eq_bitmap(input: &[u8], start: usize, end: usize, eq: &mut Vec<u64>) {
+    let n = end - start;
+    eq.clear();
+    eq.resize(n.div_ceil(64) + 1, 0);
+    let mut w = 0;
+    let mut p = start;
+    if p == 0 && n >= 65 {
+        // no predecessor for position 0: compare positions 1..=64 and shift
+        let a: &[u8; 64] = input[1..65].try_into().unwrap_or(&[0; 64]);
+        let b: &[u8; 64] = input[0..64].try_into().unwrap_or(&[0; 64]);
+        eq[0] = eq_mask64(a, b) << 1;
+        w = 1;
+        p = 64;
     }
-    for &b in rest {
-        h[0][usize::from(b)] += 1;
+    if p > 0 {
+        while p + 64 <= end {
+            let a: &[u8; 64] = input[p..p + 64].try_into().unwrap_or(&[0; 64]);
+            let b: &[u8; 64] = input[p - 1..p + 63].try_into().unwrap_or(&[0; 64]);
+            eq[w] = eq_mask64(a, b);
+            w += 1;
+            p += 64;
+        }
     }
-    for (i, x) in hist.iter_mut().enumerate() {
-        *x = h[0][i] + h[1][i] + h[2][i] + h[3][i];
+    // tail (and tiny first chunks) byte by byte
+    while p < end {
+        if p > 0 && input[p] == input[p - 1] {
+            let k = p - start;
+            eq[k / 64] |= 1 << (k % 64);
+        }
+        p += 1;
     }
 }
 
@@ -174,6 +227,7 @@ impl BlockEncoder {
         fixed.fill(&fixed_lengths(), 0, 5);
         BlockEncoder {
             runs: Vec::new(),
+            eq: Vec::new(),
             huff: HuffmanBuilder::default(),
             cl_stream: Vec::new(),
             cl_lens: [0; 19],
@@ -184,72 +238,65 @@ impl BlockEncoder {
     }
 
     /// Find the runs of bytes equal to their predecessor in `input[start..end]` (the byte before
-    /// `start`, if any, counts as a predecessor) and store them split into matches of 3..=258.
-    fn scan_runs(&mut self, input: &[u8], start: usize, end: usize) {
+    /// `start`, if any, counts as a predecessor), store them split into matches of 3..=258 in
+    /// `runs` and count the remaining literal bytes into `lit_hist`.
+    #[inline(never)]
+    fn scan_runs(&mut self, input: &[u8], start: usize, end: usize, lit_hist: &mut [u32]) {
         self.runs.clear();
-        let end = end.min(input.len());
-        let mut j = start.max(1);
-        while j < end {
-            if j + 8 <= end {
-                // x has a zero byte where input[j + k] == input[j + k - 1]
-                let x = load(input, j) ^ load(input, j - 1);
-                let z = zero_bytes(x);
-                if z == 0 {
-                    j += 8;
-                    continue;
-                }
-                // first position starting three equal-to-predecessor bytes in this word
-                let m = z & (z >> 8) & (z >> 16);
-                if m == 0 {
-                    // a triple may still start at offsets 6 or 7
-                    j += if z >> 48 == 0 { 8 } else { 6 };
-                    continue;
-                }
-                j += (m.trailing_zeros() / 8) as usize;
-            } else if input[j] != input[j - 1] {
-                j += 1;
-                continue;
-            }
-            // input[j] == input[j - 1]: measure the run
-            let v = input[j - 1];
-            let vv = u64::from_ne_bytes([v; 8]);
-            let mut k = j + 1;
-            let mut open = true;
-            while k + 8 <= end {
-                let x = load(input, k) ^ vv;
-                if x != 0 {
-                    k += (x.trailing_zeros() / 8) as usize;
-                    open = false;
+        eq_bitmap(input, start, end, &mut self.eq);
+        let eq = &self.eq;
+        let runs = &mut self.runs;
+        let n = end - start;
+        let nw = eq.len() - 1; // last word is a zero sentinel
+        let mut hist = Hist8([[0; 256]; 8]);
+        // bit k of triple(i): positions k, k+1, k+2 (relative to word i) all equal-to-previous
+        let triple = |i: usize| {
+            let (e, f) = (eq[i], eq[i + 1]);
+            e & (e >> 1 | f << 63) & (e >> 2 | f << 62)
+        };
+        let mut pos = 0usize; // next unprocessed position relative to start
+        let mut i = 0usize;
+        let mut t = if nw > 0 { triple(0) } else { 0 };
+        loop {
+            // next run start at or after pos
+            while t == 0 {
+                i += 1;
+                if i >= nw {
                     break;
                 }
-                k += 8;
+                t = triple(i);
             }
-            if open {
-                while k < end && input[k] == v {
-                    k += 1;
+            if t == 0 {
+                break;
+            }
+            let k = i * 64 + t.trailing_zeros() as usize;
+            // length: ones of eq from k on
+            let mut j = k / 64;
+            let mut e = eq[j] >> (k % 64);
+            let mut len = (!e).trailing_zeros() as usize;
+            if len == 64 - k % 64 {
+                loop {
+                    j += 1;
+                    e = eq[j];
+                    let o = (!e).trailing_zeros() as usize;
+                    len += o;
+                    if o < 64 {
+                        break;
+                    }
                 }
             }
-            self.push_run(j, k - j);
-            j = k;
-        }
-    }
-
-    /// Split a run of `len` bytes at `pos` into matches of 3..=258 (a tail of 1-2 bytes stays
-    /// literal).
-    #[inline]
-    fn push_run(&mut self, mut pos: usize, mut len: usize) {
-        while len >= MIN_RUN {
-            let mut take = len.min(MAX_RUN);
-            if len - take > 0 && len - take < MIN_RUN {
-                take = len - MIN_RUN;
+            hist.add(&input[start + pos..start + k]);
+            push_run(runs, start + k, len);
+            pos = k + len;
+            // continue the search after the run
+            i = pos / 64;
+            if i >= nw {
+                break;
             }
-            self.runs.push(Run {
-                pos: pos as u32,
-                len: take as u32,
-            });
-            pos += take;
-            len -= take;
+            t = triple(i) & (!0u64 << (pos % 64));
         }
+        hist.add(&input[start + pos.min(n)..end]);
+        hist.sum_into(lit_hist);
     }
 
     /// Encode `input[start..end]` as one or more blocks (`last`: the final ones).
@@ -262,18 +309,12 @@ impl BlockEncoder {
         w: &mut BitWriter<'_>,
     ) {
         let data = &input[start..end];
-        let mut hist = [0u32; 256];
-        histogram(data, &mut hist);
-        self.scan_runs(input, start, end);
-
         // symbol frequencies
         let mut freq = [0u32; NLIT];
-        freq[..256].copy_from_slice(&hist);
+        self.scan_runs(input, start, end, &mut freq[..256]);
         freq[EOB] = 1;
         let mut extra_bits: u64 = 0;
         for r in &self.runs {
-            let v = input[r.pos as usize - 1];
-            freq[usize::from(v)] -= r.len;
             let s = usize::from(LEN_SYM[r.len as usize]);
             freq[257 + s] += 1;
             extra_bits += u64::from(LEN_EXTRA[s]);
@@ -434,7 +475,9 @@ fn cl_extra(sym: usize) -> u64 {
     }
 }
 
-/// The literals and matches of `input[start..end]` then end-of-block, through `t`.
+/// The literals and matches of `input[start..end]` then end-of-block, through `t`. The caller
+/// reserved room for the whole block in `w`.
+#[inline(never)]
 fn write_symbols(
     t: &Tables,
     runs: &[Run],
@@ -443,20 +486,149 @@ fn write_symbols(
     end: usize,
     w: &mut BitWriter<'_>,
 ) {
-    let lits = |w: &mut BitWriter<'_>, s: &[u8]| {
-        if t.max_lit_len <= 14 {
-            w.put_literals::<4>(s, &t.lit);
-        } else {
-            w.put_literals::<3>(s, &t.lit);
-        }
-    };
+    if t.max_lit_len <= 14 {
+        write_symbols_k::<4>(t, runs, input, start, end, w);
+    } else {
+        write_symbols_k::<3>(t, runs, input, start, end, w);
+    }
+}
+
+/// [`write_symbols`] adding `K` (3 or 4) literals between flushes: at most 7 pending bits plus
+/// K codes of at most 15 (K = 3) or 14 (K = 4) bits.
+#[inline(always)]
+fn write_symbols_k<const K: usize>(
+    t: &Tables,
+    runs: &[Run],
+    input: &[u8],
+    start: usize,
+    end: usize,
+    w: &mut BitWriter<'_>,
+) {
+    let lit = &t.lit;
+    let mut st = w.raw();
+    let (mut bits, mut n) = (st.bits, st.n);
+    // the literal run `lits`, leaving at most 7 pending bits
+    macro_rules! literals {
+        ($lits:expr) => {{
+            let lits: &[u8] = $lits;
+            let chunks = lits.chunks_exact(K);
+            let rest = chunks.remainder();
+            for c in chunks {
+                // combine codes pairwise to shorten the dependency chain through `n`
+                let e0 = lit[usize::from(c[0])];
+                let e1 = lit[usize::from(c[1])];
+                let e2 = lit[usize::from(c[2])];
+                let (l0, l1, l2) = (e0 & 0xff, e1 & 0xff, e2 & 0xff);
+                let c01 = u64::from(e0 >> 8) | u64::from(e1 >> 8) << l0;
+                let (code, len) = if K == 4 {
+                    let e3 = lit[usize::from(c[3])];
+                    let c23 = u64::from(e2 >> 8) | u64::from(e3 >> 8) << l2;
+                    (c01 | c23 << (l0 + l1), l0 + l1 + l2 + (e3 & 0xff))
+                } else {
+                    (c01 | u64::from(e2 >> 8) << (l0 + l1), l0 + l1 + l2)
+                };
+                bits |= code << n;
+                n += len;
+                st.store(bits);
+                let nb = n >> 3;
+                st.advance(nb);
+                bits >>= nb * 8;
+                n &= 7;
+            }
+            for &b in rest {
+                let e = lit[usize::from(b)];
+                bits |= u64::from(e >> 8) << n;
+                n += e & 0xff;
+            }
+            st.store(bits);
+            let nb = n >> 3;
+            st.advance(nb);
+            bits >>= nb * 8;
+            n &= 7;
+        }};
+    }
+    // one entry of at most 21 bits after `literals!`
+    macro_rules! entry {
+        ($e:expr) => {{
+            let e: u32 = $e;
+            bits |= u64::from(e >> 8) << n;
+            n += e & 0xff;
+            st.store(bits);
+            let nb = n >> 3;
+            st.advance(nb);
+            bits >>= nb * 8;
+            n &= 7;
+        }};
+    }
     let mut pos = start;
     for r in runs {
         let p = r.pos as usize;
-        lits(w, &input[pos..p]);
-        w.put_entry(t.run[r.len as usize]);
+        literals!(&input[pos..p]);
+        entry!(t.run[r.len as usize]);
         pos = p + r.len as usize;
     }
-    lits(w, &input[pos..end]);
-    w.put_entry(t.eob);
+    literals!(&input[pos..end]);
+    entry!(t.eob);
+    st.bits = bits;
+    st.n = n;
+    let state = st.into_state();
+    w.set_raw(state);
+}
+
+/// Split a run of `len` bytes at `pos` into matches of 3..=258 (a tail of 1-2 bytes stays
+/// literal).
+#[inline]
+fn push_run(runs: &mut Vec<Run>, mut pos: usize, mut len: usize) {
+    while len >= MIN_RUN {
+        let mut take = len.min(MAX_RUN);
+        if len - take > 0 && len - take < MIN_RUN {
+            take = len - MIN_RUN;
+        }
+        runs.push(Run {
+            pos: pos as u32,
+            len: take as u32,
+        });
+        pos += take;
+        len -= take;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn eq_mask_matches_bytewise() {
+        let mut s = 12345u64;
+        for _ in 0..200 {
+            let mut a = [0u8; 64];
+            let mut b = [0u8; 64];
+            for k in 0..64 {
+                s = s
+                    .wrapping_mul(6364136223846793005)
+                    .wrapping_add(1442695040888963407);
+                a[k] = (s >> 60) as u8;
+                b[k] = if (s >> 40) & 1 == 0 {
+                    a[k]
+                } else {
+                    (s >> 52) as u8
+                };
+            }
+            let want = (0..64).fold(0u64, |m, k| m | u64::from(a[k] == b[k]) << k);
+            assert_eq!(eq_mask64(&a, &b), want);
+        }
+        assert_eq!(eq_mask64(&[7; 64], &[7; 64]), !0);
+        assert_eq!(eq_mask64(&[0; 64], &[0x80; 64]), 0);
+    }
+
+    #[test]
+    fn len_symbols() {
+        for (len, &s) in LEN_SYM.iter().enumerate().skip(3) {
+            let s = usize::from(s);
+            let base = usize::from(LEN_BASE[s]);
+            assert!(len >= base && len - base < 1 << LEN_EXTRA[s], "{len}");
+        }
+        assert_eq!(LEN_SYM[258], 28);
+        assert_eq!(LEN_SYM[257], 27);
+    }
 }
