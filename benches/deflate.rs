@@ -34,7 +34,7 @@ fn half_bits(v: f32) -> u16 {
         return sign | r as u16;
     }
     let r = (m + 0xfff + ((m >> 13) & 1)) >> 13;
-    (sign as u32 | ((e as u32) << 10) + r) as u16
+    (sign as u32 | (((e as u32) << 10) + r)) as u16
 }
 
 /// The predicted bytes of block `b`: OpenEXR's ZIP predictor applied to a photo-like image.
