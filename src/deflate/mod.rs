@@ -76,11 +76,13 @@ impl Encoder {
             w.put(0b011, 3);
             w.put(0, 7);
         }
+        // equal chunks of at most `self.chunk` bytes: an input made of two equal halves (the
+        // EXR predictor's low and high byte planes) gets a block boundary at the middle
+        let n = input.len().div_ceil(self.chunk);
         let mut start = 0;
-        while start < input.len() {
-            let end = (start + self.chunk).min(input.len());
-            self.blocks
-                .encode_chunk(input, start, end, end == input.len(), &mut w);
+        for i in 1..=n {
+            let end = (input.len() as u128 * i as u128 / n as u128) as usize;
+            self.blocks.encode_chunk(input, start, end, i == n, &mut w);
             start = end;
         }
         w.finish();
