@@ -12,6 +12,7 @@
 
 pub mod calibrate;
 pub mod dataset;
+pub mod deflate;
 pub mod dng;
 pub mod error;
 pub mod exr;
