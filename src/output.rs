@@ -301,7 +301,10 @@ mod tests {
         fs::write(&b, b"theirs").unwrap();
         let err = queue.finish(&base).unwrap_err();
         let msg = err.to_string();
-        assert!(msg.contains("b.bin") && msg.contains("--overwrite"), "{msg}");
+        assert!(
+            msg.contains("b.bin") && msg.contains("--overwrite"),
+            "{msg}"
+        );
         assert_eq!(fs::read(&a).unwrap(), b"new");
         assert_eq!(fs::read(&b).unwrap(), b"theirs");
         assert!(!c.exists());

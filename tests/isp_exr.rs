@@ -28,6 +28,26 @@ fn image(w: usize, h: usize) -> RgbImage {
     img
 }
 
+/// A compressible image (smooth ramps, flat runs, a little texture) large enough that one ZIP
+/// block spans several chunks of the level-1 encoder (`day2night::deflate`).
+fn smooth(w: usize, h: usize) -> RgbImage {
+    let mut img = RgbImage::new(w, h);
+    for y in 0..h {
+        for x in 0..w {
+            for k in 0..3 {
+                let v = if x < w / 3 {
+                    0.18 // a flat run
+                } else {
+                    (x as f32 / w as f32) * (0.5 + 0.25 * k as f32)
+                        + ((x * 7 + y * 13) % 5) as f32 * 1e-3
+                };
+                img.data[3 * (y * w + x) + k] = v;
+            }
+        }
+    }
+    img
+}
+
 /// What a reader must see: NaN -> 0, clamped, rounded to half when `half`.
 fn expected(img: &RgbImage, half: bool) -> Vec<u8> {
     let lim = if half { HALF_MAX } else { f32::MAX };
@@ -49,26 +69,42 @@ fn expected(img: &RgbImage, half: bool) -> Vec<u8> {
 fn own_encoder_output_decodes_exactly_in_openexr_and_oiio() {
     let Some(py) = common::python() else { return };
     let dir = tempfile::tempdir().unwrap();
-    let (w, h) = (37, 21); // 21 lines: one full ZIP block of 16 and a partial one
-    let img = image(w, h);
-    for (comp, half, level) in [
-        (ExrCompression::Zip, true, 1),
-        (ExrCompression::Zip, true, 9),
-        (ExrCompression::Zips, true, 1),
-        (ExrCompression::None, true, 1),
-        (ExrCompression::Zip, false, 1),
+    // 21 lines: one full ZIP block of 16 and a partial one
+    let noisy = image(37, 21);
+    let smooth = smooth(1500, 21);
+    for (name, img, comp, half, level) in [
+        ("noisy", &noisy, ExrCompression::Zip, true, 1),
+        ("noisy", &noisy, ExrCompression::Zip, true, 9),
+        ("noisy", &noisy, ExrCompression::Zips, true, 1),
+        ("noisy", &noisy, ExrCompression::None, true, 1),
+        ("noisy", &noisy, ExrCompression::Zip, false, 1),
+        ("smooth", &smooth, ExrCompression::Zip, true, 1),
+        ("smooth", &smooth, ExrCompression::Zip, true, 2),
+        ("smooth", &smooth, ExrCompression::Zips, true, 1),
+        ("smooth", &smooth, ExrCompression::Zip, false, 1),
     ] {
+        let (w, h) = (img.width, img.height);
         let kind = if half { "half" } else { "float" };
-        let out = dir.path().join(format!("{comp}_{kind}_{level}.exr"));
-        let exp = dir.path().join(format!("{comp}_{kind}_{level}.f32"));
+        let out = dir.path().join(format!("{name}_{comp}_{kind}_{level}.exr"));
+        let exp = dir.path().join(format!("{name}_{comp}_{kind}_{level}.f32"));
         let opts = ExrOptions {
             half,
             compression: comp,
             zip_level: level,
         };
         let attrs = [("day2night:test".to_string(), "ünïcode ok".to_string())];
-        write_exr(&img, &out, &opts, &attrs, &OutputPolicy::default()).unwrap();
-        std::fs::write(&exp, expected(&img, half)).unwrap();
+        write_exr(img, &out, &opts, &attrs, &OutputPolicy::default()).unwrap();
+        std::fs::write(&exp, expected(img, half)).unwrap();
+        if name == "smooth" {
+            // really compressed, not stored raw (float mantissas are noisier than halves)
+            let raw = w * h * 3 * if half { 2 } else { 4 };
+            let most = if half { raw / 2 } else { raw * 9 / 10 };
+            let len = std::fs::metadata(&out).unwrap().len() as usize;
+            assert!(
+                len < most,
+                "{comp} {kind} level {level}: {len} of {raw} bytes"
+            );
+        }
         let (ws, hs) = (w.to_string(), h.to_string());
         let args: Vec<&std::ffi::OsStr> = vec![
             out.as_os_str(),
@@ -82,9 +118,9 @@ fn own_encoder_output_decodes_exactly_in_openexr_and_oiio() {
         let stdout = String::from_utf8_lossy(&r.stdout);
         assert!(
             r.status.success(),
-            "isp_exr_values.py {comp} {kind} level {level}: {stdout}\n{}",
+            "isp_exr_values.py {name} {comp} {kind} level {level}: {stdout}\n{}",
             String::from_utf8_lossy(&r.stderr)
         );
-        eprintln!("isp_exr_values.py {comp} {kind} level {level}: {stdout}");
+        eprintln!("isp_exr_values.py {name} {comp} {kind} level {level}: {stdout}");
     }
 }

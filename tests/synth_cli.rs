@@ -582,12 +582,18 @@ fn failed_variant_leaves_no_outputs() {
     let out = synth(&[s(&day()), "-o", s(&o), "--target", "both"]);
     assert_eq!(out.status.code(), Some(1));
     let err = String::from_utf8_lossy(&out.stderr);
-    assert!(err.contains("day_target.png") && err.contains("--overwrite"), "{err}");
+    assert!(
+        err.contains("day_target.png") && err.contains("--overwrite"),
+        "{err}"
+    );
     let mut names: Vec<String> = std::fs::read_dir(&o)
         .unwrap()
         .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
         .collect();
     names.sort();
     assert_eq!(names, ["day_target.png"], "left behind: {names:?}");
-    assert_eq!(std::fs::read(o.join("day_target.png")).unwrap(), b"not ours");
+    assert_eq!(
+        std::fs::read(o.join("day_target.png")).unwrap(),
+        b"not ours"
+    );
 }

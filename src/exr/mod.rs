@@ -1,12 +1,13 @@
 //! Linear RGB OpenEXR targets: half (default) or 32-bit float samples, scan lines, ZIP
-//! (16 lines) compression at zlib level 1 by default, a `chromaticities` attribute for
+//! (16 lines) compression at zip level 1 (the fastest) by default, a `chromaticities` attribute for
 //! Rec.709 primaries with a D65 white, a `software` attribute and caller string attributes
 //! (source file, neutral, ...). Samples are sanitized first: NaN -> 0, +-Inf and
 //! out-of-range values clamp to the largest finite value of the sample type, so no NaN/Inf is
 //! ever written.
 //!
 //! None, ZIPS and ZIP go through our own encoder ([`scanline`]: rows converted straight into
-//! each block, blocks compressed in parallel with miniz_oxide at [`ExrOptions::zip_level`]);
+//! each block, blocks compressed in parallel at [`ExrOptions::zip_level`]: our own
+//! run-length + Huffman zlib encoder at 1, miniz_oxide at 2..=9);
 //! the rarer RLE, PIZ, PXR24, B44 and B44A go through the `exr` crate. Either way blocks are
 //! written in increasing line order and header attributes are sorted by name, so the bytes
 //! are identical from run to run and whatever the thread count (tested).
@@ -117,9 +118,10 @@ pub struct ExrOptions {
     pub half: bool,
     /// Compression (default ZIP).
     pub compression: ExrCompression,
-    /// zlib level of ZIP/ZIPS blocks, 1 (fastest, default) ..= 9 (smallest); ignored by the
-    /// other compressions. The `exr` crate, used before, hard-codes 4: about 2.7x slower
-    /// than 1 for 4-8 % smaller files (docs/benchmarks.md, "EXR writer").
+    /// zlib effort of ZIP/ZIPS blocks, 1 (fastest, default) ..= 9 (smallest); ignored by the
+    /// other compressions. 1 is day2night's own run-length + Huffman encoder
+    /// ([`crate::deflate`]), 2..=9 are miniz_oxide's levels (the `exr` crate, used before,
+    /// hard-codes 4). See docs/benchmarks.md, "EXR writer", for time and size per level.
     pub zip_level: u8,
 }
 
