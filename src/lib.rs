@@ -23,6 +23,7 @@ pub mod noise;
 pub mod normalize;
 pub mod output;
 pub mod png;
+pub mod png_rows;
 pub mod raw;
 pub mod report;
 pub mod synth;

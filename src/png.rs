@@ -73,32 +73,6 @@ pub fn encode_u8_slice(src: &[f32], tone: DisplayTone) -> Vec<u8> {
     }
 }
 
-/// Write 8-bit interleaved RGB samples (`width` x `height`, e.g. the concatenated
-/// [`encode_u8_slice`] of an image's rows) as a PNG atomically: the same bytes as
-/// [`write_png`] of the image with 8-bit samples.
-pub fn write_png_rgb8(
-    bytes: &[u8],
-    width: usize,
-    height: usize,
-    path: &Path,
-    policy: &OutputPolicy,
-) -> Result<()> {
-    let w = u32::try_from(width).map_err(|_| Error::limits("image too wide"))?;
-    let h = u32::try_from(height).map_err(|_| Error::limits("image too tall"))?;
-    if w == 0 || h == 0 || bytes.len() != 3 * width * height {
-        return Err(Error::invalid(format!(
-            "PNG of {width}x{height} RGB needs {} bytes, got {}",
-            3 * width * height,
-            bytes.len()
-        )));
-    }
-    write_atomic(path, policy, |out| {
-        image::codecs::png::PngEncoder::new(out)
-            .write_image(bytes, w, h, image::ExtendedColorType::Rgb8)
-            .map_err(img_err)
-    })
-}
-
 /// Bit pattern of 1.0f32: every key is clamped to `[0, ONE]`.
 const ONE_BITS: u32 = 0x3f80_0000;
 /// Bucket size of [`Lut8`]: keys `>> LUT_SHIFT` index the bucket table (16 256 buckets, each
@@ -335,6 +309,13 @@ pub fn write_png(
     policy: &OutputPolicy,
 ) -> Result<()> {
     let (w, h) = dims(img)?;
+    if !opts.sixteen_bit {
+        // 8-bit: row groups filtered and deflated in parallel (crate::png_rows)
+        let bytes = encode_u8(img, opts.tone);
+        return crate::png_rows::write_png_rgb8(
+            &bytes, img.width, img.height, opts.tone, path, policy,
+        );
+    }
     write_atomic(path, policy, |out| {
         let (bytes, color) = encoded(img, opts);
         image::codecs::png::PngEncoder::new(out)
@@ -506,10 +487,13 @@ mod tests {
             .collect();
         assert_eq!(bytes, encode_u8(&img, DisplayTone::Srgb));
         let b = dir.path().join("b.png");
-        write_png_rgb8(&bytes, 7, 5, &b, &policy).unwrap();
+        crate::png_rows::write_png_rgb8(&bytes, 7, 5, DisplayTone::Srgb, &b, &policy).unwrap();
         assert_eq!(std::fs::read(&a).unwrap(), std::fs::read(&b).unwrap());
         let c = dir.path().join("c.png");
-        assert!(write_png_rgb8(&bytes[1..], 7, 5, &c, &policy).is_err());
+        assert!(
+            crate::png_rows::write_png_rgb8(&bytes[1..], 7, 5, DisplayTone::Srgb, &c, &policy)
+                .is_err()
+        );
         assert!(!c.exists());
         // the release tone (no lookup) goes through the formula
         let r: Vec<u8> = encode_u8_slice(&img.data, DisplayTone::Release);

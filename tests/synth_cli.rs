@@ -511,13 +511,23 @@ fn calibration_files() {
 fn exr_compression_option_is_recorded_and_replayed() {
     let t = tempfile::tempdir().unwrap();
     let (z, p, r) = (t.path().join("z"), t.path().join("p"), t.path().join("r"));
-    ok(&synth(&[s(&day()), "-o", s(&z), "--iso", "none"]));
+    ok(&synth(&[
+        s(&day()),
+        "-o",
+        s(&z),
+        "--iso",
+        "none",
+        "--target",
+        "both",
+    ]));
     ok(&synth(&[
         s(&day()),
         "-o",
         s(&p),
         "--iso",
         "none",
+        "--target",
+        "both",
         "--exr-compression",
         "piz",
     ]));
@@ -526,6 +536,8 @@ fn exr_compression_option_is_recorded_and_replayed() {
     assert!(!String::from_utf8_lossy(&fz["day.json"]).contains("exr_compression"));
     assert!(String::from_utf8_lossy(&fp["day.json"]).contains("\"exr_compression\": \"piz\""));
     assert_eq!(fz["day_clean.dng"], fp["day_clean.dng"]);
+    // zip renders band by band, piz from the whole image: the same PNG bytes
+    assert_eq!(fz["day_target.png"], fp["day_target.png"]);
     assert_ne!(fz["day_target.exr"], fp["day_target.exr"]);
     ok(&synth(&[
         s(&day()),

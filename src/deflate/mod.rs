@@ -89,6 +89,51 @@ impl Encoder {
     }
 }
 
+impl Encoder {
+    /// Append `input` as one segment of a raw DEFLATE stream made of independently
+    /// compressed pieces: its blocks are not final and it ends byte-aligned with an empty
+    /// stored block (zlib's "sync flush"). Segments compressed separately (e.g. in parallel)
+    /// and concatenated in order, then followed by [`FINAL_EMPTY_BLOCK`], form a valid raw
+    /// DEFLATE stream of the concatenated inputs: a segment's matches never reach back into
+    /// an earlier one. An empty input gives just the 5-byte empty stored block.
+    pub fn compress_segment(&mut self, input: &[u8], out: &mut Vec<u8>) {
+        let mut w = BitWriter::new(out);
+        let n = input.len().div_ceil(self.chunk);
+        let mut start = 0;
+        for i in 1..=n {
+            let end = (input.len() as u128 * i as u128 / n as u128) as usize;
+            self.blocks.encode_chunk(input, start, end, false, &mut w);
+            start = end;
+        }
+        // BFINAL 0, BTYPE 00 (stored), pad to a byte, LEN 0, NLEN 0xFFFF
+        w.put(0, 3);
+        w.align();
+        w.put_bytes(&[0, 0, 0xFF, 0xFF]);
+        w.finish();
+    }
+}
+
+/// A final, empty fixed-Huffman block (BFINAL 1, BTYPE 01, end-of-block): ends a stream made
+/// of [`Encoder::compress_segment`] pieces.
+pub const FINAL_EMPTY_BLOCK: [u8; 2] = [0x03, 0x00];
+
+/// Adler-32 (RFC 1950) of `data`.
+pub fn adler32(data: &[u8]) -> u32 {
+    simd_adler32::adler32(&data)
+}
+
+/// The Adler-32 of `a ++ b` from the Adler-32s of `a` and `b` and the length of `b`.
+pub fn adler32_combine(adler_a: u32, adler_b: u32, len_b: u64) -> u32 {
+    const BASE: u64 = 65521;
+    let rem = len_b % BASE;
+    let (a1, b1) = (u64::from(adler_a & 0xffff), u64::from(adler_a >> 16));
+    let (a2, b2) = (u64::from(adler_b & 0xffff), u64::from(adler_b >> 16));
+    // sum1 = a1 + a2 - 1, sum2 = b1 + b2 + rem * a1 - rem (mod BASE), kept non-negative
+    let sum1 = (a1 + a2 + BASE - 1) % BASE;
+    let sum2 = (b1 + b2 + rem * a1 % BASE + BASE - rem) % BASE;
+    (sum1 | (sum2 << 16)) as u32
+}
+
 /// Append the zlib stream of `input` to `out` (see the module docs).
 pub fn compress_zlib_rle(input: &[u8], out: &mut Vec<u8>) {
     Encoder::new().compress_zlib(input, out);
@@ -125,6 +170,53 @@ mod tests {
         let pieces = n / 65535 + n / enc.chunk + 2;
         assert!(z.len() <= n + 5 * pieces + 6, "{n} -> {}", z.len());
         z
+    }
+
+    /// Segments compressed separately and joined with a zlib frame inflate to the whole.
+    fn segments_roundtrip(parts: &[&[u8]]) {
+        let mut enc = Encoder::new();
+        let mut z = vec![0x78, 0x01];
+        let mut adler = 1u32; // Adler-32 of the empty string
+        let mut whole = Vec::new();
+        for p in parts {
+            let before = z.len();
+            enc.compress_segment(p, &mut z);
+            // a segment ends with an empty stored block
+            assert_eq!(z[z.len() - 4..], [0, 0, 0xFF, 0xFF]);
+            assert!(z.len() > before);
+            adler = adler32_combine(adler, adler32(p), p.len() as u64);
+            whole.extend_from_slice(p);
+        }
+        z.extend_from_slice(&FINAL_EMPTY_BLOCK);
+        z.extend_from_slice(&adler.to_be_bytes());
+        assert_eq!(adler, adler_ref(&whole));
+        let back = miniz_oxide::inflate::decompress_to_vec_zlib(&z).expect("valid zlib stream");
+        assert!(back == whole, "segments round trip differs");
+    }
+
+    #[test]
+    fn segments_concatenate() {
+        let runs = vec![7u8; 70_000];
+        let ramp: Vec<u8> = (0..200_000u32).map(|i| (i / 3 % 251) as u8).collect();
+        segments_roundtrip(&[]);
+        segments_roundtrip(&[b""]);
+        segments_roundtrip(&[b"", b"a", b""]);
+        segments_roundtrip(&[&runs, &runs, &ramp, b"x", &ramp[..1000]]);
+        // a run crossing a segment boundary cannot reach back: still correct
+        segments_roundtrip(&[&runs[..10], &runs[..300]]);
+    }
+
+    proptest! {
+        #[test]
+        fn adler32_combine_matches_the_whole(a in proptest::collection::vec(any::<u8>(), 0..3000),
+                                             b in proptest::collection::vec(any::<u8>(), 0..3000),
+                                             fill in any::<u8>(), extra in 0usize..200_000) {
+            let mut b2 = b.clone();
+            b2.extend(std::iter::repeat_n(fill, extra));
+            let mut whole = a.clone();
+            whole.extend_from_slice(&b2);
+            prop_assert_eq!(adler32_combine(adler32(&a), adler32(&b2), b2.len() as u64), adler_ref(&whole));
+        }
     }
 
     fn roundtrip(data: &[u8]) -> Vec<u8> {

@@ -49,6 +49,7 @@
 
 use super::sidecar::{sha256_hex, CalibrationInfo, InputInfo, OutputInfo, Sidecar, SIDECAR_FORMAT};
 use super::{night_meta, run_clean, run_noise, Calibration, Plan, SynthOptions};
+use crate::deflate::Encoder;
 use crate::dng::write::{write_dng, Compression, WriteOptions};
 use crate::error::{Error, Result, ResultExt};
 use crate::exr::{
@@ -57,7 +58,8 @@ use crate::exr::{
 use crate::isp::render::{render_linear_bands, Bands};
 use crate::isp::{render_input, render_linear, RenderOptions};
 use crate::output::{write_bytes_atomic, DeferredSyncs, OutputPolicy};
-use crate::png::{encode_u8_slice, write_png, write_png_rgb8, PngOptions};
+use crate::png::{encode_u8_slice, write_png, PngOptions};
+use crate::png_rows::{write_png_groups, PngRows};
 use crate::raw::RawImage;
 use std::path::{Path, PathBuf};
 use std::str::FromStr;
@@ -283,9 +285,10 @@ impl SynthJob {
                                     Vec::new()
                                 },
                                 png: if want_png {
-                                    encode_u8_slice(rows, tone)
+                                    let rgb8 = encode_u8_slice(rows, tone);
+                                    PngRows::encode(&rgb8, w, &mut Encoder::new())?
                                 } else {
-                                    Vec::new()
+                                    PngRows::default()
                                 },
                             })
                         };
@@ -297,10 +300,10 @@ impl SynthJob {
                         {
                             start_noise();
                             let mut blocks = Vec::new();
-                            let mut png = Vec::with_capacity(if want_png { 3 * w * h } else { 0 });
+                            let mut png = Vec::with_capacity(bands.len());
                             for b in bands {
                                 blocks.extend(b.exr);
-                                png.extend_from_slice(&b.png);
+                                png.push(b.png);
                             }
                             let (e, p) = rayon::join(
                                 || {
@@ -317,7 +320,7 @@ impl SynthJob {
                                     }
                                     let kind = OutputKind::TargetPng;
                                     let path = sink.path(kind)?;
-                                    write_png_rgb8(&png, w, h, &path, policy)
+                                    write_png_groups(&png, w, h, tone, &path, policy)
                                 },
                             );
                             return e.and(p);
@@ -484,7 +487,7 @@ impl DayInput {
 /// The encoded targets of one band of the render.
 struct Band {
     exr: Vec<Vec<u8>>,
-    png: Vec<u8>,
+    png: PngRows,
 }
 
 /// One output of a variant.

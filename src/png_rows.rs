@@ -1,0 +1,415 @@
+//! 8-bit RGB PNG files written from row groups that are filtered and compressed
+//! independently (PNG specification, 3rd edition: chunks, filtering, and the zlib stream of
+//! IDAT). Why not the `png` crate: its encoder takes the whole image and deflates it on one
+//! thread, so for `synth` it was the single-threaded tail of the run; here each group of
+//! rows is filtered and compressed where it is produced (a band of the render, while it is
+//! in cache, on any thread), and the file is the concatenation of the pieces.
+//!
+//! - Filtering: per row, the filter type (None, Sub, Up, Average, Paeth) whose output has
+//!   the smallest sum of absolute values as signed bytes (the usual heuristic); the first row
+//!   of a group has no previous row in the group, so it chooses between None and Sub only.
+//! - Compression: each group is one segment of a raw DEFLATE stream
+//!   ([`crate::deflate::Encoder::compress_segment`]: non-final blocks, byte-aligned end);
+//!   the file's zlib stream is the header `78 01`, the segments in order, a final empty
+//!   block and the Adler-32 combined from the groups' ([`crate::deflate::adler32_combine`]).
+//! - Chunks: IHDR (8-bit RGB, no interlace), `sRGB` (rendering intent perceptual) for sRGB
+//!   output or `gAMA` 1/2.2 for gamma 2.2 output, one IDAT per group, IEND.
+//!
+//! The bytes depend only on the pixels and the group height (tests/png_rows.rs checks the
+//! files in OpenImageIO and scikit-image); [`write_png_rgb8`] uses groups of
+//! [`crate::isp::render::BAND`] rows, as the band-wise synth targets do, so both give the
+//! same file for the same image.
+
+use crate::deflate::{adler32, adler32_combine, Encoder, FINAL_EMPTY_BLOCK};
+use crate::error::{Error, Result};
+use crate::isp::tone::DisplayTone;
+use crate::output::{write_atomic, OutputPolicy};
+use rayon::prelude::*;
+use std::io::Write;
+use std::path::Path;
+
+/// Bytes per pixel (8-bit RGB).
+const BPP: usize = 3;
+
+/// One group of rows, filtered and compressed.
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+pub struct PngRows {
+    /// Raw DEFLATE segment of the filtered rows.
+    deflate: Vec<u8>,
+    /// Adler-32 of the filtered rows.
+    adler: u32,
+    /// Length of the filtered rows (1 + 3 * width bytes per row).
+    len: u64,
+    /// Rows in the group.
+    rows: usize,
+}
+
+impl PngRows {
+    /// Filter and compress `rgb` (whole rows of `width` 8-bit RGB pixels); `enc` is
+    /// reusable scratch. An empty `rgb` gives an empty group.
+    pub fn encode(rgb: &[u8], width: usize, enc: &mut Encoder) -> Result<PngRows> {
+        let stride = BPP * width;
+        if width == 0 || rgb.len() % stride != 0 {
+            return Err(Error::invalid(format!(
+                "PNG rows of {width} RGB pixels need a multiple of {stride} bytes, got {}",
+                rgb.len()
+            )));
+        }
+        let rows = rgb.len() / stride;
+        let mut filtered = Vec::with_capacity(rows * (stride + 1));
+        let mut scratch = Scratch::new(stride);
+        let mut prev: Option<&[u8]> = None;
+        for row in rgb.chunks_exact(stride) {
+            scratch.filter(row, prev, &mut filtered);
+            prev = Some(row);
+        }
+        let mut deflate = Vec::with_capacity(filtered.len() / 3 + 64);
+        enc.compress_segment(&filtered, &mut deflate);
+        Ok(PngRows {
+            adler: adler32(&filtered),
+            len: filtered.len() as u64,
+            deflate,
+            rows,
+        })
+    }
+
+    /// Rows in the group.
+    pub fn rows(&self) -> usize {
+        self.rows
+    }
+}
+
+/// The five candidate filtered rows of one image row.
+struct Scratch {
+    cand: [Vec<u8>; 5],
+}
+
+impl Scratch {
+    fn new(stride: usize) -> Scratch {
+        Scratch {
+            cand: std::array::from_fn(|_| vec![0; stride]),
+        }
+    }
+
+    /// Append the filter type byte and the filtered `row` with the best filter.
+    fn filter(&mut self, row: &[u8], prev: Option<&[u8]>, out: &mut Vec<u8>) {
+        let [none, sub, up, avg, paeth] = &mut self.cand;
+        none.copy_from_slice(row);
+        for (i, o) in sub.iter_mut().enumerate() {
+            let left = if i >= BPP { row[i - BPP] } else { 0 };
+            *o = row[i].wrapping_sub(left);
+        }
+        let mut kinds: &[u8] = &[0, 1];
+        if let Some(p) = prev {
+            for ((o, &x), &u) in up.iter_mut().zip(row).zip(p) {
+                *o = x.wrapping_sub(u);
+            }
+            for i in 0..row.len() {
+                let (left, ul) = if i >= BPP {
+                    (row[i - BPP], p[i - BPP])
+                } else {
+                    (0, 0)
+                };
+                let u = p[i];
+                avg[i] = row[i].wrapping_sub(((u16::from(left) + u16::from(u)) / 2) as u8);
+                paeth[i] = row[i].wrapping_sub(paeth_predictor(left, u, ul));
+            }
+            kinds = &[0, 1, 2, 3, 4];
+        }
+        let cost =
+            |v: &[u8]| -> u64 { v.iter().map(|&b| u64::from((b as i8).unsigned_abs())).sum() };
+        let mut best = 0u8;
+        let mut best_cost = u64::MAX;
+        for &k in kinds {
+            let c = cost(&self.cand[usize::from(k)]);
+            if c < best_cost {
+                best = k;
+                best_cost = c;
+            }
+        }
+        out.push(best);
+        out.extend_from_slice(&self.cand[usize::from(best)]);
+    }
+}
+
+/// The Paeth predictor of PNG filter type 4.
+#[inline]
+fn paeth_predictor(a: u8, b: u8, c: u8) -> u8 {
+    let (ia, ib, ic) = (i16::from(a), i16::from(b), i16::from(c));
+    let p = ia + ib - ic;
+    let (pa, pb, pc) = ((p - ia).abs(), (p - ib).abs(), (p - ic).abs());
+    if pa <= pb && pa <= pc {
+        a
+    } else if pb <= pc {
+        b
+    } else {
+        c
+    }
+}
+
+/// Write one chunk: length, type, data, CRC-32 of type and data.
+fn chunk<W: Write>(w: &mut W, kind: &[u8; 4], parts: &[&[u8]]) -> Result<()> {
+    let len: usize = parts.iter().map(|p| p.len()).sum();
+    let len = u32::try_from(len)
+        .ok()
+        .filter(|&l| l <= 0x7FFF_FFFF)
+        .ok_or_else(|| Error::limits("PNG chunk over 2^31 - 1 bytes"))?;
+    let mut crc = crc32fast::Hasher::new();
+    crc.update(kind);
+    w.write_all(&len.to_be_bytes())?;
+    w.write_all(kind)?;
+    for p in parts {
+        crc.update(p);
+        w.write_all(p)?;
+    }
+    w.write_all(&crc.finalize().to_be_bytes())?;
+    Ok(())
+}
+
+/// Write the PNG of `width` x `height` pixels made of `groups` (in row order) into `w`;
+/// `tone` selects the colour-space chunk (see the module documentation).
+pub fn encode_png_rows<W: Write>(
+    groups: &[PngRows],
+    width: usize,
+    height: usize,
+    tone: DisplayTone,
+    w: &mut W,
+) -> Result<()> {
+    let too_big = || Error::limits("PNG dimensions over 2^31 - 1");
+    let wu = u32::try_from(width)
+        .ok()
+        .filter(|&v| v > 0 && v <= 0x7FFF_FFFF)
+        .ok_or_else(too_big)?;
+    let hu = u32::try_from(height)
+        .ok()
+        .filter(|&v| v > 0 && v <= 0x7FFF_FFFF)
+        .ok_or_else(too_big)?;
+    let rows: usize = groups.iter().map(|g| g.rows).sum();
+    if rows != height {
+        return Err(Error::invalid(format!(
+            "PNG of {height} rows given {rows} rows of data"
+        )));
+    }
+    w.write_all(b"\x89PNG\r\n\x1a\n")?;
+    let mut ihdr = Vec::with_capacity(13);
+    ihdr.extend_from_slice(&wu.to_be_bytes());
+    ihdr.extend_from_slice(&hu.to_be_bytes());
+    // bit depth 8, colour type 2 (RGB), deflate, adaptive filtering, no interlace
+    ihdr.extend_from_slice(&[8, 2, 0, 0, 0]);
+    chunk(w, b"IHDR", &[&ihdr])?;
+    match tone {
+        DisplayTone::Srgb => chunk(w, b"sRGB", &[&[0]])?,
+        // 1 / 2.2 in units of 1e-5
+        DisplayTone::Gamma22 => chunk(w, b"gAMA", &[&45455u32.to_be_bytes()])?,
+        DisplayTone::Release => {}
+    }
+    let mut adler = 1u32;
+    let n = groups.iter().filter(|g| g.rows > 0).count();
+    let mut i = 0;
+    for g in groups.iter().filter(|g| g.rows > 0) {
+        adler = adler32_combine(adler, g.adler, g.len);
+        let head: &[u8] = if i == 0 { &[0x78, 0x01] } else { &[] };
+        i += 1;
+        if i == n {
+            let tail = [&FINAL_EMPTY_BLOCK[..], &adler.to_be_bytes()[..]].concat();
+            chunk(w, b"IDAT", &[head, &g.deflate, &tail])?;
+        } else {
+            chunk(w, b"IDAT", &[head, &g.deflate])?;
+        }
+    }
+    chunk(w, b"IEND", &[])?;
+    Ok(())
+}
+
+/// Write the PNG made of `groups` (see [`encode_png_rows`]) atomically.
+pub fn write_png_groups(
+    groups: &[PngRows],
+    width: usize,
+    height: usize,
+    tone: DisplayTone,
+    path: &Path,
+    policy: &OutputPolicy,
+) -> Result<()> {
+    write_atomic(path, policy, |out| {
+        encode_png_rows(groups, width, height, tone, out)
+    })
+}
+
+/// Write interleaved 8-bit RGB samples (`width` x `height`) as a PNG atomically, in groups
+/// of [`crate::isp::render::BAND`] rows filtered and compressed in parallel.
+pub fn write_png_rgb8(
+    bytes: &[u8],
+    width: usize,
+    height: usize,
+    tone: DisplayTone,
+    path: &Path,
+    policy: &OutputPolicy,
+) -> Result<()> {
+    if width == 0 || height == 0 || Some(bytes.len()) != width.checked_mul(3 * height) {
+        return Err(Error::invalid(format!(
+            "PNG of {width}x{height} RGB needs {} bytes, got {}",
+            3u128 * width as u128 * height as u128,
+            bytes.len()
+        )));
+    }
+    let groups = bytes
+        .par_chunks(3 * width * crate::isp::render::BAND)
+        .map_init(Encoder::new, |enc, rows| PngRows::encode(rows, width, enc))
+        .collect::<Result<Vec<_>>>()?;
+    write_png_groups(&groups, width, height, tone, path, policy)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Undo the filters (reference decoder, straight from the specification).
+    fn unfilter(data: &[u8], width: usize) -> Vec<u8> {
+        let stride = 3 * width;
+        let mut out: Vec<u8> = Vec::new();
+        for (r, row) in data.chunks_exact(stride + 1).enumerate() {
+            let kind = row[0];
+            for i in 0..stride {
+                let x = row[1 + i];
+                let a = if i >= 3 { out[r * stride + i - 3] } else { 0 };
+                let b = if r > 0 { out[(r - 1) * stride + i] } else { 0 };
+                let c = if r > 0 && i >= 3 {
+                    out[(r - 1) * stride + i - 3]
+                } else {
+                    0
+                };
+                let p = match kind {
+                    0 => 0,
+                    1 => a,
+                    2 => b,
+                    3 => ((u16::from(a) + u16::from(b)) / 2) as u8,
+                    4 => paeth_predictor(a, b, c),
+                    _ => panic!("filter type {kind}"),
+                };
+                out.push(x.wrapping_add(p));
+            }
+        }
+        out
+    }
+
+    /// Parse chunks, check CRCs, return (type, data) pairs.
+    fn chunks(png: &[u8]) -> Vec<([u8; 4], Vec<u8>)> {
+        assert_eq!(&png[..8], b"\x89PNG\r\n\x1a\n");
+        let mut p = 8;
+        let mut out = Vec::new();
+        while p < png.len() {
+            let len = u32::from_be_bytes(png[p..p + 4].try_into().unwrap()) as usize;
+            let kind: [u8; 4] = png[p + 4..p + 8].try_into().unwrap();
+            let data = png[p + 8..p + 8 + len].to_vec();
+            let crc = u32::from_be_bytes(png[p + 8 + len..p + 12 + len].try_into().unwrap());
+            let mut h = crc32fast::Hasher::new();
+            h.update(&kind);
+            h.update(&data);
+            assert_eq!(crc, h.finalize());
+            out.push((kind, data));
+            p += 12 + len;
+        }
+        out
+    }
+
+    fn image(w: usize, h: usize, seed: u32) -> Vec<u8> {
+        let mut s = seed | 1;
+        (0..3 * w * h)
+            .map(|i| {
+                s ^= s << 13;
+                s ^= s >> 17;
+                s ^= s << 5;
+                let x = i / 3 % w;
+                let y = i / (3 * w);
+                // smooth gradient plus a little noise, a flat region
+                if x < w / 4 {
+                    40
+                } else {
+                    ((x * 3 + y * 2 + (i % 3) * 50) as u32 + (s >> 29)) as u8
+                }
+            })
+            .collect()
+    }
+
+    #[test]
+    fn decodes_to_the_pixels_with_every_group_size() {
+        for (w, h) in [(1, 1), (1, 5), (5, 1), (7, 33), (64, 70), (301, 64)] {
+            let img = image(w, h, (w * 31 + h) as u32);
+            for group in [1, 2, 32, 1000] {
+                let mut enc = Encoder::new();
+                let groups: Vec<PngRows> = img
+                    .chunks(3 * w * group)
+                    .map(|r| PngRows::encode(r, w, &mut enc).unwrap())
+                    .collect();
+                let mut png = Vec::new();
+                encode_png_rows(&groups, w, h, DisplayTone::Srgb, &mut png).unwrap();
+                let ch = chunks(&png);
+                assert_eq!(&ch[0].0, b"IHDR");
+                assert_eq!(
+                    ch[0].1[..8],
+                    [(w as u32).to_be_bytes(), (h as u32).to_be_bytes()].concat()
+                );
+                assert_eq!(&ch[1].0, b"sRGB");
+                assert_eq!(&ch.last().unwrap().0, b"IEND");
+                let z: Vec<u8> = ch
+                    .iter()
+                    .filter(|c| &c.0 == b"IDAT")
+                    .flat_map(|c| c.1.clone())
+                    .collect();
+                let filtered = miniz_oxide::inflate::decompress_to_vec_zlib(&z).unwrap();
+                assert_eq!(unfilter(&filtered, w), img, "{w}x{h} group {group}");
+                // and an independent decoder agrees
+                let dec = image::load_from_memory_with_format(&png, image::ImageFormat::Png)
+                    .unwrap()
+                    .to_rgb8();
+                assert_eq!(dec.into_raw(), img);
+            }
+        }
+    }
+
+    #[test]
+    fn filters_are_chosen_and_first_rows_use_none_or_sub() {
+        let (w, h) = (64, 40);
+        let img = image(w, h, 5);
+        let mut enc = Encoder::new();
+        let g = PngRows::encode(&img, w, &mut enc).unwrap();
+        let mut z = vec![0x78, 0x01];
+        z.extend_from_slice(&g.deflate);
+        z.extend_from_slice(&FINAL_EMPTY_BLOCK);
+        z.extend_from_slice(&g.adler.to_be_bytes());
+        let f = miniz_oxide::inflate::decompress_to_vec_zlib(&z).unwrap();
+        let kinds: Vec<u8> = f.chunks_exact(3 * w + 1).map(|r| r[0]).collect();
+        assert!(kinds[0] <= 1);
+        // a smooth gradient: some row uses a filter that looks at the previous row
+        assert!(kinds[1..].iter().any(|&k| k >= 2), "{kinds:?}");
+    }
+
+    #[test]
+    fn tone_chunks_and_bad_sizes() {
+        let img = image(3, 2, 1);
+        let mut enc = Encoder::new();
+        let g = [PngRows::encode(&img, 3, &mut enc).unwrap()];
+        for (tone, kind) in [
+            (DisplayTone::Srgb, Some(*b"sRGB")),
+            (DisplayTone::Gamma22, Some(*b"gAMA")),
+            (DisplayTone::Release, None),
+        ] {
+            let mut png = Vec::new();
+            encode_png_rows(&g, 3, 2, tone, &mut png).unwrap();
+            let ch = chunks(&png);
+            match kind {
+                Some(k) => assert_eq!(ch[1].0, k),
+                None => assert_eq!(&ch[1].0, b"IDAT"),
+            }
+        }
+        let mut sink = Vec::new();
+        assert!(encode_png_rows(&g, 3, 3, DisplayTone::Srgb, &mut sink).is_err());
+        assert!(encode_png_rows(&g, 0, 2, DisplayTone::Srgb, &mut sink).is_err());
+        assert!(PngRows::encode(&img[..5], 3, &mut enc).is_err());
+        assert!(PngRows::encode(&img, 0, &mut enc).is_err());
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("x.png");
+        let r = write_png_rgb8(&img, 3, 3, DisplayTone::Srgb, &p, &OutputPolicy::default());
+        assert!(r.is_err() && !p.exists());
+    }
+}
