@@ -335,8 +335,13 @@ impl BlockEncoder {
         };
         let dyn_bits = 3 + header_bits + sym_bits(&ll) + extra_bits + nruns;
         let fixed_bits = 3 + sym_bits(&fixed_lengths()) + extra_bits + 5 * nruns;
+        // exact: the first header pads from the current bit offset, later ones from a byte
+        // boundary (3 + 5 bits); so choosing by these costs keeps the stream no longer than
+        // all-stored (5 bytes per piece)
         let pieces = data.len().div_ceil(MAX_STORED).max(1) as u64;
-        let stored_bits = pieces * (3 + 7 + 32) + 8 * data.len() as u64;
+        let off = u64::from(w.bit_offset());
+        let first_pad = (8 - (off + 3) % 8) % 8;
+        let stored_bits = 3 + first_pad + 32 + (pieces - 1) * 40 + 8 * data.len() as u64;
 
         if stored_bits < dyn_bits.min(fixed_bits) {
             self.write_stored(data, last, w);
