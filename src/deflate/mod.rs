@@ -298,9 +298,9 @@ mod tests {
             z.len(),
             miniz.len()
         );
-        // within a few percent of miniz level 1
+        // smaller than miniz level 1 (96000 -> 31999 vs 35040 when written)
         assert!(
-            z.len() * 100 < miniz.len() * 105,
+            z.len() < miniz.len(),
             "{} vs miniz {}",
             z.len(),
             miniz.len()
