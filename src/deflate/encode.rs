@@ -12,6 +12,10 @@ const EOB: usize = 256;
 const MAX_RUN: usize = 258;
 /// Shortest match.
 const MIN_RUN: usize = 3;
+/// Shortest run searched for: shorter runs stay literals. On the EXR planes runs of 3..7
+/// bytes are mostly of the plane's most frequent byte, which then keeps a short literal code;
+/// 8 gave the smallest output there (docs/deflate.md) and fewer matches to write.
+const FIND_RUN: usize = 8;
 /// Largest stored block.
 const MAX_STORED: usize = 65535;
 
@@ -237,8 +241,9 @@ impl BlockEncoder {
         }
     }
 
-    /// Find the runs of bytes equal to their predecessor in `input[start..end]` (the byte before
-    /// `start`, if any, counts as a predecessor), store them split into matches of 3..=258 in
+    /// Find the runs of at least [`FIND_RUN`] bytes equal to their predecessor in
+    /// `input[start..end]` (the byte before `start`, if any, counts as a predecessor), store them
+    /// split into matches of 3..=258 in
     /// `runs` and count the remaining literal bytes into `lit_hist`.
     #[inline(never)]
     fn scan_runs(&mut self, input: &[u8], start: usize, end: usize, lit_hist: &mut [u32]) {
@@ -249,14 +254,19 @@ impl BlockEncoder {
         let n = end - start;
         let nw = eq.len() - 1; // last word is a zero sentinel
         let mut hist = Hist8([[0; 256]; 8]);
-        // bit k of triple(i): positions k, k+1, k+2 (relative to word i) all equal-to-previous
-        let triple = |i: usize| {
+        // bit k of starts(i): positions k..k + FIND_RUN (relative to word i) all
+        // equal-to-previous, i.e. a run worth a match may start at k
+        let starts = |i: usize| {
             let (e, f) = (eq[i], eq[i + 1]);
-            e & (e >> 1 | f << 63) & (e >> 2 | f << 62)
+            let mut m = e;
+            for s in 1..FIND_RUN as u32 {
+                m &= e >> s | f << (64 - s);
+            }
+            m
         };
         let mut pos = 0usize; // next unprocessed position relative to start
         let mut i = 0usize;
-        let mut t = if nw > 0 { triple(0) } else { 0 };
+        let mut t = if nw > 0 { starts(0) } else { 0 };
         loop {
             // next run start at or after pos
             while t == 0 {
@@ -264,7 +274,7 @@ impl BlockEncoder {
                 if i >= nw {
                     break;
                 }
-                t = triple(i);
+                t = starts(i);
             }
             if t == 0 {
                 break;
@@ -293,7 +303,7 @@ impl BlockEncoder {
             if i >= nw {
                 break;
             }
-            t = triple(i) & (!0u64 << (pos % 64));
+            t = starts(i) & (!0u64 << (pos % 64));
         }
         hist.add(&input[start + pos.min(n)..end]);
         hist.sum_into(lit_hist);
