@@ -2,8 +2,9 @@
 //!
 //! Built for the ZIP-compressed OpenEXR blocks that `synth` writes (half-float samples split
 //! into low/high byte planes and delta-coded around 128): on that data LZ77 matches other than
-//! byte runs are rare, so this encoder only looks for runs (matches at distance 1, length
-//! 3..=258) and spends its time on good Huffman codes instead: the input is cut into equal
+//! byte runs are rare, so this encoder only looks for runs of 8 or more equal bytes (coded
+//! as matches at distance 1, length 3..=258) and spends its time on good Huffman codes
+//! instead: the input is cut into equal
 //! chunks of at most [`DEFAULT_CHUNK`] bytes and each chunk becomes one dynamic-Huffman block
 //! built from its exact symbol counts, or a fixed-Huffman or stored block when that is smaller
 //! by exact bit count. So the stream is never longer than the input plus 6 bytes (zlib
