@@ -57,8 +57,10 @@ impl Encoder {
         Self::with_chunk(DEFAULT_CHUNK)
     }
 
-    /// An encoder starting a new block every `chunk` input bytes (clamped to 1 KiB..=16 MiB).
-    /// Smaller chunks adapt faster to changing statistics at the cost of more block headers.
+    /// An encoder cutting its input into equal chunks (one block each) of at most `chunk`
+    /// bytes (clamped to 1 KiB..=16 MiB). Smaller chunks adapt faster to changing statistics
+    /// at the cost of more block headers; chunks over 65 535 bytes that do not compress are
+    /// stored as several blocks.
     pub fn with_chunk(chunk: usize) -> Self {
         Encoder {
             blocks: BlockEncoder::new(),
