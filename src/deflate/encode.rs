@@ -192,6 +192,13 @@ fn eq_mask64(a: &[u8; 64], b: &[u8; 64]) -> u64 {
 /// position 0 and past `end`).
 #[inline(never)]
 fn eq_bitmap(input: &[u8], start: usize, end: usize, eq: &mut Vec<u64>) {
+    // one load per cache line first: many independent loads in flight pull a chunk that is
+    // not in cache in much faster than the compute-heavy loop below would
+    let mut x = 0u8;
+    for c in input[start..end].chunks(64) {
+        x ^= c[0];
+    }
+    std::hint::black_box(x);
     let n = end - start;
     eq.clear();
     eq.resize(n.div_ceil(64) + 1, 0);
