@@ -53,7 +53,8 @@ const CL_ORDER: [usize; 19] = [
     16, 17, 18, 0, 8, 7, 9, 6, 10, 5, 11, 4, 12, 3, 13, 2, 14, 1, 15,
 ];
 
-/// One distance-1 match: `len` (3..=258) bytes at `pos` equal to the byte before `pos`.
+/// One distance-1 match: `len` (3..=258) bytes at `pos` (relative to the chunk start) equal
+/// to the byte before them.
 #[derive(Clone, Copy)]
 struct Run {
     pos: u32,
@@ -303,7 +304,8 @@ impl BlockEncoder {
                 }
             }
             hist.add(&input[start + pos..start + k]);
-            push_run(runs, start + k, len);
+            // positions relative to the chunk (at most 16 MiB) fit in u32 for any input size
+            push_run(runs, k, len);
             pos = k + len;
             // continue the search after the run
             i = pos / 64;
@@ -584,7 +586,7 @@ fn write_symbols_k<const K: usize>(
     }
     let mut pos = start;
     for r in runs {
-        let p = r.pos as usize;
+        let p = start + r.pos as usize;
         literals!(&input[pos..p]);
         entry!(t.run[r.len as usize]);
         pos = p + r.len as usize;
