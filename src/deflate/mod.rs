@@ -267,6 +267,25 @@ mod tests {
     }
 
     #[test]
+    fn big_chunks_store_in_several_pieces() {
+        // one chunk of 200 001 random bytes: four stored blocks of <= 65 535 bytes
+        let v = noise(200_001, 3);
+        let z = roundtrip_with(&mut Encoder::with_chunk(1 << 20), &v);
+        assert_eq!(z.len(), v.len() + 6 + 5 * 4);
+    }
+
+    #[test]
+    fn raw_stream_inflates() {
+        let v = exr_like(300, 16, 9);
+        let mut raw = Vec::new();
+        Encoder::new().compress_raw(&v, &mut raw);
+        assert_eq!(miniz_oxide::inflate::decompress_to_vec(&raw).unwrap(), v);
+        // the zlib stream is the raw one framed
+        let z = compress_zlib_rle_to_vec(&v);
+        assert_eq!(&z[2..z.len() - 4], &raw[..]);
+    }
+
+    #[test]
     fn skewed_needs_length_limit() {
         // Fibonacci-distributed byte frequencies: unlimited Huffman depth would exceed 15
         let mut fib = vec![1usize, 1];
