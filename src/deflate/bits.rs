@@ -38,6 +38,11 @@ impl<'a> BitWriter<'a> {
         }
     }
 
+    /// Bits already used in the current (incomplete) byte, 0..=7.
+    pub(crate) fn bit_offset(&self) -> u32 {
+        self.n & 7
+    }
+
     /// Store the pending bits and keep only the incomplete last byte pending.
     #[inline(always)]
     fn flush(&mut self) {

@@ -12,6 +12,10 @@ const EOB: usize = 256;
 const MAX_RUN: usize = 258;
 /// Shortest match.
 const MIN_RUN: usize = 3;
+/// Shortest run searched for: shorter runs stay literals. On the EXR planes runs of 3..7
+/// bytes are mostly of the plane's most frequent byte, which then keeps a short literal code;
+/// 8 gave the smallest output there (docs/deflate.md) and fewer matches to write.
+const FIND_RUN: usize = 8;
 /// Largest stored block.
 const MAX_STORED: usize = 65535;
 
@@ -49,7 +53,8 @@ const CL_ORDER: [usize; 19] = [
     16, 17, 18, 0, 8, 7, 9, 6, 10, 5, 11, 4, 12, 3, 13, 2, 14, 1, 15,
 ];
 
-/// One distance-1 match: `len` (3..=258) bytes at `pos` equal to the byte before `pos`.
+/// One distance-1 match: `len` (3..=258) bytes at `pos` (relative to the chunk start) equal
+/// to the byte before them.
 #[derive(Clone, Copy)]
 struct Run {
     pos: u32,
@@ -188,6 +193,13 @@ fn eq_mask64(a: &[u8; 64], b: &[u8; 64]) -> u64 {
 /// position 0 and past `end`).
 #[inline(never)]
 fn eq_bitmap(input: &[u8], start: usize, end: usize, eq: &mut Vec<u64>) {
+    // one load per cache line first: many independent loads in flight pull a chunk that is
+    // not in cache in much faster than the compute-heavy loop below would
+    let mut x = 0u8;
+    for c in input[start..end].chunks(64) {
+        x ^= c[0];
+    }
+    std::hint::black_box(x);
     let n = end - start;
     eq.clear();
     eq.resize(n.div_ceil(64) + 1, 0);
@@ -237,8 +249,9 @@ impl BlockEncoder {
         }
     }
 
-    /// Find the runs of bytes equal to their predecessor in `input[start..end]` (the byte before
-    /// `start`, if any, counts as a predecessor), store them split into matches of 3..=258 in
+    /// Find the runs of at least [`FIND_RUN`] bytes equal to their predecessor in
+    /// `input[start..end]` (the byte before `start`, if any, counts as a predecessor), store them
+    /// split into matches of 3..=258 in
     /// `runs` and count the remaining literal bytes into `lit_hist`.
     #[inline(never)]
     fn scan_runs(&mut self, input: &[u8], start: usize, end: usize, lit_hist: &mut [u32]) {
@@ -249,14 +262,19 @@ impl BlockEncoder {
         let n = end - start;
         let nw = eq.len() - 1; // last word is a zero sentinel
         let mut hist = Hist8([[0; 256]; 8]);
-        // bit k of triple(i): positions k, k+1, k+2 (relative to word i) all equal-to-previous
-        let triple = |i: usize| {
+        // bit k of starts(i): positions k..k + FIND_RUN (relative to word i) all
+        // equal-to-previous, i.e. a run worth a match may start at k
+        let starts = |i: usize| {
             let (e, f) = (eq[i], eq[i + 1]);
-            e & (e >> 1 | f << 63) & (e >> 2 | f << 62)
+            let mut m = e;
+            for s in 1..FIND_RUN as u32 {
+                m &= e >> s | f << (64 - s);
+            }
+            m
         };
         let mut pos = 0usize; // next unprocessed position relative to start
         let mut i = 0usize;
-        let mut t = if nw > 0 { triple(0) } else { 0 };
+        let mut t = if nw > 0 { starts(0) } else { 0 };
         loop {
             // next run start at or after pos
             while t == 0 {
@@ -264,7 +282,7 @@ impl BlockEncoder {
                 if i >= nw {
                     break;
                 }
-                t = triple(i);
+                t = starts(i);
             }
             if t == 0 {
                 break;
@@ -286,14 +304,15 @@ impl BlockEncoder {
                 }
             }
             hist.add(&input[start + pos..start + k]);
-            push_run(runs, start + k, len);
+            // positions relative to the chunk (at most 16 MiB) fit in u32 for any input size
+            push_run(runs, k, len);
             pos = k + len;
             // continue the search after the run
             i = pos / 64;
             if i >= nw {
                 break;
             }
-            t = triple(i) & (!0u64 << (pos % 64));
+            t = starts(i) & (!0u64 << (pos % 64));
         }
         hist.add(&input[start + pos.min(n)..end]);
         hist.sum_into(lit_hist);
@@ -335,8 +354,13 @@ impl BlockEncoder {
         };
         let dyn_bits = 3 + header_bits + sym_bits(&ll) + extra_bits + nruns;
         let fixed_bits = 3 + sym_bits(&fixed_lengths()) + extra_bits + 5 * nruns;
+        // exact: the first header pads from the current bit offset, later ones from a byte
+        // boundary (3 + 5 bits); so choosing by these costs keeps the stream no longer than
+        // all-stored (5 bytes per piece)
         let pieces = data.len().div_ceil(MAX_STORED).max(1) as u64;
-        let stored_bits = pieces * (3 + 7 + 32) + 8 * data.len() as u64;
+        let off = u64::from(w.bit_offset());
+        let first_pad = (8 - (off + 3) % 8) % 8;
+        let stored_bits = 3 + first_pad + 32 + (pieces - 1) * 40 + 8 * data.len() as u64;
 
         if stored_bits < dyn_bits.min(fixed_bits) {
             self.write_stored(data, last, w);
@@ -562,7 +586,7 @@ fn write_symbols_k<const K: usize>(
     }
     let mut pos = start;
     for r in runs {
-        let p = r.pos as usize;
+        let p = start + r.pos as usize;
         literals!(&input[pos..p]);
         entry!(t.run[r.len as usize]);
         pos = p + r.len as usize;
