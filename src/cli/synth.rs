@@ -167,7 +167,8 @@ pub struct ExtraArgs {
     /// Mask evaluation: separable (default), exact, or truncated:K (K sigmas).
     #[arg(long = "mask-eval", default_value = "separable")]
     pub mask_eval: String,
-    /// EXR compression (lossless: zip (default), piz (about 10 % smaller, not faster), zips,
+    /// EXR compression (lossless: zip (default, the fastest), piz (slower; larger on synth
+    /// targets, smaller on noisy images), zips,
     /// rle, none; lossy for half: pxr24, b44, b44a). See docs/benchmarks.md.
     #[arg(long = "exr-compression", default_value = "zip", value_name = "KIND")]
     pub exr_compression: String,
