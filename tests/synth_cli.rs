@@ -136,6 +136,8 @@ fn determinism_jobs_reruns_and_seeds() {
         "1",
         "--seed",
         "3",
+        "--target",
+        "both",
     ]));
     ok(&synth(&[
         s(&day()),
@@ -145,8 +147,11 @@ fn determinism_jobs_reruns_and_seeds() {
         "2",
         "--seed",
         "3",
+        "--target",
+        "both",
     ]));
     let fa = files(&a);
+    assert!(fa.contains_key("day_target.png"));
     same(&fa, &files(&b), "--jobs 1 vs --jobs 2");
     ok(&synth(&[
         s(&day()),
@@ -156,6 +161,8 @@ fn determinism_jobs_reruns_and_seeds() {
         "2",
         "--seed",
         "3",
+        "--target",
+        "both",
         "--overwrite",
     ]));
     same(&fa, &files(&a), "rerun");
