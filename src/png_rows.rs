@@ -48,8 +48,8 @@ impl PngRows {
     /// Filter and compress `rgb` (whole rows of `width` 8-bit RGB pixels); `enc` is
     /// reusable scratch. An empty `rgb` gives an empty group.
     pub fn encode(rgb: &[u8], width: usize, enc: &mut Encoder) -> Result<PngRows> {
-        let stride = BPP * width;
-        if width == 0 || rgb.len() % stride != 0 {
+        let stride = width.checked_mul(BPP).unwrap_or(0);
+        if stride == 0 || rgb.len() % stride != 0 {
             return Err(Error::invalid(format!(
                 "PNG rows of {width} RGB pixels need a multiple of {stride} bytes, got {}",
                 rgb.len()
@@ -261,15 +261,18 @@ pub fn write_png_rgb8(
     path: &Path,
     policy: &OutputPolicy,
 ) -> Result<()> {
-    if width == 0 || height == 0 || Some(bytes.len()) != width.checked_mul(3 * height) {
+    let need = width.checked_mul(BPP).and_then(|s| s.checked_mul(height));
+    if width == 0 || height == 0 || Some(bytes.len()) != need {
         return Err(Error::invalid(format!(
             "PNG of {width}x{height} RGB needs {} bytes, got {}",
             3u128 * width as u128 * height as u128,
             bytes.len()
         )));
     }
+    // bytes.len() = 3 * width * height did not overflow, so neither does this (BAND > 0)
+    let group = BPP * width * crate::isp::render::BAND.min(height);
     let groups = bytes
-        .par_chunks(3 * width * crate::isp::render::BAND)
+        .par_chunks(group)
         .map_init(Encoder::new, |enc, rows| PngRows::encode(rows, width, enc))
         .collect::<Result<Vec<_>>>()?;
     write_png_groups(&groups, width, height, tone, path, policy)
@@ -423,6 +426,13 @@ mod tests {
         assert!(encode_png_rows(&g, 0, 2, DisplayTone::Srgb, &mut sink).is_err());
         assert!(PngRows::encode(&img[..5], 3, &mut enc).is_err());
         assert!(PngRows::encode(&img, 0, &mut enc).is_err());
+        // sizes whose byte counts overflow are errors, not panics
+        assert!(PngRows::encode(&img, usize::MAX / 2, &mut enc).is_err());
+        let dir0 = tempfile::tempdir().unwrap();
+        let q = dir0.path().join("y.png");
+        let pol = OutputPolicy::default();
+        assert!(write_png_rgb8(&img, usize::MAX / 2, 3, DisplayTone::Srgb, &q, &pol).is_err());
+        assert!(write_png_rgb8(&img, 3, usize::MAX / 4, DisplayTone::Srgb, &q, &pol).is_err());
         let dir = tempfile::tempdir().unwrap();
         let p = dir.path().join("x.png");
         let r = write_png_rgb8(&img, 3, 3, DisplayTone::Srgb, &p, &OutputPolicy::default());
