@@ -203,21 +203,21 @@ impl<T: Copy> SiteTable<T> {
 }
 
 /// `clamp(round(v), 0, white) as u16` with NaN -> 0 (round half away from zero), without
-/// calling `f64::round` (a libm call on baseline x86-64): the integer part by truncation and
-/// the exact fraction `v - trunc(v)` decide. Same result as the plain expression for every
-/// input, fractional whites included (tested in noise::apply).
+/// calling `f64::round` (a libm call on baseline x86-64). Same result as the plain
+/// expression for every input, fractional whites included (tested in noise::apply).
 #[inline]
 pub fn round_clamp(v: f64, white: f64) -> u16 {
-    if v.is_nan() || v <= 0.0 {
+    // NaN, negatives and v < 0.5 round to 0 (below 0.5 the sum v + 0.5 could round up to 1)
+    if v.is_nan() || v < 0.5 {
         0
     } else if v >= white {
         white as u16
     } else {
-        // 0 < v < white <= 65535: the truncation and the difference are exact; a fractional
-        // white caps the rounded value at floor(white).
-        let t = v as u32;
-        let up = (v - t as f64 >= 0.5) as u32;
-        (t + up).min(white as u32) as u16
+        // 0.5 <= v < white <= 65535: floor(v + 0.5) is round half up, and the rounded sum
+        // has the same floor as the exact one (it is exact within v's binade; crossing into
+        // the next binade it stays within [2^k, 2^k + 0.5]). A fractional white caps the
+        // rounded value at floor(white).
+        ((v + 0.5) as u32).min(white as u32) as u16
     }
 }
 

@@ -199,6 +199,17 @@ mod tests {
             70000.0,
             f64::MIN_POSITIVE,
         ];
+        // halves and integers with their neighbours, across binade boundaries
+        let prev = |x: f64| f64::from_bits(x.to_bits() - 1);
+        let next = |x: f64| f64::from_bits(x.to_bits() + 1);
+        let ks = (0..1100u32).chain((1..17).flat_map(|m| [(1u32 << m) - 1, 1 << m]));
+        for k in ks {
+            let (h, i) = (k as f64 + 0.5, k as f64);
+            vals.extend([h, prev(h), next(h), next(i)]);
+            if k > 0 {
+                vals.push(prev(i));
+            }
+        }
         let mut s = 1u64;
         for _ in 0..20000 {
             s = s
