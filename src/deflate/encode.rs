@@ -531,6 +531,16 @@ fn write_symbols_k<const K: usize>(
     let lit = &t.lit;
     let mut st = w.raw();
     let (mut bits, mut n) = (st.bits, st.n);
+    // store the pending bits, keep the (at most 7) bits of the last incomplete byte
+    macro_rules! flush {
+        () => {{
+            st.store(bits);
+            let nb = n >> 3;
+            st.advance(nb);
+            bits >>= nb * 8;
+            n &= 7;
+        }};
+    }
     // the literal run `lits`, leaving at most 7 pending bits
     macro_rules! literals {
         ($lits:expr) => {{
@@ -553,22 +563,14 @@ fn write_symbols_k<const K: usize>(
                 };
                 bits |= code << n;
                 n += len;
-                st.store(bits);
-                let nb = n >> 3;
-                st.advance(nb);
-                bits >>= nb * 8;
-                n &= 7;
+                flush!();
             }
             for &b in rest {
                 let e = lit[usize::from(b)];
                 bits |= u64::from(e >> 8) << n;
                 n += e & 0xff;
             }
-            st.store(bits);
-            let nb = n >> 3;
-            st.advance(nb);
-            bits >>= nb * 8;
-            n &= 7;
+            flush!();
         }};
     }
     // one entry of at most 21 bits after `literals!`
@@ -577,11 +579,7 @@ fn write_symbols_k<const K: usize>(
             let e: u32 = $e;
             bits |= u64::from(e >> 8) << n;
             n += e & 0xff;
-            st.store(bits);
-            let nb = n >> 3;
-            st.advance(nb);
-            bits >>= nb * 8;
-            n &= 7;
+            flush!();
         }};
     }
     let mut pos = start;
