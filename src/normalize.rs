@@ -69,6 +69,12 @@ impl Normalizer {
             delta_v: l.black_delta_v.clone(),
         })
     }
+    /// The same levels for linear samples: any LinearizationTable dropped (what a clean
+    /// night raw made from this image holds).
+    pub fn without_linearization(mut self) -> Normalizer {
+        self.lut = None;
+        self
+    }
     /// True when there is no LinearizationTable: [`linearize`](Self::linearize) is `x as f64`.
     pub fn is_identity(&self) -> bool {
         self.lut.is_none()

@@ -7,14 +7,11 @@ use super::{usage, CmdResult, Failure};
 use day2night::dng::write::Compression;
 use day2night::error::Error;
 use day2night::exr::{ExrCompression, ExrOptions};
-use day2night::noise::NoiseModel;
 use day2night::output::OutputPolicy;
-use day2night::synth::dictionaries::{self, embedded};
+use day2night::synth::config::{parse_isos, parse_neutral, JobConfig};
 use day2night::synth::job::{DayInput, DirSink, SynthJob, Target};
 use day2night::synth::sidecar::Sidecar;
-use day2night::synth::{
-    Calibration, Covariance, Gaussian2, MaskEval, Mode, Plan, RelightFormula, SynthOptions,
-};
+use day2night::synth::{Covariance, Mode, Plan, RelightFormula, SynthOptions};
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 
@@ -180,64 +177,6 @@ pub struct ExtraArgs {
     pub exr_zip_level: u8,
 }
 
-fn parse_isos(s: &str) -> Result<Vec<u32>, Failure> {
-    if s.trim().eq_ignore_ascii_case("none") {
-        return Ok(vec![]);
-    }
-    let mut v = Vec::new();
-    for part in s.split(',') {
-        let iso: u32 = part.trim().parse().map_err(|_| {
-            usage(format!(
-                "--iso: {:?} is not an ISO (use e.g. 1600,3200 or none)",
-                part
-            ))
-        })?;
-        if iso == 0 {
-            return Err(usage("--iso: ISO 0"));
-        }
-        if !v.contains(&iso) {
-            v.push(iso);
-        }
-    }
-    Ok(v)
-}
-
-fn parse_neutral(s: &str) -> Result<[f64; 3], Failure> {
-    let v: Vec<f64> = s
-        .split(',')
-        .map(|p| p.trim().parse::<f64>())
-        .collect::<Result<_, _>>()
-        .map_err(|_| usage(format!("--day-neutral: {:?} is not r,g,b", s)))?;
-    match v.as_slice() {
-        [r, g, b] => Ok([*r, *g, *b]),
-        _ => Err(usage(format!("--day-neutral: {:?} is not r,g,b", s))),
-    }
-}
-
-fn parse_mask_eval(s: &str) -> Result<MaskEval, Failure> {
-    match s {
-        "separable" => Ok(MaskEval::Separable),
-        "exact" => Ok(MaskEval::Exact),
-        _ => match s
-            .strip_prefix("truncated:")
-            .and_then(|k| k.parse::<f64>().ok())
-        {
-            Some(k) if k > 0.0 && k.is_finite() => Ok(MaskEval::Truncated { k }),
-            _ => Err(usage(format!(
-                "--mask-eval: {:?} (use separable, exact or truncated:K)",
-                s
-            ))),
-        },
-    }
-}
-
-/// `--exr-compression` value.
-fn parse_exr_compression(s: &str) -> Result<ExrCompression, Failure> {
-    s.parse()
-        .map_err(|e: Error| usage(format!("--exr-compression: {}", e)))
-}
-
-/// `--exr-zip-level` value.
 pub(super) fn parse_zip_level(level: u8) -> Result<u8, Failure> {
     ExrOptions {
         zip_level: level,
@@ -248,10 +187,17 @@ pub(super) fn parse_zip_level(level: u8) -> Result<u8, Failure> {
     .map_err(|e| usage(format!("--exr-zip-level: {}", e)))
 }
 
+/// A library parse error as a usage error naming the flag.
+fn flag<T>(name: &str, r: day2night::Result<T>) -> Result<T, Failure> {
+    r.map_err(|e| match e {
+        Error::InvalidParam(m) => usage(format!("{}: {}", name, m)),
+        e => usage(format!("{}: {}", name, e)),
+    })
+}
+
 impl SynthOpts {
-    /// The library job these options describe, making `variants` variants per input
-    /// (`--replay` is the caller's business: it replaces the whole job).
-    pub fn job(&self, variants: u32) -> Result<SynthJob, Failure> {
+    /// The library's [`JobConfig`] these flags spell (nothing loaded yet).
+    pub fn config(&self, variants: u32) -> Result<JobConfig, Failure> {
         let options = SynthOptions {
             mode: match self.mode {
                 ModeArg::Local => Mode::Local,
@@ -265,7 +211,7 @@ impl SynthOpts {
             },
             bulbs: self.bulbs,
             local_lights: self.extra.lights,
-            isos: parse_isos(&self.iso)?,
+            isos: flag("--iso", parse_isos(&self.iso))?,
             truncate: self.truncate,
             covariance: match self.extra.covariance {
                 CovArg::Unbiased => Covariance::Unbiased,
@@ -275,39 +221,17 @@ impl SynthOpts {
                 .extra
                 .day_neutral
                 .as_deref()
-                .map(parse_neutral)
+                .map(|s| flag("--day-neutral", parse_neutral(s)))
                 .transpose()?,
-            mask_eval: parse_mask_eval(&self.extra.mask_eval)?,
+            mask_eval: flag("--mask-eval", self.extra.mask_eval.parse())?,
             ..SynthOptions::default()
         };
         options.validate().map_err(usage)?;
-        let exr_compression = parse_exr_compression(&self.extra.exr_compression)?;
-        let illuminants = match &self.extra.illuminants {
-            Some(p) => {
-                Gaussian2::from_source(&dictionaries::load_illuminants(p)?, options.covariance)
-                    .map_err(|e| e.in_file(p))?
-            }
-            None => Gaussian2::fit(&embedded::illuminants(), options.covariance)?,
-        };
-        let brightness = self
-            .extra
-            .brightness
-            .as_deref()
-            .map(dictionaries::load_brightness)
-            .transpose()?;
-        let noise = self
-            .extra
-            .noise_model
-            .as_deref()
-            .map(NoiseModel::from_file)
-            .transpose()?;
-        Ok(SynthJob {
+        Ok(JobConfig {
             options,
-            calibration: Calibration {
-                illuminants,
-                brightness,
-                noise,
-            },
+            illuminants: self.extra.illuminants.clone(),
+            brightness: self.extra.brightness.clone(),
+            noise_model: self.extra.noise_model.clone(),
             variants,
             target: match self.target {
                 TargetArg::Exr => Target::Exr,
@@ -321,15 +245,22 @@ impl SynthOpts {
                 CompressionArg::Ljpeg => Compression::Ljpeg,
             },
             exr: ExrOptions {
-                compression: exr_compression,
+                compression: flag(
+                    "--exr-compression",
+                    self.extra.exr_compression.parse::<ExrCompression>(),
+                )?,
                 zip_level: parse_zip_level(self.extra.exr_zip_level)?,
                 ..ExrOptions::default()
             },
         })
     }
+
+    /// The job these flags describe, calibration files loaded.
+    pub fn job(&self, variants: u32) -> Result<SynthJob, Failure> {
+        Ok(self.config(variants)?.build()?)
+    }
 }
 
-/// Run `day2night synth`.
 pub fn run(args: SynthArgs) -> CmdResult {
     if args.variants == 0 {
         return Err(usage("--variants must be at least 1"));

@@ -9,6 +9,7 @@
 pub mod color;
 pub mod demosaic;
 pub mod render;
+pub mod render_crop;
 pub mod tone;
 
 pub use demosaic::Demosaic;

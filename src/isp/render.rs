@@ -426,7 +426,7 @@ pub fn apply_matrix(rgb: &mut RgbImage, m: &Mat3) {
 
 /// [`apply_matrix`] on one interleaved row.
 #[inline]
-fn matrix_row(row: &mut [f32], mf: &[[f32; 3]; 3]) {
+pub(crate) fn matrix_row(row: &mut [f32], mf: &[[f32; 3]; 3]) {
     for px in row.chunks_exact_mut(3) {
         let cl = |v: f32| v.clamp(0.0, 1.0);
         let (r, g, b) = (cl(px[0]), cl(px[1]), cl(px[2]));

@@ -9,6 +9,7 @@ use super::model::NoiseParams;
 use crate::error::Result;
 use crate::normalize::{round_clamp, Normalizer};
 use crate::raw::{Bayer, RawImage};
+use crate::synth::crop::Crop;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, StandardNormal};
@@ -65,15 +66,11 @@ impl SigmaTable {
 /// A noisy copy of `clean` (which must hold linear values: no LinearizationTable).
 /// Samples outside the ActiveArea are copied unchanged.
 pub fn apply_noise(clean: &RawImage, params: &NoiseParams, seed: u64) -> Result<RawImage> {
-    let norm = Normalizer::new(clean)?;
+    let rows = RowNoise::new(clean, params)?;
     let a = clean.active_area();
     let (top, left, aw) = (a.top as usize, a.left as usize, a.width());
     let width = clean.width;
-    let white = norm.white.min(u16::MAX as f64);
-    let scale = norm.scale;
-    let scale2 = scale * scale;
     let key = noise_key(seed);
-    let table = SigmaTable::new(&norm, params, white);
     let mut data = clean.data.clone();
     data.par_chunks_mut(width)
         .enumerate()
@@ -83,34 +80,7 @@ pub fn apply_noise(clean: &RawImage, params: &NoiseParams, seed: u64) -> Result<
             || vec![0.0f64; aw],
             |blk, (srow, row)| {
                 let r = srow - top;
-                let mut rng = row_rng(&key, r);
-                let seg = &mut row[left..left + aw];
-                if let Some(t) = &table {
-                    // even and odd columns of this row: positions (r&1)*2 and (r&1)*2+1
-                    let p0 = Bayer::position(r, 0);
-                    let (s0, s1) = (&t.sigma[p0], &t.sigma[p0 | 1]);
-                    for (c, x) in seg.iter_mut().enumerate() {
-                        let s = if c & 1 == 0 { s0 } else { s1 };
-                        let xi = *x as usize;
-                        let sigma = if xi < t.len {
-                            s[xi]
-                        } else {
-                            let y = (*x as f64 - norm.black_at(r, c)) / scale;
-                            (params.var_norm(Bayer::position(r, c), y) * scale2).sqrt()
-                        };
-                        let n: f64 = StandardNormal.sample(&mut rng);
-                        *x = round_clamp(*x as f64 + sigma * n, white);
-                    }
-                    return;
-                }
-                norm.black_row(r, blk);
-                for (c, (x, &b)) in seg.iter_mut().zip(blk.iter()).enumerate() {
-                    let xf = *x as f64;
-                    let y = (xf - b) / scale;
-                    let var = params.var_norm(Bayer::position(r, c), y) * scale2;
-                    let n: f64 = StandardNormal.sample(&mut rng);
-                    *x = round_clamp(xf + var.sqrt() * n, white);
-                }
+                rows.row(r, 0, &mut row[left..left + aw], &mut row_rng(&key, r), blk);
             },
         );
     Ok(RawImage {
@@ -119,6 +89,114 @@ pub fn apply_noise(clean: &RawImage, params: &NoiseParams, seed: u64) -> Result<
         data,
         meta: clean.meta.clone(),
     })
+}
+
+/// The 32-byte ChaCha key of the noise of a crop: its own stream per crop, keyed by the
+/// noise seed and the crop's rectangle (documented in docs/noise.md).
+pub fn crop_noise_key(seed: u64, crop: &Crop) -> [u8; 32] {
+    let mut h = Sha256::new();
+    h.update(b"day2night noise crop rows v1\0");
+    h.update(seed.to_le_bytes());
+    for v in [crop.top, crop.left, crop.height, crop.width] {
+        h.update((v as u64).to_le_bytes());
+    }
+    h.finalize().into()
+}
+
+/// Noise on a crop of a clean raw: `plane` holds the clean samples of the active-area
+/// rectangle `crop` (row-major) and becomes noisy in place, with the same per-site model
+/// as [`apply_noise`]; crop row `i` draws from stream `i` of [`crop_noise_key`], so a crop's
+/// noise depends on (seed, crop) only, not on the thread count. `frame` supplies the
+/// levels (a LinearizationTable of its metadata is ignored: clean samples are linear).
+pub fn apply_noise_crop(
+    frame: &RawImage,
+    crop: &Crop,
+    plane: &mut [u16],
+    params: &NoiseParams,
+    seed: u64,
+) -> Result<()> {
+    let norm = Normalizer::new(frame)?.without_linearization();
+    let rows = RowNoise::with(norm, params);
+    if plane.len() != crop.width * crop.height {
+        return Err(crate::error::Error::invalid(format!(
+            "crop plane holds {} samples, expected {}x{}",
+            plane.len(),
+            crop.height,
+            crop.width
+        )));
+    }
+    let key = crop_noise_key(seed, crop);
+    let aw = frame.active_area().width();
+    plane
+        .par_chunks_mut(crop.width.max(1))
+        .enumerate()
+        .for_each_init(
+            || vec![0.0f64; aw],
+            |blk, (i, seg)| {
+                rows.row(crop.top + i, crop.left, seg, &mut row_rng(&key, i), blk);
+            },
+        );
+    Ok(())
+}
+
+/// The per-row noise of one model on one frame's levels.
+struct RowNoise<'a> {
+    norm: Normalizer,
+    params: &'a NoiseParams,
+    white: f64,
+    table: Option<SigmaTable>,
+}
+
+impl<'a> RowNoise<'a> {
+    fn new(clean: &RawImage, params: &'a NoiseParams) -> Result<RowNoise<'a>> {
+        Ok(RowNoise::with(Normalizer::new(clean)?, params))
+    }
+
+    fn with(norm: Normalizer, params: &'a NoiseParams) -> RowNoise<'a> {
+        let white = norm.white.min(u16::MAX as f64);
+        let table = SigmaTable::new(&norm, params, white);
+        RowNoise {
+            norm,
+            params,
+            white,
+            table,
+        }
+    }
+
+    /// Noise on `seg`, the samples of active-area row `r` from column `x0` (even), drawn
+    /// in order from `rng`; `blk` is scratch of the active-area width.
+    fn row(&self, r: usize, x0: usize, seg: &mut [u16], rng: &mut ChaCha8Rng, blk: &mut [f64]) {
+        let (norm, params, white) = (&self.norm, self.params, self.white);
+        let scale = norm.scale;
+        let scale2 = scale * scale;
+        if let Some(t) = &self.table {
+            // even and odd columns of this row: positions (r&1)*2 and (r&1)*2+1
+            let p0 = Bayer::position(r, x0);
+            let (s0, s1) = (&t.sigma[p0], &t.sigma[p0 ^ 1]);
+            for (i, x) in seg.iter_mut().enumerate() {
+                let s = if i & 1 == 0 { s0 } else { s1 };
+                let xi = *x as usize;
+                let sigma = if xi < t.len {
+                    s[xi]
+                } else {
+                    let c = x0 + i;
+                    let y = (*x as f64 - norm.black_at(r, c)) / scale;
+                    (params.var_norm(Bayer::position(r, c), y) * scale2).sqrt()
+                };
+                let n: f64 = StandardNormal.sample(rng);
+                *x = round_clamp(*x as f64 + sigma * n, white);
+            }
+            return;
+        }
+        norm.black_row(r, blk);
+        for (i, (x, &b)) in seg.iter_mut().zip(blk[x0..].iter()).enumerate() {
+            let xf = *x as f64;
+            let y = (xf - b) / scale;
+            let var = params.var_norm(Bayer::position(r, x0 + i), y) * scale2;
+            let n: f64 = StandardNormal.sample(rng);
+            *x = round_clamp(xf + var.sqrt() * n, white);
+        }
+    }
 }
 
 #[cfg(test)]

@@ -47,16 +47,21 @@
 //! # Ok(()) }
 //! ```
 
+#[cfg(doc)]
+use super::night::synthesize;
+use super::night::Night;
+use super::night::{synthesize_into, NightSink, Request, TargetOut};
+use super::relight::RunReport;
 use super::sidecar::{sha256_hex, CalibrationInfo, InputInfo, OutputInfo, Sidecar, SIDECAR_FORMAT};
-use super::{night_meta, run_clean, run_noise, Calibration, Plan, SynthOptions};
+use super::{Calibration, Plan, SynthOptions};
 use crate::deflate::Encoder;
 use crate::dng::write::{write_dng, Compression, WriteOptions};
 use crate::error::{Error, Result, ResultExt};
 use crate::exr::{
     encode_exr_rows, encodes_rows, standard_attributes, write_exr, write_exr_blocks, ExrOptions,
 };
-use crate::isp::render::{render_linear_bands, Bands};
-use crate::isp::{render_input, render_linear, RenderOptions};
+use crate::isp::render::Bands;
+use crate::isp::RgbImage;
 use crate::output::{write_bytes_atomic, DeferredSyncs, OutputPolicy};
 use crate::png::{encode_u8_slice, write_png, PngOptions};
 use crate::png_rows::{write_png_groups, PngRows};
@@ -199,162 +204,110 @@ impl SynthJob {
         )
     }
 
+    /// What [`super::night::synthesize_into`] must compute for this job's outputs.
+    pub fn request(&self) -> Request {
+        Request {
+            target: self.target != Target::None,
+            input: self.input_exr,
+            crop: None,
+        }
+    }
+
     /// Make and write every output of one planned variant of `day` through `sink` (see the
-    /// module documentation for the steps), the sidecar last. Returns the names of the files
-    /// written (as the sidecar lists them) and the stages run.
+    /// module documentation for the steps), the sidecar last: the products are computed by
+    /// [`synthesize_into`] and handed to a [`FileSink`] that encodes and writes each one.
+    /// Returns the names of the files written (as the sidecar lists them) and the stages
+    /// run.
     pub fn run_variant(
         &self,
         day: &DayInput,
         plan: &Plan,
         sink: &dyn OutputSink,
     ) -> Result<VariantOutputs> {
-        let wopts = WriteOptions {
-            compression: self.compression,
-            ..WriteOptions::default()
-        };
-        let mut stages = plan.stages.clone();
+        self.write_with(day, plan, sink, |files| {
+            synthesize_into(&day.raw, plan, &self.request(), files).map(|s| s.report)
+        })
+    }
+
+    /// Write the outputs of a variant already computed in memory ([`synthesize`] with this
+    /// job's [`SynthJob::request`]): the same files, byte for byte, as
+    /// [`SynthJob::run_variant`] writes for the same plan.
+    pub fn write_night(
+        &self,
+        day: &DayInput,
+        plan: &Plan,
+        night: &Night,
+        sink: &dyn OutputSink,
+    ) -> Result<VariantOutputs> {
+        if night.crop.is_some() {
+            return Err(Error::invalid(
+                "a crop's products are not written as files: synthesize the whole frame",
+            ));
+        }
+        let isos: Vec<u32> = night.noisy.iter().map(|(iso, _)| *iso).collect();
+        let planned: Vec<u32> = plan.noise.iter().map(|n| n.iso).collect();
+        if isos != planned
+            || (self.target != Target::None) != night.target.is_some()
+            || self.input_exr != night.input.is_some()
+        {
+            return Err(Error::invalid(
+                "the computed variant does not hold the products this job writes (ISOs, target, input)",
+            ));
+        }
+        self.write_with(day, plan, sink, |files| {
+            let (c, (n, t)) = rayon::join(
+                || files.clean(&night.clean),
+                || {
+                    rayon::join(
+                        || -> Result<()> {
+                            for (iso, noisy) in &night.noisy {
+                                files.noisy(*iso, noisy)?;
+                            }
+                            Ok(())
+                        },
+                        || match &night.target {
+                            Some(rgb) => files.target_image(rgb),
+                            None => Ok(()),
+                        },
+                    )
+                },
+            );
+            c.and(n).and(t)?;
+            if let Some(rgb) = &night.input {
+                files.input(rgb)?;
+            }
+            Ok(night.report.clone())
+        })
+    }
+
+    /// The file-writing frame of a variant: a [`FileSink`] for `compute` to feed, then the
+    /// deferred renames, the `written` calls and the sidecar.
+    fn write_with(
+        &self,
+        day: &DayInput,
+        plan: &Plan,
+        sink: &dyn OutputSink,
+        compute: impl FnOnce(&FileSink<'_>) -> Result<RunReport>,
+    ) -> Result<VariantOutputs> {
         // Every output but the sidecar is synced on a background thread and renamed into
         // place once all of them are on disk (crate::output): the compute threads never
         // wait for the disk, and on an error no output of the variant appears.
         let syncs = Arc::new(DeferredSyncs::default());
-        let policy = &sink.policy().deferring(&syncs);
-        let (mut clean, report) = run_clean(&day.raw, plan)?;
-        clean.meta = night_meta(&day.raw.meta, plan, plan.clean_iso, &plan.clean_noise);
-        let clean = clean;
+        let policy = sink.policy().deferring(&syncs);
+        let files = FileSink {
+            job: self,
+            sink,
+            policy: &policy,
+            wopts: WriteOptions {
+                compression: self.compression,
+                ..WriteOptions::default()
+            },
+            attrs: exr_attributes(&day.source, plan),
+        };
+        let report = compute(&files)?;
         let isos: Vec<u32> = plan.noise.iter().map(|np| np.iso).collect();
-        let neutral = plan.night_neutral;
-        let attrs = exr_attributes(&day.source, plan);
         let (want_exr, want_png) = (self.target.exr(), self.target.png());
-
-        // The clean DNG write, the noisy raws (computed and written one ISO after the other)
-        // and the target render run as concurrent rayon tasks: each output is computed the
-        // same way whatever runs first; only the order in which files appear changes. With
-        // one thread the tasks run one after another.
-        let mut clean_res: Option<Result<()>> = None;
-        let mut noisy_res: Option<Result<Option<RawImage>>> = None;
-        let mut target_res: Option<Result<()>> = None;
-        rayon::scope(|s| {
-            let (clean, wopts, isos, attrs) = (&clean, &wopts, &isos, &attrs);
-            let (clean_res, noisy_res) = (&mut clean_res, &mut noisy_res);
-            s.spawn(move |_| {
-                *clean_res = Some((|| {
-                    let kind = OutputKind::CleanDng;
-                    write_dng(clean, &sink.path(kind)?, wopts, policy)
-                })());
-            });
-            let noise_job = move |_: &rayon::Scope<'_>| {
-                *noisy_res = Some((|| {
-                    let mut first_noisy = None;
-                    for (i, &iso) in isos.iter().enumerate() {
-                        let (_, noisy) = run_noise(clean, plan, i)?;
-                        let kind = OutputKind::NoisyDng { iso };
-                        write_dng(&noisy, &sink.path(kind)?, wopts, policy)?;
-                        if first_noisy.is_none() && self.input_exr {
-                            first_noisy = Some(noisy);
-                        }
-                    }
-                    Ok(first_noisy)
-                })());
-            };
-            // The noisy raws start once the target is rendered (or at once without a
-            // target): the render then has both threads, and the single-threaded PNG
-            // encoder overlaps with the (parallel) noise instead of running alone at the
-            // end. Only the order of work changes, not what is computed.
-            let noise_job = std::cell::RefCell::new(Some(noise_job));
-            let start_noise = || {
-                if let Some(job) = noise_job.borrow_mut().take() {
-                    s.spawn(job);
-                }
-            };
-            if want_exr || want_png {
-                target_res = Some((|| {
-                    let ropts = RenderOptions {
-                        neutral: Some(neutral),
-                        ..RenderOptions::default()
-                    };
-                    // Band by band when every requested target can be encoded from bands
-                    // (the default ZIP/none EXRs, 8-bit PNG): same bytes, no whole f32
-                    // image, and each band is encoded while it is in cache.
-                    if !want_exr || encodes_rows(&self.exr) {
-                        let tone = PngOptions::default().tone;
-                        let f = |y0: usize, w: usize, rows: &[f32]| -> Result<Band> {
-                            Ok(Band {
-                                exr: if want_exr {
-                                    encode_exr_rows(rows, w, y0, &self.exr)?
-                                } else {
-                                    Vec::new()
-                                },
-                                png: if want_png {
-                                    let rgb8 = encode_u8_slice(rows, tone);
-                                    PngRows::encode(&rgb8, w, &mut Encoder::new())?
-                                } else {
-                                    PngRows::default()
-                                },
-                            })
-                        };
-                        if let Some(Bands {
-                            width: w,
-                            height: h,
-                            bands,
-                        }) = render_linear_bands(clean, &ropts, f)?
-                        {
-                            start_noise();
-                            let mut blocks = Vec::new();
-                            let mut png = Vec::with_capacity(bands.len());
-                            for b in bands {
-                                blocks.extend(b.exr);
-                                png.push(b.png);
-                            }
-                            let (e, p) = rayon::join(
-                                || {
-                                    if !want_exr {
-                                        return Ok(());
-                                    }
-                                    let kind = OutputKind::TargetExr;
-                                    let path = sink.path(kind)?;
-                                    write_exr_blocks(w, h, &blocks, &path, &self.exr, attrs, policy)
-                                },
-                                || {
-                                    if !want_png {
-                                        return Ok(());
-                                    }
-                                    let kind = OutputKind::TargetPng;
-                                    let path = sink.path(kind)?;
-                                    write_png_groups(&png, w, h, tone, &path, policy)
-                                },
-                            );
-                            return e.and(p);
-                        }
-                    }
-                    let rgb = render_linear(clean, &ropts)?;
-                    start_noise();
-                    let (e, p) = rayon::join(
-                        || {
-                            if !want_exr {
-                                return Ok(());
-                            }
-                            let kind = OutputKind::TargetExr;
-                            write_exr(&rgb, &sink.path(kind)?, &self.exr, attrs, policy)
-                        },
-                        || {
-                            if !want_png {
-                                return Ok(());
-                            }
-                            let kind = OutputKind::TargetPng;
-                            let path = sink.path(kind)?;
-                            write_png(&rgb, &path, &PngOptions::default(), policy)
-                        },
-                    );
-                    e.and(p)
-                })());
-            }
-            start_noise();
-        });
-        // Errors in a fixed order (clean, noisy, target), whatever finished first.
-        clean_res.unwrap_or(Ok(()))?;
-        let first_noisy = noisy_res.unwrap_or(Ok(None))?;
-        target_res.unwrap_or(Ok(()))?;
-
+        let mut stages = plan.stages.clone();
         let mut files = vec![sink.name(OutputKind::CleanDng)];
         stages.push("write_clean_dng".into());
         files.extend(
@@ -373,15 +326,9 @@ impl SynthJob {
             stages.push("target_png".into());
         }
         if self.input_exr {
-            let src = first_noisy.as_ref().unwrap_or(&clean);
-            let rgb = render_input(src, Some(neutral), Default::default())?;
-            let kind = OutputKind::InputExr;
-            write_exr(&rgb, &sink.path(kind)?, &self.exr, &attrs, policy)?;
-            files.push(sink.name(kind));
+            files.push(sink.name(OutputKind::InputExr));
             stages.push("input_exr".into());
         }
-        drop(first_noisy);
-        drop(clean);
         syncs.finish(sink.policy())?;
         let mut kinds = vec![OutputKind::CleanDng];
         kinds.extend(isos.iter().map(|&iso| OutputKind::NoisyDng { iso }));
@@ -436,6 +383,128 @@ impl SynthJob {
     }
 }
 
+/// The [`NightSink`] of the file outputs: encodes each product of a variant as its file
+/// (DNG, EXR, PNG) and writes it through the [`OutputSink`]'s paths and policy (deferred
+/// renames). It computes nothing but encodings.
+pub struct FileSink<'a> {
+    job: &'a SynthJob,
+    sink: &'a dyn OutputSink,
+    policy: &'a OutputPolicy,
+    wopts: WriteOptions,
+    attrs: Vec<(String, String)>,
+}
+
+impl FileSink<'_> {
+    /// Write a whole target image (the EXR and/or PNG the job asks for).
+    fn target_image(&self, rgb: &RgbImage) -> Result<()> {
+        let (want_exr, want_png) = (self.job.target.exr(), self.job.target.png());
+        let (e, p) = rayon::join(
+            || {
+                if !want_exr {
+                    return Ok(());
+                }
+                let path = self.sink.path(OutputKind::TargetExr)?;
+                write_exr(rgb, &path, &self.job.exr, &self.attrs, self.policy)
+            },
+            || {
+                if !want_png {
+                    return Ok(());
+                }
+                let path = self.sink.path(OutputKind::TargetPng)?;
+                write_png(rgb, &path, &PngOptions::default(), self.policy)
+            },
+        );
+        e.and(p)
+    }
+}
+
+impl NightSink for FileSink<'_> {
+    type Band = Band;
+
+    fn clean(&self, clean: &RawImage) -> Result<()> {
+        let path = self.sink.path(OutputKind::CleanDng)?;
+        write_dng(clean, &path, &self.wopts, self.policy)
+    }
+
+    fn noisy(&self, iso: u32, noisy: &RawImage) -> Result<()> {
+        let path = self.sink.path(OutputKind::NoisyDng { iso })?;
+        write_dng(noisy, &path, &self.wopts, self.policy)
+    }
+
+    /// Band by band when every requested target can be encoded from bands (the default
+    /// ZIP/none EXRs, 8-bit PNG): same bytes, no whole f32 image, and each band is encoded
+    /// while it is in cache.
+    fn banded(&self) -> bool {
+        !self.job.target.exr() || encodes_rows(&self.job.exr)
+    }
+
+    fn target_band(&self, y0: usize, w: usize, rows: &[f32]) -> Result<Band> {
+        let (want_exr, want_png) = (self.job.target.exr(), self.job.target.png());
+        Ok(Band {
+            exr: if want_exr {
+                encode_exr_rows(rows, w, y0, &self.job.exr)?
+            } else {
+                Vec::new()
+            },
+            png: if want_png {
+                let rgb8 = encode_u8_slice(rows, PngOptions::default().tone);
+                PngRows::encode(&rgb8, w, &mut Encoder::new())?
+            } else {
+                PngRows::default()
+            },
+        })
+    }
+
+    fn target(&self, target: TargetOut<Band>) -> Result<()> {
+        let (want_exr, want_png) = (self.job.target.exr(), self.job.target.png());
+        let Bands {
+            width: w,
+            height: h,
+            bands,
+        } = match target {
+            TargetOut::Image(rgb) => return self.target_image(&rgb),
+            TargetOut::Bands(b) => b,
+        };
+        let mut blocks = Vec::new();
+        let mut png = Vec::with_capacity(bands.len());
+        for b in bands {
+            blocks.extend(b.exr);
+            png.push(b.png);
+        }
+        let tone = PngOptions::default().tone;
+        let (e, p) = rayon::join(
+            || {
+                if !want_exr {
+                    return Ok(());
+                }
+                let path = self.sink.path(OutputKind::TargetExr)?;
+                write_exr_blocks(
+                    w,
+                    h,
+                    &blocks,
+                    &path,
+                    &self.job.exr,
+                    &self.attrs,
+                    self.policy,
+                )
+            },
+            || {
+                if !want_png {
+                    return Ok(());
+                }
+                let path = self.sink.path(OutputKind::TargetPng)?;
+                write_png_groups(&png, w, h, tone, &path, self.policy)
+            },
+        );
+        e.and(p)
+    }
+
+    fn input(&self, rgb: &RgbImage) -> Result<()> {
+        let path = self.sink.path(OutputKind::InputExr)?;
+        write_exr(rgb, &path, &self.job.exr, &self.attrs, self.policy)
+    }
+}
+
 /// The EXR header attribute of a render: one custom attribute only, because the `exr` crate
 /// keeps custom attributes in a HashMap (several would be written in a per-process random
 /// order, hence non-deterministic bytes).
@@ -485,7 +554,7 @@ impl DayInput {
 }
 
 /// The encoded targets of one band of the render.
-struct Band {
+pub struct Band {
     exr: Vec<Vec<u8>>,
     png: PngRows,
 }

@@ -130,6 +130,19 @@ pub struct PreparedMask {
 impl PreparedMask {
     /// Prepare `light` for an active area of `width x height`.
     pub fn new(light: &Light, width: usize, height: usize, eval: MaskEval) -> PreparedMask {
+        PreparedMask::new_in(light, width, height, eval, 0..width)
+    }
+
+    /// [`PreparedMask::new`] restricted to the active-area columns `within` (for a crop):
+    /// the column range is cut to it and only its column factors are computed (each the
+    /// same value as in the whole-width mask).
+    pub fn new_in(
+        light: &Light,
+        width: usize,
+        height: usize,
+        eval: MaskEval,
+        within: std::ops::Range<usize>,
+    ) -> PreparedMask {
         let rows = axis_range(
             light.center[0],
             light.window.map(|w| w[0]),
@@ -144,6 +157,8 @@ impl PreparedMask {
             width,
             eval,
         );
+        let cols = (cols.0.max(within.start), cols.1.min(within.end));
+        let cols = if cols.1 > cols.0 { cols } else { (0, 0) };
         let col_factor = (cols.0..cols.1)
             .map(|c| gauss(c as f64 - light.center[1], light.sigma[1]) as f32)
             .collect();

@@ -13,12 +13,15 @@
 //! # Ok(()) }
 //! ```
 
+pub mod config;
+pub mod crop;
 pub mod dictionaries;
 pub mod dim;
 pub mod illuminant;
 pub mod job;
 pub mod masks;
 pub mod neutral;
+pub mod night;
 pub mod plan;
 pub mod relight;
 pub mod rng;

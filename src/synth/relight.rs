@@ -9,6 +9,7 @@
 //! finally `y_r` is clipped to [0, 1]. Arithmetic per pixel is f32 (normalize and
 //! denormalize are f64 via [`crate::normalize::Normalizer`]).
 
+use super::crop::Crop;
 use super::dim::dim_factor;
 use super::masks::{LightKind, PreparedMask};
 use super::plan::Plan;
@@ -49,96 +50,11 @@ struct Scratch {
 /// ActiveArea the linearized input samples are kept). The result holds linear values and
 /// the input's metadata (see [`super::night_meta`] for the metadata of outputs).
 pub fn run_clean(img: &RawImage, plan: &Plan) -> Result<(RawImage, RunReport)> {
-    plan.check_against(img)?;
-    let norm = Normalizer::new(img)?;
     let a = img.active_area();
+    let pass = CleanPass::new(img, plan, Crop::whole(a.width(), a.height()))?;
     let (top, left, aw, ah) = (a.top as usize, a.left as usize, a.width(), a.height());
     let width = img.width;
-    let bayer = plan.bayer;
-    let inv_n = plan.day_neutral.map(|v| 1.0 / v);
-    let lo = if plan.keep_negative {
-        f64::NEG_INFINITY
-    } else {
-        0.0
-    };
-    let hi = if plan.keep_highlights {
-        f64::INFINITY
-    } else {
-        1.0
-    };
-    // White-balanced value of a sample whose black level is `black` (from black_row).
-    let y_w = |x: u16, black: f64, inv: f64| -> f64 {
-        let mut y = norm.normalize_with_black(x, black);
-        if !plan.keep_negative && y < 0.0 {
-            y = 0.0;
-        }
-        (y * inv).clamp(lo, hi)
-    };
-    let inv_row = |r: usize| {
-        [
-            inv_n[bayer.color_at(r, 0) as usize],
-            inv_n[bayer.color_at(r, 1) as usize],
-        ]
-    };
-    // When the black level depends on the 2x2 position only (the usual case), y_w of every
-    // stored value up to white is tabulated per position: the same expression, so the same
-    // bits, one load instead of a division and two clamps per sample.
-    let yw_table = SiteTable::new(&norm, |r, c, x| y_w(x, norm.black_at(r, c), inv_row(r)[c]));
-    let mut mean_wb = None;
-    let s = dim_factor(&plan.dim, || {
-        let sums: Vec<f64> = (0..ah)
-            .into_par_iter()
-            .map_init(
-                || vec![0.0f64; aw],
-                |blk, r| {
-                    let row = &img.data[(r + top) * width + left..][..aw];
-                    if let Some(t) = &yw_table {
-                        let (t0, t1) = t.row(r);
-                        let mut sum = 0.0f64;
-                        for (c, &x) in row.iter().enumerate() {
-                            let tab = if c & 1 == 0 { t0 } else { t1 };
-                            sum += match tab.get(x as usize) {
-                                Some(&v) => v,
-                                None => y_w(x, norm.black_at(r, c), inv_row(r)[c & 1]),
-                            };
-                        }
-                        return sum;
-                    }
-                    norm.black_row(r, blk);
-                    let k = inv_row(r);
-                    row.iter()
-                        .zip(blk.iter())
-                        .enumerate()
-                        .map(|(c, (&x, &b))| y_w(x, b, k[c & 1]))
-                        .sum::<f64>()
-                },
-            )
-            .collect();
-        let m = sums.iter().sum::<f64>() / (aw * ah) as f64;
-        mean_wb = Some(m);
-        m
-    });
-    let s32 = s as f32;
-
-    let prep = |kind: LightKind| -> Vec<Prepared> {
-        plan.lights
-            .iter()
-            .filter(|l| l.kind == kind)
-            .map(|l| Prepared {
-                mask: PreparedMask::new(l, aw, ah, plan.mask_eval),
-                illum: l.illuminant.map(|v| v as f32),
-                gain: l.gain as f32,
-                weight: l.weight as f32,
-            })
-            .collect()
-    };
-    let ye_table = yw_table.as_ref().map(|t| t.map(|v| v as f32 * s32));
-    let ambient = prep(LightKind::Ambient);
-    let locals = prep(LightKind::Local);
-    let bulbs = prep(LightKind::Bulb);
-    let day_n = plan.day_neutral.map(|v| v as f32);
-    let white = norm.white;
-
+    let norm = &pass.norm;
     // Whole stored image, linearized (so a dropped LinearizationTable stays truthful).
     // Without a table linearizing is the identity: a plain copy (the active-area rows are
     // overwritten below anyway).
@@ -156,84 +72,8 @@ pub fn run_clean(img: &RawImage, plan: &Plan) -> Result<(RawImage, RunReport)> {
         .skip(top)
         .take(ah)
         .map_init(
-            || Scratch {
-                ye: vec![0.0; aw],
-                num: vec![0.0; aw],
-                den: vec![0.0; aw],
-                m: vec![0.0; aw],
-                blk: vec![0.0; aw],
-            },
-            |scr, (srow, row)| {
-                let r = srow - top;
-                let src = &img.data[srow * width + left..][..aw];
-                let mut sat = 0u64;
-                let k = inv_row(r);
-                if ye_table.is_none() {
-                    norm.black_row(r, &mut scr.blk);
-                }
-                if let Some(t) = &ye_table {
-                    let (t0, t1) = t.row(r);
-                    for (c, (&x, ye)) in src.iter().zip(scr.ye.iter_mut()).enumerate() {
-                        let tab = if c & 1 == 0 { t0 } else { t1 };
-                        *ye = match tab.get(x as usize) {
-                            Some(&v) => v,
-                            None => y_w(x, norm.black_at(r, c), k[c & 1]) as f32 * s32,
-                        };
-                        sat += (norm.linearize(x) >= white) as u64;
-                    }
-                } else {
-                    for (c, ((&x, ye), &b)) in src
-                        .iter()
-                        .zip(scr.ye.iter_mut())
-                        .zip(scr.blk.iter())
-                        .enumerate()
-                    {
-                        if norm.linearize(x) >= white {
-                            sat += 1;
-                        }
-                        *ye = y_w(x, b, k[c & 1]) as f32 * s32;
-                    }
-                }
-                let cols = [bayer.color_at(r, 0) as usize, bayer.color_at(r, 1) as usize];
-                let out = &mut scr.num;
-                match plan.mode {
-                    Mode::Day => {
-                        let k = [day_n[cols[0]], day_n[cols[1]]];
-                        for (c, (o, &y)) in out.iter_mut().zip(&scr.ye).enumerate() {
-                            *o = y * k[c & 1];
-                        }
-                    }
-                    Mode::Dimmed => {
-                        let k = [day_n[cols[0]], day_n[cols[1]]];
-                        for (c, (o, &y)) in out.iter_mut().zip(&scr.ye).enumerate() {
-                            *o = (y * k[c & 1]).clamp(0.0, 1.0);
-                        }
-                    }
-                    Mode::Global => {
-                        let l = ambient.first().map(|p| p.illum).unwrap_or([1.0; 3]);
-                        let k = [l[cols[0]], l[cols[1]]];
-                        for (c, (o, &y)) in out.iter_mut().zip(&scr.ye).enumerate() {
-                            *o = (y * k[c & 1]).clamp(0.0, 1.0);
-                        }
-                    }
-                    Mode::Local => local_row(r, cols, &ambient, &locals, &bulbs, scr),
-                }
-                let seg = &mut row[left..left + aw];
-                if ye_table.is_some() {
-                    // 2x2-periodic black: the even and odd columns' levels
-                    let b = [norm.black_at(r, 0), norm.black_at(r, 1)];
-                    for (pair, y) in seg.chunks_mut(2).zip(scr.num.chunks(2)) {
-                        for ((d, &y), &b) in pair.iter_mut().zip(y).zip(&b) {
-                            *d = norm.denormalize_with_black(y as f64, b, plan.truncate);
-                        }
-                    }
-                } else {
-                    for ((d, &y), &b) in seg.iter_mut().zip(scr.num.iter()).zip(scr.blk.iter()) {
-                        *d = norm.denormalize_with_black(y as f64, b, plan.truncate);
-                    }
-                }
-                sat
-            },
+            || Scratch::new(aw),
+            |scr, (srow, row)| pass.row(srow - top, &mut row[left..left + aw], scr),
         )
         .sum();
     let mut meta = img.meta.clone();
@@ -245,12 +85,296 @@ pub fn run_clean(img: &RawImage, plan: &Plan) -> Result<(RawImage, RunReport)> {
             data,
             meta,
         },
-        RunReport {
-            dim_scale: s,
-            mean_white_balanced: mean_wb,
-            saturated_sites: saturated,
-        },
+        pass.report(saturated),
     ))
+}
+
+/// [`run_clean`] on the active-area rectangle `crop` only: its clean night samples
+/// (`crop.height` rows of `crop.width`, row-major), each equal to the same site of
+/// [`run_clean`]'s image, computed without touching the rest of the frame (except the
+/// whole-frame mean that a brightness-dictionary plan's dimming needs). The report's
+/// `saturated_sites` counts the crop's sites. `crop.left` must be even (CFA phase).
+pub fn run_clean_crop(img: &RawImage, plan: &Plan, crop: Crop) -> Result<(Vec<u16>, RunReport)> {
+    let a = img.active_area();
+    crop.check(a.width(), a.height())?;
+    let pass = CleanPass::new(img, plan, crop)?;
+    let mut data = vec![0u16; crop.width * crop.height];
+    let saturated: u64 = data
+        .par_chunks_mut(crop.width.max(1))
+        .enumerate()
+        .map_init(
+            || Scratch::new(crop.width),
+            |scr, (i, row)| pass.row(crop.top + i, row, scr),
+        )
+        .sum();
+    Ok((data, pass.report(saturated)))
+}
+
+/// Everything one clean pass needs, prepared once for the columns `crop.left..` of
+/// `crop.width` (the whole active area for [`run_clean`]); [`CleanPass::row`] computes one
+/// row segment.
+struct CleanPass<'a> {
+    img: &'a RawImage,
+    plan: &'a Plan,
+    norm: Normalizer,
+    /// Active-area origin in the stored image and active-area width.
+    top: usize,
+    left: usize,
+    aw: usize,
+    /// First column and width of the computed segment of every row.
+    x0: usize,
+    sw: usize,
+    inv_n: [f64; 3],
+    lo: f64,
+    hi: f64,
+    s: f64,
+    mean_wb: Option<f64>,
+    ye_table: Option<SiteTable<f32>>,
+    ambient: Vec<Prepared>,
+    locals: Vec<Prepared>,
+    bulbs: Vec<Prepared>,
+    day_n: [f32; 3],
+}
+
+impl<'a> CleanPass<'a> {
+    fn new(img: &'a RawImage, plan: &'a Plan, crop: Crop) -> Result<CleanPass<'a>> {
+        plan.check_against(img)?;
+        let norm = Normalizer::new(img)?;
+        let a = img.active_area();
+        let (top, left, aw, ah) = (a.top as usize, a.left as usize, a.width(), a.height());
+        let width = img.width;
+        let inv_n = plan.day_neutral.map(|v| 1.0 / v);
+        let lo = if plan.keep_negative {
+            f64::NEG_INFINITY
+        } else {
+            0.0
+        };
+        let hi = if plan.keep_highlights {
+            f64::INFINITY
+        } else {
+            1.0
+        };
+        let mut pass = CleanPass {
+            img,
+            plan,
+            norm,
+            top,
+            left,
+            aw,
+            x0: crop.left,
+            sw: crop.width,
+            inv_n,
+            lo,
+            hi,
+            s: 1.0,
+            mean_wb: None,
+            ye_table: None,
+            ambient: Vec::new(),
+            locals: Vec::new(),
+            bulbs: Vec::new(),
+            day_n: plan.day_neutral.map(|v| v as f32),
+        };
+        // When the black level depends on the 2x2 position only (the usual case), y_w of
+        // every stored value up to white is tabulated per position: the same expression,
+        // so the same bits, one load instead of a division and two clamps per sample.
+        let yw_table = SiteTable::new(&pass.norm, |r, c, x| {
+            pass.y_w(x, pass.norm.black_at(r, c), pass.inv_row(r)[c])
+        });
+        let mut mean_wb = None;
+        let s = dim_factor(&plan.dim, || {
+            let pass = &pass;
+            let norm = &pass.norm;
+            let sums: Vec<f64> = (0..ah)
+                .into_par_iter()
+                .map_init(
+                    || vec![0.0f64; aw],
+                    |blk, r| {
+                        let row = &img.data[(r + top) * width + left..][..aw];
+                        if let Some(t) = &yw_table {
+                            let (t0, t1) = t.row(r);
+                            let mut sum = 0.0f64;
+                            for (c, &x) in row.iter().enumerate() {
+                                let tab = if c & 1 == 0 { t0 } else { t1 };
+                                sum += match tab.get(x as usize) {
+                                    Some(&v) => v,
+                                    None => {
+                                        pass.y_w(x, norm.black_at(r, c), pass.inv_row(r)[c & 1])
+                                    }
+                                };
+                            }
+                            return sum;
+                        }
+                        norm.black_row(r, blk);
+                        let k = pass.inv_row(r);
+                        row.iter()
+                            .zip(blk.iter())
+                            .enumerate()
+                            .map(|(c, (&x, &b))| pass.y_w(x, b, k[c & 1]))
+                            .sum::<f64>()
+                    },
+                )
+                .collect();
+            let m = sums.iter().sum::<f64>() / (aw * ah) as f64;
+            mean_wb = Some(m);
+            m
+        });
+        let s32 = s as f32;
+        let cols = crop.left..crop.left + crop.width;
+        let prep = |kind: LightKind| -> Vec<Prepared> {
+            plan.lights
+                .iter()
+                .filter(|l| l.kind == kind)
+                .map(|l| Prepared {
+                    mask: PreparedMask::new_in(l, aw, ah, plan.mask_eval, cols.clone()),
+                    illum: l.illuminant.map(|v| v as f32),
+                    gain: l.gain as f32,
+                    weight: l.weight as f32,
+                })
+                .collect()
+        };
+        pass.ye_table = yw_table.as_ref().map(|t| t.map(|v| v as f32 * s32));
+        pass.ambient = prep(LightKind::Ambient);
+        pass.locals = prep(LightKind::Local);
+        pass.bulbs = prep(LightKind::Bulb);
+        pass.s = s;
+        pass.mean_wb = mean_wb;
+        Ok(pass)
+    }
+
+    /// White-balanced value of a sample whose black level is `black`.
+    #[inline]
+    fn y_w(&self, x: u16, black: f64, inv: f64) -> f64 {
+        let mut y = self.norm.normalize_with_black(x, black);
+        if !self.plan.keep_negative && y < 0.0 {
+            y = 0.0;
+        }
+        (y * inv).clamp(self.lo, self.hi)
+    }
+
+    #[inline]
+    fn inv_row(&self, r: usize) -> [f64; 2] {
+        let bayer = self.plan.bayer;
+        [
+            self.inv_n[bayer.color_at(r, 0) as usize],
+            self.inv_n[bayer.color_at(r, 1) as usize],
+        ]
+    }
+
+    fn report(&self, saturated: u64) -> RunReport {
+        RunReport {
+            dim_scale: self.s,
+            mean_white_balanced: self.mean_wb,
+            saturated_sites: saturated,
+        }
+    }
+
+    /// The clean night samples of active-area row `r`, columns `x0..x0 + sw`, into `seg`;
+    /// returns the number of saturated input sites among them.
+    fn row(&self, r: usize, seg: &mut [u16], scr: &mut Scratch) -> u64 {
+        let (norm, plan, x0, sw) = (&self.norm, self.plan, self.x0, self.sw);
+        let s32 = self.s as f32;
+        let white = norm.white;
+        let src = &self.img.data[(r + self.top) * self.img.width + self.left + x0..][..sw];
+        let mut sat = 0u64;
+        let k = self.inv_row(r);
+        // Per-site black levels of the whole row (only without the table), taken out of the
+        // scratch while the row is computed.
+        let blk_row = std::mem::take(&mut scr.blk);
+        let mut blk_row = blk_row;
+        if self.ye_table.is_none() {
+            blk_row.resize(self.aw, 0.0);
+            norm.black_row(r, &mut blk_row);
+        }
+        let blk = &blk_row[x0.min(blk_row.len())..];
+        if let Some(t) = &self.ye_table {
+            let (t0, t1) = t.row(r);
+            for (i, (&x, ye)) in src.iter().zip(scr.ye.iter_mut()).enumerate() {
+                let c = x0 + i;
+                let tab = if c & 1 == 0 { t0 } else { t1 };
+                *ye = match tab.get(x as usize) {
+                    Some(&v) => v,
+                    None => self.y_w(x, norm.black_at(r, c), k[c & 1]) as f32 * s32,
+                };
+                sat += (norm.linearize(x) >= white) as u64;
+            }
+        } else {
+            for (i, ((&x, ye), &b)) in src
+                .iter()
+                .zip(scr.ye.iter_mut())
+                .zip(blk.iter())
+                .enumerate()
+            {
+                let c = x0 + i;
+                if norm.linearize(x) >= white {
+                    sat += 1;
+                }
+                *ye = self.y_w(x, b, k[c & 1]) as f32 * s32;
+            }
+        }
+        let bayer = plan.bayer;
+        let cols = [bayer.color_at(r, 0) as usize, bayer.color_at(r, 1) as usize];
+        let out = &mut scr.num;
+        let day_n = self.day_n;
+        match plan.mode {
+            Mode::Day => {
+                let k = parity([day_n[cols[0]], day_n[cols[1]]], x0);
+                for (c, (o, &y)) in out.iter_mut().zip(&scr.ye).enumerate() {
+                    *o = y * k[c & 1];
+                }
+            }
+            Mode::Dimmed => {
+                let k = parity([day_n[cols[0]], day_n[cols[1]]], x0);
+                for (c, (o, &y)) in out.iter_mut().zip(&scr.ye).enumerate() {
+                    *o = (y * k[c & 1]).clamp(0.0, 1.0);
+                }
+            }
+            Mode::Global => {
+                let l = self.ambient.first().map(|p| p.illum).unwrap_or([1.0; 3]);
+                let k = parity([l[cols[0]], l[cols[1]]], x0);
+                for (c, (o, &y)) in out.iter_mut().zip(&scr.ye).enumerate() {
+                    *o = (y * k[c & 1]).clamp(0.0, 1.0);
+                }
+            }
+            Mode::Local => local_row(r, x0, cols, &self.ambient, &self.locals, &self.bulbs, scr),
+        }
+        if self.ye_table.is_some() {
+            // 2x2-periodic black: the even and odd columns' levels
+            let b = parity2([norm.black_at(r, 0), norm.black_at(r, 1)], x0);
+            for (pair, y) in seg.chunks_mut(2).zip(scr.num.chunks(2)) {
+                for ((d, &y), &b) in pair.iter_mut().zip(y).zip(&b) {
+                    *d = norm.denormalize_with_black(y as f64, b, plan.truncate);
+                }
+            }
+        } else {
+            for ((d, &y), &b) in seg.iter_mut().zip(scr.num.iter()).zip(blk.iter()) {
+                *d = norm.denormalize_with_black(y as f64, b, plan.truncate);
+            }
+        }
+        scr.blk = blk_row;
+        sat
+    }
+}
+
+impl Scratch {
+    fn new(w: usize) -> Scratch {
+        Scratch {
+            ye: vec![0.0; w],
+            num: vec![0.0; w],
+            den: vec![0.0; w],
+            m: vec![0.0; w],
+            blk: Vec::new(),
+        }
+    }
+}
+
+/// [`parity`] for f64 pairs.
+#[inline]
+fn parity2(k: [f64; 2], c0: usize) -> [f64; 2] {
+    if c0 & 1 == 0 {
+        k
+    } else {
+        [k[1], k[0]]
+    }
 }
 
 /// The per-colour factors of a row segment starting at column `c0` (even/odd offsets).
@@ -291,8 +415,11 @@ fn pairwise<F: Fn(&mut f32, &mut f32, f32, f32, f32)>(
     }
 }
 
+/// Local relighting of active-area row `r` over the segment of the scratch buffers, whose
+/// first sample is active-area column `x0` (the masks' column ranges lie inside it).
 fn local_row(
     r: usize,
+    x0: usize,
     cols: [usize; 2],
     ambient: &[Prepared],
     locals: &[Prepared],
@@ -305,7 +432,7 @@ fn local_row(
     // Ambient: mask 1 everywhere.
     match ambient.first() {
         Some(a) => {
-            let k = [a.illum[cols[0]] * a.gain, a.illum[cols[1]] * a.gain];
+            let k = parity([a.illum[cols[0]] * a.gain, a.illum[cols[1]] * a.gain], x0);
             let w = a.weight;
             for (c, ((n, d), &y)) in num
                 .iter_mut()
@@ -328,10 +455,11 @@ fn local_row(
         p.mask.fill_row(r, mm);
         let k = [p.illum[cols[0]] * p.gain, p.illum[cols[1]] * p.gain];
         let w = p.weight;
+        let (i0, i1) = (c0 - x0, c1 - x0);
         pairwise(
-            &mut num[c0..c1],
-            &mut den[c0..c1],
-            &ye[c0..c1],
+            &mut num[i0..i1],
+            &mut den[i0..i1],
+            &ye[i0..i1],
             mm,
             parity(k, c0),
             |n, d, y, mv, k| {
@@ -350,10 +478,11 @@ fn local_row(
         p.mask.fill_row(r, mm);
         let k = [p.illum[cols[0]], p.illum[cols[1]]];
         let g = p.gain;
+        let (i0, i1) = (c0 - x0, c1 - x0);
         pairwise(
-            &mut num[c0..c1],
-            &mut den[c0..c1],
-            &ye[c0..c1],
+            &mut num[i0..i1],
+            &mut den[i0..i1],
+            &ye[i0..i1],
             mm,
             parity(k, c0),
             |n, _, y, mv, k| {

@@ -1,0 +1,254 @@
+//! The settings of a synthesis job by name, as the command line and the Python package
+//! spell them, and the one place that turns them into a [`SynthJob`]: option values are
+//! parsed and checked, calibration files loaded (illuminant dictionary or fit, brightness
+//! dictionary, noise model), output settings validated. `synth`, `dataset` and
+//! `day2night.synthesize` build their jobs here, so the same flags mean the same job.
+
+use super::dictionaries::{self, embedded};
+use super::job::{SynthJob, Target};
+use super::{Calibration, Covariance, Gaussian2, MaskEval, Mode, RelightFormula, SynthOptions};
+use crate::dng::write::Compression;
+use crate::error::{Error, Result, ResultExt};
+use crate::exr::ExrOptions;
+use crate::noise::NoiseModel;
+use std::path::PathBuf;
+use std::str::FromStr;
+
+/// Everything that makes a [`SynthJob`], with calibration as file paths.
+#[derive(Debug, Clone, PartialEq)]
+pub struct JobConfig {
+    /// Synthesis options (mode, formula, bulbs, lights, ISOs, mask evaluation...).
+    pub options: SynthOptions,
+    /// Night illuminant dictionary or fitted Gaussian (`--illuminants`); None = embedded.
+    pub illuminants: Option<PathBuf>,
+    /// Brightness dictionary (`--brightness`).
+    pub brightness: Option<PathBuf>,
+    /// Noise model file (`--noise-model`).
+    pub noise_model: Option<PathBuf>,
+    /// Variants per input.
+    pub variants: u32,
+    /// Rendered targets.
+    pub target: Target,
+    /// Also render the network input EXR.
+    pub input_exr: bool,
+    /// DNG compression.
+    pub compression: Compression,
+    /// EXR options.
+    pub exr: ExrOptions,
+}
+
+impl Default for JobConfig {
+    fn default() -> Self {
+        JobConfig {
+            options: SynthOptions::default(),
+            illuminants: None,
+            brightness: None,
+            noise_model: None,
+            variants: 1,
+            target: Target::default(),
+            input_exr: false,
+            compression: Compression::None,
+            exr: ExrOptions::default(),
+        }
+    }
+}
+
+impl JobConfig {
+    /// Check the options, load the calibration files and make the job.
+    pub fn build(&self) -> Result<SynthJob> {
+        self.options.validate()?;
+        if self.variants == 0 {
+            return Err(Error::invalid("variants must be at least 1"));
+        }
+        self.exr.validate()?;
+        let cov = self.options.covariance;
+        let illuminants = match &self.illuminants {
+            Some(p) => {
+                Gaussian2::from_source(&dictionaries::load_illuminants(p)?, cov).in_file(p)?
+            }
+            None => Gaussian2::fit(&embedded::illuminants(), cov)?,
+        };
+        let brightness = self
+            .brightness
+            .as_deref()
+            .map(dictionaries::load_brightness)
+            .transpose()?;
+        let noise = self
+            .noise_model
+            .as_deref()
+            .map(NoiseModel::from_file)
+            .transpose()?;
+        Ok(SynthJob {
+            options: self.options.clone(),
+            calibration: Calibration {
+                illuminants,
+                brightness,
+                noise,
+            },
+            variants: self.variants,
+            target: self.target,
+            input_exr: self.input_exr,
+            compression: self.compression,
+            exr: self.exr.clone(),
+        })
+    }
+}
+
+/// A list of ISOs: `1600,3200` (duplicates dropped, order kept) or `none` (no noisy raw).
+pub fn parse_isos(s: &str) -> Result<Vec<u32>> {
+    if s.trim().eq_ignore_ascii_case("none") {
+        return Ok(vec![]);
+    }
+    let mut v = Vec::new();
+    for part in s.split(',') {
+        let iso: u32 = part.trim().parse().map_err(|_| {
+            Error::invalid(format!(
+                "{:?} is not an ISO (use e.g. 1600,3200 or none)",
+                part
+            ))
+        })?;
+        if iso == 0 {
+            return Err(Error::invalid("ISO 0"));
+        }
+        if !v.contains(&iso) {
+            v.push(iso);
+        }
+    }
+    Ok(v)
+}
+
+/// A neutral `r,g,b`.
+pub fn parse_neutral(s: &str) -> Result<[f64; 3]> {
+    let v: Vec<f64> = s
+        .split(',')
+        .map(|p| p.trim().parse::<f64>())
+        .collect::<std::result::Result<_, _>>()
+        .map_err(|_| Error::invalid(format!("{:?} is not r,g,b", s)))?;
+    match v.as_slice() {
+        [r, g, b] => Ok([*r, *g, *b]),
+        _ => Err(Error::invalid(format!("{:?} is not r,g,b", s))),
+    }
+}
+
+impl FromStr for MaskEval {
+    type Err = Error;
+    /// `separable`, `exact` or `truncated:K` (K > 0 sigmas).
+    fn from_str(s: &str) -> Result<MaskEval> {
+        match s {
+            "separable" => Ok(MaskEval::Separable),
+            "exact" => Ok(MaskEval::Exact),
+            _ => match s
+                .strip_prefix("truncated:")
+                .and_then(|k| k.parse::<f64>().ok())
+            {
+                Some(k) if k > 0.0 && k.is_finite() => Ok(MaskEval::Truncated { k }),
+                _ => Err(Error::invalid(format!(
+                    "{:?} (use separable, exact or truncated:K)",
+                    s
+                ))),
+            },
+        }
+    }
+}
+
+impl FromStr for Mode {
+    type Err = Error;
+    /// `local`, `global`, `dimmed` or `day`.
+    fn from_str(s: &str) -> Result<Mode> {
+        Ok(match s {
+            "local" => Mode::Local,
+            "global" => Mode::Global,
+            "dimmed" => Mode::Dimmed,
+            "day" => Mode::Day,
+            _ => {
+                return Err(Error::invalid(format!(
+                    "mode {:?} (use local, global, dimmed or day)",
+                    s
+                )))
+            }
+        })
+    }
+}
+
+impl FromStr for RelightFormula {
+    type Err = Error;
+    /// `release` or `paper`.
+    fn from_str(s: &str) -> Result<RelightFormula> {
+        Ok(match s {
+            "release" => RelightFormula::Release,
+            "paper" => RelightFormula::Paper,
+            _ => {
+                return Err(Error::invalid(format!(
+                    "relight formula {:?} (use release or paper)",
+                    s
+                )))
+            }
+        })
+    }
+}
+
+impl FromStr for Covariance {
+    type Err = Error;
+    /// `unbiased` or `ml`.
+    fn from_str(s: &str) -> Result<Covariance> {
+        Ok(match s {
+            "unbiased" => Covariance::Unbiased,
+            "ml" => Covariance::MaximumLikelihood,
+            _ => {
+                return Err(Error::invalid(format!(
+                    "covariance {:?} (use unbiased or ml)",
+                    s
+                )))
+            }
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn parses() {
+        assert_eq!(parse_isos("1600, 3200,1600").unwrap(), [1600, 3200]);
+        assert!(parse_isos("none").unwrap().is_empty());
+        assert!(parse_isos("0").is_err());
+        assert!(parse_isos("x").is_err());
+        assert_eq!(parse_neutral("0.5,1,0.7").unwrap(), [0.5, 1.0, 0.7]);
+        assert!(parse_neutral("1,2").is_err());
+        assert_eq!(
+            "truncated:3".parse::<MaskEval>().unwrap(),
+            MaskEval::Truncated { k: 3.0 }
+        );
+        assert!("truncated:-1".parse::<MaskEval>().is_err());
+        for m in ["local", "global", "dimmed", "day"] {
+            m.parse::<Mode>().unwrap();
+        }
+        assert!("night".parse::<Mode>().is_err());
+        assert_eq!(
+            "ml".parse::<Covariance>().unwrap(),
+            Covariance::MaximumLikelihood
+        );
+        assert!("paper".parse::<RelightFormula>().is_ok());
+    }
+
+    #[test]
+    fn build_checks_and_loads() {
+        let job = JobConfig::default().build().unwrap();
+        assert_eq!(job, SynthJob::new(SynthOptions::default()).unwrap());
+        let bad = JobConfig {
+            variants: 0,
+            ..JobConfig::default()
+        };
+        assert!(bad.build().is_err());
+        let missing = JobConfig {
+            noise_model: Some("/nonexistent/model.json".into()),
+            ..JobConfig::default()
+        };
+        assert!(missing
+            .build()
+            .unwrap_err()
+            .to_string()
+            .contains("model.json"));
+    }
+}

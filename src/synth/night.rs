@@ -1,0 +1,582 @@
+//! The one synthesis path of an (input, variant): compute every product of a [`Plan`] into
+//! memory or into a [`NightSink`] that consumes each product as it is made. `day2night
+//! synth`, `day2night dataset` (through [`super::job::SynthJob`], whose sink encodes and
+//! writes files) and the Python package (through [`synthesize`], which keeps everything in
+//! memory) all run [`synthesize_into`], so their pixels cannot drift apart.
+//!
+//! Products, computed only when asked for ([`Request`]):
+//! 1. the clean night raw (always): [`run_clean`] + [`night_meta`];
+//! 2. one noisy raw per planned ISO ([`run_noise`]), one after another (at most one alive);
+//! 3. the linear target rendered from the clean raw (`request.target`), band by band when
+//!    the sink can take bands ([`NightSink::banded`]), else as one image;
+//! 4. the network input render of the first noisy raw (`request.input`, whole frame only).
+//!
+//! For a whole frame, 1's hand-over, 2 and 3 run as concurrent rayon tasks; errors are
+//! reported in a fixed order (clean, noisy, target). With `request.crop` only the crop is
+//! computed: the plan stays the whole frame's (lights, bulbs, illuminants), the clean pass
+//! covers the crop plus the demosaicer's margin ([`run_clean_crop`]), the crop's noise
+//! draws from its own documented stream ([`apply_noise_crop`]) and the target is the crop's
+//! region of the frame's render ([`render_linear_crop`]).
+//!
+//! ```no_run
+//! use day2night::synth::night::{synthesize, Request};
+//! use day2night::synth::{self, crop::Crop, Calibration, SynthOptions};
+//! # fn main() -> day2night::Result<()> {
+//! let day = day2night::dng::read_dng("day.dng".as_ref())?;
+//! let opts = SynthOptions::default();
+//! let plan = synth::plan(&day, "day.dng", 0, 0, &opts, &Calibration::embedded(&opts)?)?;
+//! let crop = Crop { top: 512, left: 1024, height: 512, width: 512 };
+//! let night = synthesize(&day, &plan, &Request { target: true, input: false, crop: Some(crop) })?;
+//! assert_eq!(night.clean.data.len(), 512 * 512);
+//! # Ok(()) }
+//! ```
+
+use super::crop::{crop_meta, Crop};
+use super::relight::{run_clean, run_clean_crop, RunReport};
+use super::{night_meta, run_noise, Plan};
+use crate::error::{Error, Result};
+use crate::isp::render::{render_linear_bands, Bands};
+use crate::isp::render_crop::{render_linear_crop, CROP_MARGIN};
+use crate::isp::{render_input, render_linear, Demosaic, RenderOptions, RgbImage};
+use crate::noise::apply::apply_noise_crop;
+use crate::raw::RawImage;
+use std::sync::Mutex;
+
+/// What to compute of one variant besides the clean raw and the plan's noisy raws.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct Request {
+    /// Render the linear target from the clean raw.
+    pub target: bool,
+    /// Render the network input (normalized, white-balanced, demosaiced first noisy raw;
+    /// the clean raw when the plan has no ISO). Whole frame only.
+    pub input: bool,
+    /// Compute only this active-area rectangle (None = the whole frame).
+    pub crop: Option<Crop>,
+}
+
+/// A rendered target as handed to a sink.
+#[derive(Debug)]
+pub enum TargetOut<B> {
+    /// The sink's results of each band of [`crate::isp::render::BAND`] rows, in order.
+    Bands(Bands<B>),
+    /// The whole image.
+    Image(RgbImage),
+}
+
+/// A consumer of the products of [`synthesize_into`], called from concurrent rayon tasks
+/// (hence `Sync`): `clean` once, `noisy` once per ISO in plan order (from one task),
+/// `target_band` for every band in parallel then `target` once, `input` last.
+pub trait NightSink: Sync {
+    /// What [`NightSink::target_band`] makes of a band (e.g. its encoded bytes).
+    type Band: Send;
+    /// The clean night raw (with its output metadata).
+    fn clean(&self, clean: &RawImage) -> Result<()>;
+    /// The noisy night raw at `iso` (with its output metadata).
+    fn noisy(&self, iso: u32, noisy: &RawImage) -> Result<()>;
+    /// True when the sink takes the target band by band ([`NightSink::target_band`]).
+    fn banded(&self) -> bool {
+        false
+    }
+    /// One band of the target: output rows from `y0`, `width` pixels each, interleaved
+    /// linear RGB. Only called when [`NightSink::banded`].
+    fn target_band(&self, _y0: usize, _width: usize, _rows: &[f32]) -> Result<Self::Band> {
+        Err(Error::invalid("this sink does not take target bands"))
+    }
+    /// The whole target.
+    fn target(&self, target: TargetOut<Self::Band>) -> Result<()>;
+    /// The network input render.
+    fn input(&self, _input: &RgbImage) -> Result<()> {
+        Ok(())
+    }
+}
+
+/// What [`synthesize_into`] returns besides what it handed to the sink.
+#[derive(Debug, Clone)]
+pub struct Synthesized {
+    /// The clean night raw (the crop's, as a raw image of its own, for a crop).
+    pub clean: RawImage,
+    /// Values computed while running.
+    pub report: RunReport,
+    /// The plan's stages, then the products computed (`render_target`, `render_input`,
+    /// `crop`).
+    pub stages: Vec<String>,
+}
+
+/// Compute the products of `plan` on `day` that `req` asks for, handing each to `sink`.
+pub fn synthesize_into<S: NightSink>(
+    day: &RawImage,
+    plan: &Plan,
+    req: &Request,
+    sink: &S,
+) -> Result<Synthesized> {
+    let mut stages = plan.stages.clone();
+    let (clean, report) = match &req.crop {
+        None => whole_frame(day, plan, req, sink)?,
+        Some(crop) => {
+            if req.input {
+                return Err(Error::invalid(
+                    "the network input render is made for whole frames only, not for a crop",
+                ));
+            }
+            cropped(day, plan, req.target, crop, sink)?
+        }
+    };
+    if req.target {
+        stages.push("render_target".into());
+    }
+    if req.input {
+        stages.push("render_input".into());
+    }
+    if req.crop.is_some() {
+        stages.push("crop".into());
+    }
+    Ok(Synthesized {
+        clean,
+        report,
+        stages,
+    })
+}
+
+fn whole_frame<S: NightSink>(
+    day: &RawImage,
+    plan: &Plan,
+    req: &Request,
+    sink: &S,
+) -> Result<(RawImage, RunReport)> {
+    let (mut clean, report) = run_clean(day, plan)?;
+    clean.meta = night_meta(&day.meta, plan, plan.clean_iso, &plan.clean_noise);
+    let clean = clean;
+    let neutral = plan.night_neutral;
+    // The clean hand-over, the noisy raws (made and handed over one ISO after the other)
+    // and the target render run as concurrent rayon tasks: each product is computed the
+    // same way whatever runs first. With one thread the tasks run one after another.
+    let mut clean_res: Option<Result<()>> = None;
+    let mut noisy_res: Option<Result<Option<RawImage>>> = None;
+    let mut target_res: Option<Result<()>> = None;
+    rayon::scope(|s| {
+        let clean = &clean;
+        let (clean_res, noisy_res) = (&mut clean_res, &mut noisy_res);
+        s.spawn(move |_| *clean_res = Some(sink.clean(clean)));
+        let noise_job = move |_: &rayon::Scope<'_>| {
+            *noisy_res = Some((|| {
+                let mut first_noisy = None;
+                for i in 0..plan.noise.len() {
+                    let (iso, noisy) = run_noise(clean, plan, i)?;
+                    sink.noisy(iso, &noisy)?;
+                    if first_noisy.is_none() && req.input {
+                        first_noisy = Some(noisy);
+                    }
+                }
+                Ok(first_noisy)
+            })());
+        };
+        // The noisy raws start once the target is rendered (or at once without a target):
+        // the render then has both threads, and a single-threaded encoder in the sink
+        // overlaps with the (parallel) noise instead of running alone at the end. Only
+        // the order of work changes, not what is computed.
+        let noise_job = std::cell::RefCell::new(Some(noise_job));
+        let start_noise = || {
+            if let Some(job) = noise_job.borrow_mut().take() {
+                s.spawn(job);
+            }
+        };
+        if req.target {
+            target_res = Some((|| {
+                let ropts = RenderOptions {
+                    neutral: Some(neutral),
+                    ..RenderOptions::default()
+                };
+                if sink.banded() {
+                    let f = |y0: usize, w: usize, rows: &[f32]| sink.target_band(y0, w, rows);
+                    if let Some(bands) = render_linear_bands(clean, &ropts, f)? {
+                        start_noise();
+                        return sink.target(TargetOut::Bands(bands));
+                    }
+                }
+                let rgb = render_linear(clean, &ropts)?;
+                start_noise();
+                sink.target(TargetOut::Image(rgb))
+            })());
+        }
+        start_noise();
+    });
+    // Errors in a fixed order (clean, noisy, target), whatever finished first.
+    clean_res.unwrap_or(Ok(()))?;
+    let first_noisy = noisy_res.unwrap_or(Ok(None))?;
+    target_res.unwrap_or(Ok(()))?;
+    if req.input {
+        let src = first_noisy.as_ref().unwrap_or(&clean);
+        let rgb = render_input(src, Some(neutral), Default::default())?;
+        sink.input(&rgb)?;
+    }
+    Ok((clean, report))
+}
+
+fn cropped<S: NightSink>(
+    day: &RawImage,
+    plan: &Plan,
+    target: bool,
+    crop: &Crop,
+    sink: &S,
+) -> Result<(RawImage, RunReport)> {
+    let a = day.active_area();
+    let (aw, ah) = (a.width(), a.height());
+    crop.check(aw, ah)?;
+    // The target's demosaicer reads CROP_MARGIN samples around the crop.
+    let outer = if target {
+        crop.grown(CROP_MARGIN, aw, ah)
+    } else {
+        *crop
+    };
+    let (plane, report) = run_clean_crop(day, plan, outer)?;
+    let data = if outer == *crop {
+        plane.clone()
+    } else {
+        crop.cut_from(&outer, &plane)
+    };
+    let frame_meta = night_meta(&day.meta, plan, plan.clean_iso, &plan.clean_noise);
+    let clean = RawImage {
+        width: crop.width,
+        height: crop.height,
+        data,
+        meta: crop_meta(&frame_meta, crop),
+    };
+    let (c, (n, t)) = rayon::join(
+        || sink.clean(&clean),
+        || {
+            rayon::join(
+                || -> Result<()> {
+                    for np in &plan.noise {
+                        let mut data = clean.data.clone();
+                        apply_noise_crop(day, crop, &mut data, &np.params, np.seed)?;
+                        let meta = night_meta(&day.meta, plan, np.iso, &np.params);
+                        let noisy = RawImage {
+                            width: crop.width,
+                            height: crop.height,
+                            data,
+                            meta: crop_meta(&meta, crop),
+                        };
+                        sink.noisy(np.iso, &noisy)?;
+                    }
+                    Ok(())
+                },
+                || -> Result<()> {
+                    if !target {
+                        return Ok(());
+                    }
+                    let rgb = render_linear_crop(
+                        day,
+                        Some(plan.night_neutral),
+                        Demosaic::default(),
+                        &outer,
+                        &plane,
+                        crop,
+                    )?;
+                    sink.target(TargetOut::Image(rgb))
+                },
+            )
+        },
+    );
+    c?;
+    n?;
+    t?;
+    Ok((clean, report))
+}
+
+/// Every product of one variant, in memory (what [`synthesize`] returns).
+#[derive(Debug, Clone)]
+pub struct Night {
+    /// The clean night raw: the whole stored image with the night metadata, or the crop as
+    /// a raw image of its own ([`crop_meta`]).
+    pub clean: RawImage,
+    /// (ISO, noisy raw) per planned ISO, same layout as `clean`.
+    pub noisy: Vec<(u32, RawImage)>,
+    /// The linear target (whole frame: DefaultCrop and orientation applied, exactly the
+    /// EXR target's pixels before half rounding; crop: the crop's region, unoriented).
+    pub target: Option<RgbImage>,
+    /// The network input render, if asked for.
+    pub input: Option<RgbImage>,
+    /// Values computed while running.
+    pub report: RunReport,
+    /// Stages run ([`Synthesized::stages`]).
+    pub stages: Vec<String>,
+    /// The crop, if any.
+    pub crop: Option<Crop>,
+}
+
+/// The in-memory sink of [`synthesize`].
+#[derive(Default)]
+struct Collect {
+    noisy: Mutex<Vec<(u32, RawImage)>>,
+    target: Mutex<Option<RgbImage>>,
+    input: Mutex<Option<RgbImage>>,
+}
+
+impl NightSink for Collect {
+    type Band = ();
+    fn clean(&self, _clean: &RawImage) -> Result<()> {
+        Ok(()) // returned by synthesize_into
+    }
+    fn noisy(&self, iso: u32, noisy: &RawImage) -> Result<()> {
+        lock(&self.noisy).push((iso, noisy.clone()));
+        Ok(())
+    }
+    fn target(&self, target: TargetOut<()>) -> Result<()> {
+        if let TargetOut::Image(rgb) = target {
+            *lock(&self.target) = Some(rgb);
+        }
+        Ok(())
+    }
+    fn input(&self, input: &RgbImage) -> Result<()> {
+        *lock(&self.input) = Some(input.clone());
+        Ok(())
+    }
+}
+
+/// A poisoned lock only means another task panicked; its data is still the data.
+fn lock<T>(m: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
+    m.lock().unwrap_or_else(|e| e.into_inner())
+}
+
+/// Compute the products of `plan` on `day` that `req` asks for, into memory.
+pub fn synthesize(day: &RawImage, plan: &Plan, req: &Request) -> Result<Night> {
+    let sink = Collect::default();
+    let out = synthesize_into(day, plan, req, &sink)?;
+    Ok(Night {
+        clean: out.clean,
+        noisy: sink.noisy.into_inner().unwrap_or_else(|e| e.into_inner()),
+        target: sink.target.into_inner().unwrap_or_else(|e| e.into_inner()),
+        input: sink.input.into_inner().unwrap_or_else(|e| e.into_inner()),
+        report: out.report,
+        stages: out.stages,
+        crop: req.crop,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::isp::render::default_crop;
+    use crate::synth::crop::target_origin;
+    use crate::synth::{plan, Calibration, Mode, SynthOptions};
+    use std::path::Path;
+
+    fn day() -> RawImage {
+        let fix = Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/day.dng");
+        crate::dng::read_dng(&fix).unwrap()
+    }
+
+    fn planned(day: &RawImage, mode: Mode, isos: Vec<u32>) -> Plan {
+        let opts = SynthOptions {
+            mode,
+            isos,
+            ..SynthOptions::default()
+        };
+        plan(
+            day,
+            "day.dng",
+            3,
+            1,
+            &opts,
+            &Calibration::embedded(&opts).unwrap(),
+        )
+        .unwrap()
+    }
+
+    #[test]
+    fn crops_equal_the_whole_frame_region() {
+        let day = day();
+        let a = day.active_area();
+        let (aw, ah) = (a.width(), a.height());
+        for mode in [Mode::Local, Mode::Global, Mode::Dimmed, Mode::Day] {
+            let p = planned(&day, mode, vec![1600]);
+            let full = synthesize(
+                &day,
+                &p,
+                &Request {
+                    target: true,
+                    ..Request::default()
+                },
+            )
+            .unwrap();
+            let (x0, y0, _, _) = default_crop(&full.clean.meta, aw, ah);
+            // corners, edges and the middle, with and without the target
+            let crops = [
+                Crop {
+                    top: 0,
+                    left: 0,
+                    height: 6,
+                    width: 8,
+                },
+                Crop {
+                    top: ah - ah % 2 - 10,
+                    left: aw - aw % 2 - 12,
+                    height: 10,
+                    width: 12,
+                },
+                Crop {
+                    top: 2,
+                    left: 4,
+                    height: 7,
+                    width: 9,
+                },
+                Crop {
+                    top: 0,
+                    left: 0,
+                    height: ah,
+                    width: aw,
+                },
+            ];
+            for crop in crops {
+                let crop = Crop {
+                    height: crop.height.min(ah - crop.top),
+                    width: crop.width.min(aw - crop.left),
+                    ..crop
+                };
+                let c = synthesize(
+                    &day,
+                    &p,
+                    &Request {
+                        target: true,
+                        crop: Some(crop),
+                        ..Request::default()
+                    },
+                )
+                .unwrap();
+                assert_eq!((c.clean.width, c.clean.height), (crop.width, crop.height));
+                for r in 0..crop.height {
+                    for k in 0..crop.width {
+                        let want = full.clean.get(
+                            a.top as usize + crop.top + r,
+                            a.left as usize + crop.left + k,
+                        );
+                        assert_eq!(c.clean.get(r, k), want, "{mode:?} {crop:?} clean ({r},{k})");
+                    }
+                }
+                // The target of a crop inside the DefaultCrop equals the frame's region.
+                let t = c.target.as_ref().unwrap();
+                let ft = full.target.as_ref().unwrap();
+                if let Some((oy, ox)) = target_origin(&full.clean.meta, aw, ah, &crop) {
+                    assert_eq!((oy, ox), (crop.top - y0, crop.left - x0));
+                    for r in 0..crop.height {
+                        for k in 0..crop.width {
+                            assert_eq!(
+                                t.pixel(k, r),
+                                ft.pixel(ox + k, oy + r),
+                                "{mode:?} {crop:?} target"
+                            );
+                        }
+                    }
+                }
+                assert_eq!(c.noisy.len(), 1);
+                assert_eq!(c.noisy[0].1.data.len(), crop.width * crop.height);
+                assert!(c.stages.iter().any(|s| s == "crop"));
+                // Nothing was computed that the request did not ask for.
+                let bare = synthesize(
+                    &day,
+                    &p,
+                    &Request {
+                        crop: Some(crop),
+                        ..Request::default()
+                    },
+                )
+                .unwrap();
+                assert!(bare.target.is_none());
+                assert_eq!(bare.clean.data, c.clean.data);
+                assert_eq!(bare.noisy[0].1.data, c.noisy[0].1.data);
+            }
+        }
+    }
+
+    #[test]
+    fn crop_noise_is_deterministic_and_has_the_model_variance() {
+        let day = day();
+        let p = planned(&day, Mode::Dimmed, vec![3200]);
+        let crop = Crop {
+            top: 0,
+            left: 0,
+            height: day.active_area().height() & !1,
+            width: day.active_area().width() & !1,
+        };
+        let req = Request {
+            crop: Some(crop),
+            ..Request::default()
+        };
+        let a = synthesize(&day, &p, &req).unwrap();
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(1)
+            .build()
+            .unwrap();
+        let b = pool.install(|| synthesize(&day, &p, &req).unwrap());
+        assert_eq!(a.noisy[0].1.data, b.noisy[0].1.data);
+        // Standardized residuals (noisy - clean) / sigma over unclipped sites: mean ~0, var ~1.
+        let norm = crate::normalize::Normalizer::new(&a.clean).unwrap();
+        let params = &p.noise[0].params;
+        let (mut n, mut s1, mut s2) = (0f64, 0f64, 0f64);
+        for r in 0..crop.height {
+            for k in 0..crop.width {
+                let x = a.clean.get(r, k) as f64;
+                let y = (x - norm.black_at(r, k)) / norm.scale;
+                let var =
+                    params.var_norm(crate::raw::Bayer::position(r, k), y) * norm.scale * norm.scale;
+                let v = a.noisy[0].1.get(r, k) as f64;
+                if var < 4.0 || v <= 0.0 || v >= norm.white {
+                    continue;
+                }
+                let z = (v - x) / var.sqrt();
+                n += 1.0;
+                s1 += z;
+                s2 += z * z;
+            }
+        }
+        assert!(n > 1000.0, "{n}");
+        let mean = s1 / n;
+        let var = s2 / n - mean * mean;
+        assert!(mean.abs() < 0.05, "{mean}");
+        assert!((var - 1.0).abs() < 0.1, "{var}");
+    }
+
+    #[test]
+    fn bad_crops_are_errors() {
+        let day = day();
+        let p = planned(&day, Mode::Local, vec![]);
+        for crop in [
+            Crop {
+                top: 1,
+                left: 0,
+                height: 4,
+                width: 4,
+            },
+            Crop {
+                top: 0,
+                left: 0,
+                height: 0,
+                width: 4,
+            },
+            Crop {
+                top: 0,
+                left: 0,
+                height: 4,
+                width: 100_000,
+            },
+        ] {
+            let req = Request {
+                crop: Some(crop),
+                target: true,
+                ..Request::default()
+            };
+            assert!(synthesize(&day, &p, &req).is_err(), "{crop:?}");
+        }
+        let req = Request {
+            input: true,
+            crop: Some(Crop {
+                top: 0,
+                left: 0,
+                height: 4,
+                width: 4,
+            }),
+            ..Request::default()
+        };
+        assert!(synthesize(&day, &p, &req).is_err());
+    }
+}
