@@ -1,8 +1,8 @@
 //! DNG reader: the real Canon file (compared with LibRaw through rawpy) and hand-built small
 //! DNGs covering byte orders, packed bit depths, tiles, SubIFD raws, linearization and
 //! per-site black levels.
-mod common;
-mod dngbuild;
+use crate::common;
+use crate::dngbuild;
 
 use day2night::dng::meta::{ByteOrder, Layout};
 use day2night::dng::read::{inspect_bytes, read_dng, read_dng_bytes};

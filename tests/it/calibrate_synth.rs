@@ -1,8 +1,9 @@
 //! The three calibration files drive `synth` through its CLI: it accepts them, echoes the
 //! fitted illuminant Gaussian and brightness in the sidecar, and writes the calibrated noise
 //! model into the noisy DNG's NoiseProfile.
-mod calibrate_support;
-mod common;
+use crate::args;
+use crate::calibrate_support;
+use crate::common;
 
 use calibrate_support::*;
 use day2night::raw::Bayer;

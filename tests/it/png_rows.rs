@@ -1,7 +1,7 @@
 //! The own 8-bit PNG encoder (src/png_rows.rs): files of several sizes, tones and row-group
 //! heights decode in OpenImageIO and scikit-image (tests/validators/png_rows.py) to exactly
 //! the samples written, with the colour-space chunk readers expect.
-mod common;
+use crate::common;
 
 use day2night::deflate::Encoder;
 use day2night::isp::tone::DisplayTone;

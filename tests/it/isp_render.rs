@@ -1,6 +1,6 @@
 //! Software ISP: renders of the committed fixtures and the real Canon DNG, EXR outputs
 //! checked by OpenEXR and OpenImageIO, and the linear render compared with LibRaw (rawpy).
-mod common;
+use crate::common;
 
 use day2night::dng::read::read_dng;
 use day2night::isp::render::{default_crop, render_input, render_linear, RenderOptions};

@@ -4,7 +4,7 @@
 //! tifffile: tests/validators/dng_check.py; exiftool -validate) accept the output.
 //! Also the `convert` command: atomic, refuses existing outputs and inputs.
 
-mod common;
+use crate::common;
 
 use day2night::dng::meta::RawMeta;
 use day2night::dng::read::{read_dng, read_dng_bytes};

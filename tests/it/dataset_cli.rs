@@ -1,8 +1,8 @@
 //! `day2night dataset` and `day2night report` end to end with the real binary and the real
 //! synthesis, on copies of the committed fixture fixtures/day.dng.
 
-mod common;
-mod dataset_fake;
+use crate::common;
+use crate::dataset_fake;
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};

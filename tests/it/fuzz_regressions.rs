@@ -1,6 +1,6 @@
 //! Replays every committed fuzzer reproducer (tests/fuzz_regressions/) and the fuzz files of
 //! ../shared/data/dng-bad: each must give an error (or a valid image), never a panic.
-mod common;
+use crate::common;
 
 use day2night::dng::read::{inspect_bytes, read_dng_bytes};
 

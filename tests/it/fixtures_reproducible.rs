@@ -1,10 +1,10 @@
 //! The committed fixtures are exactly what examples/make_fixtures.rs generates (the generator
 //! is deterministic and nobody edited a fixture by hand).
 
-mod common;
+use crate::common;
 
 #[allow(dead_code)]
-#[path = "../examples/make_fixtures.rs"]
+#[path = "../../examples/make_fixtures.rs"]
 mod make_fixtures;
 
 #[test]

@@ -1,7 +1,7 @@
 //! The own EXR encoder (none/zips/zip): generated odd-size images, NaN/Inf included, decode
 //! in OpenEXR and OpenImageIO to exactly the sanitized values written
 //! (tests/validators/isp_exr_values.py).
-mod common;
+use crate::common;
 
 use day2night::exr::{write_exr, ExrCompression, ExrOptions, HALF_MAX};
 use day2night::isp::RgbImage;

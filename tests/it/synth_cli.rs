@@ -1,7 +1,7 @@
 //! `day2night synth` end to end: output names, determinism across --jobs and reruns, replay,
 //! every fixture (all Bayer phases, bit depths, black forms), unusable inputs, real camera
 //! data, and the independent validators (rawpy, DNG SDK, tifffile) on the written DNGs.
-mod common;
+use crate::common;
 
 use day2night::dng::meta::RawMeta;
 use day2night::dng::read_dng;

@@ -3,7 +3,7 @@
 //! fallback, skewed data needing the 15-bit limit, EXR-like predicted bytes, mixtures) are
 //! compressed and inflated by Python's zlib (tests/validators/deflate_zlib.py), which checks
 //! the framing and Adler-32 and must reproduce every input exactly.
-mod common;
+use crate::common;
 
 use day2night::deflate::{compress_zlib_rle_to_vec, Encoder};
 

@@ -1,6 +1,6 @@
 //! `day2night eval`: PSNR, SSIM and Delta E 2000 against scikit-image and colour-science on
 //! whole images; EXR/PNG/TIFF inputs including the OpenEXR reference images; clean refusals.
-mod common;
+use crate::common;
 
 use std::path::{Path, PathBuf};
 

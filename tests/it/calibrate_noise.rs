@@ -1,8 +1,9 @@
 //! Closed-loop tests of `calibrate noise`: bursts and pairs generated with a known model
 //! (by the project's writer AND by an independent tifffile script) are calibrated, and the
 //! recovered S and O are compared with the truth.
-mod calibrate_support;
-mod common;
+use crate::args;
+use crate::calibrate_support;
+use crate::common;
 
 use calibrate_support::*;
 use serde_json::Value;

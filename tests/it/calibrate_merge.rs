@@ -1,7 +1,8 @@
 //! `merge`: the output equals the frames' mean within rounding (exact sums when they fit in
 //! 16 bits), rawpy and the Adobe DNG SDK accept it, and mismatched bursts are clear errors.
-mod calibrate_support;
-mod common;
+use crate::args;
+use crate::calibrate_support;
+use crate::common;
 
 use calibrate_support::*;
 use day2night::dng::read_dng;

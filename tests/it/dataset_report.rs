@@ -2,7 +2,7 @@
 //! Debian `chromium` is installed) it loads in a real headless browser with no console
 //! errors and produces a screenshot.
 
-mod dataset_fake;
+use crate::dataset_fake;
 
 use dataset_fake::{chromium, load_in_browser, make_day_dir, opts, Fake};
 use day2night::dataset;

@@ -2,8 +2,8 @@
 //! malformed files built here all get a clear error naming the reason (never a panic), and
 //! `info` exits 1 for them, except for well-formed files of a kind synthesis cannot use
 //! (LinearRaw, non-Bayer CFA), which `info` describes with the reason.
-mod common;
-mod dngbuild;
+use crate::common;
+use crate::dngbuild;
 
 use day2night::dng::read::{inspect_bytes, read_dng, read_dng_bytes};
 use day2night::tiff::value::Value;

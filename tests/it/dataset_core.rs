@@ -2,7 +2,7 @@
 //! manifest completeness, resume, sharding, bad inputs, interruption (a child process
 //! killed mid-run).
 
-mod dataset_fake;
+use crate::dataset_fake;
 
 use dataset_fake::{make_day_dir, opts, tree, Fake};
 use day2night::dataset::{self, manifest, Shard, Split, SplitRule, Status};
@@ -274,7 +274,7 @@ fn killed_run_resumes_to_the_uninterrupted_result() {
     let mut child = std::process::Command::new(exe)
         .args([
             "--exact",
-            "child_slow_run",
+            "dataset_core::child_slow_run",
             "--test-threads=1",
             "--nocapture",
         ])

@@ -2,7 +2,7 @@
 //! committed fixtures and the real files of D2N_SHARED_DATA, for every demosaicer, every
 //! orientation and with/without DefaultCrop; the PNG lookup quantizer equals the formula
 //! on these renders.
-mod common;
+use crate::common;
 
 use day2night::dng::read::read_dng;
 use day2night::isp::render::{

@@ -1,5 +1,5 @@
 //! The binary starts, prints help, and rejects bad usage with exit code 2.
-mod common;
+use crate::common;
 
 #[test]
 fn help_and_usage_errors() {

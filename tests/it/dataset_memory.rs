@@ -3,7 +3,7 @@
 //! Measured with GNU time's "Maximum resident set size"; the numbers are printed and go into
 //! docs/dataset.md.
 
-mod common;
+use crate::common;
 
 use std::path::Path;
 

@@ -1,8 +1,9 @@
 //! `calibrate illuminants` and `calibrate brightness`: gray cards generated under known
 //! illuminants are recovered within 0.5 %, the fitted Gaussian equals numpy's, the shared
 //! s20fe dictionary refits to the spec's figures, degenerate inputs give clear errors.
-mod calibrate_support;
-mod common;
+use crate::args;
+use crate::calibrate_support;
+use crate::common;
 
 use calibrate_support::*;
 use day2night::raw::Bayer;

@@ -2,7 +2,7 @@
 //! phases: CPSNR (all three channels, data range 1, an 8-pixel border excluded) per method.
 //! Slow: runs with `D2N_SLOW=1` (prints the markdown table of docs/isp.md); the default
 //! run checks one photo in one phase.
-mod common;
+use crate::common;
 
 use day2night::imageio::read_image;
 use day2night::isp::demosaic::{demosaic, mosaic, Demosaic};

@@ -1,7 +1,7 @@
 //! Deterministic mutation test (runs in plain `cargo test`, no nightly needed): valid small
 //! DNGs of every layout, with bytes flipped, overwritten with extreme values and truncated,
 //! thousands of times. The reader must return Ok or an error, never panic or hang.
-mod dngbuild;
+use crate::dngbuild;
 
 use day2night::dng::read::{inspect_bytes, read_dng_bytes};
 use day2night::tiff::value::Value;
@@ -104,7 +104,7 @@ fn mutated_dngs_never_panic() {
     assert!(errors > 0);
 }
 
-/// `D2N_WRITE_SEEDS=DIR cargo test --test dng_robustness write_seeds` writes the valid seed
+/// `D2N_WRITE_SEEDS=DIR cargo test --test it dng_robustness::write_seeds` writes the valid seed
 /// DNGs into DIR (a starting corpus for `cargo fuzz run read_dng`).
 #[test]
 fn write_seeds() {

@@ -1,7 +1,7 @@
 //! The GPS IFD of a capture is carried into every DNG day2night writes (`convert` and the
 //! night raws of `synth`), checked by tifffile and exiftool (tests/validators/dng_gps.py) and
 //! by the Adobe DNG SDK / rawpy / OpenImageIO checks of tests/validators/dng_check.py.
-mod common;
+use crate::common;
 
 use day2night::dng::read::read_dng;
 use day2night::dng::write::{write_dng, WriteOptions};

@@ -1,6 +1,6 @@
 //! docs/cli.md is generated from the binary's --help texts (scripts/gen-cli-doc.sh); this test
 //! fails when a command's help changed and the doc was not regenerated.
-mod common;
+use crate::common;
 
 #[test]
 fn docs_cli_md_matches_help_output() {

@@ -1,0 +1,38 @@
+//! day2night's integration tests, compiled as one test binary (`cargo test --test it`):
+//! one module per topic. One binary links the crate once instead of once per file (a
+//! clean `cargo test --no-run` and `target/` are measured in docs/benchmarks.md).
+//! Shared helpers: `common` (paths, the CLI binary, the Python validators), `dngbuild`
+//! (hand-made TIFF/DNG files), `calibrate_support`, `dataset_fake`. Run one topic with
+//! `cargo test --test it synth_cli::` (the module path filters the tests).
+
+mod calibrate_support;
+mod common;
+mod dataset_fake;
+mod dngbuild;
+
+mod calibrate_illuminants;
+mod calibrate_merge;
+mod calibrate_noise;
+mod calibrate_synth;
+mod cli_docs;
+mod cli_smoke;
+mod dataset_cli;
+mod dataset_core;
+mod dataset_memory;
+mod dataset_report;
+mod deflate_zlib;
+mod dng_bad_files;
+mod dng_gps;
+mod dng_read;
+mod dng_robustness;
+mod dng_roundtrip;
+mod fixtures_reproducible;
+mod fuzz_regressions;
+mod isp_banded;
+mod isp_demosaic_accuracy;
+mod isp_exr;
+mod isp_render;
+mod metrics_eval;
+mod msrv;
+mod png_rows;
+mod synth_cli;
