@@ -4,7 +4,7 @@ use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 use day2night::dng::read::read_dng_bytes;
 use std::hint::black_box;
 
-#[path = "../tests/dngbuild/mod.rs"]
+#[path = "../tests/it/dngbuild/mod.rs"]
 mod dngbuild;
 use dngbuild::{Builder, Pixels};
 

@@ -210,7 +210,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
 }
 
 /// Write every fixture into `dir`; `source` is the photograph behind `day.dng`.
-/// (Also used by tests/fixtures_reproducible.rs.)
+/// (Also used by tests/it/fixtures_reproducible.rs.)
 pub fn generate(dir: &Path, source: &Path) -> Result<(), Box<dyn std::error::Error>> {
     std::fs::create_dir_all(dir)?;
     let order = |big: bool| WriteOptions {

@@ -2,10 +2,14 @@
 # The whole test suite with its set-up, on a fresh machine:
 #   1. a local Python virtualenv (.venv) with the independent validators
 #      (rawpy/LibRaw, dngpy/Adobe DNG SDK, tifffile, OpenEXR, OpenImageIO, numpy, ...),
+#      maturin and pytest;
 #   2. cargo test (unit, integration, doc tests); tests find the validators through
-#      D2N_PYTHON and fail (instead of skipping) when D2N_REQUIRE_VALIDATORS=1.
+#      D2N_PYTHON and fail (instead of skipping) when D2N_REQUIRE_VALIDATORS=1;
+#   3. the Python package (python/) built with maturin and installed into the same venv,
+#      then its pytest suite (python/tests), which compares it with the CLI built in 2.
 # exiftool is used when installed (.ci/run installs it). Slow suites: D2N_SLOW=1.
-# Extra arguments go to cargo test, e.g. scripts/test.sh --test dng_roundtrip.
+# Extra arguments go to cargo test, e.g. scripts/test.sh --test it dng_roundtrip:: (then the
+# Python suite is skipped; D2N_PYTHON_TESTS=1 runs it anyway, D2N_PYTHON_TESTS=0 never).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 VENV="${D2N_VENV:-$PWD/.venv}"
@@ -21,3 +25,16 @@ fi
 export D2N_PYTHON="$VENV/bin/python"
 export D2N_REQUIRE_VALIDATORS="${D2N_REQUIRE_VALIDATORS:-1}"
 cargo test "$@"
+
+py_tests="${D2N_PYTHON_TESTS:-}"
+if [ -z "$py_tests" ]; then
+  if [ "$#" -eq 0 ]; then py_tests=1; else py_tests=0; fi
+fi
+if [ "$py_tests" = 1 ]; then
+  echo "scripts/test.sh: building the Python package (pip install ./python) into $VENV" >&2
+  # maturin's build hook runs the `maturin` of PATH: the venv's
+  PATH="$VENV/bin:$PATH" "$VENV/bin/python" -m pip install --quiet --disable-pip-version-check --no-build-isolation \
+    --force-reinstall --no-deps ./python
+  export D2N_BIN="${CARGO_TARGET_DIR:-$PWD/target}/debug/day2night"
+  "$VENV/bin/python" -m pytest -q python/tests
+fi

@@ -15,7 +15,7 @@
 //! - Chunks: IHDR (8-bit RGB, no interlace), `sRGB` (rendering intent perceptual) for sRGB
 //!   output or `gAMA` 1/2.2 for gamma 2.2 output, one IDAT per group, IEND.
 //!
-//! The bytes depend only on the pixels and the group height (tests/png_rows.rs checks the
+//! The bytes depend only on the pixels and the group height (tests/it/png_rows.rs checks the
 //! files in OpenImageIO and scikit-image); [`write_png_rgb8`] uses groups of
 //! [`crate::isp::render::BAND`] rows, as the band-wise synth targets do, so both give the
 //! same file for the same image.

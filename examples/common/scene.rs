@@ -3,7 +3,7 @@
 //! metadata, deterministic hash noise, and a scene of colour and grey ramps with textured
 //! saturated patches. Included with `#[path = "common/scene.rs"] mod scene;` (not an example
 //! of its own). Changing anything here changes the committed fixtures
-//! (tests/fixtures_reproducible.rs) and the benchmark input.
+//! (tests/it/fixtures_reproducible.rs) and the benchmark input.
 
 use day2night::dng::meta::{ExifInfo, RawMeta};
 use day2night::raw::Bayer;

@@ -1,0 +1,50 @@
+"""day2night: night raw synthesis for training night-mode neural ISPs, in Python.
+
+Fresh, seeded night pairs are synthesized in memory, on the crops a training step uses,
+with the same numbers as the ``day2night synth`` command line (the Rust library does the
+work, with the GIL released).
+
+>>> import day2night
+>>> raw = day2night.read_dng("day.dng")
+>>> out = day2night.synthesize(raw, seed=0, isos=(1600,), crop=(0, 0, 512, 512))
+>>> out["noisy"][1600].shape, out["target"].shape
+((512, 512), (512, 512, 3))
+
+``NightPairs`` is a map-style dataset for ``torch.utils.data.DataLoader`` (no torch import
+here). See docs/python.md of the repository.
+"""
+
+from ._native import (  # noqa: F401
+    Raw,
+    Synthesis,
+    delta_e2000,
+    psnr,
+    read_dng,
+    render,
+    set_threads,
+    ssim,
+    synthesize,
+    threads,
+    version,
+    write_outputs,
+)
+from .pairs import NightPairs, pack_bayer  # noqa: F401
+
+__version__ = version()
+
+__all__ = [
+    "NightPairs",
+    "Raw",
+    "Synthesis",
+    "delta_e2000",
+    "pack_bayer",
+    "psnr",
+    "read_dng",
+    "render",
+    "set_threads",
+    "ssim",
+    "synthesize",
+    "threads",
+    "version",
+    "write_outputs",
+]

@@ -1,0 +1,175 @@
+"""``NightPairs``: fresh night training pairs on random crops, as a map-style dataset.
+
+Each item is a deterministic function of (seed, epoch, index): the image, the variant
+(a new plan of lights, illuminants and dimming), the crop position and the ISO are drawn
+from a SHA-256 of those three numbers, so an item is the same in any worker process and
+in any order, and ``set_epoch`` draws new variants and crops. No torch import: the items
+are dicts of numpy arrays that ``torch.utils.data.default_collate`` stacks.
+"""
+
+import hashlib
+import os
+import random
+from collections import OrderedDict
+
+import numpy as np
+
+from ._native import read_dng, synthesize
+
+
+def pack_bayer(plane, meta, top=0, left=0):
+    """Pack a Bayer plane (H x W, H and W even) into 4 x H/2 x W/2 float32, normalized by the
+    black and white levels: ``(x - black) / (white - max(black))`` per 2x2 position, in the
+    order of the CFA positions (0,0), (0,1), (1,0), (1,1) (R, G, G, B for RGGB).
+
+    ``top``/``left`` are the plane's offset in the active area (they select the phase of a
+    BlackLevel pattern; even offsets keep the CFA phase). BlackLevelDeltaH/V are not applied.
+
+    >>> x = pack_bayer(out["noisy"][1600], raw.meta)
+    >>> x.shape
+    (4, 256, 256)
+    """
+    plane = np.asarray(plane)
+    h, w = plane.shape
+    if h % 2 or w % 2:
+        raise ValueError(f"pack_bayer needs an even-sized plane, got {h}x{w}")
+    black = [float(b) for b in meta["black_level"]]
+    rr, rc = meta["black_level_repeat_dim"]
+    white = float(meta["white_level"])
+    scale = white - max(black)
+    if not scale > 0:
+        raise ValueError(f"black level {max(black)} >= white level {white}")
+    out = np.empty((4, h // 2, w // 2), dtype=np.float32)
+    for i in range(2):
+        for j in range(2):
+            b = black[((top + i) % rr) * rc + (left + j) % rc]
+            out[2 * i + j] = (plane[i::2, j::2].astype(np.float32) - np.float32(b)) / np.float32(scale)
+    return out
+
+
+def _draw(seed, epoch, index):
+    """The random stream of one item: SHA-256 of (seed, epoch, index), the same in every
+    process (Python's ``hash`` is salted per process, so it is not used)."""
+    key = hashlib.sha256(f"day2night NightPairs v1 {seed} {epoch} {index}".encode()).digest()
+    return random.Random(int.from_bytes(key, "little"))
+
+
+class NightPairs:
+    """Map-style dataset of fresh night pairs synthesized on random crops of day DNGs.
+
+    Parameters: ``day_dir`` (a folder of ``.dng`` files, sorted by name), ``crop`` (side of
+    the square crop, even), ``isos`` (each item draws one), ``seed``, ``crops_per_image``
+    (items per image and epoch), ``mode`` and any ``synthesize`` option (``bulbs``,
+    ``noise_model``, ...), ``cache`` (decoded images kept per process).
+
+    Each item is a dict: ``noisy`` (4 x crop/2 x crop/2 float32, the noisy Bayer crop packed
+    and normalized), ``clean`` (the same for the clean raw), ``target`` (3 x crop x crop
+    float32, linear Rec.709), ``iso``, ``name``, ``variant``, ``origin`` ((top, left) of the
+    crop in the active area).
+
+    >>> ds = NightPairs("day/", crop=512, isos=(1600, 3200), seed=0)
+    >>> item = ds[0]
+    >>> item["noisy"].shape, item["target"].shape
+    ((4, 256, 256), (3, 512, 512))
+    >>> loader = torch.utils.data.DataLoader(ds, batch_size=8, num_workers=2)
+    >>> for epoch in range(10):
+    ...     ds.set_epoch(epoch)   # with persistent workers, re-create the iterator
+    ...     for batch in loader: ...
+    """
+
+    def __init__(self, day_dir, crop=512, isos=(1600, 3200), seed=0, crops_per_image=1,
+                 mode="local", cache=4, **options):
+        self.day_dir = os.fspath(day_dir)
+        if not os.path.isdir(self.day_dir):
+            raise ValueError(f"{self.day_dir}: not a folder")
+        self.files = sorted(
+            f for f in os.listdir(self.day_dir)
+            if f.lower().endswith(".dng") and os.path.isfile(os.path.join(self.day_dir, f))
+        )
+        if not self.files:
+            raise ValueError(f"{self.day_dir}: no .dng file")
+        crop = int(crop)
+        if crop <= 0 or crop % 2:
+            raise ValueError(f"crop {crop} must be a positive even number of samples")
+        self.crop = crop
+        self.isos = tuple(int(i) for i in isos)
+        if not self.isos or any(i <= 0 for i in self.isos):
+            raise ValueError(f"isos {isos!r}: give one or more positive ISOs")
+        self.seed = int(seed)
+        self.crops_per_image = int(crops_per_image)
+        if self.crops_per_image < 1:
+            raise ValueError("crops_per_image must be at least 1")
+        self.mode = mode
+        self.options = dict(options)
+        self.cache_size = max(1, int(cache))
+        self.epoch = 0
+        self._cache = OrderedDict()
+
+    def __len__(self):
+        return len(self.files) * self.crops_per_image
+
+    def set_epoch(self, epoch):
+        """Draw new variants and crops: items are functions of (seed, epoch, index)."""
+        self.epoch = int(epoch)
+
+    def __getstate__(self):
+        # Decoded images stay in the process that read them (workers read their own).
+        state = self.__dict__.copy()
+        state["_cache"] = OrderedDict()
+        return state
+
+    def _raw(self, name):
+        raw = self._cache.get(name)
+        if raw is None:
+            raw = read_dng(os.path.join(self.day_dir, name))
+            self._cache[name] = raw
+            while len(self._cache) > self.cache_size:
+                self._cache.popitem(last=False)
+        else:
+            self._cache.move_to_end(name)
+        return raw
+
+    def params(self, index):
+        """The draws of item ``index`` at the current epoch: file, variant, ISO and the
+        crop's (top, left) as fractions to be placed inside the image's DefaultCrop."""
+        if not 0 <= index < len(self):
+            raise IndexError(f"index {index} out of range for {len(self)} items")
+        rng = _draw(self.seed, self.epoch, index)
+        return {
+            "file": self.files[index // self.crops_per_image],
+            "variant": rng.randrange(2**31),
+            "iso": self.isos[rng.randrange(len(self.isos))],
+            "u": rng.random(),
+            "v": rng.random(),
+        }
+
+    def __getitem__(self, index):
+        if index < 0:
+            index += len(self)
+        p = self.params(index)
+        raw = self._raw(p["file"])
+        meta = raw.meta
+        y0, x0, ch, cw = meta["default_crop"]
+        c = self.crop
+        if c > ch or c > cw:
+            raise ValueError(f"{raw.path}: crop {c} is larger than the image's {cw}x{ch} DefaultCrop")
+        # Even positions inside the DefaultCrop (the target then equals the frame's region).
+        lo_t, lo_l = y0 + (y0 % 2), x0 + (x0 % 2)
+        hi_t, hi_l = y0 + ch - c, x0 + cw - c
+        if hi_t < lo_t or hi_l < lo_l:
+            raise ValueError(f"{raw.path}: no even crop position of {c} inside the DefaultCrop")
+        top = lo_t + 2 * int(p["u"] * ((hi_t - lo_t) // 2 + 1))
+        left = lo_l + 2 * int(p["v"] * ((hi_l - lo_l) // 2 + 1))
+        top, left = min(top, hi_t - (hi_t - lo_t) % 2), min(left, hi_l - (hi_l - lo_l) % 2)
+        iso = p["iso"]
+        out = synthesize(raw, seed=self.seed, variant=p["variant"], mode=self.mode,
+                         isos=(iso,), target="linear", crop=(top, left, c, c), **self.options)
+        return {
+            "noisy": pack_bayer(out["noisy"][iso], meta, top, left),
+            "clean": pack_bayer(out["clean"], meta, top, left),
+            "target": np.ascontiguousarray(out["target"].transpose(2, 0, 1)),
+            "iso": iso,
+            "name": raw.name,
+            "variant": p["variant"],
+            "origin": np.array([top, left], dtype=np.int64),
+        }

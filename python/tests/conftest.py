@@ -1,0 +1,57 @@
+"""Shared fixtures of the Python package's tests (run by scripts/test.sh after cargo test).
+
+The command-line binary they compare against is D2N_BIN (scripts/test.sh sets it to the
+debug build cargo test made), else target/debug/day2night of the checkout."""
+
+import os
+import pathlib
+import shutil
+import subprocess
+
+import pytest
+
+ROOT = pathlib.Path(__file__).resolve().parents[2]
+FIXTURES = ROOT / "fixtures"
+SHARED = ROOT.parent / "shared" / "data" / "dng"
+
+
+def cli_path():
+    p = os.environ.get("D2N_BIN") or str(ROOT / "target" / "debug" / "day2night")
+    if not os.access(p, os.X_OK):
+        pytest.fail(f"day2night binary not found at {p}: run cargo build first or set D2N_BIN")
+    return p
+
+
+@pytest.fixture(scope="session")
+def cli():
+    path = cli_path()
+
+    def run(*args, check=True):
+        r = subprocess.run([path, *map(str, args)], capture_output=True, text=True)
+        if check and r.returncode != 0:
+            raise AssertionError(f"day2night {' '.join(map(str, args))} failed: {r.stderr}")
+        return r
+
+    return run
+
+
+@pytest.fixture(scope="session")
+def day_dng():
+    return FIXTURES / "day.dng"
+
+
+@pytest.fixture(scope="session")
+def real_dng():
+    files = sorted(SHARED.glob("*.dng")) if SHARED.is_dir() else []
+    if not files:
+        pytest.fail(f"no real DNG in {SHARED} (the shared test data must be beside the checkout)")
+    return files[0]
+
+
+@pytest.fixture()
+def day_dir(tmp_path, day_dng):
+    d = tmp_path / "days"
+    d.mkdir()
+    shutil.copy(day_dng, d / "a.dng")
+    shutil.copy(day_dng, d / "b.dng")
+    return d
