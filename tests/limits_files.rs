@@ -144,12 +144,10 @@ fn exr_chunks_sharing_an_offset_are_refused_before_decoding() {
     }
     let bomb = dir.path().join("bomb.exr");
     std::fs::write(&bomb, &bytes).unwrap();
-    for f in [&bomb] {
-        let e = read_image(f).unwrap_err().to_string();
-        assert!(e.contains("chunks 0 and 1 share the offset"), "{e}");
-        let e = open_bands(f).err().unwrap().to_string();
-        assert!(e.contains("share the offset"), "{e}");
-    }
+    let e = read_image(&bomb).unwrap_err().to_string();
+    assert!(e.contains("chunks 0 and 1 share the offset"), "{e}");
+    let e = open_bands(&bomb).err().unwrap().to_string();
+    assert!(e.contains("share the offset"), "{e}");
     let t0 = Instant::now();
     let o = common::bin()
         .arg("eval")
@@ -422,4 +420,68 @@ fn new_neutrals_never_round_to_zero() {
         neutral_value([0.5, 1.0, 0.6]),
         Value::Rational(vec![(1, 2), (1, 1), (3, 5)])
     );
+}
+
+/// `eval` of two 11584 x 11584 (134 MP) EXRs stays under 2 GiB peak (slow: set D2N_SLOW=1).
+/// The EXRs are written row block by row block, so the test itself never holds an image.
+#[test]
+fn eval_of_two_134_megapixel_exrs_stays_under_2_gib() {
+    if std::env::var("D2N_SLOW").as_deref() != Ok("1") {
+        eprintln!("SKIP: slow 134 MP eval memory measurement (set D2N_SLOW=1)");
+        return;
+    }
+    let time = Path::new("/usr/bin/time");
+    if !time.is_file() {
+        eprintln!("SKIP: /usr/bin/time not installed");
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let n = 11584usize;
+    let opts = ExrOptions {
+        half: true,
+        ..Default::default()
+    };
+    let mut paths = vec![];
+    for seed in [1u32, 2] {
+        let p = dir.path().join(format!("big{seed}.exr"));
+        let mut blocks = vec![];
+        for y0 in (0..n).step_by(512) {
+            let y1 = (y0 + 512).min(n);
+            let mut rows = vec![0f32; 3 * n * (y1 - y0)];
+            for (i, px) in rows.chunks_exact_mut(3).enumerate() {
+                let (x, y) = (i % n, y0 + i / n);
+                let t = ((x * 7 + y * 13 + seed as usize * 31) % 251) as f32 / 251.0;
+                px.copy_from_slice(&[t, 0.5 * t + 0.25, 1.0 - t]);
+            }
+            blocks.extend(day2night::exr::encode_exr_rows(&rows, n, y0, &opts).unwrap());
+        }
+        day2night::exr::write_exr_blocks(n, n, &blocks, &p, &opts, &[], &OutputPolicy::default())
+            .unwrap();
+        paths.push(p);
+    }
+    let t0 = Instant::now();
+    let o = std::process::Command::new(time)
+        .arg("-v")
+        .arg(env!("CARGO_BIN_EXE_day2night"))
+        .arg("eval")
+        .args(&paths)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{err}");
+    let kib: u64 = err
+        .lines()
+        .find_map(|l| {
+            l.trim()
+                .strip_prefix("Maximum resident set size (kbytes): ")
+        })
+        .and_then(|v| v.trim().parse().ok())
+        .unwrap();
+    eprintln!(
+        "eval 134 MP x2: {:?}, peak RSS {} MiB\n{}",
+        t0.elapsed(),
+        kib / 1024,
+        String::from_utf8_lossy(&o.stdout)
+    );
+    assert!(kib < 2 * 1024 * 1024, "peak RSS {kib} KiB");
 }

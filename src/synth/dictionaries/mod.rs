@@ -212,7 +212,7 @@ pub fn parse_brightness(name: &str, v: &Value) -> Result<BrightnessDict> {
     }
     if let (Some(m), Some(s)) = (v.get("mean"), v.get("std")) {
         let (mean, std) = (num(m, "mean")?, num(s, "std")?);
-        if !(mean > 0.0 && mean <= 1.0) || !(0.0..=1.0).contains(&std) {
+        if !(mean > 0.0 && mean <= 1.0 && (0.0..=1.0).contains(&std)) {
             return Err(Error::malformed(
                 "brightness mean must be in (0, 1], std in [0, 1]",
             ));
