@@ -87,7 +87,7 @@ fn read_raster(path: &Path) -> Result<LoadedImage> {
     })
 }
 
-fn exr_err(e: exr::error::Error) -> Error {
+pub(crate) fn exr_err(e: exr::error::Error) -> Error {
     match e {
         exr::error::Error::Io(io) if io.kind() == std::io::ErrorKind::UnexpectedEof => {
             Error::malformed("EXR: file is truncated")
@@ -99,25 +99,55 @@ fn exr_err(e: exr::error::Error) -> Error {
     }
 }
 
-fn read_exr(path: &Path) -> Result<LoadedImage> {
-    use crate::error::Error;
-    use exr::prelude::*;
-    // Headers first: refuse absurd sizes before the decoder allocates.
+/// Index of the R, G, B channels among `names` (the same index thrice for a grey image):
+/// R/G/B (or `*.R` ...), else Y, else the only channel, else the first that is not alpha.
+pub fn pick_rgb(names: &[String]) -> Result<[usize; 3]> {
+    let find = |name: &str| {
+        names
+            .iter()
+            .position(|n| n == name || n.ends_with(&format!(".{name}")))
+    };
+    match (find("R"), find("G"), find("B")) {
+        (Some(r), Some(g), Some(b)) => Ok([r, g, b]),
+        _ => match find("Y") {
+            Some(y) => Ok([y; 3]),
+            None if names.len() == 1 => Ok([0; 3]),
+            None if !names.is_empty() => match names.iter().position(|n| n != "A") {
+                Some(c) => Ok([c; 3]),
+                None => Err(Error::unsupported("EXR: no colour channel")),
+            },
+            None => Err(Error::unsupported("EXR: no channels")),
+        },
+    }
+}
+
+/// Headers of an EXR file, checked before any pixel is decoded: size within `max_pixels`,
+/// no deep data, a sane chunk offset table (no shared or overlapping chunks).
+fn exr_meta(path: &Path, max_pixels: u64) -> Result<exr::meta::MetaData> {
     let meta = exr::meta::MetaData::read_from_file(path, false).map_err(exr_err)?;
     let header = meta
         .headers
         .first()
         .ok_or_else(|| Error::malformed("EXR: no header"))?;
     let size = header.layer_size;
-    if size.0.saturating_mul(size.1) > MAX_PIXELS {
-        return Err(Error::limits(format!(
-            "EXR data window of {}x{} is too large",
-            size.0, size.1
-        )));
-    }
-    if header.deep {
+    crate::limits::Limits::with_max_pixels(max_pixels)?.check_pixels(
+        "EXR data window",
+        size.0 as u64,
+        size.1 as u64,
+    )?;
+    if meta.headers.iter().any(|h| h.deep) {
         return Err(Error::unsupported("EXR: deep data"));
     }
+    crate::exr::chunks::check_chunk_table(path, &meta)?;
+    Ok(meta)
+}
+
+fn read_exr(path: &Path) -> Result<LoadedImage> {
+    use crate::error::Error;
+    use exr::prelude::*;
+    // Headers first: refuse absurd sizes and bombs before the decoder allocates.
+    let max = (MAX_PIXELS as u64).min(crate::limits::Limits::current()?.max_pixels);
+    exr_meta(path, max)?;
     let p = path.to_path_buf();
     // The decoder of a third-party crate on untrusted data: contain any panic as an error.
     let decoded = std::panic::catch_unwind(move || {
@@ -136,27 +166,9 @@ fn read_exr(path: &Path) -> Result<LoadedImage> {
     let layer = decoded.layer_data;
     let (w, h) = (layer.size.0, layer.size.1);
     let channels = &layer.channel_data.list;
-    let find = |name: &str| {
-        channels.iter().find(|c| {
-            let n = c.name.to_string();
-            n == name || n.ends_with(&format!(".{name}"))
-        })
-    };
-    let picked: Vec<&AnyChannel<FlatSamples>> = match (find("R"), find("G"), find("B")) {
-        (Some(r), Some(g), Some(b)) => vec![r, g, b],
-        _ => match find("Y") {
-            Some(y) => vec![y, y, y],
-            None if channels.len() == 1 => vec![&channels[0]; 3],
-            None if !channels.is_empty() => {
-                // e.g. a single named channel plus alpha: take the first non-alpha one
-                match channels.iter().find(|c| c.name.to_string() != "A") {
-                    Some(c) => vec![c; 3],
-                    None => return Err(Error::unsupported("EXR: no colour channel")),
-                }
-            }
-            None => return Err(Error::unsupported("EXR: no channels")),
-        },
-    };
+    let names: Vec<String> = channels.iter().map(|c| c.name.to_string()).collect();
+    let picked: Vec<&AnyChannel<FlatSamples>> =
+        pick_rgb(&names)?.iter().map(|&i| &channels[i]).collect();
     for c in &picked {
         if c.sampling != Vec2(1, 1) {
             return Err(Error::unsupported(format!(
@@ -174,7 +186,7 @@ fn read_exr(path: &Path) -> Result<LoadedImage> {
             "EXR: channel sample count does not match the data window",
         ));
     }
-    let mut data = Vec::with_capacity(3 * w * h);
+    let mut data = crate::limits::try_with_capacity(3 * w * h, "the EXR image")?;
     for ((r, g), b) in planes[0].iter().zip(&planes[1]).zip(&planes[2]) {
         data.extend([*r, *g, *b]);
     }
@@ -190,6 +202,91 @@ fn read_exr(path: &Path) -> Result<LoadedImage> {
         format: "exr",
         non_finite,
     })
+}
+
+/// An image to evaluate band by band: a whole image in memory (PNG, TIFF, tiled or
+/// multi-part EXR), or a scan-line EXR read a band of rows at a time.
+pub enum BandSource {
+    /// Read whole.
+    Whole(LoadedImage),
+    /// Read in bands.
+    Exr(crate::exr::chunks::ExrBands),
+}
+
+impl BandSource {
+    /// Width.
+    pub fn width(&self) -> usize {
+        match self {
+            BandSource::Whole(l) => l.image.width,
+            BandSource::Exr(b) => b.width,
+        }
+    }
+    /// Height.
+    pub fn height(&self) -> usize {
+        match self {
+            BandSource::Whole(l) => l.image.height,
+            BandSource::Exr(b) => b.height,
+        }
+    }
+    /// Linear light (EXR, float TIFF) or display-encoded.
+    pub fn linear(&self) -> bool {
+        match self {
+            BandSource::Whole(l) => l.linear,
+            BandSource::Exr(_) => true,
+        }
+    }
+    /// "png", "tiff" or "exr".
+    pub fn format(&self) -> &'static str {
+        match self {
+            BandSource::Whole(l) => l.format,
+            BandSource::Exr(_) => "exr",
+        }
+    }
+    /// Rows `y0..y1` as an image (`y1 - y0` rows, interleaved RGB f32).
+    pub fn rows(&self, y0: usize, y1: usize) -> Result<RgbImage> {
+        let w = self.width();
+        let data = match self {
+            BandSource::Whole(l) => {
+                let src =
+                    l.image.data.get(3 * w * y0..3 * w * y1).ok_or_else(|| {
+                        Error::invalid(format!("rows {y0}..{y1} out of the image"))
+                    })?;
+                let mut v = crate::limits::try_with_capacity(src.len(), "an image band")?;
+                v.extend_from_slice(src);
+                v
+            }
+            BandSource::Exr(b) => b.rows(y0, y1)?,
+        };
+        Ok(RgbImage {
+            width: w,
+            height: y1 - y0,
+            data,
+        })
+    }
+}
+
+/// Open `path` for band-wise reading: single-part scan-line EXRs are read in bands (up to
+/// the process pixel limit, see [`crate::limits`]); other files are read whole
+/// ([`read_image`], at most [`MAX_PIXELS`]).
+pub fn open_bands(path: &Path) -> Result<BandSource> {
+    let mut magic = [0u8; 4];
+    let n = std::fs::File::open(path)
+        .and_then(|mut f| f.read(&mut magic))
+        .map_err(Error::from)
+        .in_file(path)?;
+    if magic[..n] != [0x76, 0x2f, 0x31, 0x01] {
+        return read_image(path).map(BandSource::Whole);
+    }
+    let opened = (|| {
+        let max = crate::limits::Limits::current()?.max_pixels;
+        let meta = exr_meta(path, max)?;
+        crate::exr::chunks::ExrBands::open(path, &meta, pick_rgb)
+    })()
+    .in_file(path)?;
+    match opened {
+        Some(b) => Ok(BandSource::Exr(b)),
+        None => read_image(path).map(BandSource::Whole),
+    }
 }
 
 impl From<image::ImageError> for Error {

@@ -18,6 +18,7 @@ pub mod error;
 pub mod exr;
 pub mod imageio;
 pub mod isp;
+pub mod limits;
 pub mod metrics;
 pub mod noise;
 pub mod normalize;

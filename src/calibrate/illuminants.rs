@@ -207,6 +207,15 @@ pub fn parse_chromaticity_list(text: &str) -> Result<Vec<[f64; 3]>> {
     let arr = list
         .as_array()
         .ok_or_else(|| Error::malformed("`illuminants_rgb_over_g` is not a list"))?;
+    let max = crate::synth::dictionaries::MAX_DICT_ENTRIES;
+    if arr.len() > max {
+        return Err(Error::limits(format!(
+            "{} chromaticities (at most {max})",
+            arr.len()
+        )));
+    }
+    let big = crate::synth::dictionaries::MAX_CHROMA;
+    let ok = |c: [f64; 3]| c.iter().all(|&x| x > 0.0 && x <= big);
     arr.iter()
         .enumerate()
         .map(|(i, e)| {
@@ -215,10 +224,11 @@ pub fn parse_chromaticity_list(text: &str) -> Result<Vec<[f64; 3]>> {
                 .map(|a| a.iter().map(|x| x.as_f64()).collect::<Option<Vec<f64>>>())
                 .unwrap_or(None);
             match nums.as_deref() {
-                Some([r, g, b]) if *g > 0.0 => Ok([r / g, 1.0, b / g]),
-                Some([r, b]) => Ok([*r, 1.0, *b]),
+                Some([r, g, b]) if *g > 0.0 && ok([r / g, 1.0, b / g]) => Ok([r / g, 1.0, b / g]),
+                Some([r, b]) if ok([*r, 1.0, *b]) => Ok([*r, 1.0, *b]),
                 _ => Err(Error::malformed(format!(
-                    "chromaticity #{i} is not [r/g, 1, b/g] or [r/g, b/g] numbers"
+                    "chromaticity #{i} is not [r/g, 1, b/g] or [r/g, b/g] numbers with \
+                     ratios in (0, {big}]"
                 ))),
             }
         })

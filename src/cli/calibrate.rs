@@ -226,9 +226,7 @@ fn run_illuminants(a: IlluminantsArgs) -> CmdResult {
             .extension()
             .is_some_and(|e| e.eq_ignore_ascii_case("json"));
         if is_json {
-            let text = std::fs::read_to_string(p)
-                .map_err(day2night::Error::from)
-                .in_file(p)?;
+            let text = day2night::synth::dictionaries::read_calibration_text(p)?;
             let list = illuminants::parse_chromaticity_list(&text).in_file(p)?;
             eprintln!("{}: {} chromaticities", p.display(), list.len());
             extra.extend(list);

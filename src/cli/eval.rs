@@ -1,8 +1,8 @@
 //! `day2night eval PRED TARGET [--json]`: PSNR, SSIM and mean Delta E 2000.
 use super::{usage, CmdResult};
-use day2night::imageio::{read_image, LoadedImage};
-use day2night::isp::tone::srgb_oetf;
-use day2night::metrics::{mean_delta_e_2000, psnr, ssim, SsimOptions, SsimWindow};
+use day2night::imageio::open_bands;
+use day2night::metrics::banded::{evaluate, DEFAULT_BAND_ROWS};
+use day2night::metrics::{SsimOptions, SsimWindow};
 use std::path::PathBuf;
 
 /// Arguments of `day2night eval`.
@@ -34,19 +34,6 @@ pub struct EvalArgs {
     pub ssim_window: String,
 }
 
-fn load(path: &std::path::Path) -> Result<LoadedImage, super::Failure> {
-    let mut l = read_image(path).map_err(lib)?;
-    if l.non_finite > 0 {
-        eprintln!(
-            "day2night: {}: warning: {} NaN/Inf samples replaced by 0 or the largest finite value",
-            path.display(),
-            l.non_finite
-        );
-        l.image.sanitize(f32::MAX);
-    }
-    Ok(l)
-}
-
 /// A library error as a failure with exit code 1 (its Display already names the file and
 /// the whole cause chain).
 fn lib(e: day2night::Error) -> super::Failure {
@@ -73,44 +60,44 @@ pub fn run(args: EvalArgs) -> CmdResult {
             args.data_range
         )));
     }
-    let p = load(&args.pred)?;
-    let t = load(&args.target)?;
-    if (p.image.width, p.image.height) != (t.image.width, t.image.height) {
+    let p = open_bands(&args.pred).map_err(lib)?;
+    let t = open_bands(&args.target).map_err(lib)?;
+    if (p.width(), p.height()) != (t.width(), t.height()) {
         return Err(anyhow::anyhow!(
             "{}: size {}x{} differs from {} ({}x{})",
             args.pred.display(),
-            p.image.width,
-            p.image.height,
+            p.width(),
+            p.height(),
             args.target.display(),
-            t.image.width,
-            t.image.height
+            t.width(),
+            t.height()
         )
         .into());
     }
-    let de = mean_delta_e_2000(&p.image, &t.image, p.linear, t.linear).map_err(lib)?;
-    let (mut a, mut b) = (p.image, t.image);
-    if p.linear != t.linear {
-        let enc = |img: &mut day2night::isp::RgbImage| {
-            img.data
-                .iter_mut()
-                .for_each(|v| *v = srgb_oetf(v.clamp(0.0, 1.0)))
-        };
-        if p.linear {
-            enc(&mut a)
-        } else {
-            enc(&mut b)
-        }
-    }
-    let ps = psnr(&a, &b, args.data_range).map_err(lib)?;
-    let ss = ssim(
-        &a,
-        &b,
+    // Band by band: memory grows with the band, not the image (docs/limits.md).
+    let r = evaluate(
+        &p,
+        &t,
         &SsimOptions {
             data_range: args.data_range,
             window,
         },
+        DEFAULT_BAND_ROWS,
     )
     .map_err(lib)?;
+    for (path, n) in [
+        (&args.pred, r.non_finite[0]),
+        (&args.target, r.non_finite[1]),
+    ] {
+        if n > 0 {
+            eprintln!(
+                "day2night: {}: warning: {n} NaN/Inf samples replaced by 0 or the largest finite value",
+                path.display()
+            );
+        }
+    }
+    let (ps, ss, de) = (r.psnr, r.ssim, r.delta_e_2000);
+    let a = &r;
     if args.json {
         let v = serde_json::json!({
             "psnr": if ps.is_finite() { Some(ps) } else { None },

@@ -18,8 +18,16 @@ mod synth;
 #[derive(Debug, Parser)]
 #[command(name = "day2night", version, about, long_about = None)]
 pub struct Cli {
+    /// Largest image accepted, in pixels (e.g. 300M, 1G; default 268M = 2^28; also
+    /// D2N_MAX_PIXELS). Larger images are refused before anything is allocated.
+    #[arg(long, global = true, value_name = "N", value_parser = parse_max_pixels)]
+    max_pixels: Option<u64>,
     #[command(subcommand)]
     command: Command,
+}
+
+fn parse_max_pixels(s: &str) -> Result<u64, String> {
+    day2night::limits::Limits::parse_pixels(s).map_err(|e| e.to_string())
 }
 
 #[derive(Debug, Subcommand)]
@@ -76,6 +84,17 @@ pub type CmdResult = Result<(), Failure>;
 /// Entry point used by `main`.
 pub fn main() -> ExitCode {
     let cli = Cli::parse();
+    let limits = match cli.max_pixels {
+        Some(n) => day2night::limits::Limits::with_max_pixels(n),
+        None => day2night::limits::Limits::current(),
+    };
+    match limits {
+        Ok(l) => l.install(),
+        Err(e) => {
+            eprintln!("day2night: {e}");
+            return ExitCode::from(2);
+        }
+    }
     let result = match cli.command {
         Command::Info(a) => info::run(a),
         Command::Convert(a) => convert::run(a),

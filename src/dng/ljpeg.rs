@@ -457,7 +457,7 @@ fn scan(data: &[u8], pos: usize, sp: ScanParams, hts: &[&Huffman]) -> Result<Dec
             nc
         )));
     }
-    let mut out = vec![0u16; total];
+    let mut out = crate::limits::try_filled(0u16, total, "a lossless JPEG frame")?;
     let mut bits = Bits::new(data, pos);
     let default_pred: i32 = 1 << (sp.precision - sp.pt - 1);
     if sp.restart_interval == 0 {

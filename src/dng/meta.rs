@@ -158,9 +158,20 @@ pub struct RawMeta {
     pub gps: Vec<Entry>,
     /// How the source stored the raw (for `info`; the writer chooses its own layout).
     pub storage: Option<Storage>,
+    /// The modelled colour tags (AsShotNeutral, AsShotWhiteXY, matrices, AnalogBalance,
+    /// BaselineExposure) exactly as the source stored them (type and value). The writer
+    /// re-uses an entry while the modelled field still equals what the reader decoded from
+    /// it, so that values nobody changed round-trip unchanged. Empty for generated images.
+    #[serde(skip)]
+    pub stored: Vec<Entry>,
 }
 
 impl RawMeta {
+    /// The source's stored entry of `tag`, if any (see [`RawMeta::stored`]).
+    pub fn stored_value(&self, tag: u16) -> Option<&crate::tiff::value::Value> {
+        self.stored.iter().find(|e| e.tag == tag).map(|e| &e.value)
+    }
+
     /// A minimal valid metadata set for a Bayer image: used by generators and tests.
     pub fn new_bayer(bayer: Bayer, bits: u16, black: f64, white: f64) -> RawMeta {
         RawMeta {
@@ -209,6 +220,7 @@ impl RawMeta {
             exif_extra: vec![],
             gps: vec![],
             storage: None,
+            stored: Vec::new(),
         }
     }
 

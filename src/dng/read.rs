@@ -12,8 +12,9 @@ use crate::tiff::value::{Entry, Value};
 use serde::Serialize;
 use std::path::Path;
 
-/// Largest stored image accepted (width * height samples).
-pub const MAX_PIXELS: usize = 1 << 28;
+/// Default largest stored image (width * height samples); the limit in force is
+/// [`crate::limits::Limits::current`] (`--max-pixels`, `D2N_MAX_PIXELS`).
+pub const MAX_PIXELS: usize = crate::limits::DEFAULT_MAX_PIXELS as usize;
 /// Largest width or height accepted.
 pub const MAX_DIMENSION: u32 = 65535;
 /// Largest CFA repeat pattern (rows or columns).
@@ -174,14 +175,12 @@ fn geometry(raw: &Ifd) -> Result<Geometry> {
             "raw image has zero size ({width}x{height})"
         )));
     }
-    if width > MAX_DIMENSION
-        || height > MAX_DIMENSION
-        || (width as usize).saturating_mul(height as usize) > MAX_PIXELS
-    {
+    if width > MAX_DIMENSION || height > MAX_DIMENSION {
         return Err(Error::limits(format!(
-            "raw image {width}x{height} exceeds the limits ({MAX_DIMENSION} per side, {MAX_PIXELS} pixels)"
+            "raw image {width}x{height} exceeds the limit of {MAX_DIMENSION} pixels per side"
         )));
     }
+    crate::limits::check_pixels("raw image", u64::from(width), u64::from(height))?;
     let spp = raw.u32(SAMPLES_PER_PIXEL).unwrap_or(1);
     if spp != 1 {
         return Err(Error::unsupported(format!(
@@ -309,7 +308,35 @@ fn blocks<'a>(bytes: &'a [u8], raw: &Ifd, g: &Geometry) -> Result<Vec<Block<'a>>
             data,
         });
     }
+    let kind = if matches!(g.layout, Layout::Strips { .. }) {
+        "strip"
+    } else {
+        "tile"
+    };
+    check_disjoint(&offs[..n], &counts[..n], kind)?;
     Ok(out)
+}
+
+/// Error when two strips or tiles share bytes: each must have its own data. Repeated or
+/// overlapping ranges are how a tiny file claims a huge image (a decompression bomb), so
+/// they are refused before anything is allocated for the pixels. Empty ranges share nothing.
+fn check_disjoint(offs: &[u32], counts: &[u32], kind: &str) -> Result<()> {
+    let mut order: Vec<usize> = (0..offs.len()).filter(|&i| counts[i] > 0).collect();
+    order.sort_unstable_by_key(|&i| (offs[i], i));
+    for pair in order.windows(2) {
+        let (a, b) = (pair[0], pair[1]);
+        let a_end = u64::from(offs[a]) + u64::from(counts[a]);
+        if u64::from(offs[b]) < a_end {
+            let (first, second) = (a.min(b), a.max(b));
+            return Err(Error::malformed(format!(
+                "{kind}s {first} and {second} overlap ({kind} {a}: bytes {}..{a_end}, \
+                 {kind} {b}: from byte {}): each {kind} must have its own data \
+                 (a decompression bomb?)",
+                offs[a], offs[b]
+            )));
+        }
+    }
+    Ok(())
 }
 
 fn decode_pixels(bytes: &[u8], order: ByteOrder, raw: &Ifd, g: &Geometry) -> Result<Vec<u16>> {
@@ -341,7 +368,7 @@ fn decode_pixels(bytes: &[u8], order: ByteOrder, raw: &Ifd, g: &Geometry) -> Res
             )));
         }
     }
-    let mut out = vec![0u16; w * h];
+    let mut out = crate::limits::try_filled(0u16, w * h, "the raw pixels")?;
     let mut rowbuf = Vec::new();
     for b in &blocks {
         let vis_w = b.w.min(w.saturating_sub(b.x));
@@ -560,6 +587,21 @@ pub const MODELLED_TAGS: &[u16] = &[
     OPCODE_LIST1,
     OPCODE_LIST2,
     OPCODE_LIST3,
+];
+
+/// Modelled tags whose stored form is kept in [`RawMeta::stored`] (written back unchanged
+/// while their value is).
+pub const STORED_TAGS: &[u16] = &[
+    AS_SHOT_NEUTRAL,
+    AS_SHOT_WHITE_XY,
+    COLOR_MATRIX1,
+    COLOR_MATRIX2,
+    CAMERA_CALIBRATION1,
+    CAMERA_CALIBRATION2,
+    FORWARD_MATRIX1,
+    FORWARD_MATRIX2,
+    ANALOG_BALANCE,
+    BASELINE_EXPOSURE,
 ];
 
 /// Exif tags decoded into [`ExifInfo`].
@@ -971,6 +1013,15 @@ fn build_meta(tiff: &Tiff, d: &Located<'_>, g: &Geometry) -> Result<RawMeta> {
             compression: g.compression,
             predictor: raw.u32(PREDICTOR).map(|p| p as u16),
         }),
+        stored: STORED_TAGS
+            .iter()
+            .filter_map(|&tag| {
+                lookup(d, tag).map(|v| Entry {
+                    tag,
+                    value: v.clone(),
+                })
+            })
+            .collect(),
     })
 }
 

@@ -608,6 +608,62 @@ fn srational(values: &[f64]) -> Value {
     )
 }
 
+/// The source's stored entry of `tag` when it still decodes to `current` exactly (the value
+/// was not changed): written back as the source stored it, type and value.
+fn kept(m: &RawMeta, tag: u16, current: &[f64]) -> Option<Value> {
+    let v = m.stored_value(tag)?;
+    (v.to_f64_vec()?.as_slice() == current).then(|| v.clone())
+}
+
+/// [`kept`] for AsShotNeutral, which the reader normalizes to green = 1.
+fn kept_neutral(m: &RawMeta, n: [f64; 3]) -> Option<Value> {
+    let v = m.stored_value(t::AS_SHOT_NEUTRAL)?;
+    match v.to_f64_vec()?.as_slice() {
+        [r, g, b] if *g > 0.0 && [r / g, 1.0, b / g] == n => Some(v.clone()),
+        _ => None,
+    }
+}
+
+/// AsShotNeutral as RATIONALs that can never round to 0: green = 1 when every component is
+/// representable within 1e-9 (the usual case), else the neutral rescaled by the geometric
+/// mean of its extremes (AsShotNeutral is defined up to scale; readers divide by green),
+/// which keeps ratios up to ~1.8e19 non-zero and finite.
+pub fn neutral_value(n: [f64; 3]) -> Value {
+    let close = |v: &Value, want: &[f64]| {
+        v.to_f64_vec().is_some_and(|got| {
+            got.iter()
+                .zip(want)
+                .all(|(g, w)| *g > 0.0 && ((g - w) / w).abs() <= 1e-9)
+        })
+    };
+    let plain = urational(&n);
+    if close(&plain, &n) || n.iter().any(|x| !(x.is_finite() && *x > 0.0)) {
+        return plain;
+    }
+    let (lo, hi) = n.iter().fold((f64::INFINITY, 0.0f64), |(lo, hi), &x| {
+        (lo.min(x), hi.max(x))
+    });
+    let s = (lo.sqrt()) * (hi.sqrt());
+    let scaled = n.map(|x| x / s);
+    let v = urational(&scaled);
+    match &v {
+        Value::Rational(r) if r.iter().all(|&(num, den)| num > 0 && den > 0) => v,
+        // Beyond what RATIONAL holds: the smallest positive value instead of 0.
+        Value::Rational(r) => Value::Rational(
+            r.iter()
+                .map(|&(num, den)| {
+                    if num == 0 || den == 0 {
+                        (1, u32::MAX)
+                    } else {
+                        (num, den)
+                    }
+                })
+                .collect(),
+        ),
+        _ => v,
+    }
+}
+
 /// Integers as SHORT/LONG when exact, otherwise RATIONAL.
 fn levels_value(values: &[f64]) -> Value {
     let ints = values
@@ -731,7 +787,10 @@ fn set_ifd0_tags(ifd: &mut Ifd, img: &RawImage, unique_id: Vec<u8>, raw_in_sub: 
         .color_matrix1
         .clone()
         .unwrap_or_else(|| vec![1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0]);
-    ifd.set(t::COLOR_MATRIX1, srational(&cm1));
+    ifd.set(
+        t::COLOR_MATRIX1,
+        kept(m, t::COLOR_MATRIX1, &cm1).unwrap_or_else(|| srational(&cm1)),
+    );
     let mats = [
         (t::COLOR_MATRIX2, &c.color_matrix2),
         (t::CAMERA_CALIBRATION1, &c.camera_calibration1),
@@ -741,7 +800,7 @@ fn set_ifd0_tags(ifd: &mut Ifd, img: &RawImage, unique_id: Vec<u8>, raw_in_sub: 
     ];
     for (tag, v) in mats {
         if let Some(v) = v {
-            ifd.set(tag, srational(v));
+            ifd.set(tag, kept(m, tag, v).unwrap_or_else(|| srational(v)));
         }
     }
     if let Some(i) = c.calibration_illuminant1 {
@@ -751,15 +810,27 @@ fn set_ifd0_tags(ifd: &mut Ifd, img: &RawImage, unique_id: Vec<u8>, raw_in_sub: 
         ifd.set(t::CALIBRATION_ILLUMINANT2, Value::Short(vec![i]));
     }
     if let Some(ab) = &c.analog_balance {
-        ifd.set(t::ANALOG_BALANCE, urational(ab));
+        ifd.set(
+            t::ANALOG_BALANCE,
+            kept(m, t::ANALOG_BALANCE, ab).unwrap_or_else(|| urational(ab)),
+        );
     }
     if let Some(be) = c.baseline_exposure {
-        ifd.set(t::BASELINE_EXPOSURE, srational(&[be]));
+        ifd.set(
+            t::BASELINE_EXPOSURE,
+            kept(m, t::BASELINE_EXPOSURE, &[be]).unwrap_or_else(|| srational(&[be])),
+        );
     }
     if let Some(n) = m.as_shot_neutral {
-        ifd.set(t::AS_SHOT_NEUTRAL, urational(&n));
+        ifd.set(
+            t::AS_SHOT_NEUTRAL,
+            kept_neutral(m, n).unwrap_or_else(|| neutral_value(n)),
+        );
     } else if let Some(xy) = m.as_shot_white_xy {
-        ifd.set(t::AS_SHOT_WHITE_XY, urational(&xy));
+        ifd.set(
+            t::AS_SHOT_WHITE_XY,
+            kept(m, t::AS_SHOT_WHITE_XY, &xy).unwrap_or_else(|| urational(&xy)),
+        );
     }
     ifd.set(t::RAW_DATA_UNIQUE_ID, Value::Byte(unique_id));
     for e in &m.ifd0_extra {

@@ -12,6 +12,7 @@
 //! written in increasing line order and header attributes are sorted by name, so the bytes
 //! are identical from run to run and whatever the thread count (tested).
 
+pub mod chunks;
 mod scanline;
 
 use crate::error::{Error, Result};

@@ -4,6 +4,7 @@
 //! All take two [`RgbImage`]s of the same size; a size mismatch is an
 //! [`Error::InvalidParam`](crate::Error::InvalidParam) naming both sizes.
 
+pub mod banded;
 pub mod deltae;
 pub mod psnr;
 pub mod ssim;

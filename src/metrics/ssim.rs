@@ -85,6 +85,26 @@ fn filter_valid(p: &[f64], w: usize, h: usize, k: &[f64]) -> Vec<f64> {
 
 /// Mean SSIM of one channel.
 fn ssim_channel(x: &[f64], y: &[f64], w: usize, h: usize, o: &SsimOptions) -> f64 {
+    let (sum, n) = ssim_channel_sum(x, y, w, h, o);
+    sum / n as f64
+}
+
+/// Side of the SSIM window (7 uniform, 11 Gaussian): a band of `n` output rows of the SSIM
+/// map needs `n + window_len - 1` input rows.
+pub fn window_len(window: SsimWindow) -> usize {
+    weights(window).len()
+}
+
+/// Sum and count of the SSIM map of one channel plane `x`, `y` (`w` x `h`, `h` >= window):
+/// the map's rows are those of the "valid" window positions, so a band of input rows gives
+/// the map rows it fully contains.
+pub(crate) fn ssim_channel_sum(
+    x: &[f64],
+    y: &[f64],
+    w: usize,
+    h: usize,
+    o: &SsimOptions,
+) -> (f64, usize) {
     let k = weights(o.window);
     let n = (k.len() * k.len()) as f64;
     let cov_norm = match o.window {
@@ -112,7 +132,34 @@ fn ssim_channel(x: &[f64], y: &[f64], w: usize, h: usize, o: &SsimOptions) -> f6
         .collect::<Vec<f64>>()
         .iter()
         .sum();
-    sum / ux.len() as f64
+    (sum, ux.len())
+}
+
+/// Check the data range and window fit of an SSIM over a `w` x `h` image.
+pub(crate) fn check_ssim(w: usize, h: usize, opts: &SsimOptions) -> Result<()> {
+    if !(opts.data_range.is_finite() && opts.data_range > 0.0) {
+        return Err(Error::invalid(format!(
+            "data range {} must be positive",
+            opts.data_range
+        )));
+    }
+    let win = weights(opts.window).len();
+    if w < win || h < win {
+        return Err(Error::invalid(format!(
+            "images of {w}x{h} are smaller than the {win}x{win} SSIM window"
+        )));
+    }
+    Ok(())
+}
+
+/// One channel of an interleaved RGB image as f64.
+pub(crate) fn plane(img: &RgbImage, c: usize) -> Vec<f64> {
+    img.data
+        .iter()
+        .skip(c)
+        .step_by(3)
+        .map(|&v| v as f64)
+        .collect()
 }
 
 /// Mean SSIM over channels of `pred` against `target`.

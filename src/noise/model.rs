@@ -107,6 +107,9 @@ impl NoiseParams {
     }
 }
 
+/// Most ISO points in a noise model file.
+pub const MAX_ISO_POINTS: usize = 1000;
+
 /// One calibrated ISO.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct IsoPoint {
@@ -163,9 +166,29 @@ impl NoiseModel {
         if self.isos.is_empty() {
             return Err(Error::malformed("noise model has no ISO points"));
         }
+        if self.isos.len() > MAX_ISO_POINTS {
+            return Err(Error::limits(format!(
+                "noise model isos: {} points (at most {MAX_ISO_POINTS})",
+                self.isos.len()
+            )));
+        }
+        let (lo, hi) = crate::synth::plan_bounds::ISO_RANGE;
         for (i, p) in self.isos.iter().enumerate() {
             if p.iso == 0 {
                 return Err(Error::malformed("noise model has a point at ISO 0"));
+            }
+            if p.iso > hi {
+                return Err(Error::malformed(format!(
+                    "noise model isos[{i}].iso: ISO {} is outside {lo}..={hi}",
+                    p.iso
+                )));
+            }
+            let big = crate::synth::plan_bounds::MAX_NOISE_PARAM;
+            if p.positions.iter().flatten().any(|v| v.abs() > big) {
+                return Err(Error::malformed(format!(
+                    "noise model isos[{i}].positions: |S| and |O| must be <= {big} \
+                     (normalized variance)"
+                )));
             }
             if i > 0 && self.isos[i - 1].iso == p.iso {
                 return Err(Error::malformed(format!(
@@ -253,7 +276,7 @@ impl NoiseModel {
 
     /// Read a noise model file.
     pub fn from_file(path: &std::path::Path) -> Result<NoiseModel> {
-        let text = std::fs::read_to_string(path).map_err(|e| Error::from(e).in_file(path))?;
+        let text = crate::synth::dictionaries::read_calibration_text(path)?;
         NoiseModel::from_json(&text).map_err(|e| e.in_file(path))
     }
 

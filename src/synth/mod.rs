@@ -23,6 +23,7 @@ pub mod masks;
 pub mod neutral;
 pub mod night;
 pub mod plan;
+pub mod plan_bounds;
 pub mod relight;
 pub mod rng;
 pub mod sidecar;
@@ -137,6 +138,13 @@ impl SynthOptions {
         }
         if self.isos.contains(&0) {
             return Err(Error::invalid("ISO 0"));
+        }
+        if self.isos.len() > plan_bounds::MAX_NOISE_ENTRIES {
+            return Err(Error::invalid(format!(
+                "{} ISOs (at most {})",
+                self.isos.len(),
+                plan_bounds::MAX_NOISE_ENTRIES
+            )));
         }
         let fin = |v: &[f64]| v.iter().all(|x| x.is_finite());
         if !(fin(&self.dim_range)

@@ -126,12 +126,33 @@ impl Sidecar {
                 s.format, SIDECAR_FORMAT
             )));
         }
+        // Bounds before any use: a hostile sidecar is refused at once, naming the field.
+        s.plan
+            .validate_bounds()
+            .map_err(|e| Error::invalid(format!("sidecar: {}", strip_kind(&e))))?;
+        s.options
+            .validate()
+            .map_err(|e| Error::invalid(format!("sidecar options: {}", strip_kind(&e))))?;
+        if s.outputs.files.len() > 4 * super::plan_bounds::MAX_NOISE_ENTRIES + 16 {
+            return Err(Error::invalid(format!(
+                "sidecar: outputs.files lists {} files",
+                s.outputs.files.len()
+            )));
+        }
         Ok(s)
     }
     /// Read a sidecar file.
     pub fn read(path: &Path) -> Result<Sidecar> {
         let text = std::fs::read_to_string(path).map_err(|e| Error::from(e).in_file(path))?;
         Sidecar::from_json(&text).map_err(|e| e.in_file(path))
+    }
+}
+
+/// The message of an `InvalidParam` error without its "invalid parameter: " prefix.
+fn strip_kind(e: &Error) -> String {
+    match e {
+        Error::InvalidParam(m) => m.clone(),
+        other => other.to_string(),
     }
 }
 

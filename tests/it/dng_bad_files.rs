@@ -120,14 +120,14 @@ fn malformed() -> Vec<(&'static str, Vec<u8>, &'static str)> {
                 .set(256, Value::Long(vec![60000]))
                 .set(257, Value::Long(vec![60000]))
                 .build(),
-            "exceeds the limits",
+            "exceeds the limit",
         ),
         (
             "huge_width",
             ok.clone()
                 .set(256, Value::Long(vec![4_000_000_000]))
                 .build(),
-            "exceeds the limits",
+            "exceeds the limit",
         ),
         (
             "cfa_value_3",

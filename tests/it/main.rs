@@ -32,6 +32,8 @@ mod isp_banded;
 mod isp_demosaic_accuracy;
 mod isp_exr;
 mod isp_render;
+mod limits_bombs;
+mod limits_files;
 mod metrics_eval;
 mod msrv;
 mod png_rows;

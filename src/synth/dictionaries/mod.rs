@@ -36,8 +36,38 @@ pub enum IlluminantSource {
     Gaussian(String, [f64; 2], [[f64; 2]; 2]),
 }
 
+/// Largest calibration JSON file read (calibration files are kilobytes).
+pub const MAX_CALIBRATION_FILE_BYTES: u64 = 64 << 20;
+/// Most entries in an illuminant or brightness list.
+pub const MAX_DICT_ENTRIES: usize = 1_000_000;
+/// Illuminant ratios (r/g, b/g) and Gaussian parameters must lie within +-this.
+pub const MAX_CHROMA: f64 = 1e6;
+
+/// Read a calibration text file, refusing files over [`MAX_CALIBRATION_FILE_BYTES`].
+pub fn read_calibration_text(path: &Path) -> Result<String> {
+    let len = std::fs::metadata(path)
+        .map_err(|e| Error::from(e).in_file(path))?
+        .len();
+    if len > MAX_CALIBRATION_FILE_BYTES {
+        return Err(Error::limits(format!(
+            "calibration file of {len} bytes (at most {MAX_CALIBRATION_FILE_BYTES})"
+        ))
+        .in_file(path));
+    }
+    std::fs::read_to_string(path).map_err(|e| Error::from(e).in_file(path))
+}
+
+fn check_count(key: &str, n: usize) -> Result<()> {
+    if n > MAX_DICT_ENTRIES {
+        return Err(Error::limits(format!(
+            "{key}: {n} entries (at most {MAX_DICT_ENTRIES})"
+        )));
+    }
+    Ok(())
+}
+
 fn read_json(path: &Path) -> Result<Value> {
-    let text = std::fs::read_to_string(path).map_err(|e| Error::from(e).in_file(path))?;
+    let text = read_calibration_text(path)?;
     serde_json::from_str(&text).map_err(|e| Error::malformed(format!("JSON: {}", e)).in_file(path))
 }
 
@@ -58,6 +88,7 @@ fn pair(v: &Value, what: &str) -> Result<[f64; 2]> {
 pub fn parse_illuminants(name: &str, v: &Value) -> Result<IlluminantSource> {
     for key in ["illuminants_rgb_over_g", "illuminants", "chromaticities"] {
         if let Some(list) = v.get(key).and_then(|l| l.as_array()) {
+            check_count(key, list.len())?;
             let mut out = Vec::with_capacity(list.len());
             for (i, e) in list.iter().enumerate() {
                 let what = format!("{}[{}]", key, i);
@@ -80,6 +111,11 @@ pub fn parse_illuminants(name: &str, v: &Value) -> Result<IlluminantSource> {
                         )))
                     }
                 };
+                if c.iter().any(|&x| !(x > 0.0 && x <= MAX_CHROMA)) {
+                    return Err(Error::malformed(format!(
+                        "{what}: ratios {c:?} must be in (0, {MAX_CHROMA}]"
+                    )));
+                }
                 out.push(c);
             }
             if out.is_empty() {
@@ -104,6 +140,17 @@ pub fn parse_illuminants(name: &str, v: &Value) -> Result<IlluminantSource> {
             .filter(|r| r.len() == 2)
             .ok_or_else(|| Error::malformed("covariance: expected a 2x2 matrix"))?;
         let cov = [pair(&rows[0], "covariance")?, pair(&rows[1], "covariance")?];
+        let all = [mean[0], mean[1], cov[0][0], cov[0][1], cov[1][0], cov[1][1]];
+        if all.iter().any(|x| x.abs() > MAX_CHROMA) {
+            return Err(Error::malformed(format!(
+                "mean/covariance values must be within +-{MAX_CHROMA}"
+            )));
+        }
+        if !(cov[0][0] > 0.0 && cov[1][1] > 0.0) {
+            return Err(Error::malformed(
+                "covariance: the variances (diagonal) must be > 0",
+            ));
+        }
         return Ok(IlluminantSource::Gaussian(name.to_string(), mean, cov));
     }
     Err(Error::malformed(
@@ -134,6 +181,7 @@ pub struct BrightnessDict {
 pub fn parse_brightness(name: &str, v: &Value) -> Result<BrightnessDict> {
     for key in ["values", "mean_intensities", "brightness"] {
         if let Some(list) = v.get(key).and_then(|l| l.as_array()) {
+            check_count(key, list.len())?;
             let vals = list
                 .iter()
                 .map(|x| num(x, key))
@@ -164,9 +212,9 @@ pub fn parse_brightness(name: &str, v: &Value) -> Result<BrightnessDict> {
     }
     if let (Some(m), Some(s)) = (v.get("mean"), v.get("std")) {
         let (mean, std) = (num(m, "mean")?, num(s, "std")?);
-        if !(mean > 0.0 && mean <= 1.0) || std < 0.0 {
+        if !(mean > 0.0 && mean <= 1.0 && (0.0..=1.0).contains(&std)) {
             return Err(Error::malformed(
-                "brightness mean must be in (0, 1], std >= 0",
+                "brightness mean must be in (0, 1], std in [0, 1]",
             ));
         }
         return Ok(BrightnessDict {

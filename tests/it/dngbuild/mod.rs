@@ -496,3 +496,81 @@ pub fn lj92(w: usize, h: usize, nc: usize, p: u8, s: &[u16]) -> Vec<u8> {
     o.extend([0xFF, 0xD9]);
     o
 }
+
+/// A little-endian DNG of `blob` (at offset 8) and IFD0 = the usual raw tags of a
+/// `width` x `height` 16-bit RGGB image plus `layout` (offsets, counts, geometry), given the
+/// blob's offset. For hostile files whose blocks share data.
+pub fn dng_around_blob(
+    width: usize,
+    height: usize,
+    compression: u16,
+    blob: &[u8],
+    layout: impl FnOnce(u32) -> Vec<(u16, Value)>,
+) -> Vec<u8> {
+    let mut f = Out {
+        buf: b"II*\0\0\0\0\0".to_vec(),
+        big: false,
+    };
+    let blob_off = f.buf.len() as u32;
+    f.buf.extend_from_slice(blob);
+    let b = Builder::new(2, 2, 16);
+    let mut tags = b.ifd0_tags();
+    tags.extend(
+        b.raw_tags()
+            .into_iter()
+            .filter(|(t, _)| !matches!(t, 256 | 257 | 259)),
+    );
+    tags.extend([
+        (256, Value::Long(vec![width as u32])),
+        (257, Value::Long(vec![height as u32])),
+        (259, Value::Short(vec![compression])),
+    ]);
+    tags.extend(layout(blob_off));
+    let first = f.ifd(tags);
+    let b = f.u32b(first);
+    f.buf[4..8].copy_from_slice(&b);
+    f.buf
+}
+
+/// The LJ92 tile bomb: a 16384 x 16384 image in 4096 tiles of 256 x 256 that all point to
+/// one 8 KiB lossless JPEG stream (one 1-bit Huffman code: every difference is 0). ~41 KB.
+pub fn bomb_lj92_tiles() -> Vec<u8> {
+    let (tw, th) = (256usize, 256usize);
+    let mut s = vec![0xFF, 0xD8, 0xFF, 0xC3, 0, 11, 16];
+    s.extend((th as u16).to_be_bytes());
+    s.extend((tw as u16).to_be_bytes());
+    s.extend([1, 0, 0x11, 0]);
+    // DHT: class 0 id 0, one code of length 1 for category 0.
+    s.extend([0xFF, 0xC4, 0, 20, 0, 1]);
+    s.extend([0u8; 15]);
+    s.push(0);
+    s.extend([0xFF, 0xDA, 0, 8, 1, 0, 0, 1, 0, 0]);
+    s.extend(std::iter::repeat_n(0u8, tw * th / 8));
+    s.extend([0xFF, 0xD9]);
+    let n = (16384 / tw) * (16384 / th);
+    let len = s.len() as u32;
+    dng_around_blob(16384, 16384, 7, &s, |off| {
+        vec![
+            (322, Value::Long(vec![tw as u32])),
+            (323, Value::Long(vec![th as u32])),
+            (324, Value::Long(vec![off; n])),
+            (325, Value::Long(vec![len; n])),
+        ]
+    })
+}
+
+/// The strip bomb: a 16384 x 16384 16-bit image in 16384 one-row strips that all point to
+/// the same 32 KiB row. ~164 KB.
+pub fn bomb_strips() -> Vec<u8> {
+    let w = 16384usize;
+    let row: Vec<u8> = (0..w)
+        .flat_map(|i| ((i % 4096) as u16).to_le_bytes())
+        .collect();
+    dng_around_blob(w, 16384, 1, &row, |off| {
+        vec![
+            (273, Value::Long(vec![off; 16384])),
+            (278, Value::Long(vec![1])),
+            (279, Value::Long(vec![(2 * w) as u32; 16384])),
+        ]
+    })
+}

@@ -1,0 +1,189 @@
+//! Resource limits against hostile or absurd inputs: the largest image (in pixels) the readers
+//! accept, and fallible allocation of large buffers (an allocation the system refuses is an
+//! [`Error::Limits`] naming the size asked, never an abort). See docs/limits.md.
+//!
+//! The pixel limit is process-wide: [`DEFAULT_MAX_PIXELS`], or the `D2N_MAX_PIXELS`
+//! environment variable, or what [`Limits::install`] (the CLI's `--max-pixels`) set.
+
+use crate::error::{Error, Result};
+use std::sync::atomic::{AtomicU64, Ordering};
+
+/// Default largest image, in pixels (stored width x height): 2^28 = 268,435,456. That is
+/// 1.8 times the largest single-shot camera sensor sold today (Phase One IQ4 150 MP,
+/// 14204 x 10652), and its raw plane alone is 512 MiB of `u16`.
+pub const DEFAULT_MAX_PIXELS: u64 = 1 << 28;
+
+/// Environment variable that sets the pixel limit when no option does.
+pub const MAX_PIXELS_ENV: &str = "D2N_MAX_PIXELS";
+
+/// Highest value the pixel limit can be raised to (65535 x 65535, the largest TIFF image the
+/// readers accept per side).
+pub const MAX_PIXELS_CEILING: u64 = 65535 * 65535;
+
+/// 0 = not installed: the environment variable or the default applies.
+static INSTALLED_MAX_PIXELS: AtomicU64 = AtomicU64::new(0);
+
+/// Resource limits.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Limits {
+    /// Largest image accepted, in pixels.
+    pub max_pixels: u64,
+}
+
+impl Default for Limits {
+    fn default() -> Self {
+        Limits {
+            max_pixels: DEFAULT_MAX_PIXELS,
+        }
+    }
+}
+
+impl Limits {
+    /// Limits with `max_pixels`, checked to be in `1..=MAX_PIXELS_CEILING`.
+    pub fn with_max_pixels(max_pixels: u64) -> Result<Limits> {
+        if max_pixels == 0 || max_pixels > MAX_PIXELS_CEILING {
+            return Err(Error::invalid(format!(
+                "pixel limit {max_pixels} must be in 1..={MAX_PIXELS_CEILING}"
+            )));
+        }
+        Ok(Limits { max_pixels })
+    }
+
+    /// Parse a pixel count: digits, optionally with a `M` (10^6) or `G` (10^9) suffix
+    /// ("300M", "1.5G", "400000000").
+    pub fn parse_pixels(s: &str) -> Result<u64> {
+        let t = s.trim();
+        let (num, mul) = match t.chars().last() {
+            Some('M' | 'm') => (&t[..t.len() - 1], 1e6),
+            Some('G' | 'g') => (&t[..t.len() - 1], 1e9),
+            _ => (t, 1.0),
+        };
+        let v: f64 = num
+            .parse()
+            .map_err(|_| Error::invalid(format!("{s:?} is not a pixel count (e.g. 300M)")))?;
+        let px = v * mul;
+        if !(px.is_finite() && px >= 1.0 && px <= MAX_PIXELS_CEILING as f64) {
+            return Err(Error::invalid(format!(
+                "pixel limit {s:?} must be in 1..={MAX_PIXELS_CEILING}"
+            )));
+        }
+        Ok(px.round() as u64)
+    }
+
+    /// The limits in force: installed ones, else `D2N_MAX_PIXELS`, else the default. An
+    /// unparseable environment variable is an error (rather than silently ignored).
+    pub fn current() -> Result<Limits> {
+        let installed = INSTALLED_MAX_PIXELS.load(Ordering::Relaxed);
+        if installed != 0 {
+            return Ok(Limits {
+                max_pixels: installed,
+            });
+        }
+        match std::env::var(MAX_PIXELS_ENV) {
+            Ok(v) => Limits::parse_pixels(&v)
+                .map(|max_pixels| Limits { max_pixels })
+                .map_err(|e| Error::invalid(format!("{MAX_PIXELS_ENV}: {e}"))),
+            Err(_) => Ok(Limits::default()),
+        }
+    }
+
+    /// Make these the process-wide limits (overrides `D2N_MAX_PIXELS`).
+    pub fn install(self) {
+        INSTALLED_MAX_PIXELS.store(self.max_pixels, Ordering::Relaxed);
+    }
+
+    /// Error unless a `width` x `height` image (`what`: "raw image", "EXR data window", ...)
+    /// is within the pixel limit.
+    pub fn check_pixels(&self, what: &str, width: u64, height: u64) -> Result<()> {
+        let n = width.saturating_mul(height);
+        if n > self.max_pixels {
+            return Err(Error::limits(format!(
+                "{what} of {width}x{height} = {n} pixels exceeds the limit of {} pixels \
+                 (raise it with --max-pixels or {MAX_PIXELS_ENV})",
+                self.max_pixels
+            )));
+        }
+        Ok(())
+    }
+}
+
+/// [`Limits::current`]`.check_pixels(...)`.
+pub fn check_pixels(what: &str, width: u64, height: u64) -> Result<()> {
+    Limits::current()?.check_pixels(what, width, height)
+}
+
+/// Human-readable byte count ("512.0 MiB").
+pub fn bytes_human(n: u128) -> String {
+    const UNITS: [&str; 5] = ["bytes", "KiB", "MiB", "GiB", "TiB"];
+    let mut v = n as f64;
+    let mut u = 0;
+    while v >= 1024.0 && u + 1 < UNITS.len() {
+        v /= 1024.0;
+        u += 1;
+    }
+    if u == 0 {
+        format!("{n} bytes")
+    } else {
+        format!("{v:.1} {}", UNITS[u])
+    }
+}
+
+fn alloc_error<T>(n: usize, what: &str) -> Error {
+    let bytes = (n as u128) * (std::mem::size_of::<T>() as u128);
+    Error::limits(format!(
+        "cannot allocate {} for {what} ({n} elements): not enough memory",
+        bytes_human(bytes)
+    ))
+}
+
+/// An empty vector with room for `n` elements, or [`Error::Limits`] naming the size when the
+/// allocator refuses (instead of aborting the process).
+pub fn try_with_capacity<T>(n: usize, what: &str) -> Result<Vec<T>> {
+    let mut v = Vec::new();
+    v.try_reserve_exact(n)
+        .map_err(|_| alloc_error::<T>(n, what))?;
+    Ok(v)
+}
+
+/// `vec![value; n]`, or [`Error::Limits`] naming the size when the allocator refuses.
+pub fn try_filled<T: Clone>(value: T, n: usize, what: &str) -> Result<Vec<T>> {
+    let mut v = try_with_capacity(n, what)?;
+    v.resize(n, value);
+    Ok(v)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn parse_and_check() {
+        assert_eq!(Limits::parse_pixels("300M").unwrap(), 300_000_000);
+        assert_eq!(Limits::parse_pixels("1.5G").unwrap(), 1_500_000_000);
+        assert_eq!(Limits::parse_pixels(" 1000 ").unwrap(), 1000);
+        for bad in ["", "x", "0", "-5", "1e30", "NaN", "5G"] {
+            assert!(Limits::parse_pixels(bad).is_err(), "{bad}");
+        }
+        let l = Limits::with_max_pixels(100).unwrap();
+        assert!(l.check_pixels("raw image", 10, 10).is_ok());
+        let e = l.check_pixels("raw image", 11, 10).unwrap_err().to_string();
+        assert!(
+            e.contains("11x10 = 110 pixels exceeds the limit of 100"),
+            "{e}"
+        );
+        assert!(e.contains("--max-pixels"), "{e}");
+        assert!(l.check_pixels("x", u64::MAX, u64::MAX).is_err());
+        assert!(Limits::with_max_pixels(0).is_err());
+    }
+
+    #[test]
+    fn refused_allocation_is_an_error_naming_the_size() {
+        let e = try_filled(0u16, usize::MAX / 2, "the raw plane").unwrap_err();
+        let s = e.to_string();
+        assert!(matches!(e, Error::Limits(_)), "{s}");
+        assert!(s.contains("the raw plane") && s.contains("TiB"), "{s}");
+        let v = try_filled(7u8, 5, "x").unwrap();
+        assert_eq!(v, vec![7; 5]);
+        assert_eq!(bytes_human(512 << 20), "512.0 MiB");
+    }
+}

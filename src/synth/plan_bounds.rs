@@ -1,0 +1,156 @@
+//! Bounds on a [`Plan`] read from a file (`synth --replay` sidecars): every count, ISO,
+//! sigma, window, gain and level must be finite and within a physical range, so that a
+//! hostile or damaged sidecar (200,000 lights, sigma 1e30) is refused at once with the field
+//! named, before any pixel work. Plans sampled by [`super::plan::plan`] always pass.
+
+use super::dim::DimPlan;
+use super::masks::LightKind;
+use super::plan::Plan;
+use super::MAX_LIGHTS;
+use crate::error::{Error, Result};
+
+/// Most lights in a plan: the ambient light plus [`MAX_LIGHTS`] local lights and
+/// [`MAX_LIGHTS`] bulbs.
+pub const MAX_PLAN_LIGHTS: usize = 1 + 2 * MAX_LIGHTS as usize;
+/// Most noisy outputs (ISOs) per plan.
+pub const MAX_NOISE_ENTRIES: usize = 64;
+/// ISO range accepted: the highest ISO of any camera sold is 3,280,000 (Nikon D5, Hi 5).
+pub const ISO_RANGE: (u32, u32) = (1, 4_000_000);
+/// Largest magnitude of a noise parameter (normalized units: a variance of 1e3 is already
+/// 30 times the full signal range as a standard deviation).
+pub const MAX_NOISE_PARAM: f64 = 1e3;
+/// Largest gain or weight of a light (released bulbs: 50 to 100).
+pub const MAX_GAIN: f64 = 1e6;
+/// Illuminants and neutrals (channel / green) must be within `[1/MAX_RATIO, MAX_RATIO]`.
+pub const MAX_RATIO: f64 = 1e6;
+/// Sigmas, windows and centres are bounded by this many times the image's larger side.
+pub const MAX_EXTENT_FACTOR: f64 = 100.0;
+/// Most stages or warnings listed.
+pub const MAX_LIST: usize = 1000;
+
+fn field(name: impl std::fmt::Display, why: impl std::fmt::Display) -> Error {
+    Error::invalid(format!("plan field {name}: {why}"))
+}
+
+fn in_range(name: &str, v: f64, lo: f64, hi: f64) -> Result<()> {
+    if !(v.is_finite() && v >= lo && v <= hi) {
+        return Err(field(name, format!("{v} is outside [{lo}, {hi}]")));
+    }
+    Ok(())
+}
+
+fn ratio(name: &str, v: &[f64]) -> Result<()> {
+    for (i, &x) in v.iter().enumerate() {
+        if !(x.is_finite() && (1.0 / MAX_RATIO..=MAX_RATIO).contains(&x)) {
+            return Err(field(
+                format!("{name}[{i}]"),
+                format!("{x} is outside [{}, {MAX_RATIO}]", 1.0 / MAX_RATIO),
+            ));
+        }
+    }
+    Ok(())
+}
+
+fn noise_params(name: &str, p: &crate::noise::NoiseParams) -> Result<()> {
+    for (i, pos) in p.positions.iter().enumerate() {
+        for (j, &v) in pos.iter().enumerate() {
+            let n = format!("{name}.positions[{i}][{j}]");
+            in_range(&n, v, -MAX_NOISE_PARAM, MAX_NOISE_PARAM)?;
+        }
+    }
+    Ok(())
+}
+
+fn iso(name: &str, v: u32) -> Result<()> {
+    if !(ISO_RANGE.0..=ISO_RANGE.1).contains(&v) {
+        return Err(field(
+            name,
+            format!("ISO {v} is outside {}..={}", ISO_RANGE.0, ISO_RANGE.1),
+        ));
+    }
+    Ok(())
+}
+
+impl Plan {
+    /// Error naming the first field of this plan that is out of its physical range
+    /// (counts, ISOs, sigmas, windows, gains, neutrals, noise parameters). Cheap: no pixels.
+    pub fn validate_bounds(&self) -> Result<()> {
+        let max_side = crate::dng::read::MAX_DIMENSION as usize;
+        for (name, v) in [
+            ("active_width", self.active_width),
+            ("active_height", self.active_height),
+        ] {
+            if v == 0 || v > max_side {
+                return Err(field(name, format!("{v} is outside 1..={max_side}")));
+            }
+        }
+        if self.lights.len() > MAX_PLAN_LIGHTS {
+            return Err(field(
+                "lights",
+                format!("{} lights (at most {MAX_PLAN_LIGHTS})", self.lights.len()),
+            ));
+        }
+        if self.noise.len() > MAX_NOISE_ENTRIES {
+            return Err(field(
+                "noise",
+                format!("{} entries (at most {MAX_NOISE_ENTRIES})", self.noise.len()),
+            ));
+        }
+        if self.stages.len() > MAX_LIST || self.warnings.len() > MAX_LIST {
+            return Err(field("stages/warnings", format!("more than {MAX_LIST}")));
+        }
+        ratio("day_neutral", &self.day_neutral)?;
+        ratio("night_neutral", &self.night_neutral)?;
+        match &self.dim {
+            DimPlan::None => {}
+            DimPlan::Uniform { s, range } => {
+                in_range("dim.s", *s, 0.0, MAX_RATIO)?;
+                in_range("dim.range[0]", range[0], 0.0, MAX_RATIO)?;
+                in_range("dim.range[1]", range[1], 0.0, MAX_RATIO)?;
+            }
+            DimPlan::TargetMean { target_mean, .. } => {
+                in_range("dim.target_mean", *target_mean, 0.0, MAX_RATIO)?;
+            }
+        }
+        let extent = MAX_EXTENT_FACTOR * self.active_width.max(self.active_height) as f64;
+        for (i, l) in self.lights.iter().enumerate() {
+            let n = |f: &str| format!("lights[{i}].{f}");
+            ratio(&n("illuminant"), &l.illuminant)?;
+            in_range(&n("gain"), l.gain, 0.0, MAX_GAIN)?;
+            in_range(&n("weight"), l.weight, 0.0, MAX_GAIN)?;
+            in_range(&n("floor"), l.floor, 0.0, 1.0)?;
+            for (k, &c) in l.center.iter().enumerate() {
+                in_range(&n(&format!("center[{k}]")), c, -extent, extent)?;
+            }
+            if let Some(w) = l.window {
+                for (k, &v) in w.iter().enumerate() {
+                    let name = n(&format!("window[{k}]"));
+                    in_range(&name, v, 0.0, extent)?;
+                    if v <= 0.0 {
+                        return Err(field(name, "must be > 0"));
+                    }
+                }
+            }
+            if l.kind != LightKind::Ambient {
+                for (k, &s) in l.sigma.iter().enumerate() {
+                    let name = n(&format!("sigma[{k}]"));
+                    in_range(&name, s, 0.0, extent)?;
+                    if s <= 0.0 {
+                        return Err(field(name, "must be > 0"));
+                    }
+                }
+            } else {
+                for (k, &s) in l.sigma.iter().enumerate() {
+                    in_range(&n(&format!("sigma[{k}]")), s, 0.0, extent)?;
+                }
+            }
+        }
+        iso("clean_iso", self.clean_iso)?;
+        noise_params("clean_noise", &self.clean_noise)?;
+        for (i, e) in self.noise.iter().enumerate() {
+            iso(&format!("noise[{i}].iso"), e.iso)?;
+            noise_params(&format!("noise[{i}].params"), &e.params)?;
+        }
+        Ok(())
+    }
+}
