@@ -4,10 +4,10 @@
 //! `cargo bench --bench dng_io` (figures in docs/benchmarks.md, "DNG I/O").
 
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
-use day2night::dng::meta::RawMeta;
 use day2night::dng::read::read_dng;
 use day2night::dng::write::{encode_dng, write_dng, Compression, WriteOptions};
 use day2night::output::{write_bytes_atomic, OutputPolicy};
+use day2night::raw::meta::RawMeta;
 use day2night::raw::{Bayer, RawImage};
 use std::hint::black_box;
 use std::time::Duration;

@@ -4,11 +4,11 @@
 //! printed once), and PNG writing. Run: `cargo bench --bench isp` (or a filter such as
 //! `cargo bench --bench isp -- render`).
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
-use day2night::dng::meta::RawMeta;
-use day2night::exr::{encode_exr, ExrCompression, ExrOptions};
+use day2night::encode::exr::{encode_exr, ExrCompression, ExrOptions};
 use day2night::isp::demosaic::{demosaic, Demosaic};
 use day2night::isp::render::{apply_matrix, color_matrix, render_linear, RenderOptions};
 use day2night::isp::RgbImage;
+use day2night::raw::meta::RawMeta;
 use day2night::raw::{Bayer, RawImage};
 use std::hint::black_box;
 use std::io::Cursor;
@@ -228,7 +228,7 @@ fn benches(c: &mut Criterion) {
     });
     g.bench_function("png8", |b| {
         b.iter(|| {
-            let bytes = day2night::png::encode_u8(&lin, Default::default());
+            let bytes = day2night::encode::png::encode_u8(&lin, Default::default());
             let mut out = Vec::new();
             let enc = image::codecs::png::PngEncoder::new(&mut out);
             image::ImageEncoder::write_image(
@@ -261,11 +261,11 @@ fn print_cpu_time_render_png(raw: &RawImage) {
                 1 => drop(black_box(
                     day2night::isp::render::render_linear_reference(raw, &opts).unwrap(),
                 )),
-                2 => drop(black_box(day2night::png::encode_u8(
+                2 => drop(black_box(day2night::encode::png::encode_u8(
                     &lin,
                     Default::default(),
                 ))),
-                _ => drop(black_box(day2night::png::encode_u8_slow(
+                _ => drop(black_box(day2night::encode::png::encode_u8_slow(
                     &lin,
                     Default::default(),
                 ))),
@@ -320,11 +320,16 @@ fn render_png_benches(c: &mut Criterion) {
     });
     let lin = render_linear(&raw, &opts).unwrap();
     g.bench_function("encode_u8_srgb", |b| {
-        b.iter(|| black_box(day2night::png::encode_u8(&lin, Default::default())))
+        b.iter(|| black_box(day2night::encode::png::encode_u8(&lin, Default::default())))
     });
     // the per-sample formula the lookup replaced (same bytes)
     g.bench_function("encode_u8_srgb_formula", |b| {
-        b.iter(|| black_box(day2night::png::encode_u8_slow(&lin, Default::default())))
+        b.iter(|| {
+            black_box(day2night::encode::png::encode_u8_slow(
+                &lin,
+                Default::default(),
+            ))
+        })
     });
     g.finish();
 }

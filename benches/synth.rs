@@ -6,8 +6,8 @@
 //!
 //! Run: `cargo bench --bench synth` (D2N_BENCH_QUICK=1 for a shorter run).
 use criterion::{criterion_group, criterion_main, Criterion};
-use day2night::dng::meta::RawMeta;
 use day2night::normalize::{normalize, NormalizeOptions};
+use day2night::raw::meta::RawMeta;
 use day2night::raw::{Bayer, RawImage};
 use day2night::synth::{self, Calibration, MaskEval, Mode, SynthOptions};
 use std::hint::black_box;

@@ -10,7 +10,7 @@
 //! Run: `cargo run --example calibration_plots -- docs/img` (prints the fitted numbers).
 use day2night::calibrate::illuminants::{fit_gaussian, Estimator};
 use day2night::calibrate::noise::{fit_iso, BurstAccumulator};
-use day2night::dng::meta::RawMeta;
+use day2night::raw::meta::RawMeta;
 use day2night::raw::{Bayer, RawImage};
 use day2night::synth::dictionaries::embedded;
 use day2night::synth::illuminant::{Gaussian2, SamplerRules};

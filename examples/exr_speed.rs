@@ -4,7 +4,7 @@
 //!
 //! `cargo run --release --example make_bench_input -- /tmp/day.dng`
 //! `cargo run --release --example exr_speed -- /tmp/day.dng [RUNS]`
-use day2night::exr::{encode_exr, ExrCompression, ExrOptions};
+use day2night::encode::exr::{encode_exr, ExrCompression, ExrOptions};
 use day2night::isp::render::{render_linear, RenderOptions};
 use day2night::isp::RgbImage;
 use exr::prelude::*;

@@ -10,8 +10,8 @@
 #[path = "common/scene.rs"]
 mod scene;
 
-use day2night::dng::meta::RawMeta;
 use day2night::dng::write::{encode_dng, Compression, RawIfd, WriteOptions};
+use day2night::raw::meta::RawMeta;
 use day2night::raw::{Bayer, RawImage, Rect};
 use scene::{day_meta, hash01, mat_vec, synthetic_scene, CM1, SRGB_TO_XYZ};
 use std::path::{Path, PathBuf};

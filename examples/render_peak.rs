@@ -7,8 +7,8 @@
 //! `reference` uses the unfused whole-image render and the per-sample PNG formula;
 //! `render-only` skips the PNG samples (peak memory of the render alone).
 use day2night::dng::read::read_dng;
+use day2night::encode::png::{encode_u8, encode_u8_slow};
 use day2night::isp::render::{render_linear, render_linear_reference, RenderOptions};
-use day2night::png::{encode_u8, encode_u8_slow};
 use std::hint::black_box;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {

@@ -253,7 +253,7 @@ pub fn normalize(img: &RawImage, opts: NormalizeOptions) -> Result<Plane> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::dng::meta::RawMeta;
+    use crate::raw::meta::RawMeta;
     use crate::raw::{Bayer, Rect};
 
     fn img(w: usize, h: usize, data: Vec<u16>) -> RawImage {

@@ -5,7 +5,7 @@
 //! of its own). Changing anything here changes the committed fixtures
 //! (tests/it/fixtures_reproducible.rs) and the benchmark input.
 
-use day2night::dng::meta::{ExifInfo, RawMeta};
+use day2night::raw::meta::{ExifInfo, RawMeta};
 use day2night::raw::Bayer;
 
 /// Canon EOS 5D Mark II ColorMatrix (D65), as published in dcraw's adobe_coeff table: a

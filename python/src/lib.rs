@@ -357,8 +357,8 @@ struct Synthesis {
     job: Arc<SynthJob>,
     plan: Plan,
     report: RunReport,
-    clean_meta: day2night::dng::meta::RawMeta,
-    noisy_meta: Vec<(u32, day2night::dng::meta::RawMeta)>,
+    clean_meta: day2night::raw::meta::RawMeta,
+    noisy_meta: Vec<(u32, day2night::raw::meta::RawMeta)>,
     crop: Option<Crop>,
     sha256: String,
 }
@@ -514,7 +514,7 @@ fn synthesize<'py>(
 
 fn raw_from(
     arr: &Bound<'_, PyAny>,
-    meta: &day2night::dng::meta::RawMeta,
+    meta: &day2night::raw::meta::RawMeta,
     what: &str,
 ) -> PyResult<RawImage> {
     let a: PyReadonlyArray2<'_, u16> = arr

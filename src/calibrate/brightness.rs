@@ -64,7 +64,7 @@ pub fn build_dictionary(files: Vec<BrightnessMeasurement>) -> Result<BrightnessD
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::dng::meta::RawMeta;
+    use crate::raw::meta::RawMeta;
     use crate::raw::Bayer;
 
     #[test]

@@ -257,7 +257,7 @@ pub fn build_dictionary(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::dng::meta::RawMeta;
+    use crate::raw::meta::RawMeta;
     use crate::raw::{Bayer, Rect};
 
     fn card(bayer: Bayer, rgb: [f64; 3], w: usize, h: usize) -> RawImage {

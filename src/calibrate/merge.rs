@@ -175,8 +175,8 @@ impl Merger {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::dng::meta::RawMeta;
     use crate::normalize::{normalize, NormalizeOptions};
+    use crate::raw::meta::RawMeta;
     use crate::raw::Bayer;
 
     fn frame(vals: &[u16], white: f64, iso: u32) -> RawImage {

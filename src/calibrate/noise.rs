@@ -697,7 +697,7 @@ pub fn build_model(
 #[cfg(test)]
 pub(crate) mod tests {
     use super::*;
-    use crate::dng::meta::RawMeta;
+    use crate::raw::meta::RawMeta;
     use rand::{RngExt, SeedableRng};
     use rand_distr::{Distribution, Normal};
 

@@ -1,6 +1,6 @@
 //! `day2night eval PRED TARGET [--json]`: PSNR, SSIM and mean Delta E 2000.
 use super::{usage, CmdResult};
-use day2night::imageio::open_bands;
+use day2night::encode::read::open_bands;
 use day2night::metrics::banded::{evaluate, DEFAULT_BAND_ROWS};
 use day2night::metrics::{SsimOptions, SsimWindow};
 use std::path::PathBuf;

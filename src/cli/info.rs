@@ -139,10 +139,10 @@ fn describe(out: &mut String, file: &std::path::Path, i: &DngInfo) {
         let _ = writeln!(out, "  CFA:           {}", r.cfa);
         if let Some(st) = &m.storage {
             let layout = match st.layout {
-                day2night::dng::meta::Layout::Strips { rows_per_strip } => {
+                day2night::raw::meta::Layout::Strips { rows_per_strip } => {
                     format!("strips of {rows_per_strip} rows")
                 }
-                day2night::dng::meta::Layout::Tiles { width, height } => {
+                day2night::raw::meta::Layout::Tiles { width, height } => {
                     format!("tiles {width}x{height}")
                 }
             };

@@ -1,11 +1,11 @@
 //! `day2night render IN.dng -o OUT.exr|png|tif`: the software ISP on one DNG.
 use super::{usage, CmdResult};
-use day2night::exr::{standard_attributes, write_exr, ExrCompression, ExrOptions};
+use day2night::encode::exr::{standard_attributes, write_exr, ExrCompression, ExrOptions};
+use day2night::encode::png::{write_png, write_tiff, PngOptions};
 use day2night::isp::render::{render_input, render_linear, resolve_neutral, RenderOptions};
 use day2night::isp::tone::DisplayTone;
 use day2night::isp::Demosaic;
 use day2night::output::OutputPolicy;
-use day2night::png::{write_png, write_tiff, PngOptions};
 use std::path::PathBuf;
 
 /// Arguments of `day2night render`.

@@ -5,8 +5,8 @@
 
 use super::{usage, CmdResult, Failure};
 use day2night::dng::write::Compression;
+use day2night::encode::exr::{ExrCompression, ExrOptions};
 use day2night::error::Error;
-use day2night::exr::{ExrCompression, ExrOptions};
 use day2night::output::OutputPolicy;
 use day2night::synth::config::{parse_isos, parse_neutral, JobConfig};
 use day2night::synth::job::{DayInput, DirSink, SynthJob, Target};

@@ -8,8 +8,8 @@
 //! the file name, so its plan (sidecar `plan`) equals what `day2night synth` samples.
 
 use super::{ensure_parent, Kind, Processor, Sink, Unit, UnitInfo};
+use crate::encode::exr::ExrOptions;
 use crate::error::Result;
-use crate::exr::ExrOptions;
 use crate::output::OutputPolicy;
 use crate::synth::job::{compression_name, DayInput, OutputKind, OutputSink, SynthJob};
 use std::borrow::Cow;
@@ -115,7 +115,7 @@ impl OutputSink for Sink {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::exr::ExrCompression;
+    use crate::encode::exr::ExrCompression;
     use crate::synth::SynthOptions;
 
     #[test]

@@ -1,12 +1,12 @@
-//! DNG reading and writing on top of the [`crate::tiff`] layer.
+//! DNG reading and writing on top of the [`crate::tiff`] layer: the reader maps a DNG's tags
+//! into the raw image model ([`crate::raw::RawImage`], [`crate::raw::RawMeta`]), the writer
+//! maps the model back into tags.
 
 pub mod ljpeg;
 pub mod ljpeg_encode;
-pub mod meta;
 pub mod read;
 pub mod thumbnail;
 pub mod write;
 
-pub use meta::RawMeta;
 pub use read::read_dng;
 pub use write::{write_dng, WriteOptions};

@@ -171,7 +171,7 @@ pub fn render(img: &RawImage, max_side: usize) -> Result<Thumbnail> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::dng::meta::RawMeta;
+    use crate::raw::meta::RawMeta;
     use crate::raw::Bayer;
 
     #[test]

@@ -13,10 +13,10 @@
 //! [`is_dropped`].
 
 use crate::dng::ljpeg_encode;
-use crate::dng::meta::{ByteOrder, RawMeta};
 use crate::dng::thumbnail;
 use crate::error::{Error, Result};
 use crate::output::OutputPolicy;
+use crate::raw::meta::{ByteOrder, RawMeta};
 use crate::raw::RawImage;
 use crate::tiff::tags as t;
 use crate::tiff::value::{Entry, Value};

@@ -18,8 +18,8 @@
 //!
 //! The temperature from xy uses Robertson's 1968 isotemperature lines, as the DNG SDK does.
 
-use crate::dng::meta::ColorInfo;
 use crate::error::{Error, Result};
+use crate::raw::meta::ColorInfo;
 
 /// A 3x3 matrix, row-major.
 pub type Mat3 = [[f64; 3]; 3];

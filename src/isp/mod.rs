@@ -8,6 +8,7 @@
 
 pub mod color;
 pub mod demosaic;
+pub mod geometry;
 pub mod render;
 pub mod render_crop;
 pub mod tone;
@@ -35,6 +36,20 @@ impl RgbImage {
             height,
             data: vec![0.0; 3 * width * height],
         }
+    }
+
+    /// [`RgbImage::new`], or [`crate::Error::Limits`] naming the size when the allocator
+    /// refuses it (instead of aborting the process).
+    pub fn try_new(width: usize, height: usize) -> crate::Result<RgbImage> {
+        let n = width
+            .checked_mul(height)
+            .and_then(|n| n.checked_mul(3))
+            .ok_or_else(|| crate::Error::limits(format!("a {width}x{height} RGB image")))?;
+        Ok(RgbImage {
+            width,
+            height,
+            data: crate::limits::try_filled(0.0, n, "an RGB image")?,
+        })
     }
 
     /// The pixel at (x, y); `None` outside the image.

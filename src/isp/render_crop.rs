@@ -79,7 +79,7 @@ pub fn render_linear_crop(
             };
         }
     };
-    let mut out = RgbImage::new(crop.width, crop.height);
+    let mut out = RgbImage::try_new(crop.width, crop.height)?;
     const BAND: usize = 32;
     out.data
         .par_chunks_mut(3 * crop.width * BAND)

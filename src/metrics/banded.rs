@@ -7,8 +7,8 @@
 
 use super::deltae::mean_delta_e_2000;
 use super::ssim::{check_ssim, plane, ssim_channel_sum, window_len, SsimOptions};
+use crate::encode::read::BandSource;
 use crate::error::{Error, Result};
-use crate::imageio::BandSource;
 use crate::isp::tone::srgb_oetf;
 use crate::isp::RgbImage;
 

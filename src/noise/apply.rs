@@ -71,7 +71,8 @@ pub fn apply_noise(clean: &RawImage, params: &NoiseParams, seed: u64) -> Result<
     let (top, left, aw) = (a.top as usize, a.left as usize, a.width());
     let width = clean.width;
     let key = noise_key(seed);
-    let mut data = clean.data.clone();
+    let mut data = crate::limits::try_with_capacity::<u16>(clean.data.len(), "a noisy raw")?;
+    data.extend_from_slice(&clean.data);
     data.par_chunks_mut(width)
         .enumerate()
         .skip(top)
@@ -202,7 +203,7 @@ impl<'a> RowNoise<'a> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::dng::meta::RawMeta;
+    use crate::raw::meta::RawMeta;
 
     fn flat(w: usize, h: usize, v: u16) -> RawImage {
         RawImage {

@@ -2,8 +2,8 @@
 //! frame (the Python package's training crops). The plan is always the full frame's; a
 //! crop only limits what is computed.
 
-use crate::dng::meta::RawMeta;
 use crate::error::{Error, Result};
+use crate::raw::meta::RawMeta;
 use serde::{Deserialize, Serialize};
 
 /// A rectangle of the active area, in active-area sample coordinates (row `top`, column

@@ -56,15 +56,15 @@ use super::sidecar::{sha256_hex, CalibrationInfo, InputInfo, OutputInfo, Sidecar
 use super::{Calibration, Plan, SynthOptions};
 use crate::deflate::Encoder;
 use crate::dng::write::{write_dng, Compression, WriteOptions};
-use crate::error::{Error, Result, ResultExt};
-use crate::exr::{
+use crate::encode::exr::{
     encode_exr_rows, encodes_rows, standard_attributes, write_exr, write_exr_blocks, ExrOptions,
 };
+use crate::encode::png::{encode_u8_slice, write_png, PngOptions};
+use crate::encode::png_rows::{write_png_groups, PngRows};
+use crate::error::{Error, Result, ResultExt};
 use crate::isp::render::Bands;
 use crate::isp::RgbImage;
 use crate::output::{write_bytes_atomic, DeferredSyncs, OutputPolicy};
-use crate::png::{encode_u8_slice, write_png, PngOptions};
-use crate::png_rows::{write_png_groups, PngRows};
 use crate::raw::RawImage;
 use std::path::{Path, PathBuf};
 use std::str::FromStr;

@@ -33,9 +33,9 @@ pub use masks::{Light, LightKind, MaskEval};
 pub use plan::{plan, NoisePlan, Plan};
 pub use relight::{run, run_clean, RunReport};
 
-use crate::dng::meta::RawMeta;
 use crate::error::{Error, Result};
 use crate::noise::{NoiseModel, NoiseParams};
+use crate::raw::meta::RawMeta;
 use crate::raw::RawImage;
 use dictionaries::BrightnessDict;
 use serde::{Deserialize, Serialize};

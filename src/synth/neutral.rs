@@ -7,8 +7,8 @@
 //! chapter 6); the white's CCT comes from McCamy's formula (no iteration is needed because
 //! the white is given in xy).
 
-use crate::dng::meta::RawMeta;
 use crate::error::{Error, Result};
+use crate::raw::meta::RawMeta;
 
 /// Smallest accepted neutral component (relative to green).
 pub const MIN_NEUTRAL: f64 = 1e-3;

@@ -58,14 +58,15 @@ pub fn run_clean(img: &RawImage, plan: &Plan) -> Result<(RawImage, RunReport)> {
     // Whole stored image, linearized (so a dropped LinearizationTable stays truthful).
     // Without a table linearizing is the identity: a plain copy (the active-area rows are
     // overwritten below anyway).
-    let mut data: Vec<u16> = if norm.is_identity() {
-        img.data.clone()
+    let mut data = crate::limits::try_with_capacity::<u16>(img.data.len(), "the clean night raw")?;
+    if norm.is_identity() {
+        data.extend_from_slice(&img.data);
     } else {
         img.data
             .par_iter()
             .map(|&x| norm.linearize(x).clamp(0.0, u16::MAX as f64) as u16)
-            .collect()
-    };
+            .collect_into_vec(&mut data);
+    }
     let saturated: u64 = data
         .par_chunks_mut(width)
         .enumerate()
@@ -98,7 +99,7 @@ pub fn run_clean_crop(img: &RawImage, plan: &Plan, crop: Crop) -> Result<(Vec<u1
     let a = img.active_area();
     crop.check(a.width(), a.height())?;
     let pass = CleanPass::new(img, plan, crop)?;
-    let mut data = vec![0u16; crop.width * crop.height];
+    let mut data = crate::limits::try_filled(0u16, crop.width * crop.height, "the clean crop")?;
     let saturated: u64 = data
         .par_chunks_mut(crop.width.max(1))
         .enumerate()

@@ -68,7 +68,7 @@ pub struct OutputInfo {
 }
 
 fn default_zip_level() -> u8 {
-    crate::exr::ExrOptions::DEFAULT_ZIP_LEVEL
+    crate::encode::exr::ExrOptions::DEFAULT_ZIP_LEVEL
 }
 
 fn is_default_zip_level(l: &u8) -> bool {

@@ -8,8 +8,8 @@ use super::dictionaries::IlluminantDict;
 use super::dim::DimPlan;
 use super::masks::{Light, LightKind, MaskEval, MASK_FLOOR};
 use super::*;
-use crate::dng::meta::RawMeta;
 use crate::normalize::Normalizer;
+use crate::raw::meta::RawMeta;
 use crate::raw::Bayer;
 use proptest::prelude::*;
 

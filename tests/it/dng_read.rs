@@ -4,8 +4,8 @@
 use crate::common;
 use crate::dngbuild;
 
-use day2night::dng::meta::{ByteOrder, Layout};
 use day2night::dng::read::{inspect_bytes, read_dng, read_dng_bytes};
+use day2night::raw::meta::{ByteOrder, Layout};
 use day2night::{Bayer, Rect};
 use dngbuild::{Builder, Pixels};
 

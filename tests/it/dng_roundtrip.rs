@@ -6,9 +6,9 @@
 
 use crate::common;
 
-use day2night::dng::meta::RawMeta;
 use day2night::dng::read::{read_dng, read_dng_bytes};
 use day2night::dng::write::{encode_dng, is_dropped, Compression, RawIfd, WriteOptions};
+use day2night::raw::meta::RawMeta;
 use day2night::raw::RawImage;
 use day2night::tiff::value::Entry;
 use std::collections::BTreeMap;

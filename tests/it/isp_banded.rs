@@ -5,12 +5,12 @@
 use crate::common;
 
 use day2night::dng::read::read_dng;
+use day2night::encode::png::{encode_u8, encode_u8_slow};
 use day2night::isp::render::{
     render_input, render_input_reference, render_linear, render_linear_reference, RenderOptions,
 };
 use day2night::isp::tone::DisplayTone;
 use day2night::isp::{Demosaic, RgbImage};
-use day2night::png::{encode_u8, encode_u8_slow};
 use std::path::PathBuf;
 
 fn bits(img: &RgbImage) -> (usize, usize, Vec<u32>) {

@@ -4,7 +4,7 @@
 //! run checks one photo in one phase.
 use crate::common;
 
-use day2night::imageio::read_image;
+use day2night::encode::read::read_image;
 use day2night::isp::demosaic::{demosaic, mosaic, Demosaic};
 use day2night::isp::RgbImage;
 use day2night::raw::Bayer;

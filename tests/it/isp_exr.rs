@@ -3,7 +3,7 @@
 //! (tests/validators/isp_exr_values.py).
 use crate::common;
 
-use day2night::exr::{write_exr, ExrCompression, ExrOptions, HALF_MAX};
+use day2night::encode::exr::{write_exr, ExrCompression, ExrOptions, HALF_MAX};
 use day2night::isp::RgbImage;
 use day2night::output::OutputPolicy;
 

@@ -5,13 +5,13 @@
 use crate::common;
 use crate::dngbuild;
 
-use day2night::exr::{write_exr, ExrCompression, ExrOptions};
-use day2night::imageio::{open_bands, read_image};
+use day2night::encode::exr::{write_exr, ExrCompression, ExrOptions};
+use day2night::encode::png::{write_png, PngOptions};
+use day2night::encode::read::{open_bands, read_image};
 use day2night::isp::RgbImage;
 use day2night::metrics::banded::evaluate;
 use day2night::metrics::{mean_delta_e_2000, psnr, ssim, SsimOptions, SsimWindow};
 use day2night::output::OutputPolicy;
-use day2night::png::{write_png, PngOptions};
 use day2night::tiff::value::Value;
 use std::path::Path;
 use std::time::{Duration, Instant};
@@ -72,7 +72,7 @@ fn banded_eval_equals_the_whole_image_metrics() {
         open_bands(&pb).unwrap(),
         open_bands(&png).unwrap(),
     );
-    assert!(matches!(sa, day2night::imageio::BandSource::Exr(_)));
+    assert!(matches!(sa, day2night::encode::read::BandSource::Exr(_)));
     // Whole-image reference, as eval computed it before bands.
     let whole = |p: &Path, q: &Path, window| {
         let (x, y) = (read_image(p).unwrap(), read_image(q).unwrap());
@@ -453,10 +453,18 @@ fn eval_of_two_134_megapixel_exrs_stays_under_2_gib() {
                 let t = ((x * 7 + y * 13 + seed as usize * 31) % 251) as f32 / 251.0;
                 px.copy_from_slice(&[t, 0.5 * t + 0.25, 1.0 - t]);
             }
-            blocks.extend(day2night::exr::encode_exr_rows(&rows, n, y0, &opts).unwrap());
+            blocks.extend(day2night::encode::exr::encode_exr_rows(&rows, n, y0, &opts).unwrap());
         }
-        day2night::exr::write_exr_blocks(n, n, &blocks, &p, &opts, &[], &OutputPolicy::default())
-            .unwrap();
+        day2night::encode::exr::write_exr_blocks(
+            n,
+            n,
+            &blocks,
+            &p,
+            &opts,
+            &[],
+            &OutputPolicy::default(),
+        )
+        .unwrap();
         paths.push(p);
     }
     let t0 = Instant::now();

@@ -160,7 +160,7 @@ fn openexr_reference_images_are_read_and_damaged_ones_refused() {
     let mut n = 0;
     for e in std::fs::read_dir(d.join("exr")).unwrap() {
         let p = e.unwrap().path();
-        let img = day2night::imageio::read_image(&p).unwrap_or_else(|e| panic!("{e}"));
+        let img = day2night::encode::read::read_image(&p).unwrap_or_else(|e| panic!("{e}"));
         assert!(img.linear && img.image.width > 0, "{}", p.display());
         let name = p.file_name().unwrap().to_string_lossy().to_string();
         if name.contains("naninf") {
@@ -186,7 +186,7 @@ fn openexr_reference_images_are_read_and_damaged_ones_refused() {
             .output()
             .unwrap();
         let want: f64 = String::from_utf8_lossy(&o.stdout).trim().parse().unwrap();
-        let img = day2night::imageio::read_image(&p).unwrap();
+        let img = day2night::encode::read::read_image(&p).unwrap();
         let got: f64 = img.image.data.iter().map(|&v| v as f64).sum();
         assert!(
             (got - want).abs() <= 1e-6 * want.abs().max(1.0),

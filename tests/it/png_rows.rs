@@ -4,9 +4,9 @@
 use crate::common;
 
 use day2night::deflate::Encoder;
+use day2night::encode::png_rows::{write_png_groups, write_png_rgb8, PngRows};
 use day2night::isp::tone::DisplayTone;
 use day2night::output::OutputPolicy;
-use day2night::png_rows::{write_png_groups, write_png_rgb8, PngRows};
 
 /// Smooth ramps, a flat region, saturated stripes and a little noise.
 fn image(w: usize, h: usize) -> Vec<u8> {

@@ -3,9 +3,9 @@
 //! data, and the independent validators (rawpy, DNG SDK, tifffile) on the written DNGs.
 use crate::common;
 
-use day2night::dng::meta::RawMeta;
 use day2night::dng::read_dng;
 use day2night::dng::write::{encode_dng, WriteOptions};
+use day2night::raw::meta::RawMeta;
 use day2night::raw::{Bayer, RawImage};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};

@@ -2,8 +2,8 @@
 //! the project's own DNG writer.
 #![allow(dead_code)]
 
-use day2night::dng::meta::RawMeta;
 use day2night::dng::write::{encode_dng, WriteOptions};
+use day2night::raw::meta::RawMeta;
 use day2night::raw::{Bayer, RawImage};
 use rand::SeedableRng;
 use rand_distr::{Distribution, StandardNormal};

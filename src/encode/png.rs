@@ -310,9 +310,9 @@ pub fn write_png(
 ) -> Result<()> {
     let (w, h) = dims(img)?;
     if !opts.sixteen_bit {
-        // 8-bit: row groups filtered and deflated in parallel (crate::png_rows)
+        // 8-bit: row groups filtered and deflated in parallel (crate::encode::png_rows)
         let bytes = encode_u8(img, opts.tone);
-        return crate::png_rows::write_png_rgb8(
+        return crate::encode::png_rows::write_png_rgb8(
             &bytes, img.width, img.height, opts.tone, path, policy,
         );
     }
@@ -487,13 +487,19 @@ mod tests {
             .collect();
         assert_eq!(bytes, encode_u8(&img, DisplayTone::Srgb));
         let b = dir.path().join("b.png");
-        crate::png_rows::write_png_rgb8(&bytes, 7, 5, DisplayTone::Srgb, &b, &policy).unwrap();
+        crate::encode::png_rows::write_png_rgb8(&bytes, 7, 5, DisplayTone::Srgb, &b, &policy)
+            .unwrap();
         assert_eq!(std::fs::read(&a).unwrap(), std::fs::read(&b).unwrap());
         let c = dir.path().join("c.png");
-        assert!(
-            crate::png_rows::write_png_rgb8(&bytes[1..], 7, 5, DisplayTone::Srgb, &c, &policy)
-                .is_err()
-        );
+        assert!(crate::encode::png_rows::write_png_rgb8(
+            &bytes[1..],
+            7,
+            5,
+            DisplayTone::Srgb,
+            &c,
+            &policy
+        )
+        .is_err());
         assert!(!c.exists());
         // the release tone (no lookup) goes through the formula
         let r: Vec<u8> = encode_u8_slice(&img.data, DisplayTone::Release);

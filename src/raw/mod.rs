@@ -1,8 +1,10 @@
 //! The in-memory raw image: a CFA mosaic of `u16` samples plus its metadata, and the
 //! geometry/level helpers every stage shares (Bayer phase, ActiveArea, per-site black).
 
-use crate::dng::meta::RawMeta;
+pub mod meta;
+
 use crate::error::{Error, Result};
+pub use meta::RawMeta;
 use serde::{Deserialize, Serialize};
 
 /// Colour of a CFA site: 0 = red, 1 = green, 2 = blue (DNG CFAPlaneColor order R,G,B).

@@ -138,7 +138,7 @@ fn exr_meta(path: &Path, max_pixels: u64) -> Result<exr::meta::MetaData> {
     if meta.headers.iter().any(|h| h.deep) {
         return Err(Error::unsupported("EXR: deep data"));
     }
-    crate::exr::chunks::check_chunk_table(path, &meta)?;
+    crate::encode::exr::chunks::check_chunk_table(path, &meta)?;
     Ok(meta)
 }
 
@@ -210,7 +210,7 @@ pub enum BandSource {
     /// Read whole.
     Whole(LoadedImage),
     /// Read in bands.
-    Exr(crate::exr::chunks::ExrBands),
+    Exr(crate::encode::exr::chunks::ExrBands),
 }
 
 impl BandSource {
@@ -280,7 +280,7 @@ pub fn open_bands(path: &Path) -> Result<BandSource> {
     let opened = (|| {
         let max = crate::limits::Limits::current()?.max_pixels;
         let meta = exr_meta(path, max)?;
-        crate::exr::chunks::ExrBands::open(path, &meta, pick_rgb)
+        crate::encode::exr::chunks::ExrBands::open(path, &meta, pick_rgb)
     })()
     .in_file(path)?;
     match opened {
@@ -301,9 +301,9 @@ impl From<image::ImageError> for Error {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::exr::{write_exr, ExrOptions};
+    use crate::encode::exr::{write_exr, ExrOptions};
+    use crate::encode::png::{write_png, PngOptions};
     use crate::output::OutputPolicy;
-    use crate::png::{write_png, PngOptions};
 
     #[test]
     fn reads_back_what_we_write() {

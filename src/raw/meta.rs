@@ -1,4 +1,5 @@
-//! `RawMeta`: everything the pipeline and a faithful re-write need from a DNG.
+//! `RawMeta`: everything the pipeline and a faithful re-write need to know about a raw
+//! image, in the model's terms (the DNG layer, [`crate::dng`], maps tags into it and back).
 //!
 //! Tags the pipeline uses are decoded into typed fields; every other entry is carried as a
 //! decoded [`Entry`] in `ifd0_extra`, `raw_extra` or `exif_extra` so that the writer can put

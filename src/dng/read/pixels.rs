@@ -1,0 +1,372 @@
+//! Pixel decoding: the raw IFD's geometry, its strips or tiles (refused when their byte
+//! ranges overlap or repeat), uncompressed and packed samples, lossless JPEG.
+
+use super::*;
+
+pub(super) struct Geometry {
+    pub(super) width: u32,
+    pub(super) height: u32,
+    pub(super) bits: u16,
+    pub(super) compression: u16,
+    pub(super) layout: Layout,
+}
+
+pub(super) fn geometry(raw: &Ifd) -> Result<Geometry> {
+    let width = raw.require_u32(IMAGE_WIDTH)?;
+    let height = raw.require_u32(IMAGE_LENGTH)?;
+    if width == 0 || height == 0 {
+        return Err(Error::malformed(format!(
+            "raw image has zero size ({width}x{height})"
+        )));
+    }
+    if width > MAX_DIMENSION || height > MAX_DIMENSION {
+        return Err(Error::limits(format!(
+            "raw image {width}x{height} exceeds the limit of {MAX_DIMENSION} pixels per side"
+        )));
+    }
+    crate::limits::check_pixels("raw image", u64::from(width), u64::from(height))?;
+    let spp = raw.u32(SAMPLES_PER_PIXEL).unwrap_or(1);
+    if spp != 1 {
+        return Err(Error::unsupported(format!(
+            "CFA raw with {spp} samples per pixel (only 1)"
+        )));
+    }
+    let bits_v = raw.get(BITS_PER_SAMPLE);
+    let bits = bits_v.and_then(|v| v.get_u32(0)).unwrap_or(1);
+    if !(8..=16).contains(&bits) {
+        return Err(Error::unsupported(format!(
+            "{bits}-bit samples (8..16 supported)"
+        )));
+    }
+    if let Some(f) = raw.u32(SAMPLE_FORMAT) {
+        if f != 1 {
+            return Err(Error::unsupported(format!(
+                "SampleFormat {f} (floating point or signed raw data) is not supported"
+            )));
+        }
+    }
+    let compression = raw.u32(COMPRESSION).unwrap_or(1) as u16;
+    check_compression(compression)?;
+    let layout = if raw.has(TILE_OFFSETS) || raw.has(TILE_WIDTH) {
+        let tw = raw.require_u32(TILE_WIDTH)?;
+        let th = raw.require_u32(TILE_LENGTH)?;
+        if tw == 0 || th == 0 || tw > MAX_DIMENSION || th > MAX_DIMENSION {
+            return Err(Error::malformed(format!("bad tile size {tw}x{th}")));
+        }
+        Layout::Tiles {
+            width: tw,
+            height: th,
+        }
+    } else {
+        let rps = raw.u32(ROWS_PER_STRIP).unwrap_or(height).clamp(1, height);
+        Layout::Strips {
+            rows_per_strip: rps,
+        }
+    };
+    Ok(Geometry {
+        width,
+        height,
+        bits: bits as u16,
+        compression,
+        layout,
+    })
+}
+
+// ---------------------------------------------------------------------------------------
+// Pixels
+
+/// One strip or tile: its place in the image and its bytes.
+pub(super) struct Block<'a> {
+    x: usize,
+    y: usize,
+    w: usize,
+    h: usize,
+    data: &'a [u8],
+}
+
+pub(super) fn blocks<'a>(bytes: &'a [u8], raw: &Ifd, g: &Geometry) -> Result<Vec<Block<'a>>> {
+    let (w, h) = (g.width as usize, g.height as usize);
+    let (off_tag, cnt_tag, bw, bh, across) = match g.layout {
+        Layout::Strips { rows_per_strip } => (
+            STRIP_OFFSETS,
+            STRIP_BYTE_COUNTS,
+            w,
+            rows_per_strip as usize,
+            1,
+        ),
+        Layout::Tiles { width, height } => (
+            TILE_OFFSETS,
+            TILE_BYTE_COUNTS,
+            width as usize,
+            height as usize,
+            w.div_ceil(width as usize),
+        ),
+    };
+    let down = h.div_ceil(bh);
+    let n = across * down;
+    let offs = raw
+        .require(off_tag)?
+        .to_u32_vec()
+        .ok_or_else(|| Error::malformed(format!("{} is not LONG/SHORT", tag_name(off_tag))))?;
+    let counts = raw
+        .require(cnt_tag)?
+        .to_u32_vec()
+        .ok_or_else(|| Error::malformed(format!("{} is not LONG/SHORT", tag_name(cnt_tag))))?;
+    if offs.len() < n || counts.len() < n {
+        return Err(Error::malformed(format!(
+            "{} {} and {} {} for {} {} needed by a {}x{} image",
+            offs.len(),
+            tag_name(off_tag),
+            counts.len(),
+            tag_name(cnt_tag),
+            n,
+            if across == 1 && matches!(g.layout, Layout::Strips { .. }) {
+                "strips"
+            } else {
+                "tiles"
+            },
+            w,
+            h
+        )));
+    }
+    let mut out = Vec::with_capacity(n);
+    for i in 0..n {
+        let (bx, by) = (i % across, i / across);
+        let off = offs[i] as usize;
+        let len = counts[i] as usize;
+        let data = off
+            .checked_add(len)
+            .and_then(|end| bytes.get(off..end))
+            .ok_or_else(|| {
+                Error::malformed(format!(
+                    "{} {i}: {len} bytes at offset {off} run past the end of the {}-byte file (truncated?)",
+                    if matches!(g.layout, Layout::Strips { .. }) { "strip" } else { "tile" },
+                    bytes.len()
+                ))
+            })?;
+        out.push(Block {
+            x: bx * bw,
+            y: by * bh,
+            w: bw,
+            h: bh,
+            data,
+        });
+    }
+    let kind = if matches!(g.layout, Layout::Strips { .. }) {
+        "strip"
+    } else {
+        "tile"
+    };
+    check_disjoint(&offs[..n], &counts[..n], kind)?;
+    Ok(out)
+}
+
+/// Error when two strips or tiles share bytes: each must have its own data. Repeated or
+/// overlapping ranges are how a tiny file claims a huge image (a decompression bomb), so
+/// they are refused before anything is allocated for the pixels. Empty ranges share nothing.
+pub(super) fn check_disjoint(offs: &[u32], counts: &[u32], kind: &str) -> Result<()> {
+    let mut order: Vec<usize> = (0..offs.len()).filter(|&i| counts[i] > 0).collect();
+    order.sort_unstable_by_key(|&i| (offs[i], i));
+    for pair in order.windows(2) {
+        let (a, b) = (pair[0], pair[1]);
+        let a_end = u64::from(offs[a]) + u64::from(counts[a]);
+        if u64::from(offs[b]) < a_end {
+            let (first, second) = (a.min(b), a.max(b));
+            return Err(Error::malformed(format!(
+                "{kind}s {first} and {second} overlap ({kind} {a}: bytes {}..{a_end}, \
+                 {kind} {b}: from byte {}): each {kind} must have its own data \
+                 (a decompression bomb?)",
+                offs[a], offs[b]
+            )));
+        }
+    }
+    Ok(())
+}
+
+pub(super) fn decode_pixels(
+    bytes: &[u8],
+    order: ByteOrder,
+    raw: &Ifd,
+    g: &Geometry,
+) -> Result<Vec<u16>> {
+    let (w, h) = (g.width as usize, g.height as usize);
+    let blocks = blocks(bytes, raw, g)?;
+    let bits = g.bits as usize;
+    if g.compression == 1 {
+        // Check that the data covers the image before allocating it.
+        for (i, b) in blocks.iter().enumerate() {
+            let rows = b.h.min(h - b.y.min(h));
+            let need = row_bytes(b.w, bits).saturating_mul(rows);
+            if b.data.len() < need {
+                return Err(Error::malformed(format!(
+                    "{} {i} holds {} bytes, {need} needed (truncated?)",
+                    if matches!(g.layout, Layout::Strips { .. }) {
+                        "strip"
+                    } else {
+                        "tile"
+                    },
+                    b.data.len()
+                )));
+            }
+        }
+    } else {
+        let total: usize = blocks.iter().map(|b| b.data.len()).sum();
+        if w.saturating_mul(h) > total.saturating_mul(8) {
+            return Err(Error::malformed(format!(
+                "{total} bytes of lossless JPEG data cannot hold a {w}x{h} image (truncated?)"
+            )));
+        }
+    }
+    let mut out = crate::limits::try_filled(0u16, w * h, "the raw pixels")?;
+    let mut rowbuf = Vec::new();
+    for b in &blocks {
+        let vis_w = b.w.min(w.saturating_sub(b.x));
+        let vis_h = b.h.min(h.saturating_sub(b.y));
+        if vis_w == 0 || vis_h == 0 {
+            continue;
+        }
+        if g.compression == 1 {
+            let rb = row_bytes(b.w, bits);
+            rowbuf.resize(b.w, 0);
+            for (r, src) in b.data.chunks_exact(rb.max(1)).take(vis_h).enumerate() {
+                let dst_start = (b.y + r) * w + b.x;
+                let dst = &mut out[dst_start..dst_start + vis_w];
+                if vis_w == b.w {
+                    unpack_row(src, dst, bits, order);
+                } else {
+                    unpack_row(src, &mut rowbuf, bits, order);
+                    dst.copy_from_slice(&rowbuf[..vis_w]);
+                }
+            }
+        } else {
+            let d = ljpeg::decode(b.data)?;
+            if d.data.len() < b.w * vis_h.min(b.h) {
+                return Err(Error::malformed(format!(
+                    "lossless JPEG {}x{}x{} frame too small for a {}x{} block",
+                    d.width, d.height, d.components, b.w, b.h
+                )));
+            }
+            for (r, src) in d.data.chunks_exact(b.w).take(vis_h).enumerate() {
+                let dst_start = (b.y + r) * w + b.x;
+                out[dst_start..dst_start + vis_w].copy_from_slice(&src[..vis_w]);
+            }
+        }
+    }
+    Ok(out)
+}
+
+pub(super) fn row_bytes(w: usize, bits: usize) -> usize {
+    (w.saturating_mul(bits)).div_ceil(8)
+}
+
+/// Unpack one row of `dst.len()` samples: 8-bit bytes, 16-bit in file byte order, other
+/// depths packed MSB-first (the DNG convention whatever the byte order).
+pub fn unpack_row(src: &[u8], dst: &mut [u16], bits: usize, order: ByteOrder) {
+    match bits {
+        8 => {
+            for (d, &s) in dst.iter_mut().zip(src) {
+                *d = s as u16;
+            }
+        }
+        16 => match order {
+            ByteOrder::Little => {
+                for (d, s) in dst.iter_mut().zip(src.chunks_exact(2)) {
+                    *d = u16::from_le_bytes([s[0], s[1]]);
+                }
+            }
+            ByteOrder::Big => {
+                for (d, s) in dst.iter_mut().zip(src.chunks_exact(2)) {
+                    *d = u16::from_be_bytes([s[0], s[1]]);
+                }
+            }
+        },
+        12 => {
+            let pairs = dst.len() / 2;
+            for (d, s) in dst.chunks_exact_mut(2).zip(src.chunks_exact(3)) {
+                d[0] = (u16::from(s[0]) << 4) | (u16::from(s[1]) >> 4);
+                d[1] = (u16::from(s[1] & 0x0F) << 8) | u16::from(s[2]);
+            }
+            if dst.len() % 2 == 1 {
+                let i = pairs * 3;
+                let a = src.get(i).copied().unwrap_or(0);
+                let b = src.get(i + 1).copied().unwrap_or(0);
+                if let Some(last) = dst.last_mut() {
+                    *last = (u16::from(a) << 4) | (u16::from(b) >> 4);
+                }
+            }
+        }
+        10 => unpack_quads::<10>(src, dst),
+        14 => unpack_quads::<14>(src, dst),
+        _ => {
+            // Eight samples of `bits` bits fill exactly `bits` bytes: decode whole groups
+            // from a 128-bit big-endian word, then the tail bit by bit.
+            let groups = (dst.len() / 8).min(src.len() / bits);
+            let mask = (1u128 << bits) - 1;
+            for (d, s) in dst
+                .chunks_exact_mut(8)
+                .zip(src.chunks_exact(bits))
+                .take(groups)
+            {
+                let mut word = [0u8; 16];
+                word[..bits].copy_from_slice(s);
+                let v = u128::from_be_bytes(word);
+                for (k, o) in d.iter_mut().enumerate() {
+                    *o = ((v >> (128 - bits * (k + 1))) & mask) as u16;
+                }
+            }
+            unpack_bits(
+                &src[(groups * bits).min(src.len())..],
+                &mut dst[groups * 8..],
+                bits,
+            );
+        }
+    }
+}
+
+/// Four `BITS`-bit samples fill exactly BITS/2 bytes (BITS even): decode whole groups from
+/// a 64-bit big-endian word (constant-size copies, no per-sample branches), then the tail.
+pub(super) fn unpack_quads<const BITS: usize>(src: &[u8], dst: &mut [u16]) {
+    let gb = BITS / 2;
+    let groups = (dst.len() / 4).min(src.len() / gb);
+    let mask = (1u64 << BITS) - 1;
+    for (d, s) in dst
+        .chunks_exact_mut(4)
+        .zip(src.chunks_exact(gb))
+        .take(groups)
+    {
+        let mut word = [0u8; 8];
+        for (w, b) in word.iter_mut().zip(s) {
+            *w = *b;
+        }
+        let v = u64::from_be_bytes(word);
+        d[0] = ((v >> (64 - BITS)) & mask) as u16;
+        d[1] = ((v >> (64 - 2 * BITS)) & mask) as u16;
+        d[2] = ((v >> (64 - 3 * BITS)) & mask) as u16;
+        d[3] = ((v >> (64 - 4 * BITS)) & mask) as u16;
+    }
+    let (s_done, d_done) = (groups * gb, groups * 4);
+    unpack_bits(
+        src.get(s_done..).unwrap_or(&[]),
+        dst.get_mut(d_done..).unwrap_or(&mut []),
+        BITS,
+    );
+}
+
+/// Generic MSB-first unpacking (missing source bytes read as zero).
+pub(super) fn unpack_bits(src: &[u8], dst: &mut [u16], bits: usize) {
+    let mut acc: u64 = 0;
+    let mut n = 0usize;
+    let mut it = src.iter();
+    let mask = (1u64 << bits) - 1;
+    for d in dst.iter_mut() {
+        while n < bits {
+            acc = (acc << 8) | u64::from(it.next().copied().unwrap_or(0));
+            n += 8;
+        }
+        n -= bits;
+        *d = ((acc >> n) & mask) as u16;
+    }
+}
+
+// ---------------------------------------------------------------------------------------
+// Metadata
