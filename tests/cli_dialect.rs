@@ -49,7 +49,7 @@ fn every_output_option_has_the_three_spellings() {
             "{cmd:?} has no -o/--output:\n{help}"
         );
         assert!(
-            help.contains("[aliases: --out]"),
+            help.contains("[alias: --out]"),
             "{cmd:?} has no --out alias:\n{help}"
         );
     }
