@@ -62,11 +62,25 @@ struct TempState {
 /// The registry of this process's temporary files (used by [`write_atomic`]).
 static TEMPS: TempRegistry = TempRegistry::new();
 
+/// The lock files of the [`OutputSetLock`]s this process holds (removed by an exit on an
+/// interrupt, which does not run their destructors).
+static HELD_LOCKS: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
+
+fn held_locks() -> MutexGuard<'static, Vec<PathBuf>> {
+    HELD_LOCKS.lock().unwrap_or_else(PoisonError::into_inner)
+}
+
 /// Remove every temporary file this process is writing and refuse new ones (and renames
-/// into place) from now on; returns how many were removed. For a process about to exit
-/// on an interrupt.
+/// into place) from now on; returns how many were removed. The lock files of the output
+/// sets held are removed too (the locks themselves end with the process). For a process
+/// about to exit on an interrupt.
 pub fn remove_temp_files_and_close() -> usize {
-    TEMPS.close_and_remove()
+    let n = TEMPS.close_and_remove();
+    #[cfg(unix)]
+    for p in held_locks().iter() {
+        let _ = fs::remove_file(p);
+    }
+    n
 }
 
 impl TempRegistry {
@@ -211,6 +225,7 @@ impl OutputSetLock {
             // A releasing holder removes the file: if the path no longer names the file
             // locked, lock the new one instead.
             if same_file(&file, &path) {
+                held_locks().push(path.clone());
                 return Ok(OutputSetLock { path, _file: file });
             }
         }
@@ -226,6 +241,10 @@ impl Drop for OutputSetLock {
     fn drop(&mut self) {
         // Removed while still locked (a waiter then sees a stale file and retries), then
         // unlocked as the file closes.
+        let mut held = held_locks();
+        if let Some(i) = held.iter().position(|p| *p == self.path) {
+            held.swap_remove(i);
+        }
         #[cfg(unix)]
         let _ = fs::remove_file(&self.path);
     }
