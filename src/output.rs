@@ -202,18 +202,19 @@ impl OutputSetLock {
                 .open(&path)
                 .map_err(Error::Io)
                 .in_file(&path)?;
+            // Called through the trait: std's File::lock (same names) needs Rust 1.89.
             let locked = if wait {
-                file.lock()
+                fs4::FileExt::lock(&file)
             } else {
-                match file.try_lock() {
+                match fs4::FileExt::try_lock(&file) {
                     Ok(()) => Ok(()),
-                    Err(fs::TryLockError::WouldBlock) => {
+                    Err(fs4::TryLockError::WouldBlock) => {
                         return Err(Error::Busy(format!(
                             "output set {base}_* is being written by another day2night process (pass --wait to wait for it)"
                         ))
                         .in_file(dir))
                     }
-                    Err(fs::TryLockError::Error(e)) => Err(e),
+                    Err(fs4::TryLockError::Error(e)) => Err(e),
                 }
             };
             match locked {
@@ -613,7 +614,7 @@ mod tests {
         let out = dir.path().join("b.bin");
         reg.commit_all(vec![(t2.clone(), out.clone())], |_| Ok(()))
             .unwrap();
-        assert_eq!(reg.live(), [t1.clone()]);
+        assert_eq!(reg.live(), std::slice::from_ref(&t1));
         assert_eq!(reg.close_and_remove(), 1);
         assert!(!t1.exists() && out.exists());
         assert!(matches!(

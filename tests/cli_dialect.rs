@@ -76,7 +76,10 @@ fn synth_accepts_each_spelling_and_lists_what_it_wrote() {
         for f in ["day_clean.dng", "day.json"] {
             assert!(out.join(f).is_file());
             let line = format!("wrote {}", out.join(f).display());
-            assert!(err.lines().any(|l| l == line), "{flag}: no {line:?} in {err}");
+            assert!(
+                err.lines().any(|l| l == line),
+                "{flag}: no {line:?} in {err}"
+            );
         }
         assert!(o.stdout.is_empty());
     }
@@ -104,7 +107,12 @@ fn synth_refuses_a_file_as_output_and_leaves_no_empty_folder() {
     let day = common::fixtures().join("day.dng");
     let file = tmp.path().join("night.dng");
     std::fs::write(&file, b"x").unwrap();
-    let o = run(&["synth".as_ref(), day.as_os_str(), "-o".as_ref(), file.as_os_str()]);
+    let o = run(&[
+        "synth".as_ref(),
+        day.as_os_str(),
+        "-o".as_ref(),
+        file.as_os_str(),
+    ]);
     assert_eq!(o.status.code(), Some(2));
     assert!(
         text(&o.stderr).contains("the output must be a directory"),
@@ -118,7 +126,12 @@ fn synth_refuses_a_file_as_output_and_leaves_no_empty_folder() {
     let bad = tmp.path().join("bad.dng");
     std::fs::write(&bad, b"not a dng at all").unwrap();
     let out = tmp.path().join("never");
-    let o = run(&["synth".as_ref(), bad.as_os_str(), "-o".as_ref(), out.as_os_str()]);
+    let o = run(&[
+        "synth".as_ref(),
+        bad.as_os_str(),
+        "-o".as_ref(),
+        out.as_os_str(),
+    ]);
     assert_eq!(o.status.code(), Some(1));
     assert!(!out.exists(), "an empty output folder was left");
     let err = text(&o.stderr);
@@ -140,7 +153,12 @@ fn dataset_without_dngs_and_report_of_a_missing_folder_are_errors() {
     std::fs::create_dir_all(&day).unwrap();
     std::fs::write(day.join("notes.txt"), b"no raws here").unwrap();
     let out = tmp.path().join("set");
-    let o = run(&["dataset".as_ref(), day.as_os_str(), "-o".as_ref(), out.as_os_str()]);
+    let o = run(&[
+        "dataset".as_ref(),
+        day.as_os_str(),
+        "-o".as_ref(),
+        out.as_os_str(),
+    ]);
     assert_eq!(o.status.code(), Some(1), "{}", text(&o.stderr));
     assert!(text(&o.stderr).contains("no DNG file found"));
     error_lines_have_the_form(&o, &day);
@@ -149,7 +167,11 @@ fn dataset_without_dngs_and_report_of_a_missing_folder_are_errors() {
     let missing = tmp.path().join("no_such_set");
     let o = run(&["report".as_ref(), missing.as_os_str()]);
     assert_eq!(o.status.code(), Some(1));
-    assert!(text(&o.stderr).contains("no such folder"), "{}", text(&o.stderr));
+    assert!(
+        text(&o.stderr).contains("no such folder"),
+        "{}",
+        text(&o.stderr)
+    );
     error_lines_have_the_form(&o, &missing);
     assert!(!missing.exists());
 }

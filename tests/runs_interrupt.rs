@@ -16,7 +16,9 @@ fn inputs(dir: &Path, n: usize, w: usize, h: usize) -> Vec<PathBuf> {
         .map(|i| {
             let mut b = dngbuild::Builder::new(w, h, 12);
             b.layout = dngbuild::Pixels::Strips { rows: 64 };
-            b.pixels.iter_mut().for_each(|p| *p = (*p + i as u16) & 0xfff);
+            b.pixels
+                .iter_mut()
+                .for_each(|p| *p = (*p + i as u16) & 0xfff);
             let p = dir.join(format!("img{i:02}.dng"));
             std::fs::write(&p, b.build()).unwrap();
             p
