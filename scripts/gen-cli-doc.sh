@@ -17,10 +17,13 @@ on these spellings.
 Conventions of every command:
 - errors go to stderr as `day2night: <file>: <reason>`; nothing but the requested output goes
   to stdout; exit code 0 on success, 1 for bad input or failed work, 2 for bad usage;
+- the output option is `-o`/`--output` (alias `--out`) wherever there is one;
 - outputs are written to a temporary file beside the destination, synced and renamed into
   place (a `synth`/`dataset` variant's files appear together, after all are on disk, or not
   at all if the variant fails); an existing output is refused unless `--overwrite`; an input
-  is never overwritten;
+  is never overwritten; concurrent runs writing one output set take turns (advisory lock,
+  `--wait`), and SIGINT/SIGTERM removes the temporary files and exits 130/143
+  (docs/concurrency.md);
 - a progress bar appears on stderr when stderr is a terminal and the work takes a while.
 
 Dataset layout and a PyTorch loader: docs/dataset.md. Calibration workflow: docs/calibration.md.

@@ -30,6 +30,14 @@ pub enum Error {
         /// Why it is refused.
         reason: String,
     },
+    /// Another process is writing the same outputs (it holds their advisory lock, see
+    /// [`crate::output::OutputSetLock`]); the message names the output set.
+    #[error("{0}")]
+    Busy(String),
+    /// The run was asked to stop (SIGINT/SIGTERM, see [`crate::output::request_stop`])
+    /// before this work could finish; its temporary files were removed.
+    #[error("interrupted")]
+    Interrupted,
     /// An operating-system I/O error.
     #[error("I/O error: {0}")]
     Io(#[from] std::io::Error),

@@ -7,13 +7,263 @@
 //! waits for the disk (`fsync`), and [`DeferredSyncs::finish`] renames the files into place
 //! once every sync succeeded. `synth` uses this so that its compute threads do not sit in
 //! `fsync` and so that a variant's outputs appear together, or not at all on an error.
+//!
+//! Across processes, an [`OutputSetLock`] (an advisory lock on a hidden `.<base>.lock` file
+//! beside the outputs) makes two runs writing the same output set take turns, so that the
+//! files of one set never come from two runs (docs/concurrency.md).
+//!
+//! Interrupts: every temporary file being written is recorded in a process-wide registry.
+//! [`request_stop`] (called on the first SIGINT/SIGTERM) makes deferred writes and
+//! [`DeferredSyncs::finish`] refuse to start, so a run stops at its next output and its
+//! temporary files are removed as the errors unwind; [`remove_temp_files_and_close`]
+//! (called before exiting at once, e.g. on a second signal) removes every registered
+//! temporary file and refuses any new one or any rename into place from then on.
 
 use crate::error::{Error, Result, ResultExt};
 use std::fs::{self, File};
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
-use std::sync::{Arc, Mutex, PoisonError};
+use std::sync::atomic::{AtomicI32, Ordering};
+use std::sync::{Arc, Mutex, MutexGuard, PoisonError};
 use std::thread::JoinHandle;
+
+/// The signal number that asked this process to stop; 0 while none did.
+static STOP: AtomicI32 = AtomicI32::new(0);
+
+/// Ask this process to stop starting new work (e.g. on SIGINT = 2 or SIGTERM = 15; any
+/// positive number). Returns true for the first request; later ones keep the first signal.
+pub fn request_stop(signal: i32) -> bool {
+    STOP.compare_exchange(0, signal.max(1), Ordering::SeqCst, Ordering::SeqCst)
+        .is_ok()
+}
+
+/// The signal of the first [`request_stop`], if any.
+pub fn stop_requested() -> Option<i32> {
+    match STOP.load(Ordering::SeqCst) {
+        0 => None,
+        s => Some(s),
+    }
+}
+
+/// The temporary files a process is writing, so that an interrupt can remove them. Creating
+/// a temporary file, renaming it into place and removing it all happen under its lock, so
+/// after [`TempRegistry::close_and_remove`] no temporary file is created or renamed.
+#[derive(Debug, Default)]
+pub struct TempRegistry {
+    state: Mutex<TempState>,
+}
+
+#[derive(Debug, Default)]
+struct TempState {
+    closed: bool,
+    live: Vec<PathBuf>,
+}
+
+/// The registry of this process's temporary files (used by [`write_atomic`]).
+static TEMPS: TempRegistry = TempRegistry::new();
+
+/// The lock files of the [`OutputSetLock`]s this process holds (removed by an exit on an
+/// interrupt, which does not run their destructors).
+static HELD_LOCKS: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
+
+fn held_locks() -> MutexGuard<'static, Vec<PathBuf>> {
+    HELD_LOCKS.lock().unwrap_or_else(PoisonError::into_inner)
+}
+
+/// Remove every temporary file this process is writing and refuse new ones (and renames
+/// into place) from now on; returns how many were removed. The lock files of the output
+/// sets held are removed too (the locks themselves end with the process). For a process
+/// about to exit on an interrupt.
+pub fn remove_temp_files_and_close() -> usize {
+    let n = TEMPS.close_and_remove();
+    #[cfg(unix)]
+    for p in held_locks().iter() {
+        let _ = fs::remove_file(p);
+    }
+    n
+}
+
+impl TempRegistry {
+    /// An empty, open registry.
+    pub const fn new() -> TempRegistry {
+        TempRegistry {
+            state: Mutex::new(TempState {
+                closed: false,
+                live: Vec::new(),
+            }),
+        }
+    }
+
+    fn lock(&self) -> MutexGuard<'_, TempState> {
+        self.state.lock().unwrap_or_else(PoisonError::into_inner)
+    }
+
+    /// Create (truncate) the temporary file `tmp` and record it; [`Error::Interrupted`]
+    /// once the registry is closed.
+    pub fn create(&self, tmp: &Path) -> Result<File> {
+        let mut st = self.lock();
+        if st.closed {
+            return Err(Error::Interrupted);
+        }
+        let f = File::create(tmp)?;
+        st.live.push(tmp.to_path_buf());
+        Ok(f)
+    }
+
+    /// Remove `tmp` (if it still exists) and forget it.
+    pub fn discard(&self, tmp: &Path) {
+        let mut st = self.lock();
+        let _ = fs::remove_file(tmp);
+        st.live.retain(|p| p != tmp);
+    }
+
+    /// Rename each `(tmp, path)` into place in order, under one hold of the lock (an
+    /// interrupt waits for the whole group), after `check(path)` passes. On the first
+    /// failure (or if the registry is closed) that file and the rest are removed and the
+    /// error is returned, naming its file; the files renamed before stay.
+    pub fn commit_all(
+        &self,
+        files: Vec<(PathBuf, PathBuf)>,
+        check: impl Fn(&Path) -> Result<()>,
+    ) -> Result<()> {
+        let mut st = self.lock();
+        let mut err = None;
+        for (tmp, path) in files {
+            if err.is_none() {
+                let r = if st.closed {
+                    Err(Error::Interrupted)
+                } else {
+                    check(&path).and_then(|_| fs::rename(&tmp, &path).map_err(Error::from))
+                };
+                if let Err(e) = r {
+                    err = Some(e.in_file(&path));
+                }
+            }
+            if err.is_some() {
+                let _ = fs::remove_file(&tmp);
+            }
+            st.live.retain(|p| *p != tmp);
+        }
+        match err {
+            Some(e) => Err(e),
+            None => Ok(()),
+        }
+    }
+
+    /// The temporary files recorded now.
+    pub fn live(&self) -> Vec<PathBuf> {
+        self.lock().live.clone()
+    }
+
+    /// Remove every recorded temporary file and close the registry (see
+    /// [`remove_temp_files_and_close`]); returns how many were removed.
+    pub fn close_and_remove(&self) -> usize {
+        let mut st = self.lock();
+        st.closed = true;
+        let mut n = 0;
+        for p in std::mem::take(&mut st.live) {
+            if fs::remove_file(&p).is_ok() {
+                n += 1;
+            }
+        }
+        n
+    }
+}
+
+/// An advisory lock on one output set: the files a run writes under one base name (e.g.
+/// `day_clean.dng`, `day_iso1600.dng`, `day_target.exr`, `day.json` for the base `day`).
+/// Held from before the existing outputs are checked until the last one is renamed into
+/// place, it makes concurrent day2night processes writing the same set take turns, so a set
+/// never mixes the files of two runs. The lock is `flock`-style on a hidden file
+/// `.<base>.lock` in the output folder, removed again on release (Unix); another process
+/// ignoring the lock is not stopped by it.
+#[derive(Debug)]
+pub struct OutputSetLock {
+    path: PathBuf,
+    _file: File,
+}
+
+impl OutputSetLock {
+    /// The lock file of the set `base` in `dir`.
+    pub fn lock_path(dir: &Path, base: &str) -> PathBuf {
+        dir.join(format!(".{base}.lock"))
+    }
+
+    /// Lock the output set `base` in `dir` (which must exist). When another process holds
+    /// it: wait for it if `wait`, else fail at once with [`Error::Busy`].
+    pub fn acquire(dir: &Path, base: &str, wait: bool) -> Result<OutputSetLock> {
+        let path = Self::lock_path(dir, base);
+        loop {
+            let file = fs::OpenOptions::new()
+                .read(true)
+                .write(true)
+                .create(true)
+                .truncate(false)
+                .open(&path)
+                .map_err(Error::Io)
+                .in_file(&path)?;
+            // Called through the trait: std's File::lock (same names) needs Rust 1.89.
+            let locked = if wait {
+                fs4::FileExt::lock(&file)
+            } else {
+                match fs4::FileExt::try_lock(&file) {
+                    Ok(()) => Ok(()),
+                    Err(fs4::TryLockError::WouldBlock) => {
+                        return Err(Error::Busy(format!(
+                            "output set {base}_* is being written by another day2night process (pass --wait to wait for it)"
+                        ))
+                        .in_file(dir))
+                    }
+                    Err(fs4::TryLockError::Error(e)) => Err(e),
+                }
+            };
+            match locked {
+                Ok(()) => {}
+                // A file system without locks: go on unlocked rather than refuse to work.
+                Err(e) if e.kind() == std::io::ErrorKind::Unsupported => {}
+                Err(e) => return Err(Error::Io(e).in_file(&path)),
+            }
+            // A releasing holder removes the file: if the path no longer names the file
+            // locked, lock the new one instead.
+            if same_file(&file, &path) {
+                held_locks().push(path.clone());
+                return Ok(OutputSetLock { path, _file: file });
+            }
+        }
+    }
+
+    /// The lock file.
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+}
+
+impl Drop for OutputSetLock {
+    fn drop(&mut self) {
+        // Removed while still locked (a waiter then sees a stale file and retries), then
+        // unlocked as the file closes.
+        let mut held = held_locks();
+        if let Some(i) = held.iter().position(|p| *p == self.path) {
+            held.swap_remove(i);
+        }
+        #[cfg(unix)]
+        let _ = fs::remove_file(&self.path);
+    }
+}
+
+#[cfg(unix)]
+fn same_file(file: &File, path: &Path) -> bool {
+    use std::os::unix::fs::MetadataExt;
+    match (file.metadata(), fs::metadata(path)) {
+        (Ok(a), Ok(b)) => a.dev() == b.dev() && a.ino() == b.ino(),
+        _ => false,
+    }
+}
+
+#[cfg(not(unix))]
+fn same_file(_file: &File, _path: &Path) -> bool {
+    true
+}
 
 /// How an output may treat an existing file at its path.
 #[derive(Debug, Clone, Default)]
@@ -72,26 +322,16 @@ impl DeferredSyncs {
             }
             synced.push((p.tmp, p.path));
         }
-        let mut synced = synced.into_iter();
-        if first_err.is_none() {
-            for (tmp, path) in synced.by_ref() {
-                let r = policy
-                    .check(&path)
-                    .and_then(|_| fs::rename(&tmp, &path).map_err(Error::from));
-                if let Err(e) = r {
-                    let _ = fs::remove_file(&tmp);
-                    first_err = Some(e.in_file(&path));
-                    break;
-                }
+        if first_err.is_none() && stop_requested().is_some() {
+            first_err = synced.first().map(|(_, p)| Error::Interrupted.in_file(p));
+        }
+        if let Some(e) = first_err {
+            for (tmp, _) in &synced {
+                TEMPS.discard(tmp);
             }
+            return Err(e);
         }
-        for (tmp, _) in synced {
-            let _ = fs::remove_file(&tmp);
-        }
-        match first_err {
-            Some(e) => Err(e),
-            None => Ok(()),
-        }
+        TEMPS.commit_all(synced, |path| policy.check(path))
     }
 }
 
@@ -99,7 +339,7 @@ impl Drop for DeferredSyncs {
     fn drop(&mut self) {
         for p in self.take() {
             let _ = p.sync.join();
-            let _ = fs::remove_file(&p.tmp);
+            TEMPS.discard(&p.tmp);
         }
     }
 }
@@ -147,6 +387,10 @@ where
     F: FnOnce(&mut BufWriter<File>) -> Result<()>,
 {
     policy.check(path)?;
+    if policy.defer.is_some() && stop_requested().is_some() {
+        // Interrupted: start no new output (the deferred set will not be committed).
+        return Err(Error::Interrupted.in_file(path));
+    }
     let dir = match path.parent() {
         Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
         _ => PathBuf::from("."),
@@ -160,7 +404,7 @@ where
         std::process::id()
     ));
     let result = (|| -> Result<()> {
-        let file = File::create(&tmp)?;
+        let file = TEMPS.create(&tmp)?;
         let mut w = BufWriter::with_capacity(1 << 20, file);
         fill(&mut w)?;
         w.flush()?;
@@ -179,12 +423,10 @@ where
         file.sync_all()?;
         drop(file);
         // Re-check just before the rename: a racing writer may have created the output.
-        policy.check(path)?;
-        fs::rename(&tmp, path)?;
-        Ok(())
+        TEMPS.commit_all(vec![(tmp.clone(), path.to_path_buf())], |p| policy.check(p))
     })();
     if result.is_err() {
-        let _ = fs::remove_file(&tmp);
+        TEMPS.discard(&tmp);
     }
     result.in_file(path)
 }
@@ -309,5 +551,84 @@ mod tests {
         assert_eq!(fs::read(&b).unwrap(), b"theirs");
         assert!(!c.exists());
         assert!(tmp_files(dir.path()).is_empty());
+    }
+
+    #[test]
+    fn set_lock_excludes_a_second_holder_and_is_removed_on_release() {
+        let dir = tempfile::tempdir().unwrap();
+        let a = OutputSetLock::acquire(dir.path(), "day", false).unwrap();
+        assert!(a.path().ends_with(".day.lock") && a.path().exists());
+        // A second open file description (as another process would have) is refused...
+        let err = OutputSetLock::acquire(dir.path(), "day", false).unwrap_err();
+        let msg = err.to_string();
+        assert!(
+            msg.contains("output set day_* is being written by another day2night process"),
+            "{msg}"
+        );
+        assert!(matches!(err.root(), Error::Busy(_)));
+        // ...while another set is independent.
+        let b = OutputSetLock::acquire(dir.path(), "day_v2", false).unwrap();
+        drop(a);
+        #[cfg(unix)]
+        assert!(!dir.path().join(".day.lock").exists());
+        let again = OutputSetLock::acquire(dir.path(), "day", false).unwrap();
+        drop((again, b));
+        #[cfg(unix)]
+        assert_eq!(fs::read_dir(dir.path()).unwrap().count(), 0);
+    }
+
+    #[test]
+    fn set_lock_waiters_take_turns() {
+        use std::sync::atomic::AtomicUsize;
+        let dir = tempfile::tempdir().unwrap();
+        let inside = AtomicUsize::new(0);
+        let max_inside = AtomicUsize::new(0);
+        std::thread::scope(|s| {
+            for _ in 0..4 {
+                s.spawn(|| {
+                    for _ in 0..25 {
+                        let _g = OutputSetLock::acquire(dir.path(), "x", true).unwrap();
+                        let n = inside.fetch_add(1, Ordering::SeqCst) + 1;
+                        max_inside.fetch_max(n, Ordering::SeqCst);
+                        std::thread::yield_now();
+                        inside.fetch_sub(1, Ordering::SeqCst);
+                    }
+                });
+            }
+        });
+        assert_eq!(max_inside.load(Ordering::SeqCst), 1);
+        #[cfg(unix)]
+        assert_eq!(fs::read_dir(dir.path()).unwrap().count(), 0);
+    }
+
+    #[test]
+    fn closed_registry_removes_live_files_and_refuses_new_ones() {
+        let dir = tempfile::tempdir().unwrap();
+        let reg = TempRegistry::new();
+        let (t1, t2) = (dir.path().join(".a.tmp-1"), dir.path().join(".b.tmp-1"));
+        let mut f = reg.create(&t1).unwrap();
+        f.write_all(b"x").unwrap();
+        reg.create(&t2).unwrap();
+        assert_eq!(reg.live(), [t1.clone(), t2.clone()]);
+        // one committed: no longer live
+        let out = dir.path().join("b.bin");
+        reg.commit_all(vec![(t2.clone(), out.clone())], |_| Ok(()))
+            .unwrap();
+        assert_eq!(reg.live(), std::slice::from_ref(&t1));
+        assert_eq!(reg.close_and_remove(), 1);
+        assert!(!t1.exists() && out.exists());
+        assert!(matches!(
+            reg.create(&dir.path().join(".c.tmp-1")),
+            Err(Error::Interrupted)
+        ));
+        assert!(!dir.path().join(".c.tmp-1").exists());
+        // a rename after the close is refused and its file removed
+        let t3 = dir.path().join(".d.tmp-1");
+        fs::write(&t3, b"late").unwrap();
+        let err = reg
+            .commit_all(vec![(t3.clone(), dir.path().join("d.bin"))], |_| Ok(()))
+            .unwrap_err();
+        assert!(matches!(err.root(), Error::Interrupted), "{err}");
+        assert!(!t3.exists() && !dir.path().join("d.bin").exists());
     }
 }

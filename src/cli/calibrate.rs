@@ -49,7 +49,7 @@ Examples:
 #[derive(Debug, clap::Args)]
 pub struct OutArgs {
     /// Output JSON file.
-    #[arg(short, long, value_name = "FILE.json")]
+    #[arg(short, long, visible_alias = "out", value_name = "FILE.json")]
     output: PathBuf,
     /// Replace an existing output file.
     #[arg(long)]

@@ -44,6 +44,10 @@ pub struct DatasetArgs {
     /// Recompute everything, ignoring the manifest (and accept a non-empty OUT_DIR).
     #[arg(long)]
     pub overwrite: bool,
+    /// When another day2night process is writing a unit's outputs, wait for it instead of
+    /// failing the unit.
+    #[arg(long)]
+    pub wait: bool,
     /// Also write the HTML report (OUT_DIR/report/index.html) at the end.
     #[arg(long)]
     pub report: bool,
@@ -109,6 +113,7 @@ pub fn run(args: DatasetArgs) -> CmdResult {
         shard,
         jobs,
         overwrite: args.overwrite,
+        wait: args.wait,
         progress: if args.quiet {
             ProgressMode::Quiet
         } else {

@@ -41,8 +41,14 @@ pub fn run(args: InfoArgs) -> CmdResult {
                 }
             }
             Err(e) => {
-                // `inspect` already names the file.
-                eprintln!("day2night: {e}");
+                match sniff(f) {
+                    Some(kind) => eprintln!(
+                        "day2night: {}: not a DNG: this is {kind} (info describes DNG files)",
+                        f.display()
+                    ),
+                    // `inspect` already names the file.
+                    None => eprintln!("day2night: {e}"),
+                }
                 failed += 1;
             }
         }
@@ -52,6 +58,10 @@ pub fn run(args: InfoArgs) -> CmdResult {
     } else {
         print!("{text}");
     }
+    if failed > 0 && args.files.len() == 1 {
+        // The file's own line said why.
+        return Err(super::reported(1));
+    }
     if failed > 0 {
         return Err(super::Failure {
             code: 1,
@@ -59,6 +69,43 @@ pub fn run(args: InfoArgs) -> CmdResult {
         });
     }
     Ok(())
+}
+
+/// The kind of a file that is not TIFF-based, from its first bytes (None for TIFF, which
+/// `inspect`'s own error then describes, and for unknown contents).
+fn sniff(path: &std::path::Path) -> Option<&'static str> {
+    use std::io::Read;
+    let mut head = [0u8; 12];
+    let mut f = std::fs::File::open(path).ok()?;
+    let n = f.read(&mut head).ok()?;
+    let h = &head[..n];
+    let kinds: [(&[u8], usize, &str); 9] = [
+        (b"\x76\x2f\x31\x01", 0, "an OpenEXR image"),
+        (b"\x89PNG\r\n\x1a\n", 0, "a PNG image"),
+        (b"\xff\xd8\xff", 0, "a JPEG image"),
+        (b"II\x2b\x00", 0, "a BigTIFF file"),
+        (b"MM\x00\x2b", 0, "a BigTIFF file"),
+        (b"ftyp", 4, "an ISO media file (HEIF, AVIF, CR3 or MP4)"),
+        (b"RIFF", 0, "a RIFF file (e.g. WebP)"),
+        (b"GIF8", 0, "a GIF image"),
+        (b"%PDF", 0, "a PDF document"),
+    ];
+    kinds
+        .iter()
+        .find(|(magic, at, _)| h.get(*at..at + magic.len()) == Some(*magic))
+        .map(|k| k.2)
+}
+
+/// A number in its shortest form at 6 significant digits: `3.2e-4` rather than
+/// `3.1999999999999997e-4` (the binary value of a NoiseProfile double).
+fn short_sci(x: f64) -> String {
+    let s = format!("{x:.5e}");
+    match s.split_once('e') {
+        Some((m, e)) if m.contains('.') => {
+            format!("{}e{e}", m.trim_end_matches('0').trim_end_matches('.'))
+        }
+        _ => s,
+    }
 }
 
 fn opt<T: std::fmt::Display>(v: &Option<T>) -> String {
@@ -220,7 +267,7 @@ fn describe(out: &mut String, file: &std::path::Path, i: &DngInfo) {
             "  noise profile: {}",
             m.noise_profile.as_ref().map_or("-".into(), |p| p
                 .iter()
-                .map(|(s, o)| format!("S={s:e} O={o:e}"))
+                .map(|(s, o)| format!("S={} O={}", short_sci(*s), short_sci(*o)))
                 .collect::<Vec<_>>()
                 .join("; "))
         );
@@ -251,4 +298,30 @@ fn describe(out: &mut String, file: &std::path::Path, i: &DngInfo) {
             format!("not usable: {}", opt(&i.reason))
         }
     );
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn noise_numbers_are_short() {
+        assert_eq!(short_sci(3.1999999999999997e-4), "3.2e-4");
+        assert_eq!(short_sci(1.0239999999999998e-4), "1.024e-4");
+        assert_eq!(short_sci(2e-5), "2e-5");
+        assert_eq!(short_sci(0.0), "0e0");
+        assert_eq!(short_sci(1.234567e-3), "1.23457e-3");
+    }
+
+    #[test]
+    fn sniffs_non_tiff_files() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("x.exr");
+        std::fs::write(&p, b"\x76\x2f\x31\x01\x02\0\0\0").unwrap();
+        assert_eq!(sniff(&p), Some("an OpenEXR image"));
+        std::fs::write(&p, b"II*\0\x08\0\0\0").unwrap();
+        assert_eq!(sniff(&p), None);
+        std::fs::write(&p, b"").unwrap();
+        assert_eq!(sniff(&p), None);
+    }
 }

@@ -23,7 +23,7 @@ pub struct MergeArgs {
     #[arg(required = true, value_name = "FRAME.dng")]
     pub frames: Vec<PathBuf>,
     /// Output DNG.
-    #[arg(short, long, value_name = "OUT.dng")]
+    #[arg(short, long, visible_alias = "out", value_name = "OUT.dng")]
     pub output: PathBuf,
     /// Replace an existing output file.
     #[arg(long)]

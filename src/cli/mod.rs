@@ -9,6 +9,7 @@ mod convert;
 mod dataset;
 mod eval;
 mod info;
+mod interrupt;
 mod merge;
 mod render;
 mod report;
@@ -70,6 +71,15 @@ impl<E: Into<anyhow::Error>> From<E> for Failure {
     }
 }
 
+/// A failure already reported on stderr (e.g. per file): exit code `code`, nothing more
+/// printed.
+pub fn reported(code: u8) -> Failure {
+    Failure {
+        code,
+        error: anyhow::anyhow!(""),
+    }
+}
+
 /// A usage error (exit code 2).
 pub fn usage(msg: impl std::fmt::Display) -> Failure {
     Failure {
@@ -95,6 +105,10 @@ pub fn main() -> ExitCode {
             return ExitCode::from(2);
         }
     }
+    // synth and dataset stop gracefully on a first SIGINT/SIGTERM; the others at once.
+    let graceful = matches!(cli.command, Command::Synth(_) | Command::Dataset(_));
+    let resumable = matches!(cli.command, Command::Dataset(_));
+    interrupt::install(graceful, resumable);
     let result = match cli.command {
         Command::Info(a) => info::run(a),
         Command::Convert(a) => convert::run(a),
@@ -106,6 +120,12 @@ pub fn main() -> ExitCode {
         Command::Dataset(a) => dataset::run(a),
         Command::Report(a) => report::run(a),
     };
+    if let Some(sig) = day2night::output::stop_requested() {
+        // Stopped by a signal: whatever failed on the way is a consequence of the stop.
+        day2night::output::remove_temp_files_and_close();
+        eprintln!("day2night: {}", interrupt::message(resumable));
+        return ExitCode::from(interrupt::exit_code(sig));
+    }
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(f) => {
@@ -118,7 +138,9 @@ pub fn main() -> ExitCode {
                     msg.push_str(&format!(": {c}"));
                 }
             }
-            eprintln!("day2night: {msg}");
+            if !msg.is_empty() {
+                eprintln!("day2night: {msg}");
+            }
             ExitCode::from(f.code)
         }
     }

@@ -22,7 +22,7 @@ pub struct RenderArgs {
     #[arg(value_name = "IN.dng")]
     pub input: PathBuf,
     /// Output file (.exr, .png, .tif or .tiff).
-    #[arg(short, long, value_name = "OUT")]
+    #[arg(short, long, visible_alias = "out", value_name = "OUT")]
     pub output: PathBuf,
     /// Demosaicing method: bilinear, mhc (default) or menon.
     #[arg(long, default_value = "mhc", value_name = "METHOD")]

@@ -7,7 +7,7 @@ use super::{usage, CmdResult, Failure};
 use day2night::dng::write::Compression;
 use day2night::encode::exr::{ExrCompression, ExrOptions};
 use day2night::error::Error;
-use day2night::output::OutputPolicy;
+use day2night::output::{stop_requested, OutputPolicy, OutputSetLock};
 use day2night::synth::config::{parse_isos, parse_neutral, JobConfig};
 use day2night::synth::job::{DayInput, DirSink, SynthJob, Target};
 use day2night::synth::sidecar::Sidecar;
@@ -81,8 +81,13 @@ pub struct SynthArgs {
     /// Day DNG files.
     #[arg(required = true, value_name = "DAY.dng")]
     pub inputs: Vec<PathBuf>,
-    /// Output directory (created if missing).
-    #[arg(short = 'o', long = "out", value_name = "DIR")]
+    /// Output directory (created if missing; a file is refused).
+    #[arg(
+        short = 'o',
+        long = "output",
+        visible_alias = "out",
+        value_name = "DIR"
+    )]
     pub out: PathBuf,
     /// Variants per input.
     #[arg(long, default_value_t = 1)]
@@ -96,6 +101,13 @@ pub struct SynthArgs {
     /// Replace existing outputs.
     #[arg(long)]
     pub overwrite: bool,
+    /// When another day2night process is writing the same output set, wait for it instead
+    /// of failing that input.
+    #[arg(long)]
+    pub wait: bool,
+    /// Do not list the files written (errors and warnings are still printed).
+    #[arg(long, short = 'q')]
+    pub quiet: bool,
 }
 
 /// Synthesis and output options: the same flags, values and defaults in `synth` and
@@ -285,7 +297,15 @@ pub fn run(args: SynthArgs) -> CmdResult {
         inputs: args.inputs.clone(),
         ..OutputPolicy::default()
     };
-    std::fs::create_dir_all(&args.out).map_err(|e| Error::from(e).in_file(&args.out))?;
+    if args.out.exists() && !args.out.is_dir() {
+        return Err(usage(format!(
+            "{}: the output must be a directory (synth writes several files per input)",
+            args.out.display()
+        )));
+    }
+    // Created before the first variant is written, so that no empty folder is left when
+    // every input fails.
+    let created_out = !args.out.exists();
     let mut builder = rayon::ThreadPoolBuilder::new();
     if let Some(n) = args.jobs {
         builder = builder.num_threads(n);
@@ -298,7 +318,7 @@ pub fn run(args: SynthArgs) -> CmdResult {
     })?;
 
     let total = args.inputs.len() as u64 * job.variants as u64;
-    let bar = if std::io::stderr().is_terminal() {
+    let bar = if std::io::stderr().is_terminal() && !args.quiet {
         let b = indicatif::ProgressBar::new(total);
         if let Ok(style) = indicatif::ProgressStyle::with_template(
             "{bar:30} {pos}/{len} {msg} [{elapsed_precise}]",
@@ -316,13 +336,22 @@ pub fn run(args: SynthArgs) -> CmdResult {
         policy: &policy,
         replay: replay.as_ref(),
         bar: bar.as_ref(),
+        wait: args.wait,
+        quiet: args.quiet,
     };
     let mut failed = 0usize;
     for input in &args.inputs {
+        // Interrupted (SIGINT/SIGTERM): start no new input; cli::main reports it.
+        if stop_requested().is_some() {
+            break;
+        }
         if let Some(b) = &bar {
             b.set_message(input.display().to_string());
         }
         if let Err(e) = pool.install(|| run.input(input)) {
+            if stop_requested().is_some() {
+                break;
+            }
             failed += 1;
             run.say(format!("day2night: {}", e.in_file(input)));
         }
@@ -330,9 +359,19 @@ pub fn run(args: SynthArgs) -> CmdResult {
     if let Some(b) = bar {
         b.finish_and_clear();
     }
+    if created_out {
+        // Nothing written (every input failed): leave no empty folder (remove_dir only
+        // removes an empty one).
+        let _ = std::fs::remove_dir(&args.out);
+    }
+    if failed > 0 && args.inputs.len() == 1 {
+        // The input's own line said why.
+        return Err(super::reported(1));
+    }
     if failed > 0 {
         return Err(Failure::from(anyhow::anyhow!(
-            "{} of {} inputs failed",
+            "{}: {} of {} inputs failed",
+            args.out.display(),
             failed,
             args.inputs.len()
         )));
@@ -348,6 +387,10 @@ struct Run<'a> {
     policy: &'a OutputPolicy,
     replay: Option<&'a Sidecar>,
     bar: Option<&'a indicatif::ProgressBar>,
+    /// Wait for an output set another process is writing (else fail the input).
+    wait: bool,
+    /// Do not list the files written.
+    quiet: bool,
 }
 
 impl Run<'_> {
@@ -382,6 +425,9 @@ impl Run<'_> {
             }
             None => {
                 for v in 0..self.job.variants {
+                    if stop_requested().is_some() {
+                        return Err(Error::Interrupted);
+                    }
                     let plan = self.job.plan(&day, &name, self.seed, v)?;
                     self.variant(input, &day, &stem, &plan)?;
                 }
@@ -401,10 +447,24 @@ impl Run<'_> {
         for w in &plan.warnings {
             self.say(format!("day2night: {}: warning: {}", input.display(), w));
         }
+        std::fs::create_dir_all(self.out).map_err(|e| Error::from(e).in_file(self.out))?;
+        // One process at a time checks and writes this output set (docs/concurrency.md).
+        // Its base name as DirSink::new makes it.
+        let base = if self.job.variants > 1 {
+            format!("{}_v{}", stem, plan.variant.saturating_add(1))
+        } else {
+            stem.to_string()
+        };
+        let _set = OutputSetLock::acquire(self.out, &base, self.wait)?;
         let sink = DirSink::new(self.out, stem, self.job, plan, self.policy);
-        self.job.run_variant(day, plan, &sink)?;
+        let written = self.job.run_variant(day, plan, &sink)?;
         if let Some(b) = self.bar {
             b.inc(1);
+        }
+        if !self.quiet {
+            for f in &written.files {
+                self.say(format!("wrote {}", self.out.join(f).display()));
+            }
         }
         Ok(())
     }

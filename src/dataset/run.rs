@@ -9,7 +9,7 @@ use super::resume::{decide, Decision, Reason, Want};
 use super::split::{assign, Split, SplitRule};
 use super::{sha256_hex, Processor, Shard, Sink, Unit};
 use crate::error::{Error, Result, ResultExt};
-use crate::output::OutputPolicy;
+use crate::output::{stop_requested, OutputPolicy, OutputSetLock};
 use serde::Serialize;
 use std::collections::{BTreeMap, HashMap};
 use std::io::IsTerminal;
@@ -51,6 +51,9 @@ pub struct RunOptions {
     pub overwrite: bool,
     /// Progress display.
     pub progress: ProgressMode,
+    /// When another process is writing a unit's outputs (holds its
+    /// [`OutputSetLock`]): wait for it (`true`) or fail the unit (`false`).
+    pub wait: bool,
 }
 
 /// What a run did.
@@ -135,6 +138,12 @@ pub fn run<P: Processor>(opts: &RunOptions, processor: &P) -> Result<Summary> {
     let jobs = opts.jobs.max(1);
     let out_dir = &opts.out_dir;
     let inputs = discover(&opts.day_dir, std::slice::from_ref(out_dir))?;
+    if inputs.is_empty() {
+        return Err(Error::invalid(
+            "no DNG file found (searched recursively for *.dng in any letter case)",
+        )
+        .in_file(&opts.day_dir));
+    }
     // Two inputs must not map to the same output names.
     let mut stems: HashMap<String, &str> = HashMap::new();
     for inp in &inputs {
@@ -204,6 +213,10 @@ pub fn run<P: Processor>(opts: &RunOptions, processor: &P) -> Result<Summary> {
     pool.scope(|s| {
         for _ in 0..jobs {
             s.spawn(|_| loop {
+                // Interrupted: start no new input (see crate::output::request_stop).
+                if stop_requested().is_some() {
+                    break;
+                }
                 let i = next.fetch_add(1, Ordering::SeqCst);
                 let Some(task) = tasks.get(i) else { break };
                 let t0 = Instant::now();
@@ -256,6 +269,12 @@ pub fn run<P: Processor>(opts: &RunOptions, processor: &P) -> Result<Summary> {
     });
     progress.finish();
     drop(appender);
+    if stop_requested().is_some() {
+        // The manifest holds every unit completed (appended as each one finished); keep it
+        // as it is, uncompacted, so the records of the inputs not reached stay for the
+        // rerun that resumes.
+        return Err(Error::Interrupted.in_file(out_dir));
+    }
 
     let final_records = final_records
         .into_inner()
@@ -285,7 +304,9 @@ pub fn run<P: Processor>(opts: &RunOptions, processor: &P) -> Result<Summary> {
 
 /// Remove the hidden temporary files (`.<name>.tmp-<pid>`, see `crate::output`) that a
 /// killed run left for the outputs of this run's units: each unit belongs to exactly one
-/// shard, so no live process can own them. Other shards' files are left alone.
+/// shard, so only another run of the same shard could own them, and the files of a unit
+/// whose [`OutputSetLock`] is held (being written now) are left alone. Other shards' files
+/// are left alone.
 fn remove_stale_temp_files(out_dir: &Path, tasks: &[Task], variants: u32) {
     let mut ids = std::collections::HashSet::new();
     for t in tasks {
@@ -308,7 +329,9 @@ fn remove_stale_temp_files(out_dir: &Path, tasks: &[Task], variants: u32) {
                 let Some(name) = name.to_str() else { continue };
                 if let Some(id) = temp_file_id(name) {
                     if ids.contains(id) {
-                        let _ = std::fs::remove_file(e.path());
+                        if let Ok(_unit) = OutputSetLock::acquire(out_dir, id, false) {
+                            let _ = std::fs::remove_file(e.path());
+                        }
                     }
                 }
             }
@@ -435,6 +458,9 @@ fn process_input<P: Processor>(
     let mut out = Vec::with_capacity(units.len());
     let mut loaded: Option<std::result::Result<P::Loaded, String>> = None;
     for (u, d) in units.iter().zip(decisions) {
+        if stop_requested().is_some() {
+            break;
+        }
         let reason = match d {
             Decision::Skip => {
                 if let Some(prev) = previous.get(&(u.rel.clone(), u.variant)) {
@@ -461,7 +487,9 @@ fn process_input<P: Processor>(
         match loaded.as_ref() {
             Some(Ok(input)) => {
                 let sink = Sink::new(&opts.out_dir, u.split, &u.id, policy.clone());
+                // One process at a time writes a unit's outputs (docs/concurrency.md).
                 let res = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+                    let _unit = OutputSetLock::acquire(&opts.out_dir, &u.id, opts.wait)?;
                     processor.process(input, u, &sink)
                 }));
                 match res {
@@ -486,6 +514,10 @@ fn process_input<P: Processor>(
             }
             Some(Err(msg)) => rec.error = Some(msg.clone()),
             None => rec.error = Some("not loaded".into()),
+        }
+        if rec.status != Status::Ok && stop_requested().is_some() {
+            // Stopped by an interrupt: no record, the rerun computes the unit.
+            break;
         }
         out.push(finish(rec, Did::Computed(reason)));
     }

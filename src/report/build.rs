@@ -95,6 +95,14 @@ struct Cell {
 /// Build `OUT_DIR/report/index.html` (+ `report/img/*.png`).
 pub fn build(opts: &ReportOptions, vis: &dyn Visuals) -> Result<ReportSummary> {
     let out = &opts.out_dir;
+    if !out.is_dir() {
+        let why = if out.exists() {
+            "not a folder (give the folder `day2night dataset` wrote)"
+        } else {
+            "no such folder"
+        };
+        return Err(Error::invalid(why).in_file(out));
+    }
     let manifests = manifest::all_manifests(out)?;
     if manifests.is_empty() {
         return Err(Error::invalid("no manifest*.jsonl here: not a dataset folder").in_file(out));

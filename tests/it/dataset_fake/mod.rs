@@ -101,6 +101,7 @@ pub fn opts(day: &Path, out: &Path) -> RunOptions {
         jobs: 2,
         overwrite: false,
         progress: ProgressMode::Quiet,
+        wait: false,
     }
 }
 
