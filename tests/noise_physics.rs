@@ -148,6 +148,10 @@ fn calibrate(dir: &Path) -> (PathBuf, Value) {
     assert!(err.contains("K DN/e-"), "table printed: {err}");
     let svg = std::fs::read_to_string(&plot).unwrap();
     assert!(svg.starts_with("<svg") && svg.contains("ISO 800"));
+    // D2N_WRITE_DOC_FIGURES=1 refreshes the figure of docs/calibration.md.
+    if std::env::var_os("D2N_WRITE_DOC_FIGURES").is_some() {
+        std::fs::write(common::root().join("docs/img/calibration_physics.svg"), &svg).unwrap();
+    }
     let text = std::fs::read_to_string(&out).unwrap();
     (out, serde_json::from_str(&text).unwrap())
 }

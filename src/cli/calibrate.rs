@@ -30,7 +30,8 @@ Normalized mean intensity of each image's active area and the normal fit N(mean,
 Example:
   day2night calibrate brightness night/*.dng -o brightness.json")]
     Brightness(BrightnessArgs),
-    /// Per-ISO noise model from bursts, clean/noisy pairs or NoiseProfile tags.
+    /// Per-ISO noise model from bursts, clean/noisy pairs or NoiseProfile tags, or the
+    /// physics-based model from dark and flat frames (--physics).
     #[command(after_help = "\
 Per ISO (Exif ISO of the frames) and 2x2 CFA position: var(y) = S*y + O on normalized data,
 fitted by weighted least squares over intensity bins (split-half burst statistics or pair
@@ -38,10 +39,15 @@ residuals), clipped pixels excluded, rounding variance removed from O. Several I
 file; S = c*ISO and O = a + b*ISO^2 fitted across them. A burst needs >= 4 frames; 16 frames
 of 1024x512 pixels measure S and O to about 1 %.
 
+--physics: per ISO, K (DN per electron) from flat-pair differences against the dark point,
+sigma_row from dark row means, sigma_read and the Tukey lambda (PPCC) from row-corrected dark
+residuals; >= 2 darks and >= 2 flats (pairs of equal exposure) per ISO. See docs/noise.md.
+
 Examples:
   day2night calibrate noise --burst iso1600_*.dng --burst iso3200_*.dng -o noise.json
   day2night calibrate noise --pair merged_iso50.dng iso3200_01.dng -o noise.json
-  day2night calibrate noise --from-noise-profile shots/*.dng -o noise.json")]
+  day2night calibrate noise --from-noise-profile shots/*.dng -o noise.json
+  day2night calibrate noise --physics --dark dark_*.dng --flat flat_*.dng -o physics.json --plot fit.svg")]
     Noise(NoiseArgs),
 }
 
