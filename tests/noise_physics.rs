@@ -150,7 +150,11 @@ fn calibrate(dir: &Path) -> (PathBuf, Value) {
     assert!(svg.starts_with("<svg") && svg.contains("ISO 800"));
     // D2N_WRITE_DOC_FIGURES=1 refreshes the figure of docs/calibration.md.
     if std::env::var_os("D2N_WRITE_DOC_FIGURES").is_some() {
-        std::fs::write(common::root().join("docs/img/calibration_physics.svg"), &svg).unwrap();
+        std::fs::write(
+            common::root().join("docs/img/calibration_physics.svg"),
+            &svg,
+        )
+        .unwrap();
     }
     let text = std::fs::read_to_string(&out).unwrap();
     (out, serde_json::from_str(&text).unwrap())
