@@ -37,6 +37,9 @@ the read noise; black and white = levels of the calibration frames";
 /// Default electron count above which the shot noise uses the normal approximation
 /// `N(e, e)` instead of an exact Poisson draw (docs/noise.md, measured table).
 pub const DEFAULT_POISSON_MAX_ELECTRONS: f64 = 1000.0;
+/// Largest exact-Poisson threshold (larger values, including infinity, are lowered to it;
+/// beyond 1e12 electrons the normal approximation's CDF error is below 1e-7).
+pub const POISSON_MAX_CAP: f64 = 1e12;
 /// Smallest sigma used in the log-log joint fit (smaller values are raised to it).
 pub const LOG_SIGMA_FLOOR: f64 = 1e-3;
 /// Accepted range of K (DN per electron).
@@ -80,12 +83,12 @@ impl PhysicsParams {
             && (self.gaussian_read
                 || (tukey::LAMBDA_MIN..=tukey::LAMBDA_MAX).contains(&self.lambda))
             && self.poisson_max_electrons >= 0.0
-            && !self.poisson_max_electrons.is_nan();
+            && self.poisson_max_electrons <= POISSON_MAX_CAP;
         if !ok {
             return Err(Error::invalid(format!(
                 "{what}: physics noise parameters out of range (k {} in [{:e}, {:e}], \
                  sigma_read {} and sigma_row {} finite >= 0, lambda {} in [{}, {}] unless \
-                 gaussian_read, poisson_max_electrons {} >= 0)",
+                 gaussian_read, poisson_max_electrons {} in [0, 1e12])",
                 self.k,
                 K_RANGE.0,
                 K_RANGE.1,
@@ -285,14 +288,15 @@ impl PhysicsModel {
         })
     }
 
-    /// Set the exact-Poisson threshold (electrons, >= 0; infinity = always exact).
+    /// Set the exact-Poisson threshold (electrons, >= 0; values above [`POISSON_MAX_CAP`],
+    /// infinity included, become the cap: always exact in practice).
     pub fn with_poisson_max(mut self, electrons: f64) -> Result<PhysicsModel> {
         if electrons.is_nan() || electrons < 0.0 {
             return Err(Error::invalid(format!(
                 "poisson_max_electrons {electrons} (need >= 0)"
             )));
         }
-        self.poisson_max_electrons = electrons;
+        self.poisson_max_electrons = electrons.min(POISSON_MAX_CAP);
         Ok(self)
     }
 

@@ -315,12 +315,15 @@ mod tests {
         }
         // K huge: at most a few electrons; a dark site with s < K gets 0 or K electrons.
         let mut p = params(1e6, 0.0, 0.0, 0.0);
-        p.poisson_max_electrons = f64::INFINITY;
+        p.poisson_max_electrons = 1e12;
         let img = flat(64, 64, 600);
         let out = apply_physics_noise_image(&img, &p, 3).unwrap();
         assert!(out.data.iter().all(|&v| v == 512 || v == 16383));
         assert!(apply_physics_noise_image(&img, &params(0.0, 1.0, 0.0, 0.0), 1).is_err());
         assert!(apply_physics_noise_image(&img, &params(1.0, f64::NAN, 0.0, 0.0), 1).is_err());
+        let mut p = params(1.0, 1.0, 0.0, 0.0);
+        p.poisson_max_electrons = f64::INFINITY;
+        assert!(apply_physics_noise_image(&img, &p, 1).is_err());
     }
 
     #[test]
