@@ -9,6 +9,7 @@ pub mod format;
 pub mod illuminants;
 pub mod merge;
 pub mod noise;
+pub mod physics;
 pub mod stats;
 
 use crate::error::{Error, Result};

@@ -30,7 +30,8 @@ Normalized mean intensity of each image's active area and the normal fit N(mean,
 Example:
   day2night calibrate brightness night/*.dng -o brightness.json")]
     Brightness(BrightnessArgs),
-    /// Per-ISO noise model from bursts, clean/noisy pairs or NoiseProfile tags.
+    /// Per-ISO noise model from bursts, clean/noisy pairs or NoiseProfile tags, or the
+    /// physics-based model from dark and flat frames (--physics).
     #[command(after_help = "\
 Per ISO (Exif ISO of the frames) and 2x2 CFA position: var(y) = S*y + O on normalized data,
 fitted by weighted least squares over intensity bins (split-half burst statistics or pair
@@ -38,10 +39,15 @@ residuals), clipped pixels excluded, rounding variance removed from O. Several I
 file; S = c*ISO and O = a + b*ISO^2 fitted across them. A burst needs >= 4 frames; 16 frames
 of 1024x512 pixels measure S and O to about 1 %.
 
+--physics: per ISO, K (DN per electron) from flat-pair differences against the dark point,
+sigma_row from dark row means, sigma_read and the Tukey lambda (PPCC) from row-corrected dark
+residuals; >= 2 darks and >= 2 flats (pairs of equal exposure) per ISO. See docs/noise.md.
+
 Examples:
   day2night calibrate noise --burst iso1600_*.dng --burst iso3200_*.dng -o noise.json
   day2night calibrate noise --pair merged_iso50.dng iso3200_01.dng -o noise.json
-  day2night calibrate noise --from-noise-profile shots/*.dng -o noise.json")]
+  day2night calibrate noise --from-noise-profile shots/*.dng -o noise.json
+  day2night calibrate noise --physics --dark dark_*.dng --flat flat_*.dng -o physics.json --plot fit.svg")]
     Noise(NoiseArgs),
 }
 
@@ -99,6 +105,11 @@ pub struct NoiseArgs {
     pair: Vec<Vec<PathBuf>>,
     from_noise_profile: Vec<PathBuf>,
     assume_iso: Option<u32>,
+    physics: bool,
+    dark: Vec<PathBuf>,
+    flat: Vec<PathBuf>,
+    plot: Option<PathBuf>,
+    poisson_max_electrons: Option<f64>,
     out: OutArgs,
 }
 
@@ -114,6 +125,11 @@ impl clap::FromArgMatches for NoiseArgs {
             pair: occ("pair"),
             from_noise_profile: occ("from_noise_profile").into_iter().flatten().collect(),
             assume_iso: m.get_one::<u32>("assume_iso").copied(),
+            physics: m.get_flag("physics"),
+            dark: occ("dark").into_iter().flatten().collect(),
+            flat: occ("flat").into_iter().flatten().collect(),
+            plot: m.get_one::<PathBuf>("plot").cloned(),
+            poisson_max_electrons: m.get_one::<f64>("poisson_max_electrons").copied(),
             out: OutArgs::from_arg_matches(m)?,
         })
     }
@@ -159,7 +175,52 @@ impl clap::Args for NoiseArgs {
                     .long("assume-iso")
                     .value_parser(value_parser!(u32).range(1..))
                     .value_name("ISO")
+                    .visible_alias("iso")
                     .help("ISO of input frames without an Exif ISO (missing or 0); frames with one keep theirs"),
+            )
+            .arg(
+                Arg::new("physics")
+                    .long("physics")
+                    .action(ArgAction::SetTrue)
+                    .conflicts_with_all(["burst", "pair", "from_noise_profile"])
+                    .requires_all(["dark", "flat"])
+                    .help("Fit the physics-based model (shot, Tukey-lambda read, row noise) from --dark and --flat frames"),
+            )
+            .arg(
+                Arg::new("dark")
+                    .long("dark")
+                    .num_args(1..)
+                    .action(ArgAction::Append)
+                    .requires("physics")
+                    .value_parser(value_parser!(PathBuf))
+                    .value_name("DARK.dng")
+                    .help("Dark frames (no light), >= 2 per ISO (--physics)"),
+            )
+            .arg(
+                Arg::new("flat")
+                    .long("flat")
+                    .num_args(1..)
+                    .action(ArgAction::Append)
+                    .requires("physics")
+                    .value_parser(value_parser!(PathBuf))
+                    .value_name("FLAT.dng")
+                    .help("Flat frames (uniform, unsaturated), in pairs of equal exposure, >= 2 per ISO (--physics)"),
+            )
+            .arg(
+                Arg::new("plot")
+                    .long("plot")
+                    .requires("physics")
+                    .value_parser(value_parser!(PathBuf))
+                    .value_name("FIT.svg")
+                    .help("Also write an SVG plot of the mean-variance fit (--physics)"),
+            )
+            .arg(
+                Arg::new("poisson_max_electrons")
+                    .long("poisson-max-electrons")
+                    .requires("physics")
+                    .value_parser(value_parser!(f64))
+                    .value_name("N")
+                    .help("Exact Poisson shot noise up to N electrons, normal approximation above (--physics; default 1000)"),
             );
         <OutArgs as clap::Args>::augment_args(cmd)
     }
@@ -295,6 +356,9 @@ fn run_brightness(a: BrightnessArgs) -> CmdResult {
 }
 
 fn run_noise(a: NoiseArgs) -> CmdResult {
+    if a.physics {
+        return run_noise_physics(a);
+    }
     // Frames without an Exif ISO get --assume-iso (noted once), the others keep theirs.
     let noted = std::cell::Cell::new(false);
     let read = |p: &Path| -> day2night::Result<RawImage> {
@@ -314,7 +378,7 @@ fn run_noise(a: NoiseArgs) -> CmdResult {
     };
     if a.burst.is_empty() && a.pair.is_empty() && a.from_noise_profile.is_empty() {
         return Err(usage(
-            "give at least one --burst FRAMES..., --pair CLEAN NOISY or --from-noise-profile DNG...",
+            "give at least one --burst FRAMES..., --pair CLEAN NOISY, --from-noise-profile DNG... or --physics --dark ... --flat ...",
         ));
     }
     let mut inputs: Vec<PathBuf> = vec![];
@@ -410,4 +474,75 @@ fn run_noise(a: NoiseArgs) -> CmdResult {
         eprintln!("day2night: warning: {w}");
     }
     write_json(&a.out, &inputs, &model)
+}
+
+fn run_noise_physics(a: NoiseArgs) -> CmdResult {
+    use day2night::calibrate::physics;
+    let read_all = |paths: &[PathBuf]| -> day2night::Result<Vec<(String, RawImage)>> {
+        let mut v = vec![];
+        for p in paths {
+            let mut img = read(p)?;
+            if let Some(iso) = a.assume_iso {
+                if img.meta.exif.iso.filter(|&i| i > 0).is_none() {
+                    img.meta.exif.iso = Some(iso);
+                }
+            }
+            v.push((p.display().to_string(), img));
+        }
+        Ok(v)
+    };
+    let darks = read_all(&a.dark)?;
+    let flats = read_all(&a.flat)?;
+    let dr: Vec<physics::Named> = darks.iter().map(|(n, i)| (n.as_str(), i)).collect();
+    let fr: Vec<physics::Named> = flats.iter().map(|(n, i)| (n.as_str(), i)).collect();
+    let camera = darks
+        .first()
+        .and_then(|(_, i)| i.meta.unique_camera_model.clone())
+        .unwrap_or_else(|| "unknown camera".into());
+    let source = format!(
+        "{camera}: physics noise calibration from {} dark and {} flat frames (day2night calibrate noise --physics)",
+        darks.len(),
+        flats.len()
+    );
+    let mut cal = physics::fit_physics(&dr, &fr, &source)?;
+    if let Some(n) = a.poisson_max_electrons {
+        cal.model = cal.model.with_poisson_max(n)?;
+    }
+    eprintln!(
+        "{:>6}  {:>10}  {:>10}  {:>8}  {:>6}  {:>10}  {:>6}  {:>6}",
+        "ISO", "K DN/e-", "read DN", "lambda", "gauss", "row DN", "darks", "pairs"
+    );
+    for (p, f) in cal.model.isos.iter().zip(&cal.fits) {
+        eprintln!(
+            "{:>6}  {:>10.4}  {:>10.4}  {:>8.3}  {:>6}  {:>10.4}  {:>6}  {:>6}",
+            p.iso,
+            p.k,
+            p.sigma_read,
+            p.lambda,
+            if p.gaussian_read { "yes" } else { "no" },
+            p.sigma_row,
+            f.dark.frames,
+            f.flats.len()
+        );
+    }
+    let j = &cal.model.joint;
+    eprintln!(
+        "joint fit: ln sigma_read = {:.4} + {:.4} ln K (residual {:.4}); ln sigma_row = {:.4} + {:.4} ln K (residual {:.4})",
+        j.read.intercept, j.read.slope, j.read.residual_std, j.row.intercept, j.row.slope, j.row.residual_std
+    );
+    for w in &cal.warnings {
+        eprintln!("day2night: warning: {w}");
+    }
+    let inputs: Vec<PathBuf> = a.dark.iter().chain(&a.flat).cloned().collect();
+    if let Some(plot) = &a.plot {
+        let svg = physics::plot_svg(&cal)?;
+        let policy = OutputPolicy {
+            overwrite: a.out.overwrite,
+            inputs: inputs.clone(),
+            ..OutputPolicy::default()
+        };
+        write_bytes_atomic(plot, &policy, svg.as_bytes())?;
+        eprintln!("wrote {}", plot.display());
+    }
+    write_json(&a.out, &inputs, &cal)
 }

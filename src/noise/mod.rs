@@ -1,8 +1,15 @@
 //! Noise models and noise synthesis: the heteroscedastic Gaussian model per 2x2 CFA position
-//! and ISO ([`model`]), and applying it to a clean night raw ([`apply`]). See docs/noise.md.
+//! and ISO ([`model`]), and applying it to a clean night raw ([`apply`]); the physics-based
+//! model (shot, Tukey-lambda read, row noise; [`physics`], [`physics_apply`], [`tukey`]).
+//! See docs/noise.md.
 
 pub mod apply;
 pub mod model;
+pub mod physics;
+pub mod physics_apply;
+pub mod tukey;
 
 pub use apply::apply_noise;
 pub use model::{Evaluated, IsoPoint, NoiseModel, NoiseParams, NOISE_MODEL_FORMAT};
+pub use physics::{PhysicsModel, PhysicsParams};
+pub use physics_apply::{apply_physics_noise, apply_physics_noise_crop, apply_physics_noise_image};

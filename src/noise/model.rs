@@ -131,6 +131,11 @@ pub struct NoiseModel {
     pub source: String,
     /// Calibrated points, any order (sorted on load), distinct ISOs.
     pub isos: Vec<IsoPoint>,
+    /// The physics-based model when the file was one (`"model": "physics"`); `isos` then
+    /// holds its equivalent Gaussian at the file's levels. Never written for Gaussian
+    /// models, so their files are unchanged.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub physics: Option<super::physics::PhysicsModel>,
 }
 
 /// A model evaluated at one ISO.
@@ -151,8 +156,16 @@ impl NoiseModel {
             units: NOISE_MODEL_UNITS.into(),
             source: source.into(),
             isos,
+            physics: None,
         };
         m.validate()?;
+        Ok(m)
+    }
+
+    /// A model carrying a physics model (its equivalent Gaussian as `isos`).
+    pub fn from_physics(p: super::physics::PhysicsModel) -> Result<NoiseModel> {
+        let mut m = NoiseModel::new(p.source.clone(), p.gaussian_points())?;
+        m.physics = Some(p);
         Ok(m)
     }
 
@@ -261,8 +274,14 @@ impl NoiseModel {
         )
     }
 
-    /// Parse a `day2night-noise-model/1` JSON document.
+    /// Parse a `day2night-noise-model/1` JSON document, or a physics model document
+    /// (`"model": "physics"`, see [`super::physics`]).
     pub fn from_json(text: &str) -> Result<NoiseModel> {
+        let v: serde_json::Value = serde_json::from_str(text)
+            .map_err(|e| Error::malformed(format!("noise model JSON: {}", e)))?;
+        if v.get("model").and_then(|m| m.as_str()) == Some(super::physics::PHYSICS_MODEL_TAG) {
+            return NoiseModel::from_physics(super::physics::PhysicsModel::from_json(text)?);
+        }
         let m: NoiseModel = serde_json::from_str(text)
             .map_err(|e| Error::malformed(format!("noise model JSON: {}", e)))?;
         if m.format != NOISE_MODEL_FORMAT {

@@ -243,7 +243,10 @@ pub fn run_noise(clean: &RawImage, plan: &Plan, index: usize) -> Result<(u32, Ra
         .noise
         .get(index)
         .ok_or_else(|| Error::invalid(format!("plan has no noise entry {}", index)))?;
-    let mut img = crate::noise::apply_noise(clean, &np.params, np.seed)?;
+    let mut img = match &np.physics {
+        Some(p) => crate::noise::apply_physics_noise_image(clean, p, np.seed)?,
+        None => crate::noise::apply_noise(clean, &np.params, np.seed)?,
+    };
     img.meta = night_meta(&clean.meta, plan, np.iso, &np.params);
     Ok((np.iso, img))
 }

@@ -14,9 +14,10 @@
 //! For a whole frame, 1's hand-over, 2 and 3 run as concurrent rayon tasks; errors are
 //! reported in a fixed order (clean, noisy, target). With `request.crop` only the crop is
 //! computed: the plan stays the whole frame's (lights, bulbs, illuminants), the clean pass
-//! covers the crop plus the demosaicer's margin ([`run_clean_crop`]), the crop's noise
-//! draws from its own documented stream ([`apply_noise_crop`]) and the target is the crop's
-//! region of the frame's render ([`render_linear_crop`]).
+//! covers the crop plus the demosaicer's margin ([`run_clean_crop`]), the crop's Gaussian
+//! noise draws from its own documented stream ([`apply_noise_crop`]; the physics model's
+//! draws are per site, so a crop gets the frame's samples: [`apply_physics_noise_crop`])
+//! and the target is the crop's region of the frame's render ([`render_linear_crop`]).
 //!
 //! ```no_run
 //! use day2night::synth::night::{synthesize, Request};
@@ -39,6 +40,7 @@ use crate::isp::render::{render_linear_bands, Bands};
 use crate::isp::render_crop::{render_linear_crop, CROP_MARGIN};
 use crate::isp::{render_input, render_linear, Demosaic, RenderOptions, RgbImage};
 use crate::noise::apply::apply_noise_crop;
+use crate::noise::apply_physics_noise_crop;
 use crate::raw::RawImage;
 use std::sync::Mutex;
 
@@ -247,8 +249,16 @@ fn cropped<S: NightSink>(
             rayon::join(
                 || -> Result<()> {
                     for np in &plan.noise {
-                        let mut data = clean.data.clone();
-                        apply_noise_crop(day, crop, &mut data, &np.params, np.seed)?;
+                        let data = match &np.physics {
+                            Some(p) => {
+                                apply_physics_noise_crop(day, crop, &clean.data, p, np.seed)?
+                            }
+                            None => {
+                                let mut data = clean.data.clone();
+                                apply_noise_crop(day, crop, &mut data, &np.params, np.seed)?;
+                                data
+                            }
+                        };
                         let meta = night_meta(&day.meta, plan, np.iso, &np.params);
                         let noisy = RawImage {
                             width: crop.width,
@@ -534,6 +544,57 @@ mod tests {
         let var = s2 / n - mean * mean;
         assert!(mean.abs() < 0.05, "{mean}");
         assert!((var - 1.0).abs() < 0.1, "{var}");
+    }
+
+    #[test]
+    fn physics_noise_on_a_crop_equals_the_frame_region() {
+        use crate::noise::physics::{PhysicsModel, PhysicsPoint};
+        use crate::noise::NoiseModel;
+        let day = day();
+        let opts = SynthOptions {
+            isos: vec![1200],
+            ..SynthOptions::default()
+        };
+        let mut cal = Calibration::embedded(&opts).unwrap();
+        let pt = |iso, k| PhysicsPoint {
+            iso,
+            k,
+            sigma_read: 2.0 * k,
+            lambda: 0.05,
+            gaussian_read: false,
+            sigma_row: 0.5 * k,
+        };
+        let (b, w) = (day.meta.levels.black_max(), day.meta.levels.white);
+        let pm = PhysicsModel::new("t", b, w, vec![pt(800, 0.5), pt(1600, 1.0)]).unwrap();
+        cal.noise = Some(NoiseModel::from_physics(pm).unwrap());
+        let p = plan(&day, "day.dng", 3, 0, &opts, &cal).unwrap();
+        assert!(p.noise[0].physics.is_some());
+        let full = synthesize(&day, &p, &Request::default()).unwrap();
+        let a = day.active_area();
+        let crop = Crop {
+            top: 4,
+            left: 6,
+            height: 9,
+            width: 11,
+        };
+        let c = synthesize(
+            &day,
+            &p,
+            &Request {
+                crop: Some(crop),
+                ..Request::default()
+            },
+        )
+        .unwrap();
+        for r in 0..crop.height {
+            for k in 0..crop.width {
+                let want = full.noisy[0].1.get(
+                    a.top as usize + crop.top + r,
+                    a.left as usize + crop.left + k,
+                );
+                assert_eq!(c.noisy[0].1.get(r, k), want);
+            }
+        }
     }
 
     #[test]

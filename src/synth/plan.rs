@@ -9,7 +9,7 @@ use super::neutral::day_neutral;
 use super::rng::SynthRng;
 use super::{Calibration, Mode, RelightFormula, SynthOptions};
 use crate::error::{Error, Result};
-use crate::noise::{NoiseModel, NoiseParams};
+use crate::noise::{Evaluated, NoiseModel, NoiseParams, PhysicsParams};
 use crate::raw::{Bayer, RawImage};
 use serde::{Deserialize, Serialize};
 
@@ -27,6 +27,11 @@ pub struct NoisePlan {
     pub params: NoiseParams,
     /// True when the ISO was outside the model's calibrated range.
     pub extrapolated: bool,
+    /// The physics-based model at this ISO when `--noise-model` is a physics file (then
+    /// `params` is its equivalent Gaussian, written as NoiseProfile). Absent otherwise, so
+    /// Gaussian plans and sidecars are unchanged.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub physics: Option<crate::noise::PhysicsParams>,
 }
 
 /// Everything needed to run synthesis on one image, with no randomness left.
@@ -281,13 +286,33 @@ pub fn plan(
 
     let model = choose_noise_model(img, cal, bayer)?;
     let clean_iso = img.meta.iso_or_default();
-    let clean_noise = model.at(clean_iso)?.params;
+    // Physics model: its equivalent Gaussian at this image's levels (the NoiseProfile).
+    let scale = img.meta.levels.white - img.meta.levels.black_max();
+    let at = |iso: u32| -> Result<(Evaluated, Option<PhysicsParams>)> {
+        match &model.physics {
+            Some(pm) => {
+                let e = pm.at(iso)?;
+                let ev = Evaluated {
+                    params: e.params.to_noise_params(scale),
+                    extrapolated: e.extrapolated,
+                };
+                Ok((ev, Some(e.params)))
+            }
+            None => Ok((model.at(iso)?, None)),
+        }
+    };
+    let clean_noise = at(clean_iso)?.0.params;
     let mut noise = Vec::new();
     for &iso in &opts.isos {
-        let e = model.at(iso)?;
+        let (e, physics) = at(iso)?;
         if e.extrapolated {
             let (lo, hi) = model.iso_range();
-            warnings.push(if lo == hi {
+            warnings.push(if model.physics.is_some() {
+                format!(
+                    "ISO {} is outside the physics noise model's calibrated range {}..{} ({}): K proportional to ISO, sigmas from the joint log-log fit",
+                    iso, lo, hi, model.source
+                )
+            } else if lo == hi {
                 format!(
                     "ISO {} scaled from the single calibrated ISO {} ({}): S in proportion to ISO, O to ISO^2",
                     iso, lo, model.source
@@ -304,6 +329,7 @@ pub fn plan(
             seed: rng.next_u64(),
             params: e.params,
             extrapolated: e.extrapolated,
+            physics,
         });
     }
     if !noise.is_empty() {
@@ -387,6 +413,7 @@ impl Plan {
                 .positions
                 .iter()
                 .all(|p| p[0].is_finite() && p[1].is_finite())
+                && n.physics.is_none_or(|p| p.check("plan").is_ok())
         });
         if !ok || !dim_ok || !noise_ok || self.day_neutral.iter().any(|&v| v <= 0.0) {
             return Err(Error::invalid("plan holds non-finite or invalid values"));

@@ -648,3 +648,45 @@ fn clean_pass_tables_match_the_per_sample_formula() {
         }
     }
 }
+
+#[test]
+fn physics_model_plan_carries_params_and_gaussian_plans_do_not() {
+    use crate::noise::physics::{PhysicsModel, PhysicsPoint};
+    let img = frame(Bayer::RGGB, 16, 12, [500, 700, 300]);
+    let o = SynthOptions {
+        isos: vec![800, 1200, 6400],
+        ..SynthOptions::default()
+    };
+    let mut cal = Calibration::embedded(&o).unwrap();
+    let gauss = plan(&img, "x", 3, 0, &o, &cal).unwrap();
+    assert!(gauss.noise.iter().all(|n| n.physics.is_none()));
+    assert!(!serde_json::to_string(&gauss).unwrap().contains("physics"));
+    let pt = |iso, k| PhysicsPoint {
+        iso,
+        k,
+        sigma_read: 2.0 * k,
+        lambda: 0.05,
+        gaussian_read: false,
+        sigma_row: 0.5 * k,
+    };
+    let pm = PhysicsModel::new("t", 512.0, 16383.0, vec![pt(800, 1.0), pt(1600, 2.0)]).unwrap();
+    cal.noise = Some(NoiseModel::from_physics(pm.clone()).unwrap());
+    let p = plan(&img, "x", 3, 0, &o, &cal).unwrap();
+    // Same random draws as the Gaussian plan (the seeds do not depend on the model).
+    assert_eq!(p.lights, gauss.lights);
+    let scale = WHITE - BLACK;
+    for n in &p.noise {
+        let ph = n.physics.unwrap();
+        assert_eq!(ph, pm.at(n.iso).unwrap().params);
+        assert_eq!(n.params, ph.to_noise_params(scale));
+        assert_eq!(n.extrapolated, n.iso == 6400);
+    }
+    assert!(p.warnings.iter().any(|w| w.contains("ISO 6400")));
+    p.check_against(&img).unwrap();
+    // The plan round-trips through JSON (the sidecar) with its physics parameters.
+    let back: Plan = serde_json::from_str(&serde_json::to_string(&p).unwrap()).unwrap();
+    assert_eq!(back, p);
+    let out = run(&img, &p).unwrap();
+    assert_eq!(out.noisy.len(), 3);
+    assert_ne!(out.noisy[0].1.data, out.clean.data);
+}

@@ -37,6 +37,7 @@ mod limits_bombs;
 mod limits_files;
 mod metrics_eval;
 mod msrv;
+mod noise_physics;
 mod png_rows;
 mod runs_concurrent;
 mod runs_interrupt;
