@@ -181,7 +181,7 @@ fn fit_darks(darks: &[Named], norm: &Normalizer) -> Result<DarkOut> {
             for (c, v) in row.iter().enumerate() {
                 let e = v - if c & 1 == 0 { m0 } else { m1 };
                 ss += e * e;
-                if idx % stride == 0 {
+                if idx.is_multiple_of(stride) {
                     let u = (splitmix(&mut dither) >> 11) as f64 / (1u64 << 53) as f64 - 0.5;
                     picked.push(e + u);
                 }

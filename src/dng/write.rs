@@ -435,7 +435,7 @@ fn extract_tile(img: &RawImage, x0: usize, y0: usize, tw: usize, th: usize) -> V
         let last = n - 1;
         if v <= last {
             v
-        } else if (v - last) % 2 == 0 {
+        } else if (v - last).is_multiple_of(2) {
             last
         } else {
             last.saturating_sub(1)

@@ -49,7 +49,7 @@ impl PngRows {
     /// reusable scratch. An empty `rgb` gives an empty group.
     pub fn encode(rgb: &[u8], width: usize, enc: &mut Encoder) -> Result<PngRows> {
         let stride = width.checked_mul(BPP).unwrap_or(0);
-        if stride == 0 || rgb.len() % stride != 0 {
+        if stride == 0 || !rgb.len().is_multiple_of(stride) {
             return Err(Error::invalid(format!(
                 "PNG rows of {width} RGB pixels need a multiple of {stride} bytes, got {}",
                 rgb.len()

@@ -663,7 +663,7 @@ mod tests {
                     let mut img = noisy_raw(w, h, bayer, inset, case);
                     let aw = w - inset.0 as usize;
                     let ah = h - inset.1 as usize;
-                    if case % 2 == 0 {
+                    if case.is_multiple_of(2) {
                         // per-site black (2x2 repeat) with BlackLevelDeltaH/V
                         let l = &mut img.meta.levels;
                         l.black_repeat = (2, 2);

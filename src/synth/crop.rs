@@ -41,7 +41,7 @@ impl Crop {
                 self.height, self.width
             )));
         }
-        if self.top % 2 != 0 || self.left % 2 != 0 {
+        if !self.top.is_multiple_of(2) || !self.left.is_multiple_of(2) {
             return Err(Error::invalid(format!(
                 "crop offset ({}, {}) must be even (it keeps the CFA phase)",
                 self.top, self.left

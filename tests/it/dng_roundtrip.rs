@@ -272,7 +272,7 @@ fn round_trip_every_input_in_every_mode() {
             // exiftool expects ceil(w*h*bits/8) bytes; TIFF pads every packed row to a
             // byte (libtiff, the DNG SDK and LibRaw agree), so odd-width packed rows are
             // "oversized" to exiftool. Only that exact case is tolerated, only for strips.
-            let row_padded = (r1.width * r1.meta.bits_per_sample as usize) % 8 != 0;
+            let row_padded = !(r1.width * r1.meta.bits_per_sample as usize).is_multiple_of(8);
             for ((out, w_out), (_, _, name)) in outs.iter().zip(&warns[1..]).zip(MODES) {
                 for w in w_out {
                     if row_padded

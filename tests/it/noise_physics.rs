@@ -3,6 +3,7 @@
 //! sampler, and written with the project's DNG writer) are calibrated with
 //! `calibrate noise --physics`; the fitted file then drives `synth --noise-model`, whose
 //! added noise is measured against the model at a calibrated ISO and between two.
+use crate::args;
 use crate::calibrate_support;
 use crate::common;
 

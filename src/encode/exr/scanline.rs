@@ -407,7 +407,7 @@ pub(crate) fn encode_rows(
     let lpb = lines_per_block(opts.compression).ok_or_else(|| {
         Error::unsupported(format!("own EXR encoder: compression {}", opts.compression))
     })?;
-    if w == 0 || first_row % lpb != 0 || rows.len() % (3 * w) != 0 {
+    if w == 0 || !first_row.is_multiple_of(lpb) || !rows.len().is_multiple_of(3 * w) {
         return Err(Error::invalid(format!(
             "EXR rows: first row {first_row} not a multiple of {lpb} lines, or a partial line"
         )));
