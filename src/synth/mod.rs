@@ -304,7 +304,8 @@ pub fn run_noise(clean: &RawImage, plan: &Plan, index: usize) -> Result<(u32, Ra
         .noise
         .get(index)
         .ok_or_else(|| Error::invalid(format!("plan has no noise entry {}", index)))?;
-    let mut img = crate::noise::apply_noise(clean, &np.params, np.seed)?;
+    let mut img =
+        crate::noise::apply::apply_noise_with(clean, &np.params, np.seed, plan.truncate_noise)?;
     img.meta = night_meta(&clean.meta, plan, np.iso, &np.params);
     Ok((np.iso, img))
 }
