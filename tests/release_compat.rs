@@ -206,7 +206,7 @@ fn check_day_identity(img: &RawImage, what: &str) {
             ..SynthOptions::default()
         };
         let (out, p) = clean(img, &opts);
-        let (mut n, mut cut) = (0u64, 0u64);
+        let (mut n, mut cut, mut old_off) = (0u64, 0u64, 0u64);
         for r in 0..area.height() {
             for c in 0..area.width() {
                 let x = img.get(r + top, c + left);
@@ -218,6 +218,15 @@ fn check_day_identity(img: &RawImage, what: &str) {
                     continue;
                 }
                 n += 1;
+                // the f32 round trip of the clean pass before the fix (y_w as f32, times
+                // the neutral as f32, denormalized): how many samples it moved
+                let nc = p.day_neutral[p.bayer.color_at(r, c) as usize];
+                let old = norm.denormalize_with_black(
+                    ((v as f32) * (nc as f32)) as f64,
+                    norm.black_at(r, c),
+                    truncate,
+                );
+                old_off += (old as f64 != lin) as u64;
                 assert_eq!(
                     out.get(r + top, c + left) as f64,
                     lin,
@@ -225,7 +234,11 @@ fn check_day_identity(img: &RawImage, what: &str) {
                 );
             }
         }
-        eprintln!("{what}: truncate {truncate}: {n} samples exact, {cut} clipped");
+        eprintln!(
+            "{what}: truncate {truncate}: {n} samples exact, {cut} clipped; the f32 round trip \
+             moved {old_off} ({:.1} %)",
+            100.0 * old_off as f64 / n as f64
+        );
         assert!(n > 0, "{what}");
     }
 }
@@ -263,7 +276,12 @@ fn measure_release_masks() {
     use day2night::dng::meta::RawMeta;
     use day2night::raw::Bayer;
     use day2night::synth::masks::{LightKind, PreparedMask};
-    for (w, h, seeds) in [(512usize, 512usize, 20u64), (4000, 3000, 4)] {
+    for (w, h, seeds, snap) in [
+        (512usize, 512usize, 20u64, false),
+        (512, 512, 20, true),
+        (4000, 3000, 4, false),
+        (4000, 3000, 4, true),
+    ] {
         let mut meta = RawMeta::new_bayer(Bayer::RGGB, 10, 64.0, 1023.0);
         meta.as_shot_neutral = Some([0.5, 1.0, 0.6]);
         // a smooth scene: mid-grey with gentle gradients
@@ -288,7 +306,20 @@ fn measure_release_masks() {
                 ..SynthOptions::default()
             };
             let cal = Calibration::embedded(&base).unwrap();
-            let pa = synth::plan(&img, "m.dng", seed, 0, &base, &cal).unwrap();
+            let mut pa = synth::plan(&img, "m.dng", seed, 0, &base, &cal).unwrap();
+            if snap {
+                // centres on the release's grid (its integer location ty is the window's
+                // first row + h // 2): only the kernel's shape differs, not its placement
+                for l in pa.lights.iter_mut() {
+                    if let Some(win) = l.window {
+                        for (c, n) in l.center.iter_mut().zip(win) {
+                            let n = n.round();
+                            let first = (*c - n / 2.0).floor() + 1.0;
+                            *c = first + (n - 1.0) / 2.0;
+                        }
+                    }
+                }
+            }
             let mut pb = pa.clone();
             pb.mask_eval = MaskEval::Release;
             for l in pa.lights.iter().filter(|l| l.kind != LightKind::Ambient) {
@@ -335,7 +366,7 @@ fn measure_release_masks() {
             }
         }
         eprintln!(
-            "{w}x{h}, {seeds} plans: bulbs mask |diff| max {:.4} mean {:.2e} (where >= 0.01); \
+            "{w}x{h}, {seeds} plans, centres on the release grid {snap}: bulbs mask |diff| max {:.4} mean {:.2e} (where >= 0.01); \
              local lights max {:.4} mean {:.2e}; clean raw |diff| max {dn_max} DN, mean {:.4} DN, \
              {:.3} % of samples differ",
             bulb_max,

@@ -89,7 +89,7 @@ impl JobConfig {
             target: self.target,
             input_exr: self.input_exr,
             compression: self.compression,
-            exr: self.exr.clone(),
+            exr: self.exr,
         })
     }
 }
