@@ -272,6 +272,7 @@ fn job_config(
             o.isos.push(iso);
         }
     }
+    let mut release = false;
     if let Some(opts) = options {
         for (k, v) in opts.iter() {
             let key: String = k.extract()?;
@@ -312,6 +313,15 @@ fn job_config(
                 "mask_eval" => {
                     o.mask_eval = v.extract::<String>()?.parse::<MaskEval>().map_err(py_err)?
                 }
+                "compat" => {
+                    release = match v.extract::<Option<String>>()?.as_deref() {
+                        None => false,
+                        Some("release") => true,
+                        Some(c) => {
+                            return Err(value_err(format!("compat {c:?}: use \"release\" or None")))
+                        }
+                    }
+                }
                 "illuminants" => cfg.illuminants = path(&v)?,
                 "brightness" => cfg.brightness = path(&v)?,
                 "noise_model" => cfg.noise_model = path(&v)?,
@@ -323,6 +333,10 @@ covariance, day_neutral, mask_eval, illuminants, brightness, noise_model)"
                 }
             }
         }
+    }
+    if release {
+        // Applied last, like --compat release: it checks the other options.
+        cfg.options = cfg.options.clone().release_compat().map_err(py_err)?;
     }
     cfg.target = if want_target {
         Target::Exr
@@ -396,7 +410,9 @@ fn rgb_array(py: Python<'_>, img: RgbImage) -> PyResult<Bound<'_, PyAny>> {
 ///
 /// Options (as the command line's flags): relight_formula ("release" | "paper"), bulbs,
 /// lights, truncate, covariance ("unbiased" | "ml"), day_neutral ((r, g, b)), mask_eval
-/// ("separable" | "exact" | "truncated:K"), illuminants, brightness, noise_model (paths).
+/// ("separable" | "exact" | "truncated:K" | "release"), compat ("release": the authors'
+/// release semantics, docs/synthesis.md), illuminants, brightness, noise_model (paths; a
+/// physics noise model file is recognized).
 ///
 /// Returns a dict: ``clean`` (uint16, the whole stored plane, or the crop), ``noisy``
 /// ({iso: uint16 array}), ``target`` (float32 HxWx3 linear Rec.709, or None), ``plan``

@@ -28,6 +28,13 @@ pub enum ModeArg {
     Day,
 }
 
+/// Compatibility preset.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum CompatArg {
+    /// The authors' released code where it is deterministic.
+    Release,
+}
+
 /// Local relighting formula.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
 pub enum FormulaArg {
@@ -146,6 +153,12 @@ pub struct SynthOpts {
     /// Truncate instead of rounding when denormalizing (released code, -0.5 DN bias).
     #[arg(long)]
     pub truncate: bool,
+    /// Reproduce the authors' released code where it is deterministic: implies --truncate
+    /// and --mask-eval release, truncates the noisy raws too, divides by the day neutral as
+    /// stored (not normalized to green = 1) and does not cut illuminant draws at
+    /// Mahalanobis 3. See docs/synthesis.md, "Release compatibility".
+    #[arg(long, value_enum, value_name = "PRESET")]
+    pub compat: Option<CompatArg>,
 }
 
 /// Less common `synth` options.
@@ -173,7 +186,8 @@ pub struct ExtraArgs {
     /// Day neutral r,g,b overriding (or replacing a missing) AsShotNeutral.
     #[arg(long = "day-neutral", value_name = "R,G,B")]
     pub day_neutral: Option<String>,
-    /// Mask evaluation: separable (default), exact, or truncated:K (K sigmas).
+    /// Mask evaluation: separable (default), exact, truncated:K (K sigmas), or release (the
+    /// authors' sampled kernel resized bilinearly).
     #[arg(long = "mask-eval", default_value = "separable")]
     pub mask_eval: String,
     /// EXR compression (lossless: zip (default, the fastest), piz (slower; larger on synth
@@ -237,6 +251,10 @@ impl SynthOpts {
                 .transpose()?,
             mask_eval: flag("--mask-eval", self.extra.mask_eval.parse())?,
             ..SynthOptions::default()
+        };
+        let options = match self.compat {
+            Some(CompatArg::Release) => flag("--compat release", options.release_compat())?,
+            None => options,
         };
         options.validate().map_err(usage)?;
         Ok(JobConfig {

@@ -2,6 +2,9 @@
 //! `x_noisy = clip(round(x + N(0, max(0, var(x)))), 0, white)` in DN, where
 //! `var(x) = (S * y + O) * (white - black_max)^2` and `y = (x - black(site)) / (white - black_max)`.
 //!
+//! With `truncate` (the authors' release, `SynthOptions::compat.truncate_noise`) the sum is
+//! truncated instead of rounded: `clip(trunc(x + n), 0, white)`, a -0.5 DN bias.
+//!
 //! Each active-area row draws from its own ChaCha8 stream (key from the plan's noise seed,
 //! stream number = row), so the result does not depend on how rayon splits the rows.
 
@@ -63,10 +66,33 @@ impl SigmaTable {
     }
 }
 
+/// `v` truncated toward zero and clipped to `[0, white]` (NaN gives 0): the release's
+/// `astype(uint16)` of a clipped value.
+#[inline]
+pub fn trunc_clamp(v: f64, white: f64) -> u16 {
+    let v = v.trunc();
+    if v.is_nan() {
+        0
+    } else {
+        v.clamp(0.0, white) as u16
+    }
+}
+
 /// A noisy copy of `clean` (which must hold linear values: no LinearizationTable).
 /// Samples outside the ActiveArea are copied unchanged.
 pub fn apply_noise(clean: &RawImage, params: &NoiseParams, seed: u64) -> Result<RawImage> {
-    let rows = RowNoise::new(clean, params)?;
+    apply_noise_with(clean, params, seed, false)
+}
+
+/// [`apply_noise`], the noisy sum truncated instead of rounded when `truncate`.
+pub fn apply_noise_with(
+    clean: &RawImage,
+    params: &NoiseParams,
+    seed: u64,
+    truncate: bool,
+) -> Result<RawImage> {
+    let mut rows = RowNoise::new(clean, params)?;
+    rows.truncate = truncate;
     let a = clean.active_area();
     let (top, left, aw) = (a.top as usize, a.left as usize, a.width());
     let width = clean.width;
@@ -116,8 +142,21 @@ pub fn apply_noise_crop(
     params: &NoiseParams,
     seed: u64,
 ) -> Result<()> {
+    apply_noise_crop_with(frame, crop, plane, params, seed, false)
+}
+
+/// [`apply_noise_crop`], the noisy sum truncated instead of rounded when `truncate`.
+pub fn apply_noise_crop_with(
+    frame: &RawImage,
+    crop: &Crop,
+    plane: &mut [u16],
+    params: &NoiseParams,
+    seed: u64,
+    truncate: bool,
+) -> Result<()> {
     let norm = Normalizer::new(frame)?.without_linearization();
-    let rows = RowNoise::with(norm, params);
+    let mut rows = RowNoise::with(norm, params);
+    rows.truncate = truncate;
     if plane.len() != crop.width * crop.height {
         return Err(crate::error::Error::invalid(format!(
             "crop plane holds {} samples, expected {}x{}",
@@ -146,6 +185,8 @@ struct RowNoise<'a> {
     params: &'a NoiseParams,
     white: f64,
     table: Option<SigmaTable>,
+    /// Truncate instead of rounding.
+    truncate: bool,
 }
 
 impl<'a> RowNoise<'a> {
@@ -161,6 +202,7 @@ impl<'a> RowNoise<'a> {
             params,
             white,
             table,
+            truncate: false,
         }
     }
 
@@ -168,6 +210,13 @@ impl<'a> RowNoise<'a> {
     /// in order from `rng`; `blk` is scratch of the active-area width.
     fn row(&self, r: usize, x0: usize, seg: &mut [u16], rng: &mut ChaCha8Rng, blk: &mut [f64]) {
         let (norm, params, white) = (&self.norm, self.params, self.white);
+        let quantize = |v: f64| {
+            if self.truncate {
+                trunc_clamp(v, white)
+            } else {
+                round_clamp(v, white)
+            }
+        };
         let scale = norm.scale;
         let scale2 = scale * scale;
         if let Some(t) = &self.table {
@@ -185,7 +234,7 @@ impl<'a> RowNoise<'a> {
                     (params.var_norm(Bayer::position(r, c), y) * scale2).sqrt()
                 };
                 let n: f64 = StandardNormal.sample(rng);
-                *x = round_clamp(*x as f64 + sigma * n, white);
+                *x = quantize(*x as f64 + sigma * n);
             }
             return;
         }
@@ -195,7 +244,7 @@ impl<'a> RowNoise<'a> {
             let y = (xf - b) / scale;
             let var = params.var_norm(Bayer::position(r, x0 + i), y) * scale2;
             let n: f64 = StandardNormal.sample(rng);
-            *x = round_clamp(xf + var.sqrt() * n, white);
+            *x = quantize(xf + var.sqrt() * n);
         }
     }
 }
@@ -302,6 +351,42 @@ mod tests {
                 assert_eq!(round_clamp(v, w), reference(v, w), "v {v} white {w}");
             }
         }
+    }
+
+    #[test]
+    fn truncation_keeps_the_draws_and_drops_the_fraction() {
+        let mut img = flat(64, 40, 3000);
+        for (i, v) in img.data.iter_mut().enumerate() {
+            *v = 400 + (i % 9000) as u16;
+        }
+        let p = NoiseParams::uniform(2e-4, 1e-5);
+        let r = apply_noise(&img, &p, 9).unwrap();
+        let t = apply_noise_with(&img, &p, 9, true).unwrap();
+        let mut n = 0f64;
+        let mut sum = 0f64;
+        for (&a, &b) in r.data.iter().zip(&t.data) {
+            let d = a as i32 - b as i32;
+            assert!(d == 0 || d == 1, "{a} {b}");
+            sum += d as f64;
+            n += 1.0;
+        }
+        assert!((sum / n - 0.5).abs() < 0.05, "{}", sum / n);
+        assert_eq!(trunc_clamp(-0.7, 100.0), 0);
+        assert_eq!(trunc_clamp(f64::NAN, 100.0), 0);
+        assert_eq!(trunc_clamp(99.99, 100.0), 99);
+        assert_eq!(trunc_clamp(1e9, 100.0), 100);
+        // the crop path truncates the same way
+        let crop = Crop {
+            top: 0,
+            left: 0,
+            height: 40,
+            width: 64,
+        };
+        let (mut pr, mut pt) = (img.data.clone(), img.data.clone());
+        apply_noise_crop(&img, &crop, &mut pr, &p, 9).unwrap();
+        apply_noise_crop_with(&img, &crop, &mut pt, &p, 9, true).unwrap();
+        assert!(pr.iter().zip(&pt).all(|(&a, &b)| a == b || a == b + 1));
+        assert_ne!(pr, pt);
     }
 
     /// The per-sample formula without the sigma table (the pre-table implementation).

@@ -132,18 +132,19 @@ pub fn parse_neutral(s: &str) -> Result<[f64; 3]> {
 
 impl FromStr for MaskEval {
     type Err = Error;
-    /// `separable`, `exact` or `truncated:K` (K > 0 sigmas).
+    /// `separable`, `exact`, `truncated:K` (K > 0 sigmas) or `release`.
     fn from_str(s: &str) -> Result<MaskEval> {
         match s {
             "separable" => Ok(MaskEval::Separable),
             "exact" => Ok(MaskEval::Exact),
+            "release" => Ok(MaskEval::Release),
             _ => match s
                 .strip_prefix("truncated:")
                 .and_then(|k| k.parse::<f64>().ok())
             {
                 Some(k) if k > 0.0 && k.is_finite() => Ok(MaskEval::Truncated { k }),
                 _ => Err(Error::invalid(format!(
-                    "{:?} (use separable, exact or truncated:K)",
+                    "{:?} (use separable, exact, truncated:K or release)",
                     s
                 ))),
             },

@@ -264,6 +264,40 @@ mod tests {
         }
     }
 
+    /// Covariance of `n` draws under `rules`, divided entry-wise by the fit's (trace ratio).
+    fn cov_ratio(rules: &SamplerRules, n: usize) -> f64 {
+        let g = Gaussian2::fit(&embedded::illuminants(), Covariance::Unbiased).unwrap();
+        let mut rng = SynthRng::new(3, "cov", 0);
+        let xs: Vec<[f64; 3]> = (0..n).map(|_| g.sample(&mut rng, rules).unwrap()).collect();
+        let nf = n as f64;
+        let m = [0, 2].map(|i| xs.iter().map(|x| x[i]).sum::<f64>() / nf);
+        let var =
+            |i: usize, k: usize| xs.iter().map(|x| (x[i] - m[k]).powi(2)).sum::<f64>() / (nf - 1.0);
+        (var(0, 0) + var(2, 1)) / (g.cov[0][0] + g.cov[1][1])
+    }
+
+    #[test]
+    fn the_radius_cut_shrinks_the_covariance_and_no_cut_keeps_it() {
+        // A 2-D standard normal cut at |z| <= 3 keeps E[z_i^2] = 1 - 4.5 e^-4.5 / (1 - e^-4.5)
+        // = 0.9494; without a cut (the release) the draws have the dictionary's covariance.
+        let exact = 1.0 - 4.5 * (-4.5f64).exp() / (1.0 - (-4.5f64).exp());
+        let n = 200_000;
+        let cut = cov_ratio(&SamplerRules::default(), n);
+        let free = cov_ratio(
+            &SamplerRules {
+                max_mahalanobis: crate::synth::NO_MAHALANOBIS_CUT,
+                ..SamplerRules::default()
+            },
+            n,
+        );
+        // standard error of a variance ratio ~ sqrt(2/n) = 0.0032
+        assert!((cut - exact).abs() < 0.013, "cut {cut} vs {exact}");
+        assert!((free - 1.0).abs() < 0.013, "no cut {free}");
+        eprintln!(
+            "covariance / dictionary's: radius 3 {cut:.4} (exact {exact:.4}), no cut {free:.4}"
+        );
+    }
+
     #[test]
     fn default_rules_respect_floor_and_radius() {
         let g = Gaussian2::fit(&embedded::illuminants(), Covariance::Unbiased).unwrap();

@@ -7,7 +7,9 @@
 //! exactly 0, so a light is skipped on every row outside its window and every column
 //! outside its column range. [`MaskEval`] picks how the product is computed: separable
 //! (row factor times a precomputed f32 column factor: default), exact (one 2-D `exp` per
-//! pixel in f64: the reference) or truncated at `k` sigma (also zero beyond `k` sigma).
+//! pixel in f64: the reference), truncated at `k` sigma (also zero beyond `k` sigma) or
+//! release (the authors' sampled, max-normalized and bilinearly resized kernel:
+//! [`release_resized`]).
 
 use serde::{Deserialize, Serialize};
 
@@ -61,6 +63,10 @@ pub enum MaskEval {
         /// Truncation radius in sigmas.
         k: f64,
     },
+    /// The authors' released code: windowed lights are a sampled Gaussian kernel divided by
+    /// its maximum and resized bilinearly to the window ([`release_resized`]); lights
+    /// without a window are evaluated like `Separable`.
+    Release,
 }
 
 impl MaskEval {
@@ -121,6 +127,10 @@ pub struct PreparedMask {
     pub cols: (usize, usize),
     /// Column factors over `cols` (separable evaluation).
     pub col_factor: Vec<f32>,
+    /// Release kernel of a windowed light under [`MaskEval::Release`].
+    release: Option<ReleaseKernel>,
+    /// Column factors over `cols` in f64 (release kernel only).
+    col64: Vec<f64>,
     center: [f64; 2],
     sigma: [f64; 2],
     floor: f64,
@@ -157,15 +167,33 @@ impl PreparedMask {
             width,
             eval,
         );
+        let release = match (eval, light.window) {
+            (MaskEval::Release, Some(win)) => {
+                Some(ReleaseKernel::new(light.center, win, light.sigma))
+            }
+            _ => None,
+        };
+        let (rows, cols) = match &release {
+            Some(k) => (clip_range(k.r0, k.h, height), clip_range(k.c0, k.w, width)),
+            None => (rows, cols),
+        };
         let cols = (cols.0.max(within.start), cols.1.min(within.end));
         let cols = if cols.1 > cols.0 { cols } else { (0, 0) };
-        let col_factor = (cols.0..cols.1)
-            .map(|c| gauss(c as f64 - light.center[1], light.sigma[1]) as f32)
-            .collect();
+        let (col_factor, col64) = match &release {
+            Some(k) => (Vec::new(), (cols.0..cols.1).map(|c| k.col(c)).collect()),
+            None => (
+                (cols.0..cols.1)
+                    .map(|c| gauss(c as f64 - light.center[1], light.sigma[1]) as f32)
+                    .collect(),
+                Vec::new(),
+            ),
+        };
         PreparedMask {
             rows,
             cols,
             col_factor,
+            release,
+            col64,
             center: light.center,
             sigma: light.sigma,
             floor: light.floor,
@@ -185,6 +213,14 @@ impl PreparedMask {
     /// Fill `out[i]` with the mask at columns `cols.0 + i` of row `r` (which must be on_row).
     pub fn fill_row(&self, r: usize, out: &mut [f32]) {
         let floor = self.floor as f32;
+        if let Some(k) = &self.release {
+            // The release floors the f64 kernel, then stores the mask as f32.
+            let rf = k.row(r);
+            for (o, &cf) in out.iter_mut().zip(&self.col64) {
+                *o = (rf * cf).max(self.floor) as f32;
+            }
+            return;
+        }
         match self.eval {
             MaskEval::Exact => {
                 let dr = r as f64 - self.center[0];
@@ -219,14 +255,139 @@ impl PreparedMask {
             return 0.0;
         }
         let mut v = [0.0f32; 1];
+        let i = c - self.cols.0;
         let sub = PreparedMask {
             cols: (c, c + 1),
-            col_factor: vec![self.col_factor[c - self.cols.0]],
+            col_factor: self.col_factor.get(i).map(|&f| vec![f]).unwrap_or_default(),
+            col64: self.col64.get(i).map(|&f| vec![f]).unwrap_or_default(),
             ..self.clone()
         };
         sub.fill_row(r, &mut v);
         v[0]
     }
+}
+
+/// `[start, end)` of `len` samples starting at `start` (possibly negative), cut to `[0, n)`.
+fn clip_range(start: i64, len: usize, n: usize) -> (usize, usize) {
+    let lo = start.clamp(0, n as i64);
+    let hi = start.saturating_add(len as i64).clamp(0, n as i64);
+    if hi <= lo {
+        (0, 0)
+    } else {
+        (lo as usize, hi as usize)
+    }
+}
+
+/// Largest window side (samples) the release kernel is built for; plans with larger windows
+/// are cut to it (no real frame comes near).
+const MAX_RELEASE_WINDOW: f64 = (1u64 << 31) as f64;
+
+/// A windowed light as the authors' released code makes its mask (`gaussian_kernel` and
+/// `translate_in_frame` of `utils/relight.py`): a `sz x sz` kernel, `sz = max(h, w)`,
+/// sampled by `cv2.getGaussianKernel(sz, sigma)`, its outer product divided by its maximum,
+/// resized to `h` rows and `w` columns by `cv2.resize` (INTER_LINEAR), floored at 1e-7 and
+/// shifted so that its sample `[0][0]` lands on frame pixel `(r0, c0)`; 0 outside.
+///
+/// The kernel's sigma is the plan's sigma of the longer window axis (the plan's other sigma
+/// is that one scaled by the window ratio, which is what the resize does). The window's
+/// first row is the first integer inside the plan's window, `r0 = floor(c_row - h/2) + 1`:
+/// for the release's integer location `ty`, a plan centre of `ty` (odd `h`) or `ty - 0.5`
+/// (even `h`, where the resized kernel's peak lies) gives the release's `ty - h // 2`.
+#[derive(Debug, Clone)]
+struct ReleaseKernel {
+    sz: usize,
+    sigma: f64,
+    r0: i64,
+    c0: i64,
+    h: usize,
+    w: usize,
+}
+
+impl ReleaseKernel {
+    fn new(center: [f64; 2], window: [f64; 2], sigma: [f64; 2]) -> ReleaseKernel {
+        let side = |v: f64| {
+            if v.is_nan() {
+                1
+            } else {
+                v.round().clamp(1.0, MAX_RELEASE_WINDOW) as usize
+            }
+        };
+        let (h, w) = (side(window[0]), side(window[1]));
+        let first = |c: f64, n: usize| {
+            let v = (c - n as f64 / 2.0).floor() + 1.0;
+            if v.is_nan() {
+                0
+            } else {
+                v.clamp(-MAX_RELEASE_WINDOW * 4.0, MAX_RELEASE_WINDOW * 4.0) as i64
+            }
+        };
+        ReleaseKernel {
+            sz: h.max(w),
+            sigma: if h >= w { sigma[0] } else { sigma[1] },
+            r0: first(center[0], h),
+            c0: first(center[1], w),
+            h,
+            w,
+        }
+    }
+    /// Row factor of frame row `r` (inside the window).
+    fn row(&self, r: usize) -> f64 {
+        let i = (r as i64 - self.r0).clamp(0, self.h as i64 - 1) as usize;
+        release_resized(i, self.h, self.sz, self.sigma)
+    }
+    /// Column factor of frame column `c` (inside the window).
+    fn col(&self, c: usize) -> f64 {
+        let j = (c as i64 - self.c0).clamp(0, self.w as i64 - 1) as usize;
+        release_resized(j, self.w, self.sz, self.sigma)
+    }
+}
+
+/// Sample `i` of the release's 1-D Gaussian kernel of `sz` samples and `sigma`, divided by
+/// the kernel's maximum, as `cv2.getGaussianKernel(sz, sigma) / max` gives it (OpenCV's
+/// bit-exact kernel; its sum normalization cancels): `exp(-d^2 / (2 sigma^2))` with
+/// `d = i - (sz - 1)/2`, and exactly 1 at the centre sample (odd `sz`) or the two centre
+/// samples (even `sz`, `d = -1/2, 1/2`: OpenCV gives them the centre's value 1, not
+/// `exp(-1 / (8 sigma^2))`). A `sigma` that is not positive gives 1 at the centre and 0
+/// elsewhere.
+pub fn release_kernel(i: usize, sz: usize, sigma: f64) -> f64 {
+    let d = i as f64 - (sz as f64 - 1.0) / 2.0;
+    if d.abs() <= 0.5 {
+        return 1.0;
+    }
+    if sigma.is_nan() || sigma <= 0.0 {
+        return 0.0;
+    }
+    let v = (-(d * d) / (2.0 * sigma * sigma)).exp();
+    if v.is_finite() {
+        v
+    } else {
+        0.0
+    }
+}
+
+/// Sample `j` of the release kernel ([`release_kernel`], `sz` samples) resized to `n`
+/// samples the way `cv2.resize(..., INTER_LINEAR)` does on a float64 image (applied to
+/// the separable outer product, it works axis by axis): source position
+/// `f = (j + 0.5) * scale - 0.5` with `scale = 1 / (n / sz)`, `s = floor(f)`, weights
+/// `1 - (f - s)` and `f - s` in f64; `s < 0` takes sample 0 and `s >= sz - 1` the last
+/// sample. `n == sz` is the identity.
+pub fn release_resized(j: usize, n: usize, sz: usize, sigma: f64) -> f64 {
+    let sz = sz.max(1);
+    let scale = 1.0 / (n.max(1) as f64 / sz as f64);
+    let f = (j as f64 + 0.5) * scale - 0.5;
+    let s = f.floor();
+    let mut fx = f - s;
+    let mut s = if s.is_finite() { s as i64 } else { 0 };
+    if s < 0 {
+        s = 0;
+        fx = 0.0;
+    }
+    let last = sz as i64 - 1;
+    if s >= last {
+        return release_kernel(sz - 1, sz, sigma);
+    }
+    let s = s as usize;
+    release_kernel(s, sz, sigma) * (1.0 - fx) + release_kernel(s + 1, sz, sigma) * fx
 }
 
 /// Sigma of a release-style local light for a window of `h x w`: OpenCV's
@@ -315,6 +476,155 @@ mod tests {
                 assert!((s.at(r, c) - e.at(r, c)).abs() < 1e-6);
             }
         }
+    }
+
+    /// `cv2.resize(k / k.max(), (w, h))` of `k = g.T * g`, `g = cv2.getGaussianKernel(max(h, w),
+    /// sigma)`, floored at 1e-7: values printed by opencv-python-headless 5.0.0 (numpy
+    /// 2.4) for (h, w, row, col, sigma, value) (the release's `gaussian_kernel`).
+    const OPENCV: &[(usize, usize, usize, usize, f64, f64)] = &[
+        (7, 12, 0, 0, 2.15, 0.0024402879003997623),
+        (7, 12, 6, 11, 2.15, 0.0024402879003997636),
+        (7, 12, 3, 6, 2.15, 1.0),
+        (7, 12, 2, 6, 2.15, 0.7249738373615809),
+        (7, 12, 4, 8, 2.15, 0.3687409866995592),
+        (7, 12, 1, 10, 2.15, 0.031676004898253514),
+        (7, 12, 3, 10, 2.15, 0.11187499191122484),
+        (7, 12, 2, 2, 2.15, 0.19269237499629316),
+        (12, 7, 5, 3, 2.15, 1.0),
+        (12, 7, 7, 5, 2.15, 0.22197346073462254),
+        (12, 7, 2, 6, 2.15, 0.01710061455604925),
+        (12, 7, 6, 6, 2.15, 0.0643382913111057),
+        (12, 7, 3, 5, 2.15, 0.14401126452350732),
+        (300, 512, 150, 256, 10.870547945205479, 0.996652129896137),
+        (300, 512, 135, 268, 10.870547945205479, 0.038808894189584275),
+        (
+            300,
+            512,
+            156,
+            308,
+            10.870547945205479,
+            5.116625911767752e-06,
+        ),
+        (300, 512, 154, 262, 10.870547945205479, 0.6514014137740752),
+        (300, 512, 129, 308, 10.870547945205479, 1e-07),
+        (300, 512, 160, 256, 10.870547945205479, 0.2574341597282431),
+        (513, 200, 256, 100, 8.806043956043956, 0.988195814730753),
+        (513, 200, 255, 100, 8.806043956043956, 0.9818446707627703),
+        (513, 200, 255, 98, 8.806043956043956, 0.9024917034514046),
+        (513, 200, 209, 97, 8.806043956043956, 4.998630192164719e-07),
+        (513, 200, 256, 92, 8.806043956043956, 0.09237593606842186),
+        (333, 334, 168, 188, 10.37, 0.11428140810746094),
+        (333, 334, 191, 191, 10.37, 0.0033165461181134176),
+        (333, 334, 136, 156, 10.37, 0.008969023769530366),
+        (1500, 2000, 0, 0, 300.35, 1.5536883228000477e-05),
+        (1500, 2000, 750, 1000, 300.35, 0.9999979215322443),
+        (1500, 2000, 1477, 711, 300.35, 0.003426013452652142),
+        (1500, 2000, 868, 689, 300.35, 0.5103126150835575),
+        (1500, 2000, 46, 62, 300.35, 5.840764235042259e-05),
+        (64, 64, 28, 29, 2.0954545454545457, 0.12164901019934563),
+    ];
+
+    fn release_light(center: [f64; 2], h: f64, w: f64, sigma: f64) -> Light {
+        let m = h.max(w);
+        light(center, Some([h, w]), [sigma * h / m, sigma * w / m])
+    }
+
+    #[test]
+    fn release_kernel_matches_opencv() {
+        for &(h, w, i, j, sigma, want) in OPENCV {
+            let sz = h.max(w);
+            let v = (release_resized(i, h, sz, sigma) * release_resized(j, w, sz, sigma))
+                .max(MASK_FLOOR);
+            assert!(
+                (v - want).abs() <= 1e-12 * want.max(1e-3),
+                "{h}x{w} ({i},{j}): {v} vs {want}"
+            );
+            // through a prepared mask: kernel [0][0] at frame (10, 20), odd/even windows
+            // placed by the plan's centre rule (peak at ty, or ty - 0.5 for even sides)
+            let (ty, tx) = (10 + h / 2, 20 + w / 2);
+            let cy = ty as f64 - if h % 2 == 0 { 0.5 } else { 0.0 };
+            let cx = tx as f64 - if w % 2 == 0 { 0.5 } else { 0.0 };
+            let l = release_light([cy, cx], h as f64, w as f64, sigma);
+            let pm = PreparedMask::new(&l, w + 40, h + 20, MaskEval::Release);
+            assert_eq!(pm.rows, (10, 10 + h));
+            assert_eq!(pm.cols, (20, 20 + w));
+            let got = pm.at(10 + i, 20 + j);
+            let ulp = (want as f32 - got).abs() / f32::EPSILON / (want as f32).max(1e-30);
+            assert!(
+                ulp <= 1.0,
+                "{h}x{w} ({i},{j}): f32 {got} vs {want} ({ulp} ulp)"
+            );
+            assert_eq!(pm.at(9, 20 + j), 0.0);
+            assert_eq!(pm.at(10 + i, 20 + w), 0.0);
+        }
+    }
+
+    #[test]
+    fn release_resize_identity_and_ends() {
+        // n == sz: the kernel itself; a kernel of one sample is 1
+        for i in 0..9 {
+            assert_eq!(release_resized(i, 9, 9, 1.7), release_kernel(i, 9, 1.7));
+        }
+        assert_eq!(release_kernel(4, 9, 1.7), 1.0);
+        assert_eq!(release_kernel(4, 10, 1.7), 1.0);
+        assert_eq!(release_kernel(5, 10, 1.7), 1.0);
+        assert_eq!(release_resized(0, 1, 1, 0.0), 1.0);
+        // sigma 0 or NaN: a delta at the centre; never NaN
+        assert_eq!(release_kernel(3, 9, 0.0), 0.0);
+        assert_eq!(release_kernel(3, 9, f64::NAN), 0.0);
+        for n in 1..12 {
+            for j in 0..n {
+                let v = release_resized(j, n, 12, 2.0);
+                assert!((0.0..=1.0).contains(&v), "{n} {j} {v}");
+            }
+        }
+    }
+
+    #[test]
+    fn release_eval_is_sane_on_odd_plans() {
+        // non-finite or huge geometry: no panic, values in [0, 1], zero outside the window
+        for (c, win, sig) in [
+            ([f64::NAN, 5.0], [10.0, 10.0], [2.0, 2.0]),
+            ([5.0, 5.0], [f64::NAN, 1e300], [2.0, 2.0]),
+            ([5.0, 5.0], [0.0, -3.0], [0.0, 0.0]),
+            ([-1e18, 1e18], [4.0, 4.0], [1.0, 1.0]),
+            ([5.0, 5.0], [7.0, 7.0], [f64::NAN, f64::INFINITY]),
+        ] {
+            let l = light(c, Some(win), sig);
+            let pm = PreparedMask::new(&l, 16, 12, MaskEval::Release);
+            for r in 0..12 {
+                for k in 0..16 {
+                    let v = pm.at(r, k);
+                    assert!((0.0..=1.0).contains(&v), "{c:?} {win:?} {v}");
+                }
+            }
+        }
+        // without a window (paper lights) the release eval is the separable one
+        let l = light([30.3, 41.7], None, [7.0, 9.5]);
+        let a = PreparedMask::new(&l, 80, 90, MaskEval::Release);
+        let b = PreparedMask::new(&l, 80, 90, MaskEval::Separable);
+        for r in 0..80 {
+            for k in 0..90 {
+                assert_eq!(a.at(r, k), b.at(r, k));
+            }
+        }
+    }
+
+    #[test]
+    fn release_kernel_is_close_to_the_analytic_mask_for_large_sigmas() {
+        // a local light's kernel (sigma ~0.15 of the window) is well sampled: close to ours
+        let (h, w) = (301.0, 451.0);
+        let l = release_light([200.0, 300.0], h, w, opencv_sigma(451.0));
+        let a = PreparedMask::new(&l, 600, 400, MaskEval::Release);
+        let b = PreparedMask::new(&l, 600, 400, MaskEval::Exact);
+        let mut worst = 0f32;
+        for r in (0..400).step_by(3) {
+            for k in (0..600).step_by(3) {
+                worst = worst.max((a.at(r, k) - b.at(r, k)).abs());
+            }
+        }
+        assert!(worst < 5e-3, "{worst}");
+        assert!(worst > 0.0);
     }
 
     #[test]

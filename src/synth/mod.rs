@@ -66,6 +66,31 @@ pub enum RelightFormula {
     Paper,
 }
 
+/// Switches that reproduce the authors' released code where day2night deliberately differs
+/// (docs/synthesis.md, "Release compatibility"). All off by default; the whole struct is
+/// left out of serialized options when off, so default sidecars are unchanged.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(default)]
+pub struct Compat {
+    /// Divide by the day neutral as stored (AsShotNeutral or `--day-neutral` as given), not
+    /// normalized to green = 1 (the release; see [`neutral::day_neutral_as_stored`]).
+    pub neutral_as_stored: bool,
+    /// Truncate the noisy raws too when `truncate` is set (the release's `astype(uint16)`).
+    pub truncate_noise: bool,
+}
+
+impl Compat {
+    /// Every switch on (the `--compat release` preset's part of it).
+    pub const RELEASE: Compat = Compat {
+        neutral_as_stored: true,
+        truncate_noise: true,
+    };
+    /// True when no switch is on.
+    pub fn is_off(&self) -> bool {
+        *self == Compat::default()
+    }
+}
+
 /// Synthesis options (all serializable: the sidecar records them).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(default)]
@@ -100,6 +125,9 @@ pub struct SynthOptions {
     pub day_neutral: Option<[f64; 3]>,
     /// Mask evaluation.
     pub mask_eval: MaskEval,
+    /// Release-compatibility switches (absent from serialized options when all off).
+    #[serde(default, skip_serializing_if = "Compat::is_off")]
+    pub compat: Compat,
 }
 
 impl Default for SynthOptions {
@@ -120,7 +148,43 @@ impl Default for SynthOptions {
             covariance: Covariance::Unbiased,
             day_neutral: None,
             mask_eval: MaskEval::Separable,
+            compat: Compat::default(),
         }
+    }
+}
+
+/// Largest Mahalanobis radius: the sampler's "no cut" (finite, so that it round-trips
+/// through the JSON sidecar; every finite draw is within it).
+pub const NO_MAHALANOBIS_CUT: f64 = f64::MAX;
+
+impl SynthOptions {
+    /// The `--compat release` preset applied to `self`: the authors' released code where it
+    /// is deterministic (docs/synthesis.md, "Release compatibility"): the release formula,
+    /// the unbiased covariance, truncation of clean and noisy raws, the day neutral as
+    /// stored, illuminant draws not cut by a Mahalanobis radius, and the release's sampled,
+    /// resized light kernels. Errors when `self` asks for something else on one of these
+    /// (the paper formula, the ML covariance, another mask evaluation).
+    pub fn release_compat(mut self) -> Result<SynthOptions> {
+        if self.formula != RelightFormula::Release {
+            return Err(Error::invalid(
+                "the release preset uses the release relight formula, not the paper's",
+            ));
+        }
+        if self.covariance != Covariance::Unbiased {
+            return Err(Error::invalid(
+                "the release preset uses the unbiased covariance (numpy's np.cov), not ml",
+            ));
+        }
+        if !matches!(self.mask_eval, MaskEval::Separable | MaskEval::Release) {
+            return Err(Error::invalid(
+                "the release preset evaluates masks as the release does (mask-eval release)",
+            ));
+        }
+        self.truncate = true;
+        self.compat = Compat::RELEASE;
+        self.sampler.max_mahalanobis = NO_MAHALANOBIS_CUT;
+        self.mask_eval = MaskEval::Release;
+        Ok(self)
     }
 }
 
@@ -164,6 +228,11 @@ impl SynthOptions {
             if !(k > 0.0 && k.is_finite()) {
                 return Err(Error::invalid("mask truncation radius must be > 0"));
             }
+        }
+        if self.compat.truncate_noise && !self.truncate {
+            return Err(Error::invalid(
+                "compat.truncate_noise truncates the noisy raws when truncating: it needs truncate",
+            ));
         }
         let s = &self.sampler;
         if s.max_mahalanobis.is_nan()
@@ -245,7 +314,9 @@ pub fn run_noise(clean: &RawImage, plan: &Plan, index: usize) -> Result<(u32, Ra
         .ok_or_else(|| Error::invalid(format!("plan has no noise entry {}", index)))?;
     let mut img = match &np.physics {
         Some(p) => crate::noise::apply_physics_noise_image(clean, p, np.seed)?,
-        None => crate::noise::apply_noise(clean, &np.params, np.seed)?,
+        None => {
+            crate::noise::apply::apply_noise_with(clean, &np.params, np.seed, plan.truncate_noise)?
+        }
     };
     img.meta = night_meta(&clean.meta, plan, np.iso, &np.params);
     Ok((np.iso, img))
@@ -253,3 +324,159 @@ pub fn run_noise(clean: &RawImage, plan: &Plan, index: usize) -> Result<(u32, Ra
 
 #[cfg(test)]
 mod tests;
+
+#[cfg(test)]
+mod compat_tests {
+    use super::*;
+    use crate::raw::meta::RawMeta;
+    use crate::raw::Bayer;
+
+    fn frame(neutral: [f64; 3]) -> RawImage {
+        let (w, h) = (64usize, 48usize);
+        let mut meta = RawMeta::new_bayer(Bayer::RGGB, 10, 64.0, 1023.0);
+        meta.as_shot_neutral = Some(neutral);
+        RawImage {
+            width: w,
+            height: h,
+            data: (0..w * h)
+                .map(|i| 100 + ((i * 7919) % 800) as u16)
+                .collect(),
+            meta,
+        }
+    }
+
+    fn planned(img: &RawImage, o: &SynthOptions) -> Plan {
+        plan(img, "c.dng", 7, 0, o, &Calibration::embedded(o).unwrap()).unwrap()
+    }
+
+    #[test]
+    fn defaults_serialize_without_compat_and_old_options_parse() {
+        let o = SynthOptions::default();
+        let j = serde_json::to_string(&o).unwrap();
+        assert!(!j.contains("compat"), "{j}");
+        let p = planned(&frame([0.5, 1.0, 0.4]), &o);
+        let pj = serde_json::to_string(&p).unwrap();
+        assert!(!pj.contains("truncate_noise"), "{pj}");
+        // options and plans written before the field existed parse to the defaults
+        let back: SynthOptions = serde_json::from_str(&j).unwrap();
+        assert_eq!(back, o);
+        let back: Plan = serde_json::from_str(&pj).unwrap();
+        assert_eq!(back, p);
+    }
+
+    #[test]
+    fn release_preset_sets_each_piece_and_round_trips() {
+        let r = SynthOptions::default().release_compat().unwrap();
+        assert!(r.truncate);
+        assert_eq!(r.compat, Compat::RELEASE);
+        assert_eq!(r.sampler.max_mahalanobis, NO_MAHALANOBIS_CUT);
+        assert_eq!(r.mask_eval, MaskEval::Release);
+        r.validate().unwrap();
+        let j = serde_json::to_string(&r).unwrap();
+        assert_eq!(serde_json::from_str::<SynthOptions>(&j).unwrap(), r);
+        let p = planned(&frame([0.5, 1.0, 0.4]), &r);
+        assert!(p.truncate && p.truncate_noise);
+        assert_eq!(p.mask_eval, MaskEval::Release);
+        let pj = serde_json::to_string(&p).unwrap();
+        assert_eq!(serde_json::from_str::<Plan>(&pj).unwrap(), p);
+        // conflicting requests are refused, not overridden
+        for bad in [
+            SynthOptions {
+                formula: RelightFormula::Paper,
+                ..SynthOptions::default()
+            },
+            SynthOptions {
+                covariance: Covariance::MaximumLikelihood,
+                ..SynthOptions::default()
+            },
+            SynthOptions {
+                mask_eval: MaskEval::Exact,
+                ..SynthOptions::default()
+            },
+        ] {
+            assert!(bad.release_compat().is_err());
+        }
+        // noise truncation only when truncating
+        let lone = SynthOptions {
+            compat: Compat {
+                truncate_noise: true,
+                ..Compat::default()
+            },
+            ..SynthOptions::default()
+        };
+        assert!(lone.validate().is_err());
+    }
+
+    #[test]
+    fn neutral_as_stored_divides_by_the_stored_vector() {
+        // green 2.477 stored: the global relight comes out 2.477x darker than ours
+        let img = frame([1.0, 2.477, 1.462]);
+        let base = SynthOptions {
+            mode: Mode::Global,
+            isos: vec![],
+            ..SynthOptions::default()
+        };
+        let stored = SynthOptions {
+            compat: Compat {
+                neutral_as_stored: true,
+                ..Compat::default()
+            },
+            ..base.clone()
+        };
+        let (a, b) = (planned(&img, &base), planned(&img, &stored));
+        assert_eq!(a.lights, b.lights, "same draws");
+        assert_eq!(b.day_neutral, [1.0, 2.477, 1.462]);
+        let (oa, _) = run_clean(&img, &a).unwrap();
+        let (ob, _) = run_clean(&img, &b).unwrap();
+        // green sites (RGGB: row + col odd): y_w = y or y / 2.477, neither clipped here
+        let (mut sa, mut sb) = (0.0, 0.0);
+        for (i, (&x, &y)) in oa.data.iter().zip(&ob.data).enumerate() {
+            if (i / img.width + i % img.width) % 2 == 1 {
+                sa += x as f64 - 64.0;
+                sb += y as f64 - 64.0;
+            }
+        }
+        let ratio = sa / sb;
+        assert!((ratio - 2.477).abs() < 0.01, "{ratio}");
+    }
+
+    #[test]
+    fn noise_truncation_is_a_half_dn_bias_on_the_same_draws() {
+        let img = frame([0.5, 1.0, 0.4]);
+        let o = SynthOptions {
+            mode: Mode::Dimmed,
+            isos: vec![3200],
+            truncate: true,
+            ..SynthOptions::default()
+        };
+        let t = SynthOptions {
+            compat: Compat {
+                truncate_noise: true,
+                ..Compat::default()
+            },
+            ..o.clone()
+        };
+        let (pr, pt) = (planned(&img, &o), planned(&img, &t));
+        let (r, tr) = (run(&img, &pr).unwrap(), run(&img, &pt).unwrap());
+        assert_eq!(r.clean.data, tr.clean.data);
+        let (mut n, mut sum) = (0f64, 0f64);
+        for (&a, &b) in r.noisy[0].1.data.iter().zip(&tr.noisy[0].1.data) {
+            let d = b as f64 - a as f64;
+            assert!(d == 0.0 || d == -1.0, "{a} {b}");
+            if a > 0 && a < 1023 {
+                n += 1.0;
+                sum += d;
+            }
+        }
+        let bias = sum / n;
+        eprintln!("noise truncation bias {bias:.4} DN over {n} samples");
+        assert!((bias + 0.5).abs() < 0.05, "{bias}");
+        // thread-count independent
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(1)
+            .build()
+            .unwrap();
+        let one = pool.install(|| run(&img, &pt).unwrap());
+        assert_eq!(one.noisy[0].1.data, tr.noisy[0].1.data);
+    }
+}

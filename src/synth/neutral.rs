@@ -1,6 +1,14 @@
 //! The day neutral (SYNTHESIS.md 2): AsShotNeutral, or AsShotWhiteXY converted through the
-//! colour matrices, or the user's `--day-neutral`; always normalized so that green = 1 and
+//! colour matrices, or the user's `--day-neutral`; normalized so that green = 1 and
 //! refused when a component is tiny, zero, negative or not finite.
+//!
+//! Why green = 1: AsShotNeutral is a direction, "the selected white balance in linear
+//! reference space values" (DNG 1.6, AsShotNeutral); its scale carries no meaning (raw
+//! tools divide by it and renormalize; many cameras store green = 1, others do not), so
+//! dividing by the vector as stored would also dim or brighten the image by its arbitrary
+//! green component. The authors' release does divide by the stored vector
+//! ([`day_neutral_as_stored`], `SynthOptions::compat.neutral_as_stored`): a file storing
+//! "1 2.477 1.462" comes out 2.477 times darker there.
 //!
 //! AsShotWhiteXY conversion: `neutral = AnalogBalance * CameraCalibration * ColorMatrix * XYZ(x, y)`
 //! with ColorMatrix1/2 interpolated linearly in inverse correlated colour temperature (DNG
@@ -150,6 +158,51 @@ pub fn day_neutral(meta: &RawMeta, user: Option<[f64; 3]>) -> Result<([f64; 3], 
     ))
 }
 
+/// Components of a day neutral divided by as stored must lie in `[1e-12, 1e12]` (their
+/// reciprocals then stay finite and far from 0).
+pub const AS_STORED_RANGE: [f64; 2] = [1e-12, 1e12];
+
+/// The day neutral as the release uses it: AsShotNeutral as stored, or `--day-neutral` as
+/// given, without normalizing to green = 1 (checked like [`check_neutral`], and each
+/// component within [`AS_STORED_RANGE`]). AsShotWhiteXY has no stored scale: it gives the
+/// same (green = 1) neutral as [`day_neutral`].
+pub fn day_neutral_as_stored(meta: &RawMeta, user: Option<[f64; 3]>) -> Result<([f64; 3], String)> {
+    // The reader normalizes AsShotNeutral to green = 1; the entry as the file stored it
+    // (`RawMeta::stored`) gives the release's reading.
+    let stored = meta
+        .stored_value(crate::tiff::tags::AS_SHOT_NEUTRAL)
+        .and_then(|v| v.to_f64_vec())
+        .and_then(|v| <[f64; 3]>::try_from(v.as_slice()).ok());
+    let (n, what) = match (user, stored.or(meta.as_shot_neutral)) {
+        (Some(n), _) => (n, "--day-neutral"),
+        (None, Some(n)) => (n, "AsShotNeutral"),
+        (None, None) => return day_neutral(meta, None),
+    };
+    check_neutral(n, what)?;
+    if n.iter()
+        .any(|&v| !(AS_STORED_RANGE[0]..=AS_STORED_RANGE[1]).contains(&v))
+    {
+        return Err(Error::invalid(format!(
+            "{} {:?}: to divide by it as stored, each component must lie in [{}, {}]",
+            what, n, AS_STORED_RANGE[0], AS_STORED_RANGE[1]
+        )));
+    }
+    Ok((
+        n,
+        format!("{} as stored (not normalized; release compatibility)", what),
+    ))
+}
+
+/// The day neutral `opts` asks for: [`day_neutral_as_stored`] with
+/// `compat.neutral_as_stored`, else [`day_neutral`].
+pub fn day_neutral_for(meta: &RawMeta, opts: &super::SynthOptions) -> Result<([f64; 3], String)> {
+    if opts.compat.neutral_as_stored {
+        day_neutral_as_stored(meta, opts.day_neutral)
+    } else {
+        day_neutral(meta, opts.day_neutral)
+    }
+}
+
 #[cfg(test)]
 #[allow(clippy::needless_range_loop)]
 mod tests {
@@ -164,6 +217,41 @@ mod tests {
         assert!(check_neutral([0.5, 1.0, f64::NAN], "n").is_err());
         assert!(check_neutral([-0.5, 1.0, 0.5], "n").is_err());
         assert_eq!(check_neutral([1.0, 2.477, 1.462], "n").unwrap()[1], 1.0);
+    }
+
+    #[test]
+    fn as_stored_keeps_the_scale_and_checks() {
+        let mut m = RawMeta::new_bayer(Bayer::RGGB, 12, 0.0, 4095.0);
+        m.as_shot_neutral = Some([1.0, 2.477, 1.462]);
+        let (n, src) = day_neutral_as_stored(&m, None).unwrap();
+        assert_eq!(n, [1.0, 2.477, 1.462]);
+        assert!(src.contains("as stored"), "{src}");
+        // the default reading divides by green
+        let (d, _) = day_neutral(&m, None).unwrap();
+        assert_eq!(d, [1.0 / 2.477, 1.0, 1.462 / 2.477]);
+        // the user's neutral as given
+        assert_eq!(
+            day_neutral_as_stored(&m, Some([0.5, 0.25, 0.75]))
+                .unwrap()
+                .0,
+            [0.5, 0.25, 0.75]
+        );
+        // refused: bad components, and scales whose reciprocal would overflow or vanish
+        for bad in [
+            [0.0, 1.0, 1.0],
+            [f64::NAN, 1.0, 1.0],
+            [1e-300, 1e-300, 1e-300],
+            [1e300, 1e300, 1e300],
+            [-1.0, -1.0, -1.0],
+        ] {
+            m.as_shot_neutral = Some(bad);
+            assert!(day_neutral_as_stored(&m, None).is_err(), "{bad:?}");
+        }
+        // no stored vector: AsShotWhiteXY has no scale and gives the normalized neutral
+        m.as_shot_neutral = None;
+        m.as_shot_white_xy = Some([0.3127, 0.3290]);
+        let (w, _) = day_neutral_as_stored(&m, None).unwrap();
+        assert_eq!(w, day_neutral(&m, None).unwrap().0);
     }
 
     #[test]

@@ -15,7 +15,7 @@
 //! reported in a fixed order (clean, noisy, target). With `request.crop` only the crop is
 //! computed: the plan stays the whole frame's (lights, bulbs, illuminants), the clean pass
 //! covers the crop plus the demosaicer's margin ([`run_clean_crop`]), the crop's Gaussian
-//! noise draws from its own documented stream ([`apply_noise_crop`]; the physics model's
+//! noise draws from its own documented stream ([`apply_noise_crop_with`]; the physics model's
 //! draws are per site, so a crop gets the frame's samples: [`apply_physics_noise_crop`])
 //! and the target is the crop's region of the frame's render ([`render_linear_crop`]).
 //!
@@ -39,7 +39,7 @@ use crate::error::{Error, Result};
 use crate::isp::render::{render_linear_bands, Bands};
 use crate::isp::render_crop::{render_linear_crop, CROP_MARGIN};
 use crate::isp::{render_input, render_linear, Demosaic, RenderOptions, RgbImage};
-use crate::noise::apply::apply_noise_crop;
+use crate::noise::apply::apply_noise_crop_with;
 use crate::noise::apply_physics_noise_crop;
 use crate::raw::RawImage;
 use std::sync::Mutex;
@@ -255,7 +255,14 @@ fn cropped<S: NightSink>(
                             }
                             None => {
                                 let mut data = clean.data.clone();
-                                apply_noise_crop(day, crop, &mut data, &np.params, np.seed)?;
+                                apply_noise_crop_with(
+                                    day,
+                                    crop,
+                                    &mut data,
+                                    &np.params,
+                                    np.seed,
+                                    plan.truncate_noise,
+                                )?;
                                 data
                             }
                         };

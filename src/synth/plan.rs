@@ -5,7 +5,7 @@
 use super::dim::{sample_dim, DimPlan};
 use super::illuminant::Gaussian2;
 use super::masks::{opencv_sigma, release_sigma, Light, LightKind, MaskEval, MASK_FLOOR};
-use super::neutral::day_neutral;
+use super::neutral::day_neutral_for;
 use super::rng::SynthRng;
 use super::{Calibration, Mode, RelightFormula, SynthOptions};
 use crate::error::{Error, Result};
@@ -57,13 +57,16 @@ pub struct Plan {
     pub formula: RelightFormula,
     /// Truncate instead of rounding when denormalizing (released code).
     pub truncate: bool,
+    /// Truncate the noisy raws too (`truncate` and `compat.truncate_noise`; absent = false).
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub truncate_noise: bool,
     /// Keep negative normalized values (no clip at 0).
     pub keep_negative: bool,
     /// Keep white-balanced values above 1 (no clip at 1 after removing the day illuminant).
     pub keep_highlights: bool,
     /// Mask evaluation.
     pub mask_eval: MaskEval,
-    /// Day neutral (green = 1).
+    /// Day neutral (green = 1; as stored with `compat.neutral_as_stored`).
     pub day_neutral: [f64; 3],
     /// Where the day neutral came from.
     pub day_neutral_source: String,
@@ -131,7 +134,7 @@ pub fn plan(
     let bayer = img.bayer()?;
     let a = img.active_area();
     let (w, h) = (a.width(), a.height());
-    let (dn, dn_src) = day_neutral(&img.meta, opts.day_neutral)?;
+    let (dn, dn_src) = day_neutral_for(&img.meta, opts)?;
     let mut rng = SynthRng::new(seed, input_name, variant);
     let mut warnings = Vec::new();
     let mut stages: Vec<String> = vec!["normalize".into(), "remove_day_illuminant".into()];
@@ -346,6 +349,7 @@ pub fn plan(
         mode: opts.mode,
         formula: opts.formula,
         truncate: opts.truncate,
+        truncate_noise: opts.truncate && opts.compat.truncate_noise,
         keep_negative: opts.keep_negative,
         keep_highlights: opts.keep_highlights,
         mask_eval: opts.mask_eval,

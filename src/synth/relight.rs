@@ -8,6 +8,11 @@
 //! `y_r = num / max(den, 1e-30)`; each bulb on the row adds `g * m * clip(y_e * l[c], 0, 1)`;
 //! finally `y_r` is clipped to [0, 1]. Arithmetic per pixel is f32 (normalize and
 //! denormalize are f64 via [`crate::normalize::Normalizer`]).
+//!
+//! Mode `day` changes nothing except what a clip cut (step 1's clip at 0, step 2's clip at
+//! 1, the output range [0, white]): every other sample is the stored (linearized) input
+//! value itself, whatever `truncate` says, not its f32 round trip (truncating that put
+//! 33-39 % of samples 1 DN low).
 
 use super::crop::Crop;
 use super::dim::dim_factor;
@@ -352,7 +357,30 @@ impl<'a> CleanPass<'a> {
             }
         }
         scr.blk = blk_row;
+        if plan.mode == Mode::Day {
+            self.day_identity(r, src, seg);
+        }
         sat
+    }
+
+    /// Mode `day`: every sample of `seg` (active-area row `r` from column `x0`, computed
+    /// from `src`) that no clip changed becomes its linearized input value exactly.
+    fn day_identity(&self, r: usize, src: &[u16], seg: &mut [u16]) {
+        let norm = &self.norm;
+        let k = self.inv_row(r);
+        for (i, (&x, d)) in src.iter().zip(seg.iter_mut()).enumerate() {
+            let c = self.x0 + i;
+            let lin = norm.linearize(x);
+            let y = norm.normalize_with_black(x, norm.black_at(r, c));
+            let v = y * k[c & 1];
+            let clipped = (!self.plan.keep_negative && y < 0.0)
+                || v.clamp(self.lo, self.hi) != v
+                || !(0.0..=norm.white.min(u16::MAX as f64)).contains(&lin)
+                || lin.fract() != 0.0;
+            if !clipped {
+                *d = lin as u16;
+            }
+        }
     }
 }
 
@@ -510,4 +538,101 @@ pub fn run(img: &RawImage, plan: &Plan) -> Result<SynthOutput> {
         noisy,
         report,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::raw::meta::RawMeta;
+    use crate::raw::Bayer;
+    use crate::synth::{plan, Calibration, Compat, SynthOptions};
+
+    /// A 10-bit frame with stored values below black, across the range, at and above white.
+    fn frame(bayer: Bayer, table: bool, delta: bool) -> RawImage {
+        let (w, h) = (41usize, 27usize);
+        let data = (0..w * h).map(|i| ((i * 7919) % 1400) as u16).collect();
+        let mut meta = RawMeta::new_bayer(bayer, 10, 64.0, 1023.0);
+        meta.as_shot_neutral = Some([0.6, 1.2, 0.3]);
+        meta.levels.black = vec![60.0, 64.5, 66.0, 70.0];
+        meta.levels.black_repeat = (2, 2);
+        if table {
+            // a curve with integer entries (LinearizationTable holds u16)
+            meta.linearization_table = Some(
+                (0..1200u32)
+                    .map(|x| (x * 9 / 10 + x * x / 8000) as u16)
+                    .collect(),
+            );
+        }
+        if delta {
+            meta.levels.black_delta_h = (0..w).map(|c| (c % 3) as f64 * 0.75).collect();
+        }
+        RawImage {
+            width: w,
+            height: h,
+            data,
+            meta,
+        }
+    }
+
+    #[test]
+    fn day_mode_returns_every_unclipped_sample_exactly() {
+        for b in Bayer::ALL {
+            for (table, delta) in [(false, false), (true, false), (false, true)] {
+                let img = frame(b, table, delta);
+                let norm = Normalizer::new(&img).unwrap();
+                for (keep_negative, keep_highlights) in [(false, false), (true, true)] {
+                    for truncate in [false, true] {
+                        let stored = Compat {
+                            neutral_as_stored: true,
+                            truncate_noise: false,
+                        };
+                        for compat in [Compat::default(), stored] {
+                            let opts = SynthOptions {
+                                mode: Mode::Day,
+                                isos: vec![],
+                                truncate,
+                                keep_negative,
+                                keep_highlights,
+                                compat,
+                                ..SynthOptions::default()
+                            };
+                            let cal = Calibration::embedded(&opts).unwrap();
+                            let p = plan(&img, "d.dng", 0, 0, &opts, &cal).unwrap();
+                            let (out, _) = run_clean(&img, &p).unwrap();
+                            let crop = Crop {
+                                top: 2,
+                                left: 4,
+                                height: 20,
+                                width: 31,
+                            };
+                            let (cropped, _) = run_clean_crop(&img, &p, crop).unwrap();
+                            let (mut same, mut clipped) = (0, 0);
+                            for r in 0..img.height {
+                                for c in 0..img.width {
+                                    let x = img.get(r, c);
+                                    let lin = norm.linearize(x);
+                                    let y = norm.normalize_with_black(x, norm.black_at(r, c));
+                                    let v = y / p.day_neutral[b.color_at(r, c) as usize];
+                                    let cut = (!keep_negative && y < 0.0)
+                                        || (!keep_highlights && v > 1.0)
+                                        || lin > 1023.0;
+                                    if cut {
+                                        clipped += 1;
+                                    } else {
+                                        same += 1;
+                                        assert_eq!(out.get(r, c) as f64, lin, "{b} ({r},{c})");
+                                    }
+                                    if (2..22).contains(&r) && (4..35).contains(&c) {
+                                        let k = (r - 2) * 31 + (c - 4);
+                                        assert_eq!(cropped[k], out.get(r, c));
+                                    }
+                                }
+                            }
+                            assert!(same > 100 && clipped > 10, "{same} {clipped}");
+                        }
+                    }
+                }
+            }
+        }
+    }
 }

@@ -39,6 +39,7 @@ mod metrics_eval;
 mod msrv;
 mod noise_physics;
 mod png_rows;
+mod release_compat;
 mod runs_concurrent;
 mod runs_interrupt;
 mod synth_cli;
