@@ -148,7 +148,7 @@ pub struct PhysicsPoint {
 }
 
 /// `ln sigma = intercept + slope * ln K` over the calibrated ISOs.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
 pub struct LogLine {
     /// Intercept.
     pub intercept: f64,
@@ -195,7 +195,7 @@ impl LogLine {
 }
 
 /// The ELD joint model: log sigmas against log K.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
 pub struct JointFit {
     /// `ln sigma_read` against `ln K`.
     pub read: LogLine,
@@ -225,7 +225,9 @@ pub struct PhysicsModel {
     pub poisson_max_electrons: f64,
     /// Calibrated points, sorted by ISO on load.
     pub isos: Vec<PhysicsPoint>,
-    /// The joint log-log fit (recomputed from `isos` on load; written for people).
+    /// The joint log-log fit (recomputed from `isos` on load, so a file may omit it;
+    /// written for people).
+    #[serde(default)]
     pub joint: JointFit,
 }
 

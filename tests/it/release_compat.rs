@@ -182,7 +182,7 @@ fn stored_neutral_makes_the_canon_file_2_48x_darker() {
     let (mut sa, mut sb) = (0.0, 0.0);
     for r in area.top as usize..area.bottom as usize {
         for c in area.left as usize..area.right as usize {
-            if (r - area.top as usize + c - area.left as usize) % 2 == 0 {
+            if (r - area.top as usize + c - area.left as usize).is_multiple_of(2) {
                 continue;
             }
             let (x, y) = (a.get(r, c) as f64, b.get(r, c) as f64);
