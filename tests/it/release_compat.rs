@@ -11,46 +11,10 @@ use day2night::synth::sidecar::Sidecar;
 use day2night::synth::{
     self, run_clean, Calibration, Compat, MaskEval, Mode, SynthOptions, NO_MAHALANOBIS_CUT,
 };
-use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
-fn synth(args: &[&str]) -> std::process::Output {
-    common::bin().arg("synth").args(args).output().unwrap()
-}
-
-fn ok(out: &std::process::Output) {
-    assert!(
-        out.status.success(),
-        "synth failed: {}\n{}",
-        out.status,
-        String::from_utf8_lossy(&out.stderr)
-    );
-}
-
-fn files(dir: &Path) -> BTreeMap<String, Vec<u8>> {
-    std::fs::read_dir(dir)
-        .unwrap()
-        .map(|e| e.unwrap().path())
-        .filter(|p| p.is_file())
-        .map(|p| {
-            (
-                p.file_name().unwrap().to_string_lossy().into_owned(),
-                std::fs::read(&p).unwrap(),
-            )
-        })
-        .collect()
-}
-
-fn same(a: &BTreeMap<String, Vec<u8>>, b: &BTreeMap<String, Vec<u8>>, what: &str) {
-    assert_eq!(
-        a.keys().collect::<Vec<_>>(),
-        b.keys().collect::<Vec<_>>(),
-        "{what}"
-    );
-    for (k, v) in a {
-        assert!(v == &b[k], "{what}: {k} differs");
-    }
-}
+// The synth CLI helpers are shared with synth_cli (same test binary).
+use crate::synth_cli::{files, ok, same, synth};
 
 fn s(p: &Path) -> &str {
     p.to_str().unwrap()

@@ -10,11 +10,11 @@ use day2night::raw::{Bayer, RawImage};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
-fn synth(args: &[&str]) -> std::process::Output {
+pub(crate) fn synth(args: &[&str]) -> std::process::Output {
     common::bin().arg("synth").args(args).output().unwrap()
 }
 
-fn ok(out: &std::process::Output) {
+pub(crate) fn ok(out: &std::process::Output) {
     assert!(
         out.status.success(),
         "synth failed: {}\n{}",
@@ -23,7 +23,7 @@ fn ok(out: &std::process::Output) {
     );
 }
 
-fn files(dir: &Path) -> BTreeMap<String, Vec<u8>> {
+pub(crate) fn files(dir: &Path) -> BTreeMap<String, Vec<u8>> {
     std::fs::read_dir(dir)
         .unwrap()
         .map(|e| e.unwrap().path())
@@ -38,7 +38,7 @@ fn files(dir: &Path) -> BTreeMap<String, Vec<u8>> {
 }
 
 /// Same names and bytes (without dumping megabytes on failure).
-fn same(a: &BTreeMap<String, Vec<u8>>, b: &BTreeMap<String, Vec<u8>>, what: &str) {
+pub(crate) fn same(a: &BTreeMap<String, Vec<u8>>, b: &BTreeMap<String, Vec<u8>>, what: &str) {
     assert_eq!(
         a.keys().collect::<Vec<_>>(),
         b.keys().collect::<Vec<_>>(),
