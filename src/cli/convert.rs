@@ -34,9 +34,18 @@ pub struct ConvertArgs {
     /// Input DNG.
     #[arg(value_name = "IN.dng")]
     pub input: PathBuf,
-    /// Output DNG (refused if it exists, unless --overwrite; never the input).
-    #[arg(value_name = "OUT.dng")]
-    pub output: PathBuf,
+    /// Output DNG (refused if it exists, unless --overwrite; never the input); or -o.
+    #[arg(value_name = "OUT.dng", required_unless_present = "out")]
+    pub output: Option<PathBuf>,
+    /// Output DNG, as an option (the same as the positional OUT.dng).
+    #[arg(
+        short = 'o',
+        long = "output",
+        visible_alias = "out",
+        value_name = "OUT.dng",
+        conflicts_with = "output"
+    )]
+    pub out: Option<PathBuf>,
     /// Raw image compression.
     #[arg(long, value_enum, default_value = "none")]
     pub compression: CompressionArg,
@@ -50,13 +59,18 @@ pub struct ConvertArgs {
 
 /// Run `day2night convert`.
 pub fn run(args: ConvertArgs) -> CmdResult {
+    let Some(output) = args.out.clone().or(args.output.clone()) else {
+        return Err(super::usage(
+            "convert needs an output: OUT.dng or -o OUT.dng",
+        ));
+    };
     let policy = OutputPolicy {
         overwrite: args.overwrite,
         inputs: vec![args.input.clone()],
         ..OutputPolicy::default()
     };
     // Fail before reading a large input when the output is refused anyway.
-    policy.check(&args.output)?;
+    policy.check(&output)?;
     let img = read_dng(&args.input)?;
     let opts = WriteOptions {
         compression: match args.compression {
@@ -69,6 +83,6 @@ pub fn run(args: ConvertArgs) -> CmdResult {
         },
         ..WriteOptions::default()
     };
-    write_dng(&img, &args.output, &opts, &policy)?;
+    write_dng(&img, &output, &opts, &policy)?;
     Ok(())
 }

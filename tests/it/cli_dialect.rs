@@ -34,6 +34,7 @@ fn error_lines_have_the_form(o: &Output, file: &Path) {
 fn every_output_option_has_the_three_spellings() {
     for cmd in [
         &["synth"][..],
+        &["convert"],
         &["render"],
         &["merge"],
         &["dataset"],
@@ -215,4 +216,43 @@ fn info_prints_short_noise_numbers_and_names_foreign_formats() {
         "{}",
         text(&o.stderr)
     );
+}
+
+#[test]
+fn convert_takes_its_output_as_an_argument_or_an_option() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = common::root().join("fixtures/day.dng");
+    let a = dir.path().join("a.dng");
+    let b = dir.path().join("b.dng");
+    let o = run(&["convert".as_ref(), input.as_os_str(), a.as_os_str()]);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    for (flag, out) in [
+        ("-o", &b),
+        ("--output", &dir.path().join("c.dng")),
+        ("--out", &dir.path().join("d.dng")),
+    ] {
+        let o = run(&[
+            "convert".as_ref(),
+            input.as_os_str(),
+            flag.as_ref(),
+            out.as_os_str(),
+        ]);
+        assert!(o.status.success(), "{flag}: {}", text(&o.stderr));
+        assert_eq!(
+            std::fs::read(out).unwrap(),
+            std::fs::read(&a).unwrap(),
+            "{flag}"
+        );
+    }
+    // both, or neither: usage errors
+    let o = run(&[
+        "convert".as_ref(),
+        input.as_os_str(),
+        a.as_os_str(),
+        "-o".as_ref(),
+        b.as_os_str(),
+    ]);
+    assert_eq!(o.status.code(), Some(2));
+    let o = run(&["convert".as_ref(), input.as_os_str()]);
+    assert_eq!(o.status.code(), Some(2));
 }
