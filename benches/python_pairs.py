@@ -7,7 +7,8 @@ DNG held in memory, against whole-frame synthesis. Not a test; prints a table.
 
 Rows (one ISO, linear target, each a median of --runs runs):
   crops, 1 Python thread    synthesize(crop=512x512), the thread's pool has all cores
-  crops, 2 Python threads   two threads, each with one rayon worker (set_threads(1))
+  crops, 1 x 1 worker       one thread with one rayon worker (set_threads(1))
+  crops, 2 Python threads   two threads, each with one rayon worker: the GIL-release gain
   NightPairs items          the dataset's __getitem__ (crop + packing), one thread
   whole frame               synthesize() without a crop: the full 12 MP clean + noisy + target
 """
@@ -55,6 +56,8 @@ def main():
     rows.append(("crops, 1 Python thread (pool: all cores)",
                  [crops_per_s(raw, a.pairs, 1, a.crop) for _ in range(a.runs)]))
     day2night.set_threads(1)
+    rows.append(("crops, 1 Python thread x 1 worker",
+                 [crops_per_s(raw, a.pairs, 1, a.crop) for _ in range(a.runs)]))
     rows.append(("crops, 2 Python threads x 1 worker",
                  [crops_per_s(raw, a.pairs, 2, a.crop) for _ in range(a.runs)]))
     day2night.set_threads(0)
