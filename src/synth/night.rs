@@ -400,6 +400,20 @@ mod tests {
         .unwrap()
     }
 
+    /// Every sample of the crop raw `c` equals the same active-area site of `full`.
+    fn assert_region(c: &RawImage, full: &RawImage, crop: &Crop, what: &str) {
+        let a = full.active_area();
+        for r in 0..crop.height {
+            for k in 0..crop.width {
+                let want = full.get(
+                    a.top as usize + crop.top + r,
+                    a.left as usize + crop.left + k,
+                );
+                assert_eq!(c.get(r, k), want, "{what} {crop:?} ({r},{k})");
+            }
+        }
+    }
+
     #[test]
     fn crops_equal_the_whole_frame_region() {
         let day = day();
@@ -461,15 +475,7 @@ mod tests {
                 )
                 .unwrap();
                 assert_eq!((c.clean.width, c.clean.height), (crop.width, crop.height));
-                for r in 0..crop.height {
-                    for k in 0..crop.width {
-                        let want = full.clean.get(
-                            a.top as usize + crop.top + r,
-                            a.left as usize + crop.left + k,
-                        );
-                        assert_eq!(c.clean.get(r, k), want, "{mode:?} {crop:?} clean ({r},{k})");
-                    }
-                }
+                assert_region(&c.clean, &full.clean, &crop, &format!("{mode:?} clean"));
                 // The target of a crop inside the DefaultCrop equals the frame's region.
                 let t = c.target.as_ref().unwrap();
                 let ft = full.target.as_ref().unwrap();
@@ -577,7 +583,6 @@ mod tests {
         let p = plan(&day, "day.dng", 3, 0, &opts, &cal).unwrap();
         assert!(p.noise[0].physics.is_some());
         let full = synthesize(&day, &p, &Request::default()).unwrap();
-        let a = day.active_area();
         let crop = Crop {
             top: 4,
             left: 6,
@@ -593,15 +598,7 @@ mod tests {
             },
         )
         .unwrap();
-        for r in 0..crop.height {
-            for k in 0..crop.width {
-                let want = full.noisy[0].1.get(
-                    a.top as usize + crop.top + r,
-                    a.left as usize + crop.left + k,
-                );
-                assert_eq!(c.noisy[0].1.get(r, k), want);
-            }
-        }
+        assert_region(&c.noisy[0].1, &full.noisy[0].1, &crop, "physics noisy");
     }
 
     #[test]
