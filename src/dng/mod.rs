@@ -4,6 +4,7 @@
 
 pub mod ljpeg;
 pub mod ljpeg_encode;
+pub mod opcodes;
 pub mod read;
 pub mod thumbnail;
 pub mod write;
