@@ -8,6 +8,7 @@
 
 use serde::Serialize;
 
+pub mod describe;
 mod encode;
 mod parse;
 
