@@ -23,7 +23,10 @@ def shared_file(rel):
     p = SHARED_DATA / rel
     if p.is_file():
         return p
-    why = f"shared real-camera data {p} not found (set D2N_SHARED_DATA)"
+    missing(f"shared real-camera file {p} not found (set D2N_SHARED_DATA)")
+
+
+def missing(why):
     if os.environ.get("D2N_REQUIRE_SHARED_DATA") == "1":
         pytest.fail(f"{why} but D2N_REQUIRE_SHARED_DATA=1")
     pytest.skip(why)
@@ -58,7 +61,7 @@ def day_dng():
 def real_dng():
     files = sorted(SHARED.glob("*.dng")) if SHARED.is_dir() else []
     if not files:
-        return shared_file("dng/*.dng")
+        missing(f"no real DNG in {SHARED} (shared real-camera data; set D2N_SHARED_DATA)")
     return files[0]
 
 
