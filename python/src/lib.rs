@@ -665,7 +665,7 @@ fn write_outputs(
     py.detach(move || {
         on_pool(move || write_files(day, from_file, stem, plan, job, night, out_dir, overwrite))
     })
-        .map_err(py_err)
+    .map_err(py_err)
 }
 
 #[allow(clippy::too_many_arguments)]

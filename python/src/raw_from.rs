@@ -137,7 +137,11 @@ impl<'py> Meta<'py> {
     fn bad(k: &str, why: impl std::fmt::Display) -> PyErr {
         value_err(format!("meta[{k:?}]: {why}"))
     }
-    fn extract<T: for<'a> FromPyObject<'a, 'py>>(&self, k: &str, what: &str) -> PyResult<Option<T>> {
+    fn extract<T: for<'a> FromPyObject<'a, 'py>>(
+        &self,
+        k: &str,
+        what: &str,
+    ) -> PyResult<Option<T>> {
         match self.get(k)? {
             None => Ok(None),
             Some(v) => v
@@ -160,7 +164,10 @@ impl<'py> Meta<'py> {
             .map_err(|_| Self::bad(k, format!("must be numbers (got {})", short_repr(&v))))?;
         if let Some(n) = n {
             if flat.len() != n {
-                return Err(Self::bad(k, format!("has {} values, expected {n}", flat.len())));
+                return Err(Self::bad(
+                    k,
+                    format!("has {} values, expected {n}", flat.len()),
+                ));
             }
         }
         Ok(Some(flat))
@@ -213,21 +220,31 @@ fn parse_cfa(m: &Meta<'_>) -> PyResult<Bayer> {
                 'R' => Ok(0),
                 'G' => Ok(1),
                 'B' => Ok(2),
-                _ => Err(Meta::bad(k, format!("{s:?}: use R, G and B (e.g. \"RGGB\")"))),
+                _ => Err(Meta::bad(
+                    k,
+                    format!("{s:?}: use R, G and B (e.g. \"RGGB\")"),
+                )),
             })
             .collect::<PyResult<_>>()?
     } else {
         m.ints(k, 4)
-            .map_err(|_| Meta::bad(k, "must be a string such as \"RGGB\" or four colour indices (0 R, 1 G, 2 B)"))?
+            .map_err(|_| {
+                Meta::bad(
+                    k,
+                    "must be a string such as \"RGGB\" or four colour indices (0 R, 1 G, 2 B)",
+                )
+            })?
             .unwrap_or_default()
             .into_iter()
             .map(|x| x.min(255) as u8)
             .collect()
     };
-    let arr: [u8; 4] = codes
-        .as_slice()
-        .try_into()
-        .map_err(|_| Meta::bad(k, format!("has {} colours, a Bayer pattern has 4", codes.len())))?;
+    let arr: [u8; 4] = codes.as_slice().try_into().map_err(|_| {
+        Meta::bad(
+            k,
+            format!("has {} colours, a Bayer pattern has 4", codes.len()),
+        )
+    })?;
     Bayer::from_pattern(arr).map_err(|e| Meta::bad(k, e))
 }
 
@@ -285,14 +302,16 @@ fn parse_meta(
         Some(b) => b,
         None => {
             // The fewest bits that hold the white level and every sample, at least 8.
-            let top = (white.max(0.0).min(65535.0) as u32).max(u32::from(max_sample));
+            let top = (white.clamp(0.0, 65535.0) as u32).max(u32::from(max_sample));
             (32 - top.leading_zeros()).clamp(8, 16) as u16
         }
     };
     let mut meta = RawMeta::bare(bayer, levels, bits);
-    meta.linearization_table = m
-        .floats("linearization_table", None)?
-        .map(|t| t.into_iter().map(|x| x.clamp(0.0, 65535.0) as u16).collect());
+    meta.linearization_table = m.floats("linearization_table", None)?.map(|t| {
+        t.into_iter()
+            .map(|x| x.clamp(0.0, 65535.0) as u16)
+            .collect()
+    });
     if let Some(a) = m.ints("active_area", 4)? {
         let c = |x: i64| u32::try_from(x).unwrap_or(u32::MAX);
         meta.active_area = Some(Rect {
@@ -317,7 +336,9 @@ fn parse_meta(
             meta.default_crop_size = Some([w as f64, h as f64]);
         }
     }
-    meta.orientation = m.extract::<u16>("orientation", "an integer 1..8")?.unwrap_or(1);
+    meta.orientation = m
+        .extract::<u16>("orientation", "an integer 1..8")?
+        .unwrap_or(1);
     meta.make = m.extract("make", "a string")?;
     meta.model = m.extract("model", "a string")?;
     meta.unique_camera_model = m.extract("unique_camera_model", "a string")?;
@@ -415,8 +436,12 @@ pub(crate) fn from_array(
     let (stem, file_name) = names(name)?;
     let arr: PyReadonlyArray2<'_, u16> = data.extract().map_err(|_| {
         let (dtype, shape) = (
-            data.getattr("dtype").map(|v| short_repr(&v)).unwrap_or_default(),
-            data.getattr("shape").map(|v| short_repr(&v)).unwrap_or_default(),
+            data.getattr("dtype")
+                .map(|v| short_repr(&v))
+                .unwrap_or_default(),
+            data.getattr("shape")
+                .map(|v| short_repr(&v))
+                .unwrap_or_default(),
         );
         value_err(format!(
             "data must be a 2-D uint16 numpy array (got dtype {dtype}, shape {shape})"

@@ -324,7 +324,8 @@ mod tests {
 
     #[test]
     fn each_bad_value_is_refused_with_its_name() {
-        let cases: Vec<(&str, Box<dyn Fn(&mut RawMeta)>)> = vec![
+        type Change = Box<dyn Fn(&mut RawMeta)>;
+        let cases: Vec<(&str, Change)> = vec![
             (
                 "AsShotNeutral",
                 Box::new(|m| m.as_shot_neutral = Some([1.0, 0.0, 1.0])),
