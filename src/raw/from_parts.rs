@@ -22,6 +22,9 @@ pub const D65_ILLUMINANT: u16 = 21;
 /// CIE 1931 xy of D65: the default white (AsShotWhiteXY) of a raw without a neutral.
 pub const D65_WHITE_XY: [f64; 2] = [0.3127, 0.3290];
 
+/// Largest width or height (the DNG reader's limit, `dng::read::MAX_DIMENSION`).
+pub const MAX_SIDE: usize = 65535;
+
 /// Colour metadata a source may lack, each with a documented default.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum ColorDefault {
@@ -234,7 +237,7 @@ fn check_meta(meta: &mut RawMeta, width: usize, height: usize) -> Result<()> {
             positive(name, &[v])?;
         }
     }
-    let max = crate::dng::read::MAX_DIMENSION as usize;
+    let max = MAX_SIDE;
     if width > max || height > max {
         return Err(Error::limits(format!(
             "{width}x{height} image: at most {max} samples per side"
