@@ -8,6 +8,9 @@
 #   3. the Python package (python/) built with maturin and installed into the same venv,
 #      then its pytest suite (python/tests), which compares it with the CLI built in 2.
 # exiftool is used when installed (.ci/run installs it). Slow suites: D2N_SLOW=1.
+# Tests that need the real-camera files of ../shared/data (or $D2N_SHARED_DATA) skip with
+# the reason when they are absent; D2N_REQUIRE_SHARED_DATA=1 (set by .ci/run when
+# ../shared/data exists) makes them fail instead.
 # Extra arguments go to cargo test, e.g. scripts/test.sh --test it dng_roundtrip:: (then the
 # Python suite is skipped; D2N_PYTHON_TESTS=1 runs it anyway, D2N_PYTHON_TESTS=0 never).
 set -euo pipefail

@@ -4,6 +4,8 @@
 //! `OSError` (I/O) or `ValueError` (everything else) with the command line's message.
 #![forbid(unsafe_code)]
 
+mod raw_from;
+
 use day2night::isp::render::{render_linear, RenderOptions};
 use day2night::isp::{Demosaic, RgbImage};
 use day2night::metrics::{
@@ -28,7 +30,7 @@ use std::sync::{Arc, Mutex, OnceLock};
 
 /// A library error as a Python exception: `OSError` for I/O, `ValueError` otherwise, with
 /// the message the command line prints (after its `day2night: ` prefix).
-fn py_err(e: Error) -> PyErr {
+pub(crate) fn py_err(e: Error) -> PyErr {
     let msg = e.to_string();
     let mut cur = &e;
     while let Error::File { source, .. } = cur {
@@ -91,7 +93,7 @@ fn pool() -> Result<Arc<rayon::ThreadPool>, Error> {
 }
 
 /// Run `f` on the calling thread's worker threads.
-fn on_pool<T: Send>(f: impl FnOnce() -> Result<T, Error> + Send) -> Result<T, Error> {
+pub(crate) fn on_pool<T: Send>(f: impl FnOnce() -> Result<T, Error> + Send) -> Result<T, Error> {
     pool()?.install(f)
 }
 
@@ -112,7 +114,7 @@ fn threads() -> PyResult<usize> {
     Ok(pool().map_err(py_err)?.current_num_threads())
 }
 
-fn value_err(msg: impl Into<String>) -> PyErr {
+pub(crate) fn value_err(msg: impl Into<String>) -> PyErr {
     PyValueError::new_err(msg.into())
 }
 
@@ -126,10 +128,12 @@ fn value_err(msg: impl Into<String>) -> PyErr {
 /// >>> raw.data.shape, raw.meta["cfa_pattern"]
 /// ((3024, 4032), 'RGGB')
 #[pyclass(module = "day2night", name = "Raw", frozen)]
-struct Raw {
+pub(crate) struct Raw {
     day: Arc<DayInput>,
     name: String,
     file_name: String,
+    /// Read from `day.source` (false: built in memory, e.g. `Raw.from_array`).
+    from_file: bool,
     data: OnceLock<Py<PyArray2<u16>>>,
 }
 
@@ -171,10 +175,29 @@ impl Raw {
         &self.file_name
     }
 
-    /// The path the DNG was read from.
+    /// The path the DNG was read from (None for a raw built in memory).
     #[getter]
-    fn path(&self) -> String {
-        self.day.source.display().to_string()
+    fn path(&self) -> Option<String> {
+        self.from_file
+            .then(|| self.day.source.display().to_string())
+    }
+
+    /// A raw from a 2-D uint16 CFA array (the whole stored plane; any strides) and a
+    /// metadata dict with the keys of ``Raw.meta`` (cfa_pattern, black_level and
+    /// white_level required; missing colour metadata gets the documented defaults, each
+    /// with a warning). ``name`` is the file stem the outputs and random streams are keyed
+    /// by (``file_name`` is ``name + ".dng"``). Checked as the DNG reader checks a file.
+    ///
+    /// >>> r = day2night.read_dng("day.dng")
+    /// >>> same = day2night.Raw.from_array(r.data, r.meta, name=r.name)
+    #[staticmethod]
+    fn from_array(
+        py: Python<'_>,
+        data: &Bound<'_, PyAny>,
+        meta: &Bound<'_, PyAny>,
+        name: &str,
+    ) -> PyResult<Raw> {
+        raw_from::from_array(py, data, meta, name)
     }
 
     /// SHA-256 of the file's bytes (the sidecar's ``input.sha256``).
@@ -226,6 +249,7 @@ fn meta_dict<'py>(py: Python<'py>, raw: &RawImage) -> PyResult<Bound<'py, PyDict
     d.set_item("width", raw.width)?;
     d.set_item("height", raw.height)?;
     d.set_item("bits_per_sample", m.bits_per_sample)?;
+    raw_from::extra_meta(&d, raw)?;
     Ok(d)
 }
 
@@ -249,6 +273,7 @@ fn read_dng(py: Python<'_>, path: PathBuf) -> PyResult<Raw> {
         day: Arc::new(day),
         name,
         file_name,
+        from_file: true,
         data: OnceLock::new(),
     })
 }
@@ -636,12 +661,17 @@ fn write_outputs(
     let day = r.day.clone();
     let stem = r.name.clone();
     let plan = s.plan.clone();
-    py.detach(move || on_pool(move || write_files(day, stem, plan, job, night, out_dir, overwrite)))
-        .map_err(py_err)
+    let from_file = r.from_file;
+    py.detach(move || {
+        on_pool(move || write_files(day, from_file, stem, plan, job, night, out_dir, overwrite))
+    })
+    .map_err(py_err)
 }
 
+#[allow(clippy::too_many_arguments)]
 fn write_files(
     day: Arc<DayInput>,
+    from_file: bool,
     stem: String,
     plan: Plan,
     job: SynthJob,
@@ -653,7 +683,11 @@ fn write_files(
         std::fs::create_dir_all(&out_dir).map_err(|e| Error::from(e).in_file(&out_dir))?;
         let policy = OutputPolicy {
             overwrite,
-            inputs: vec![day.source.clone()],
+            inputs: if from_file {
+                vec![day.source.clone()]
+            } else {
+                Vec::new()
+            },
             ..OutputPolicy::default()
         };
         let sink = DirSink::new(&out_dir, &stem, &job, &plan, &policy);
@@ -777,5 +811,6 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(version, m)?)?;
     m.add_function(wrap_pyfunction!(set_threads, m)?)?;
     m.add_function(wrap_pyfunction!(threads, m)?)?;
+    raw_from::register(m)?;
     Ok(())
 }

@@ -12,7 +12,24 @@ import pytest
 
 ROOT = pathlib.Path(__file__).resolve().parents[2]
 FIXTURES = ROOT / "fixtures"
-SHARED = ROOT.parent / "shared" / "data" / "dng"
+SHARED_DATA = pathlib.Path(os.environ.get("D2N_SHARED_DATA") or ROOT.parent / "shared" / "data")
+SHARED = SHARED_DATA / "dng"
+
+
+def shared_file(rel):
+    """A file of the shared real-camera data (../shared/data or $D2N_SHARED_DATA): the test
+    skips with the reason when it is absent, or fails when D2N_REQUIRE_SHARED_DATA=1
+    (.ci/run sets it when ../shared/data exists)."""
+    p = SHARED_DATA / rel
+    if p.is_file():
+        return p
+    missing(f"shared real-camera file {p} not found (set D2N_SHARED_DATA)")
+
+
+def missing(why):
+    if os.environ.get("D2N_REQUIRE_SHARED_DATA") == "1":
+        pytest.fail(f"{why} but D2N_REQUIRE_SHARED_DATA=1")
+    pytest.skip(why)
 
 
 def cli_path():
@@ -44,7 +61,7 @@ def day_dng():
 def real_dng():
     files = sorted(SHARED.glob("*.dng")) if SHARED.is_dir() else []
     if not files:
-        pytest.fail(f"no real DNG in {SHARED} (the shared test data must be beside the checkout)")
+        missing(f"no real DNG in {SHARED} (shared real-camera data; set D2N_SHARED_DATA)")
     return files[0]
 
 

@@ -551,6 +551,30 @@ impl DayInput {
         let bytes = std::fs::read(path).map_err(Error::Io).in_file(path)?;
         DayInput::from_bytes(path, &bytes)
     }
+
+    /// A raw that is in memory only (e.g. [`RawImage::from_parts`]), named `file_name` (the
+    /// name the EXR targets record). Its `sha256` (the sidecar's `input.sha256`) is the
+    /// SHA-256 of its contents: "day2night in-memory raw v1", width and height (u64 LE),
+    /// the samples (u16 LE) and the metadata as JSON.
+    pub fn in_memory(raw: RawImage, file_name: &str) -> DayInput {
+        use sha2::{Digest, Sha256};
+        let mut h = Sha256::new();
+        h.update(b"day2night in-memory raw v1\0");
+        h.update((raw.width as u64).to_le_bytes());
+        h.update((raw.height as u64).to_le_bytes());
+        for chunk in raw.data.chunks(1 << 16) {
+            let bytes: Vec<u8> = chunk.iter().flat_map(|v| v.to_le_bytes()).collect();
+            h.update(&bytes);
+        }
+        if let Ok(json) = serde_json::to_vec(&raw.meta) {
+            h.update(&json);
+        }
+        DayInput {
+            raw,
+            sha256: h.finalize().iter().map(|b| format!("{b:02x}")).collect(),
+            source: PathBuf::from(file_name),
+        }
+    }
 }
 
 /// The encoded targets of one band of the render.

@@ -29,9 +29,8 @@ fn files() -> Vec<PathBuf> {
         .collect();
     v.sort();
     assert!(!v.is_empty(), "no fixtures");
-    match common::shared_data() {
-        Some(d) => v.push(d.join("dng/canon_kissx4_magiclantern_rggb14_strips.dng")),
-        None => eprintln!("real Canon DNG not checked: D2N_SHARED_DATA is not set"),
+    if let Some(p) = common::shared_file("dng/canon_kissx4_magiclantern_rggb14_strips.dng") {
+        v.push(p);
     }
     v
 }

@@ -19,7 +19,7 @@ fn fixtures() -> Vec<PathBuf> {
 }
 
 fn canon() -> Option<PathBuf> {
-    common::shared_data().map(|d| d.join("dng/canon_kissx4_magiclantern_rggb14_strips.dng"))
+    common::shared_file("dng/canon_kissx4_magiclantern_rggb14_strips.dng")
 }
 
 #[test]

@@ -21,13 +21,7 @@ fn s(p: &Path) -> &str {
 }
 
 fn canon() -> Option<PathBuf> {
-    let p = common::shared_data()?.join("dng/canon_kissx4_magiclantern_rggb14_strips.dng");
-    if p.is_file() {
-        Some(p)
-    } else {
-        eprintln!("SKIP: {} not found", p.display());
-        None
-    }
+    common::shared_file("dng/canon_kissx4_magiclantern_rggb14_strips.dng")
 }
 
 #[test]

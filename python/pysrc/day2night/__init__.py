@@ -11,7 +11,8 @@ work, with the GIL released).
 ((512, 512), (512, 512, 3))
 
 ``NightPairs`` is a map-style dataset for ``torch.utils.data.DataLoader`` (no torch import
-here). See docs/python.md of the repository.
+here). Raws from other sources: ``Raw.from_array(data, meta, name=...)``, ``from_rawpy``
+(any camera raw rawpy reads) and ``write_dng``. See docs/python.md of the repository.
 """
 
 from ._native import (  # noqa: F401
@@ -26,9 +27,11 @@ from ._native import (  # noqa: F401
     synthesize,
     threads,
     version,
+    write_dng,
     write_outputs,
 )
 from .pairs import NightPairs, pack_bayer  # noqa: F401
+from .rawpy_meta import from_rawpy  # noqa: F401
 
 __version__ = version()
 
@@ -37,6 +40,7 @@ __all__ = [
     "Raw",
     "Synthesis",
     "delta_e2000",
+    "from_rawpy",
     "pack_bayer",
     "psnr",
     "read_dng",
@@ -46,5 +50,6 @@ __all__ = [
     "synthesize",
     "threads",
     "version",
+    "write_dng",
     "write_outputs",
 ]

@@ -15,7 +15,9 @@ pub fn fixtures() -> PathBuf {
     root().join("fixtures")
 }
 
-/// `../shared/data` (or `$D2N_SHARED_DATA`), if present. Prints why when absent.
+/// `../shared/data` (or `$D2N_SHARED_DATA`), if present. Prints why when absent (the
+/// calling test then skips), or fails when `D2N_REQUIRE_SHARED_DATA=1` (`.ci/run` sets it
+/// when `../shared/data` exists, so that a test silently skipping there is a failure).
 pub fn shared_data() -> Option<PathBuf> {
     let p = std::env::var_os("D2N_SHARED_DATA")
         .map(PathBuf::from)
@@ -23,12 +25,31 @@ pub fn shared_data() -> Option<PathBuf> {
     if p.is_dir() {
         Some(p)
     } else {
-        eprintln!(
-            "SKIP: shared real-camera data not found at {} (set D2N_SHARED_DATA)",
+        skip_shared(&format!(
+            "shared real-camera data not found at {} (set D2N_SHARED_DATA)",
             p.display()
-        );
+        ));
         None
     }
+}
+
+/// A file of the shared data (`rel` inside [`shared_data`]), if present; like
+/// [`shared_data`], prints why when absent, or fails under `D2N_REQUIRE_SHARED_DATA=1`.
+pub fn shared_file(rel: &str) -> Option<PathBuf> {
+    let p = shared_data()?.join(rel);
+    if p.is_file() {
+        Some(p)
+    } else {
+        skip_shared(&format!("shared file {} not found", p.display()));
+        None
+    }
+}
+
+fn skip_shared(why: &str) {
+    if std::env::var("D2N_REQUIRE_SHARED_DATA").as_deref() == Ok("1") {
+        panic!("{why} but D2N_REQUIRE_SHARED_DATA=1");
+    }
+    eprintln!("SKIP: {why}");
 }
 
 /// The Python interpreter of the validator virtualenv, if any. When
