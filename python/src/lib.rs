@@ -4,6 +4,9 @@
 //! `OSError` (I/O) or `ValueError` (everything else) with the command line's message.
 #![forbid(unsafe_code)]
 
+mod dataset_units;
+mod pairs;
+
 use day2night::isp::render::{render_linear, RenderOptions};
 use day2night::isp::{Demosaic, RgbImage};
 use day2night::metrics::{
@@ -777,5 +780,9 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(version, m)?)?;
     m.add_function(wrap_pyfunction!(set_threads, m)?)?;
     m.add_function(wrap_pyfunction!(threads, m)?)?;
+    m.add_function(wrap_pyfunction!(pairs::night_pair, m)?)?;
+    m.add_function(wrap_pyfunction!(dataset_units::dataset_units, m)?)?;
+    m.add_function(wrap_pyfunction!(dataset_units::write_unit, m)?)?;
+    m.add_function(wrap_pyfunction!(dataset_units::write_manifest, m)?)?;
     Ok(())
 }

@@ -279,7 +279,12 @@ mod tests {
         let u = unit("a/b.dng", "x/a/b.dng".into(), Split::Val, 2, 3, 7).unwrap();
         assert_eq!(u.id, "a__b_v2");
         assert_eq!(u.split, Split::Val);
-        assert_eq!(unit("a.dng", "a.dng".into(), Split::Train, 1, 1, 0).unwrap().id, "a");
+        assert_eq!(
+            unit("a.dng", "a.dng".into(), Split::Train, 1, 1, 0)
+                .unwrap()
+                .id,
+            "a"
+        );
         assert!(unit("a.dng", "a.dng".into(), Split::Train, 0, 1, 0).is_err());
         assert!(unit("a.dng", "a.dng".into(), Split::Train, 2, 1, 0).is_err());
         assert_eq!(

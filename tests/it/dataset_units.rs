@@ -159,7 +159,10 @@ fn the_command_finishes_an_interrupted_unit_run() {
     ob.out_dir = b.path().to_path_buf();
     let f = Fake::new("x");
     let s = dataset::run(&ob, &f).unwrap();
-    assert_eq!((s.skipped, s.done, f.units.load(Ordering::SeqCst)), (4, 6, 6));
+    assert_eq!(
+        (s.skipped, s.done, f.units.load(Ordering::SeqCst)),
+        (4, 6, 6)
+    );
     assert!(!b.path().join(JOURNAL_DIR).exists());
     assert_eq!(tree(a.path(), true), tree(b.path(), true));
 }

@@ -11,12 +11,15 @@ work, with the GIL released).
 ((512, 512), (512, 512, 3))
 
 ``NightPairs`` is a map-style dataset for ``torch.utils.data.DataLoader`` (no torch import
-here). See docs/python.md of the repository.
+here). ``dataset_units``, ``write_unit`` and ``write_manifest`` run ``day2night dataset`` as
+independent units on a scheduler such as Ray Data (python/examples/ray_dataset.py). See
+docs/python.md of the repository.
 """
 
 from ._native import (  # noqa: F401
     Raw,
     Synthesis,
+    dataset_units,
     delta_e2000,
     psnr,
     read_dng,
@@ -26,7 +29,9 @@ from ._native import (  # noqa: F401
     synthesize,
     threads,
     version,
+    write_manifest,
     write_outputs,
+    write_unit,
 )
 from .pairs import NightPairs, pack_bayer  # noqa: F401
 
@@ -36,6 +41,7 @@ __all__ = [
     "NightPairs",
     "Raw",
     "Synthesis",
+    "dataset_units",
     "delta_e2000",
     "pack_bayer",
     "psnr",
@@ -46,5 +52,7 @@ __all__ = [
     "synthesize",
     "threads",
     "version",
+    "write_manifest",
     "write_outputs",
+    "write_unit",
 ]
