@@ -39,7 +39,7 @@ fn pack_levels(levels: &Levels, top: usize, left: usize) -> Result<([f32; 4], f3
         .copied()
         .fold(f64::NEG_INFINITY, f64::max);
     let scale = levels.white - max_black;
-    if !(scale > 0.0) {
+    if scale.is_nan() || scale <= 0.0 {
         return Err(Error::invalid(format!(
             "black level {max_black} >= white level {}",
             levels.white
