@@ -7,7 +7,7 @@ The output tree equals `day2night dataset DAY_DIR -o OUT` with the same options:
 file names, every file byte for byte, the same manifest lines (python/tests/test_ray.py).
 A rerun after a kill completes the tree, skipping the units already complete.
 
-Without --address a local Ray cluster is started (`ray.init()`, --num-cpus CPUs); with
+Without --address a new local Ray cluster is started (--num-cpus CPUs); with
 `--address auto` (on a node of a running cluster) or `--address ray://HEAD:10001` the units
 run on that cluster's nodes, which must all see DAY_DIR and OUT at the same paths (a
 shared file system; see docs/python.md for object storage). Needs `pip install
@@ -96,7 +96,9 @@ def main(argv=None):
     if a.address:
         ray.init(address=a.address, log_to_driver=not a.quiet)
     else:
-        ray.init(num_cpus=a.num_cpus, include_dashboard=False, log_to_driver=not a.quiet)
+        # address="local": always a new local cluster (never one `ray start` left behind).
+        ray.init(address="local", num_cpus=a.num_cpus, include_dashboard=False,
+                 log_to_driver=not a.quiet)
     ctx = ray.data.DataContext.get_current()
     ctx.enable_progress_bars = not a.quiet
     work = unit_writer(a.out, a.cpus_per_task, a.overwrite, a.wait, options)

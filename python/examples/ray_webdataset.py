@@ -70,7 +70,9 @@ def main(argv=None):
     if a.address:
         ray.init(address=a.address, log_to_driver=not a.quiet)
     else:
-        ray.init(num_cpus=a.num_cpus, include_dashboard=False, log_to_driver=not a.quiet)
+        # address="local": always a new local cluster (never one `ray start` left behind).
+        ray.init(address="local", num_cpus=a.num_cpus, include_dashboard=False,
+                 log_to_driver=not a.quiet)
     ray.data.DataContext.get_current().enable_progress_bars = not a.quiet
     (ray.data.range(n)
      .map(Items, fn_constructor_args=(a.day_dir, a.crop, isos, a.seed, a.crops_per_image,
