@@ -8,10 +8,11 @@ file names, every file byte for byte, the same manifest lines (python/tests/test
 A rerun after a kill completes the tree, skipping the units already complete.
 
 Without --address a new local Ray cluster is started (--num-cpus CPUs); with
-`--address auto` (on a node of a running cluster) or `--address ray://HEAD:10001` the units
-run on that cluster's nodes, which must all see DAY_DIR and OUT at the same paths (a
-shared file system; see docs/python.md for object storage). Needs `pip install
-"ray[data]"` beside day2night.
+`--address auto` or `--address HEAD_IP:6379` (on a node of a cluster made by `ray start`;
+Ray 2.60 then wants RAY_AUTH_MODE=token and the cluster's token) the units run on that
+cluster's nodes, which must all see DAY_DIR and OUT at the same paths (a shared file
+system; see docs/python.md for object storage). Needs `pip install "ray[data]"` beside
+day2night.
 """
 import argparse
 import json
