@@ -5,8 +5,9 @@
 #      maturin and pytest;
 #   2. cargo test (unit, integration, doc tests); tests find the validators through
 #      D2N_PYTHON and fail (instead of skipping) when D2N_REQUIRE_VALIDATORS=1;
-#   3. the Python package (python/) built with maturin and installed into the same venv,
-#      then its pytest suite (python/tests), which compares it with the CLI built in 2.
+#   3. the Python package (python/) built with maturin and installed into the same venv
+#      (with ray[data] from python/tests/requirements-ray.txt where it has wheels), then its
+#      pytest suite (python/tests), which compares it with the CLI built in 2.
 # exiftool is used when installed (.ci/run installs it). Slow suites: D2N_SLOW=1.
 # Tests that need the real-camera files of ../shared/data (or $D2N_SHARED_DATA) skip with
 # the reason when they are absent; D2N_REQUIRE_SHARED_DATA=1 (set by .ci/run when
@@ -34,6 +35,25 @@ if [ -z "$py_tests" ]; then
   if [ "$#" -eq 0 ]; then py_tests=1; else py_tests=0; fi
 fi
 if [ "$py_tests" = 1 ]; then
+  # Ray Data for python/tests/test_ray.py, where wheels exist for this platform and Python
+  # (about 50 s on the 2-core machine, once: stamped like the validators). Installed, the
+  # test must run (D2N_REQUIRE_RAY=1); not installable, it skips with the reason, unless
+  # D2N_REQUIRE_RAY=1 was set by the caller (CI), which makes that an error.
+  ray_req=python/tests/requirements-ray.txt
+  ray_stamp="$VENV/.ray-requirements.sha"
+  ray_want=$(sha256sum "$ray_req" | cut -d' ' -f1)
+  if [ "$(cat "$ray_stamp" 2>/dev/null)" = "$ray_want" ]; then
+    export D2N_REQUIRE_RAY=1
+  elif "$VENV/bin/python" -m pip install --quiet --disable-pip-version-check --only-binary=:all: -r "$ray_req"; then
+    echo "$ray_want" > "$ray_stamp"
+    export D2N_REQUIRE_RAY=1
+  elif [ "${D2N_REQUIRE_RAY:-}" = 1 ]; then
+    echo "scripts/test.sh: D2N_REQUIRE_RAY=1 but $ray_req could not be installed" >&2
+    exit 1
+  else
+    export D2N_RAY_SKIP_REASON="ray[data] could not be installed from $ray_req (no wheel for this platform or Python, or no network): test_ray.py skipped"
+    echo "scripts/test.sh: $D2N_RAY_SKIP_REASON" >&2
+  fi
   echo "scripts/test.sh: building the Python package (pip install ./python) into $VENV" >&2
   # maturin's build hook runs the `maturin` of PATH: the venv's
   PATH="$VENV/bin:$PATH" "$VENV/bin/python" -m pip install --quiet --disable-pip-version-check --no-build-isolation \

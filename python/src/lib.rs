@@ -5,6 +5,8 @@
 #![forbid(unsafe_code)]
 
 mod raw_from;
+mod dataset_units;
+mod pairs;
 
 use day2night::isp::render::{render_linear, RenderOptions};
 use day2night::isp::{Demosaic, RgbImage};
@@ -812,5 +814,9 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(set_threads, m)?)?;
     m.add_function(wrap_pyfunction!(threads, m)?)?;
     raw_from::register(m)?;
+    m.add_function(wrap_pyfunction!(pairs::night_pair, m)?)?;
+    m.add_function(wrap_pyfunction!(dataset_units::dataset_units, m)?)?;
+    m.add_function(wrap_pyfunction!(dataset_units::write_unit, m)?)?;
+    m.add_function(wrap_pyfunction!(dataset_units::write_manifest, m)?)?;
     Ok(())
 }

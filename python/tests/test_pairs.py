@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 import day2night
-from day2night import NightPairs
+from day2night import NightPairs, pack_bayer
 
 
 def items(ds, idx):
@@ -101,3 +101,33 @@ def test_pack_bayer_by_hand():
     assert np.allclose(p[:, 0, 0], [0.0, 1.0, 480 / 959, 0.0])
     with pytest.raises(ValueError):
         day2night.pack_bayer(np.zeros((3, 4), np.uint16), meta)
+
+
+def test_items_equal_numpy_packing_with_a_black_level_pattern(tmp_path):
+    # The Rust layout of an item (night_pair) equals pack_bayer of synthesize's arrays, here
+    # on a BGGR raw with a 2x2 BlackLevel pattern (the black of each CFA position differs).
+    import pathlib
+    import shutil
+
+    from day2night._native import night_pair
+
+    fixtures = pathlib.Path(__file__).resolve().parents[2] / "fixtures"
+    d = tmp_path / "d"
+    d.mkdir()
+    shutil.copy(fixtures / "bggr_14bit_packed_le_subifd_black2x2.dng", d / "p.dng")
+    ds = NightPairs(d, crop=24, isos=(800, 3200), seed=2, crops_per_image=4)
+    raw = day2night.read_dng(d / "p.dng")
+    assert raw.meta["black_level_repeat_dim"] == (2, 2)
+    assert len(set(raw.meta["black_level"])) > 1
+    for i in range(len(ds)):
+        it = ds[i]
+        top, left = (int(x) for x in it["origin"])
+        out = day2night.synthesize(raw, seed=2, variant=it["variant"], isos=(it["iso"],),
+                                   crop=(top, left, 24, 24))
+        assert np.array_equal(pack_bayer(out["noisy"][it["iso"]], raw.meta, top, left),
+                              it["noisy"])
+        assert np.array_equal(pack_bayer(out["clean"], raw.meta, top, left), it["clean"])
+        assert np.array_equal(out["target"].transpose(2, 0, 1), it["target"])
+        assert it["target"].flags.c_contiguous and it["noisy"].flags.c_contiguous
+    with pytest.raises(ValueError, match="even"):
+        night_pair(raw, 0, 0, 800, (0, 0, 15, 16))

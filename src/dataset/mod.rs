@@ -26,6 +26,7 @@ pub mod run;
 pub mod shard;
 pub mod split;
 pub mod synthesis;
+pub mod units;
 
 use crate::error::{Error, Result, ResultExt};
 use crate::output::{write_atomic, OutputPolicy};

@@ -123,26 +123,54 @@ impl Summary {
     }
 }
 
-struct Task {
-    input: Input,
-    split: Split,
-    stem: String,
+/// One input of the run: where it goes and under which name.
+pub(super) struct Task {
+    pub(super) input: Input,
+    pub(super) split: Split,
+    pub(super) stem: String,
 }
 
-/// Run the dataset generation with `processor`.
-pub fn run<P: Processor>(opts: &RunOptions, processor: &P) -> Result<Summary> {
-    let start = Instant::now();
-    if opts.variants == 0 {
-        return Err(Error::invalid("--variants must be at least 1"));
+impl Task {
+    /// The (input, variant) units of this input, variants 1..=`variants`.
+    pub(super) fn units(&self, variants: u32, seed: u64) -> Vec<Unit> {
+        (1..=variants)
+            .map(|variant| Unit {
+                rel: self.input.rel.clone(),
+                path: self.input.path.clone(),
+                split: self.split,
+                variant,
+                variants,
+                seed,
+                id: unit_id(&self.stem, variant, variants),
+            })
+            .collect()
     }
-    let jobs = opts.jobs.max(1);
-    let out_dir = &opts.out_dir;
-    let inputs = discover(&opts.day_dir, std::slice::from_ref(out_dir))?;
+}
+
+/// The output id of a unit: the sample stem, plus `_vK` when more than one variant is made.
+pub(super) fn unit_id(stem: &str, variant: u32, variants: u32) -> String {
+    if variants > 1 {
+        format!("{stem}_v{variant}")
+    } else {
+        stem.to_string()
+    }
+}
+
+/// Discover the inputs under `day_dir` (skipping `out_dir`), refuse name clashes, split
+/// them and keep `shard`'s: (inputs found, tasks of the shard).
+pub(super) fn plan_tasks(
+    day_dir: &Path,
+    out_dir: Option<&Path>,
+    split: SplitRule,
+    shard: Shard,
+) -> Result<(usize, Vec<Task>)> {
+    let exclude: Vec<PathBuf> = out_dir.map(Path::to_path_buf).into_iter().collect();
+    let inputs = discover(day_dir, &exclude)?;
     if inputs.is_empty() {
         return Err(Error::invalid(
             "no DNG file found (searched recursively for *.dng in any letter case)",
         )
-        .in_file(&opts.day_dir));
+        .in_file(day_dir));
     }
     // Two inputs must not map to the same output names.
     let mut stems: HashMap<String, &str> = HashMap::new();
@@ -153,30 +181,56 @@ pub fn run<P: Processor>(opts: &RunOptions, processor: &P) -> Result<Summary> {
                 "inputs {other} and {} would both be named {stem} in the dataset; rename one",
                 inp.rel
             ))
-            .in_file(&opts.day_dir));
+            .in_file(day_dir));
         }
     }
-    let splits = assign(&inputs, opts.split)?;
+    let splits = assign(&inputs, split)?;
     let found = inputs.len();
-    let tasks: Vec<Task> = inputs
+    let tasks = inputs
         .into_iter()
         .zip(splits)
-        .filter(|(inp, _)| opts.shard.selects(&inp.rel))
+        .filter(|(inp, _)| shard.selects(&inp.rel))
         .map(|(input, split)| Task {
             stem: sample_stem(&input.rel),
             input,
             split,
         })
         .collect();
+    Ok((found, tasks))
+}
 
-    // Safety: only reuse an OUT_DIR that is empty or already a dataset.
-    let manifests = manifest::all_manifests(out_dir)?;
-    if manifests.is_empty() && !opts.overwrite && dir_has_entries(out_dir) {
+/// Only reuse an OUT_DIR that is empty or already a dataset (it holds a manifest, or
+/// `extra_marker` when given), unless `overwrite`.
+pub(super) fn check_out_dir(
+    out_dir: &Path,
+    manifests: &[PathBuf],
+    extra_marker: Option<&Path>,
+    overwrite: bool,
+) -> Result<()> {
+    let marked = !manifests.is_empty() || extra_marker.is_some_and(Path::exists);
+    if !marked && !overwrite && dir_has_entries(out_dir) {
         return Err(Error::invalid(
             "output folder is not empty and holds no manifest*.jsonl (not a dataset); pass --overwrite to write into it anyway",
         )
         .in_file(out_dir));
     }
+    Ok(())
+}
+
+/// Run the dataset generation with `processor`.
+pub fn run<P: Processor>(opts: &RunOptions, processor: &P) -> Result<Summary> {
+    let start = Instant::now();
+    if opts.variants == 0 {
+        return Err(Error::invalid("--variants must be at least 1"));
+    }
+    let jobs = opts.jobs.max(1);
+    let out_dir = &opts.out_dir;
+    let (found, tasks) = plan_tasks(&opts.day_dir, Some(out_dir), opts.split, opts.shard)?;
+
+    // Safety: only reuse an OUT_DIR that is empty or already a dataset.
+    let manifests = manifest::all_manifests(out_dir)?;
+    let journal = out_dir.join(super::units::JOURNAL_DIR);
+    check_out_dir(out_dir, &manifests, Some(&journal), opts.overwrite)?;
     std::fs::create_dir_all(out_dir)
         .map_err(Error::Io)
         .in_file(out_dir)?;
@@ -189,6 +243,8 @@ pub fn run<P: Processor>(opts: &RunOptions, processor: &P) -> Result<Summary> {
     let own_loaded = manifest::read(&own_manifest)?;
     let own_keys: Vec<(String, u32)> = own_loaded.records.iter().map(|r| r.key()).collect();
     previous.extend(own_loaded.records);
+    // Units written by `dataset::units` (a Ray run) since the last manifest: newer.
+    previous.extend(super::units::journal_records(out_dir));
     let previous = manifest::latest(previous);
     let appender = Appender::open(&own_manifest)?;
     remove_stale_temp_files(out_dir, &tasks, opts.variants);
@@ -289,7 +345,9 @@ pub fn run<P: Processor>(opts: &RunOptions, processor: &P) -> Result<Summary> {
         .count();
     let mut summary = stats.into_inner().unwrap_or_else(|e| e.into_inner());
     summary.outputs_total = final_records.iter().map(|r| r.outputs.len()).sum();
+    let keys: Vec<(String, u32)> = final_records.iter().map(|r| r.key()).collect();
     manifest::write_compacted(&own_manifest, final_records)?;
+    super::units::clear_journal(out_dir, &keys);
     summary.failures.sort();
     summary.found = found;
     summary.images = tasks.len();
@@ -307,15 +365,11 @@ pub fn run<P: Processor>(opts: &RunOptions, processor: &P) -> Result<Summary> {
 /// shard, so only another run of the same shard could own them, and the files of a unit
 /// whose [`OutputSetLock`] is held (being written now) are left alone. Other shards' files
 /// are left alone.
-fn remove_stale_temp_files(out_dir: &Path, tasks: &[Task], variants: u32) {
+pub(super) fn remove_stale_temp_files(out_dir: &Path, tasks: &[Task], variants: u32) {
     let mut ids = std::collections::HashSet::new();
     for t in tasks {
-        if variants > 1 {
-            for v in 1..=variants {
-                ids.insert(format!("{}_v{v}", t.stem));
-            }
-        } else {
-            ids.insert(t.stem.clone());
+        for v in 1..=variants {
+            ids.insert(unit_id(&t.stem, v, variants));
         }
     }
     for split in [Split::Train, Split::Val] {
@@ -377,36 +431,8 @@ fn process_input<P: Processor>(
     policy: &OutputPolicy,
     appender: &Appender,
 ) -> Vec<(Record, Did)> {
-    let rel = &task.input.rel;
-    let units: Vec<Unit> = (1..=opts.variants)
-        .map(|variant| Unit {
-            rel: rel.clone(),
-            path: task.input.path.clone(),
-            split: task.split,
-            variant,
-            variants: opts.variants,
-            seed: opts.seed,
-            id: if opts.variants > 1 {
-                format!("{}_v{variant}", task.stem)
-            } else {
-                task.stem.clone()
-            },
-        })
-        .collect();
-    let blank = |u: &Unit, input_sha256: &str| Record {
-        input: u.rel.clone(),
-        variant: u.variant,
-        split: u.split,
-        status: Status::Failed,
-        input_sha256: input_sha256.to_string(),
-        seed: u.seed,
-        options_sha256: options_sha.to_string(),
-        outputs: vec![],
-        iso: vec![],
-        night_neutral: None,
-        stages: vec![],
-        error: None,
-    };
+    let units = task.units(opts.variants, opts.seed);
+    let blank = |u: &Unit, input_sha256: &str| blank_record(u, input_sha256, options_sha);
     let finish = |mut rec: Record, what: Did| -> (Record, Did) {
         if !matches!(what, Did::Skipped) {
             if let Err(e) = appender.append(&rec) {
@@ -471,50 +497,29 @@ fn process_input<P: Processor>(
             Decision::Redo(r) => r,
         };
         if loaded.is_none() {
-            let l = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-                processor.load(&task.input.path, &bytes)
-            }));
-            loaded = Some(match l {
-                Ok(Ok(x)) => Ok(x),
-                Ok(Err(e)) => Err(e.in_file(&task.input.path).to_string()),
-                Err(_) => Err(format!(
-                    "{}: internal error (panic) while loading",
-                    task.input.path.display()
-                )),
-            });
+            loaded = Some(load_input(processor, &task.input.path, &bytes));
         }
-        let mut rec = blank(u, &input_sha);
-        match loaded.as_ref() {
-            Some(Ok(input)) => {
-                let sink = Sink::new(&opts.out_dir, u.split, &u.id, policy.clone());
-                // One process at a time writes a unit's outputs (docs/concurrency.md).
-                let res = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-                    let _unit = OutputSetLock::acquire(&opts.out_dir, &u.id, opts.wait)?;
-                    processor.process(input, u, &sink)
-                }));
-                match res {
-                    Ok(Ok(info)) => {
-                        rec.status = Status::Ok;
-                        rec.outputs = sink.into_outputs();
-                        if let Some(prev) = previous.get(&(u.rel.clone(), u.variant)) {
-                            remove_replaced_outputs(&opts.out_dir, prev, &rec);
-                        }
-                        rec.iso = info.iso;
-                        rec.night_neutral = info.night_neutral;
-                        rec.stages = info.stages;
-                    }
-                    Ok(Err(e)) => rec.error = Some(e.in_file(&task.input.path).to_string()),
-                    Err(_) => {
-                        rec.error = Some(format!(
-                            "{}: internal error (panic) while processing",
-                            task.input.path.display()
-                        ))
-                    }
-                }
-            }
-            Some(Err(msg)) => rec.error = Some(msg.clone()),
-            None => rec.error = Some("not loaded".into()),
-        }
+        let prev = previous.get(&(u.rel.clone(), u.variant));
+        let rec = match loaded.as_ref() {
+            Some(Ok(input)) => compute_unit(
+                processor,
+                input,
+                u,
+                prev,
+                blank(u, &input_sha),
+                &opts.out_dir,
+                policy,
+                opts.wait,
+            ),
+            Some(Err(msg)) => Record {
+                error: Some(msg.clone()),
+                ..blank(u, &input_sha)
+            },
+            None => Record {
+                error: Some("not loaded".into()),
+                ..blank(u, &input_sha)
+            },
+        };
         if rec.status != Status::Ok && stop_requested().is_some() {
             // Stopped by an interrupt: no record, the rerun computes the unit.
             break;
@@ -522,6 +527,82 @@ fn process_input<P: Processor>(
         out.push(finish(rec, Did::Computed(reason)));
     }
     out
+}
+
+/// The record of a unit not (yet) made: status failed, no outputs.
+pub(super) fn blank_record(u: &Unit, input_sha256: &str, options_sha256: &str) -> Record {
+    Record {
+        input: u.rel.clone(),
+        variant: u.variant,
+        split: u.split,
+        status: Status::Failed,
+        input_sha256: input_sha256.to_string(),
+        seed: u.seed,
+        options_sha256: options_sha256.to_string(),
+        outputs: vec![],
+        iso: vec![],
+        night_neutral: None,
+        stages: vec![],
+        error: None,
+    }
+}
+
+/// Load a unit's input from its bytes, a panic caught as an error message.
+pub(super) fn load_input<P: Processor>(
+    processor: &P,
+    path: &Path,
+    bytes: &[u8],
+) -> std::result::Result<P::Loaded, String> {
+    match std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| processor.load(path, bytes))) {
+        Ok(Ok(x)) => Ok(x),
+        Ok(Err(e)) => Err(e.in_file(path).to_string()),
+        Err(_) => Err(format!(
+            "{}: internal error (panic) while loading",
+            path.display()
+        )),
+    }
+}
+
+/// Make one unit's outputs under its [`OutputSetLock`] and return its record (`rec`, the
+/// blank record, filled in): `ok` with the files written, or `failed` with the error (a
+/// panic is caught). Files the previous record listed that are no longer made are removed.
+#[allow(clippy::too_many_arguments)]
+pub(super) fn compute_unit<P: Processor>(
+    processor: &P,
+    input: &P::Loaded,
+    u: &Unit,
+    prev: Option<&Record>,
+    mut rec: Record,
+    out_dir: &Path,
+    policy: &OutputPolicy,
+    wait: bool,
+) -> Record {
+    let sink = Sink::new(out_dir, u.split, &u.id, policy.clone());
+    // One process at a time writes a unit's outputs (docs/concurrency.md).
+    let res = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+        let _unit = OutputSetLock::acquire(out_dir, &u.id, wait)?;
+        processor.process(input, u, &sink)
+    }));
+    match res {
+        Ok(Ok(info)) => {
+            rec.status = Status::Ok;
+            rec.outputs = sink.into_outputs();
+            if let Some(prev) = prev {
+                remove_replaced_outputs(out_dir, prev, &rec);
+            }
+            rec.iso = info.iso;
+            rec.night_neutral = info.night_neutral;
+            rec.stages = info.stages;
+        }
+        Ok(Err(e)) => rec.error = Some(e.in_file(&u.path).to_string()),
+        Err(_) => {
+            rec.error = Some(format!(
+                "{}: internal error (panic) while processing",
+                u.path.display()
+            ))
+        }
+    }
+    rec
 }
 
 /// Delete the files a unit's previous record listed that its new outputs no longer include
@@ -540,7 +621,7 @@ fn remove_replaced_outputs(out_dir: &Path, prev: &Record, now: &Record) {
     }
 }
 
-fn want<'a>(u: &Unit, input_sha: &'a str, options_sha: &'a str) -> Want<'a> {
+pub(super) fn want<'a>(u: &Unit, input_sha: &'a str, options_sha: &'a str) -> Want<'a> {
     Want {
         split: u.split,
         input_sha256: input_sha,

@@ -21,6 +21,7 @@ mod dataset_cli;
 mod dataset_core;
 mod dataset_memory;
 mod dataset_report;
+mod dataset_units;
 mod deflate_zlib;
 mod dng_bad_files;
 mod dng_gps;

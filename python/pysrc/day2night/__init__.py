@@ -13,11 +13,14 @@ work, with the GIL released).
 ``NightPairs`` is a map-style dataset for ``torch.utils.data.DataLoader`` (no torch import
 here). Raws from other sources: ``Raw.from_array(data, meta, name=...)``, ``from_rawpy``
 (any camera raw rawpy reads) and ``write_dng``. See docs/python.md of the repository.
+``dataset_units``, ``write_unit`` and ``write_manifest`` run ``day2night dataset`` as
+independent units on a scheduler such as Ray Data (python/examples/ray_dataset.py).
 """
 
 from ._native import (  # noqa: F401
     Raw,
     Synthesis,
+    dataset_units,
     delta_e2000,
     psnr,
     read_dng,
@@ -28,7 +31,9 @@ from ._native import (  # noqa: F401
     threads,
     version,
     write_dng,
+    write_manifest,
     write_outputs,
+    write_unit,
 )
 from .pairs import NightPairs, pack_bayer  # noqa: F401
 from .rawpy_meta import from_rawpy  # noqa: F401
@@ -39,6 +44,7 @@ __all__ = [
     "NightPairs",
     "Raw",
     "Synthesis",
+    "dataset_units",
     "delta_e2000",
     "from_rawpy",
     "pack_bayer",
@@ -51,5 +57,7 @@ __all__ = [
     "threads",
     "version",
     "write_dng",
+    "write_manifest",
     "write_outputs",
+    "write_unit",
 ]

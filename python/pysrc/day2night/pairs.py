@@ -14,7 +14,7 @@ from collections import OrderedDict
 
 import numpy as np
 
-from ._native import read_dng, synthesize
+from ._native import night_pair, read_dng
 
 
 def pack_bayer(plane, meta, top=0, left=0):
@@ -119,15 +119,17 @@ class NightPairs:
         return state
 
     def _raw(self, name):
-        raw = self._cache.get(name)
-        if raw is None:
+        """The decoded image ``name`` and its DefaultCrop, from this process's cache."""
+        entry = self._cache.get(name)
+        if entry is None:
             raw = read_dng(os.path.join(self.day_dir, name))
-            self._cache[name] = raw
+            entry = (raw, tuple(raw.meta["default_crop"]))
+            self._cache[name] = entry
             while len(self._cache) > self.cache_size:
                 self._cache.popitem(last=False)
         else:
             self._cache.move_to_end(name)
-        return raw
+        return entry
 
     def params(self, index):
         """The draws of item ``index`` at the current epoch: file, variant, ISO and the
@@ -143,13 +145,14 @@ class NightPairs:
             "v": rng.random(),
         }
 
-    def __getitem__(self, index):
+    def place(self, index):
+        """Where item ``index`` of the current epoch is synthesized: a dict with ``raw``
+        (the decoded image), ``variant``, ``iso`` and ``crop`` ((top, left, height, width)
+        in active-area coordinates: an even position inside the image's DefaultCrop)."""
         if index < 0:
             index += len(self)
         p = self.params(index)
-        raw = self._raw(p["file"])
-        meta = raw.meta
-        y0, x0, ch, cw = meta["default_crop"]
+        raw, (y0, x0, ch, cw) = self._raw(p["file"])
         c = self.crop
         if c > ch or c > cw:
             raise ValueError(f"{raw.path}: crop {c} is larger than the image's {cw}x{ch} DefaultCrop")
@@ -161,15 +164,16 @@ class NightPairs:
         top = lo_t + 2 * int(p["u"] * ((hi_t - lo_t) // 2 + 1))
         left = lo_l + 2 * int(p["v"] * ((hi_l - lo_l) // 2 + 1))
         top, left = min(top, hi_t - (hi_t - lo_t) % 2), min(left, hi_l - (hi_l - lo_l) % 2)
-        iso = p["iso"]
-        out = synthesize(raw, seed=self.seed, variant=p["variant"], mode=self.mode,
-                         isos=(iso,), target="linear", crop=(top, left, c, c), **self.options)
-        return {
-            "noisy": pack_bayer(out["noisy"][iso], meta, top, left),
-            "clean": pack_bayer(out["clean"], meta, top, left),
-            "target": np.ascontiguousarray(out["target"].transpose(2, 0, 1)),
-            "iso": iso,
-            "name": raw.name,
-            "variant": p["variant"],
-            "origin": np.array([top, left], dtype=np.int64),
-        }
+        return {"raw": raw, "variant": p["variant"], "iso": p["iso"], "crop": (top, left, c, c)}
+
+    def __getitem__(self, index):
+        q = self.place(index)
+        raw, iso, (top, left, _, _) = q["raw"], q["iso"], q["crop"]
+        # One call: the synthesis of the crop and the arrays in their final layout (Rust).
+        out = night_pair(raw, self.seed, q["variant"], iso, q["crop"], mode=self.mode,
+                         **self.options)
+        out["iso"] = iso
+        out["name"] = raw.name
+        out["variant"] = q["variant"]
+        out["origin"] = np.array([top, left], dtype=np.int64)
+        return out

@@ -1,0 +1,361 @@
+//! `day2night.dataset_units`, `write_unit`, `write_manifest`: the dataset job as units for a
+//! scheduler of the user's (Ray Data: python/examples/ray_dataset.py). The library's
+//! `day2night::dataset::units` does the work; this file converts Python values (the CLI's
+//! option names and values, in snake case) to the library's types and back.
+
+use crate::{json_obj, on_pool, py_err, value_err};
+use day2night::dataset::synthesis::SynthProcessor;
+use day2night::dataset::units::{self as lib, UnitsOptions, WriteOptions};
+use day2night::dataset::{Record, Shard, Split, SplitRule, Unit};
+use day2night::dng::write::Compression;
+use day2night::encode::exr::{ExrCompression, ExrOptions};
+use day2night::synth::config::{parse_isos, parse_neutral, JobConfig};
+use day2night::synth::job::Target;
+use day2night::synth::{Covariance, MaskEval, Mode, RelightFormula};
+use day2night::Error;
+use pyo3::prelude::*;
+use pyo3::types::{PyDict, PyList};
+use std::collections::HashMap;
+use std::path::PathBuf;
+use std::sync::{Arc, Mutex, OnceLock};
+
+fn parse_split_rule(
+    val: Option<usize>,
+    val_fraction: Option<f64>,
+    seed: u64,
+) -> PyResult<SplitRule> {
+    match (val, val_fraction) {
+        (Some(_), Some(_)) => Err(value_err("give val or val_fraction, not both")),
+        (Some(n), None) => Ok(SplitRule::LastN(n)),
+        (None, Some(f)) => {
+            if !(0.0..=1.0).contains(&f) {
+                return Err(value_err(format!("val_fraction {f} is not within [0, 1]")));
+            }
+            Ok(SplitRule::Fraction { fraction: f, seed })
+        }
+        (None, None) => Ok(SplitRule::AllTrain),
+    }
+}
+
+fn parse_shard(shard: Option<&str>) -> PyResult<Shard> {
+    match shard {
+        None => Ok(Shard::ALL),
+        Some(s) => Shard::parse(s).map_err(py_err),
+    }
+}
+
+/// The (input, split, variant) units ``day2night dataset DAY_DIR -o OUT_DIR`` makes with
+/// the same options, in its order, as dicts: ``input`` (path relative to ``day_dir``, the
+/// unit's identity), ``path``, ``split`` ("train" | "val"), ``variant`` (1-based),
+/// ``variants``, ``seed``, ``id`` (output name) and ``previous`` (the unit's latest
+/// manifest record in ``out_dir`` as a JSON string, or None).
+///
+/// With ``out_dir``, as ``dataset`` does when it starts: the folder is excluded from the
+/// search, must be empty, missing or a dataset (unless ``overwrite``), and temporary files a
+/// killed run left for these units are removed. ``val``, ``val_fraction``, ``shard``
+/// ("I/N") and ``seed`` are the command's flags.
+///
+/// >>> units = day2night.dataset_units("day/", "night/", variants=2, val=10, seed=1)
+#[pyfunction]
+#[pyo3(signature = (day_dir, out_dir=None, *, variants=1, val=None, val_fraction=None, seed=0, shard=None, overwrite=false))]
+#[allow(clippy::too_many_arguments)]
+pub fn dataset_units<'py>(
+    py: Python<'py>,
+    day_dir: PathBuf,
+    out_dir: Option<PathBuf>,
+    variants: u32,
+    val: Option<usize>,
+    val_fraction: Option<f64>,
+    seed: u64,
+    shard: Option<&str>,
+    overwrite: bool,
+) -> PyResult<Bound<'py, PyList>> {
+    let opts = UnitsOptions {
+        day_dir,
+        out_dir,
+        split: parse_split_rule(val, val_fraction, seed)?,
+        variants,
+        seed,
+        shard: parse_shard(shard)?,
+        overwrite,
+    };
+    let planned = py.detach(move || lib::units(&opts)).map_err(py_err)?;
+    let list = PyList::empty(py);
+    for p in planned {
+        let u = &p.unit;
+        let d = PyDict::new(py);
+        d.set_item("input", &u.rel)?;
+        d.set_item("path", u.path.display().to_string())?;
+        d.set_item("split", u.split.name())?;
+        d.set_item("variant", u.variant)?;
+        d.set_item("variants", u.variants)?;
+        d.set_item("seed", u.seed)?;
+        d.set_item("id", &u.id)?;
+        let prev = match &p.previous {
+            Some(r) => Some(serde_json::to_string(r).map_err(|e| value_err(e.to_string()))?),
+            None => None,
+        };
+        d.set_item("previous", prev)?;
+        list.append(d)?;
+    }
+    Ok(list)
+}
+
+/// A record given as a dict or a JSON string.
+fn record_from(v: &Bound<'_, PyAny>, what: &str) -> PyResult<Record> {
+    let text: String = if let Ok(s) = v.extract::<String>() {
+        s
+    } else {
+        v.py()
+            .import("json")?
+            .call_method1("dumps", (v,))?
+            .extract()?
+    };
+    serde_json::from_str(&text)
+        .map_err(|e| value_err(format!("{what}: not a manifest record: {e}")))
+}
+
+fn unit_from(d: &Bound<'_, PyAny>) -> PyResult<(Unit, Option<Record>)> {
+    let get = |k: &str| -> PyResult<Bound<'_, PyAny>> {
+        d.get_item(k)
+            .map_err(|_| value_err(format!("unit has no {k:?}: pass a dict from dataset_units")))
+    };
+    let rel: String = get("input")?.extract()?;
+    let path: PathBuf = get("path")?.extract()?;
+    let split = match get("split")?.extract::<String>()?.as_str() {
+        "train" => Split::Train,
+        "val" => Split::Val,
+        s => return Err(value_err(format!("unit split {s:?}: train or val"))),
+    };
+    let variant: u32 = get("variant")?.extract()?;
+    let variants: u32 = get("variants")?.extract()?;
+    let seed: u64 = get("seed")?.extract()?;
+    let unit = lib::unit(&rel, path, split, variant, variants, seed).map_err(py_err)?;
+    if let Ok(id) = d.get_item("id") {
+        if !id.is_none() && id.extract::<String>()? != unit.id {
+            return Err(value_err(format!(
+                "unit id {id} is not the id of {rel} variant {variant} ({})",
+                unit.id
+            )));
+        }
+    }
+    let previous = match d.get_item("previous") {
+        Ok(p) if !p.is_none() => Some(record_from(&p, "unit[\"previous\"]")?),
+        _ => None,
+    };
+    Ok((unit, previous))
+}
+
+const KNOWN: &str = "iso, mode, relight_formula, bulbs, lights, illuminants, covariance, \
+brightness, noise_model, day_neutral, mask_eval, target, input_exr, compression, \
+exr_compression, exr_zip_level, truncate, compat";
+
+fn parsed<T: std::str::FromStr<Err = Error>>(v: &Bound<'_, PyAny>, name: &str) -> PyResult<T> {
+    v.extract::<String>()?
+        .parse::<T>()
+        .map_err(|e| value_err(format!("{name}: {}", e.root())))
+}
+
+/// The job `dataset`'s flags spell, from keyword options named like the flags (`--iso` is
+/// `iso`, `--noise-model` is `noise_model`, ...), with the same values and defaults.
+fn dataset_config(variants: u32, options: Option<&Bound<'_, PyDict>>) -> PyResult<JobConfig> {
+    let mut cfg = JobConfig {
+        variants,
+        ..JobConfig::default()
+    };
+    let mut release = false;
+    let mut zip_level = ExrOptions::DEFAULT_ZIP_LEVEL;
+    let path = |v: &Bound<'_, PyAny>| -> PyResult<Option<PathBuf>> {
+        if v.is_none() {
+            Ok(None)
+        } else {
+            Ok(Some(v.extract::<PathBuf>()?))
+        }
+    };
+    if let Some(opts) = options {
+        for (k, v) in opts.iter() {
+            let key: String = k.extract()?;
+            let o = &mut cfg.options;
+            match key.as_str() {
+                "iso" => {
+                    o.isos = if v.is_none() {
+                        Vec::new()
+                    } else if let Ok(s) = v.extract::<String>() {
+                        parse_isos(&s).map_err(|e| value_err(format!("iso: {}", e.root())))?
+                    } else if let Ok(i) = v.extract::<u32>() {
+                        parse_isos(&i.to_string()).map_err(py_err)?
+                    } else {
+                        let list: Vec<u32> = v.extract()?;
+                        let text: Vec<String> = list.iter().map(|i| i.to_string()).collect();
+                        if text.is_empty() {
+                            Vec::new()
+                        } else {
+                            parse_isos(&text.join(","))
+                                .map_err(|e| value_err(format!("iso: {}", e.root())))?
+                        }
+                    }
+                }
+                "mode" => o.mode = parsed::<Mode>(&v, "mode")?,
+                "relight_formula" => o.formula = parsed::<RelightFormula>(&v, "relight_formula")?,
+                "bulbs" => o.bulbs = v.extract()?,
+                "lights" => o.local_lights = v.extract()?,
+                "covariance" => o.covariance = parsed::<Covariance>(&v, "covariance")?,
+                "day_neutral" => {
+                    o.day_neutral = if v.is_none() {
+                        None
+                    } else if let Ok(s) = v.extract::<String>() {
+                        Some(parse_neutral(&s).map_err(|e| value_err(format!("day_neutral: {}", e.root())))?)
+                    } else {
+                        let n: Vec<f64> = v.extract()?;
+                        match n.as_slice() {
+                            [r, g, b] => Some([*r, *g, *b]),
+                            _ => return Err(value_err("day_neutral must be (r, g, b)")),
+                        }
+                    }
+                }
+                "mask_eval" => o.mask_eval = parsed::<MaskEval>(&v, "mask_eval")?,
+                "truncate" => o.truncate = v.extract()?,
+                "compat" => {
+                    release = match v.extract::<Option<String>>()?.as_deref() {
+                        None => false,
+                        Some("release") => true,
+                        Some(c) => return Err(value_err(format!("compat {c:?}: use \"release\" or None"))),
+                    }
+                }
+                "illuminants" => cfg.illuminants = path(&v)?,
+                "brightness" => cfg.brightness = path(&v)?,
+                "noise_model" => cfg.noise_model = path(&v)?,
+                "target" => {
+                    cfg.target = match v.extract::<String>()?.as_str() {
+                        "exr" => Target::Exr,
+                        "png" => Target::Png,
+                        "both" => Target::Both,
+                        "none" => Target::None,
+                        t => return Err(value_err(format!("target {t:?}: exr, png, both or none"))),
+                    }
+                }
+                "input_exr" => cfg.input_exr = v.extract()?,
+                "compression" => {
+                    cfg.compression = match v.extract::<String>()?.as_str() {
+                        "none" => Compression::None,
+                        "ljpeg" => Compression::Ljpeg,
+                        c => return Err(value_err(format!("compression {c:?}: none or ljpeg"))),
+                    }
+                }
+                "exr_compression" => {
+                    cfg.exr.compression = parsed::<ExrCompression>(&v, "exr_compression")?
+                }
+                "exr_zip_level" => zip_level = v.extract()?,
+                other => {
+                    return Err(value_err(format!(
+                        "unknown option {other:?} (known: {KNOWN}; seed, variants, val and shard are dataset_units')"
+                    )))
+                }
+            }
+        }
+    }
+    cfg.exr.zip_level = zip_level;
+    if release {
+        // Applied last, like --compat release: it checks the other options.
+        cfg.options = cfg.options.clone().release_compat().map_err(py_err)?;
+    }
+    Ok(cfg)
+}
+
+/// Processors already built (calibration files loaded), by configuration: a worker writes
+/// many units with the same options.
+fn processor_for(cfg: &JobConfig) -> Result<Arc<SynthProcessor>, Error> {
+    static CACHE: OnceLock<Mutex<HashMap<String, Arc<SynthProcessor>>>> = OnceLock::new();
+    let key = format!("{cfg:?}");
+    let cache = CACHE.get_or_init(Default::default);
+    if let Some(p) = cache.lock().unwrap_or_else(|e| e.into_inner()).get(&key) {
+        return Ok(p.clone());
+    }
+    let p = Arc::new(SynthProcessor { job: cfg.build()? });
+    let mut map = cache.lock().unwrap_or_else(|e| e.into_inner());
+    if map.len() > 16 {
+        map.clear();
+    }
+    map.insert(key, p.clone());
+    Ok(p)
+}
+
+/// Write exactly one unit's files (a dict from ``dataset_units``) into the dataset layout
+/// in ``out_dir``, as ``day2night dataset`` writes them with the same options, and return
+/// its manifest record (a dict, the line ``manifest.jsonl`` holds for the unit).
+///
+/// Every file is written atomically under the unit's lock. A unit whose record (the unit's
+/// ``previous``, or the one a killed run of this function left) is up to date is skipped:
+/// its record is returned and nothing is written. A unit that fails returns a record with
+/// ``status`` "failed" and the ``error``, as ``dataset`` records it.
+///
+/// Options are ``dataset``'s synthesis and output flags in snake case, same values and
+/// defaults: iso ("1600,3200", "none" or a list of ints), mode, relight_formula, bulbs,
+/// lights, illuminants, covariance, brightness, noise_model, day_neutral, mask_eval, target
+/// ("exr" | "png" | "both" | "none"), input_exr, compression ("none" | "ljpeg"),
+/// exr_compression, exr_zip_level, truncate, compat. ``overwrite`` recomputes an up-to-date
+/// unit, ``wait`` waits for another process writing the same unit. With ``reason=True``
+/// returns ``(record, reason)``: why the unit was computed ("new", "outputs missing or
+/// altered", ...) or None when it was skipped.
+///
+/// >>> rec = day2night.write_unit(units[0], "night/", iso="800,3200", target="both")
+#[pyfunction]
+#[pyo3(signature = (unit, out_dir, *, overwrite=false, wait=false, reason=false, **options))]
+pub fn write_unit<'py>(
+    py: Python<'py>,
+    unit: &Bound<'py, PyAny>,
+    out_dir: PathBuf,
+    overwrite: bool,
+    wait: bool,
+    reason: bool,
+    options: Option<&Bound<'py, PyDict>>,
+) -> PyResult<Bound<'py, PyAny>> {
+    let (unit, previous) = unit_from(unit)?;
+    let cfg = dataset_config(unit.variants, options)?;
+    let w = WriteOptions {
+        out_dir,
+        overwrite,
+        wait,
+    };
+    let (rec, why) = py
+        .detach(move || {
+            on_pool(move || {
+                let p = processor_for(&cfg)?;
+                lib::write_unit(&unit, previous.as_ref(), &w, p.as_ref())
+            })
+        })
+        .map_err(py_err)?;
+    let rec = json_obj(py, &rec)?;
+    if reason {
+        Ok((rec, why.map(|r| r.describe()))
+            .into_pyobject(py)?
+            .into_any())
+    } else {
+        Ok(rec)
+    }
+}
+
+/// Write the manifest of a run (``manifest.jsonl``, or ``manifest.shard-I-of-N.jsonl``
+/// with ``shard="I/N"``) into ``out_dir`` from the records ``write_unit`` returned (dicts
+/// or JSON strings; the latest record of each unit is kept), lines sorted as ``dataset``
+/// writes them, and remove the per-unit records of those units. Returns the path.
+///
+/// >>> day2night.write_manifest(records, "night/")
+#[pyfunction]
+#[pyo3(signature = (records, out_dir, shard=None))]
+pub fn write_manifest(
+    py: Python<'_>,
+    records: &Bound<'_, PyAny>,
+    out_dir: PathBuf,
+    shard: Option<&str>,
+) -> PyResult<String> {
+    let shard = parse_shard(shard)?;
+    let mut recs = Vec::new();
+    for (i, r) in records.try_iter()?.enumerate() {
+        recs.push(record_from(&r?, &format!("records[{i}]"))?);
+    }
+    let path = py
+        .detach(move || lib::write_manifest(&out_dir, recs, shard))
+        .map_err(py_err)?;
+    Ok(path.display().to_string())
+}

@@ -1,0 +1,295 @@
+//! The dataset job as independent units, for a scheduler of the user's (Ray Data, Dask, a
+//! queue): [`units`] lists the (input, split, variant) units that [`super::run`] makes,
+//! [`write_unit`] makes exactly one unit's files in the dataset layout and returns its
+//! manifest record, [`write_manifest`] writes the manifest of a finished run. The three
+//! together write the tree `day2night dataset` writes, byte for byte, whatever the order,
+//! the process or the machine each unit runs on.
+//!
+//! Resume: [`units`] attaches to each unit its latest record from OUT_DIR's manifests, and
+//! [`write_unit`] skips a unit whose record is up to date ([`super::resume::decide`], as
+//! `dataset` decides). Until the manifest is written, each computed unit leaves its record
+//! in `OUT_DIR/.day2night-units/<stem>.v<variant>.json` (one small file per unit, written
+//! atomically after the unit's outputs: no shared file is appended to, so any number of
+//! processes on any number of machines can write units into one shared folder);
+//! [`write_unit`] reads its own unit's file first, so a rerun after a kill skips the units
+//! completed before it, and [`write_manifest`] removes the files of the records it writes.
+//! `dataset` ([`super::run`]) reads those files too, so it can finish such a run.
+
+use super::discover::sample_stem;
+use super::manifest::{self, Record};
+use super::resume::{decide, Decision, Reason};
+use super::run::{
+    blank_record, check_out_dir, compute_unit, load_input, plan_tasks, remove_stale_temp_files,
+    unit_id, want,
+};
+use super::{sha256_hex, Processor, Shard, Split, SplitRule, Unit};
+use crate::error::{Error, Result, ResultExt};
+use crate::output::{write_bytes_atomic, OutputPolicy};
+use std::path::{Path, PathBuf};
+
+/// Folder (inside OUT_DIR) of the records of units computed since the last manifest.
+pub const JOURNAL_DIR: &str = ".day2night-units";
+
+/// What [`units`] needs: `dataset`'s options that decide the units.
+#[derive(Debug, Clone)]
+pub struct UnitsOptions {
+    /// Folder searched (recursively) for day DNGs.
+    pub day_dir: PathBuf,
+    /// Output folder: excluded from the search, its manifests give each unit's previous
+    /// record, and temporary files a killed run left for these units are removed. None:
+    /// just list the units.
+    pub out_dir: Option<PathBuf>,
+    /// Train/val rule.
+    pub split: SplitRule,
+    /// Variants per input (>= 1).
+    pub variants: u32,
+    /// Run seed.
+    pub seed: u64,
+    /// Which shard.
+    pub shard: Shard,
+    /// Accept a non-empty OUT_DIR that is not a dataset.
+    pub overwrite: bool,
+}
+
+/// A unit with the latest record OUT_DIR's manifests hold for it.
+#[derive(Debug, Clone)]
+pub struct Planned {
+    /// The unit.
+    pub unit: Unit,
+    /// Its latest manifest record, if any.
+    pub previous: Option<Record>,
+}
+
+/// A unit from its fields (the id is derived, as [`super::run`] names it): `variant` in
+/// `1..=variants`.
+pub fn unit(
+    rel: &str,
+    path: PathBuf,
+    split: Split,
+    variant: u32,
+    variants: u32,
+    seed: u64,
+) -> Result<Unit> {
+    if variant == 0 || variant > variants {
+        return Err(Error::invalid(format!(
+            "unit variant {variant} is not within 1..={variants}"
+        )));
+    }
+    Ok(Unit {
+        rel: rel.to_string(),
+        path,
+        split,
+        variant,
+        variants,
+        seed,
+        id: unit_id(&sample_stem(rel), variant, variants),
+    })
+}
+
+/// The units `day2night dataset` makes with these options, in its order (inputs sorted by
+/// relative path, then variants), each with its previous record.
+pub fn units(o: &UnitsOptions) -> Result<Vec<Planned>> {
+    if o.variants == 0 {
+        return Err(Error::invalid("--variants must be at least 1"));
+    }
+    let (_found, tasks) = plan_tasks(&o.day_dir, o.out_dir.as_deref(), o.split, o.shard)?;
+    let mut previous = std::collections::BTreeMap::new();
+    if let Some(out_dir) = &o.out_dir {
+        let manifests = manifest::all_manifests(out_dir)?;
+        check_out_dir(
+            out_dir,
+            &manifests,
+            Some(&out_dir.join(JOURNAL_DIR)),
+            o.overwrite,
+        )?;
+        // Every manifest, this shard's own file last (it wins), as `dataset` reads them.
+        let own = out_dir.join(manifest::file_name(o.shard));
+        let mut records = Vec::new();
+        for m in manifests.iter().filter(|m| **m != own) {
+            records.extend(manifest::read(m)?.records);
+        }
+        records.extend(manifest::read(&own)?.records);
+        previous = manifest::latest(records);
+        remove_stale_temp_files(out_dir, &tasks, o.variants);
+    }
+    Ok(tasks
+        .iter()
+        .flat_map(|t| t.units(o.variants, o.seed))
+        .map(|u| Planned {
+            previous: previous.remove(&(u.rel.clone(), u.variant)),
+            unit: u,
+        })
+        .collect())
+}
+
+/// Options of [`write_unit`] besides the processor.
+#[derive(Debug, Clone)]
+pub struct WriteOptions {
+    /// Output folder.
+    pub out_dir: PathBuf,
+    /// Recompute even when the unit is up to date.
+    pub overwrite: bool,
+    /// Wait for another process writing the unit instead of failing it.
+    pub wait: bool,
+}
+
+/// Path of a unit's record in the journal.
+pub fn journal_path(out_dir: &Path, rel: &str, variant: u32) -> PathBuf {
+    out_dir
+        .join(JOURNAL_DIR)
+        .join(format!("{}.v{variant}.json", sample_stem(rel)))
+}
+
+fn read_journal(path: &Path) -> Option<Record> {
+    let text = std::fs::read(path).ok()?;
+    serde_json::from_slice(&text).ok()
+}
+
+/// Make one unit's outputs in OUT_DIR (every file atomic, under the unit's lock) unless its
+/// latest record (`previous`, or the journal's, which is newer) is up to date. Returns the
+/// unit's manifest record and why it was computed (None: skipped, the record is the
+/// previous one). A unit that fails returns a `failed` record with the error, as `dataset`
+/// records it; `Err` only for an OUT_DIR that cannot be created.
+pub fn write_unit<P: Processor>(
+    unit: &Unit,
+    previous: Option<&Record>,
+    o: &WriteOptions,
+    processor: &P,
+) -> Result<(Record, Option<Reason>)> {
+    let out_dir = &o.out_dir;
+    let journal = journal_path(out_dir, &unit.rel, unit.variant);
+    let journaled = read_journal(&journal);
+    let prev = journaled.as_ref().or(previous);
+    let options_sha = sha256_hex(processor.fingerprint().as_bytes());
+    let (rec, reason) = match std::fs::read(&unit.path) {
+        Err(e) => {
+            let reason = match decide(prev, want(unit, "", &options_sha), out_dir, o.overwrite) {
+                Decision::Redo(r) => r,
+                Decision::Skip => Reason::InputChanged,
+            };
+            let mut r = blank_record(unit, "", &options_sha);
+            r.error = Some(Error::Io(e).in_file(&unit.path).to_string());
+            (r, reason)
+        }
+        Ok(bytes) => {
+            let input_sha = sha256_hex(&bytes);
+            let reason = match decide(
+                prev,
+                want(unit, &input_sha, &options_sha),
+                out_dir,
+                o.overwrite,
+            ) {
+                Decision::Skip => {
+                    if let Some(p) = prev {
+                        return Ok((p.clone(), None));
+                    }
+                    Reason::New
+                }
+                Decision::Redo(r) => r,
+            };
+            std::fs::create_dir_all(out_dir)
+                .map_err(Error::Io)
+                .in_file(out_dir)?;
+            let blank = blank_record(unit, &input_sha, &options_sha);
+            let rec = match load_input(processor, &unit.path, &bytes) {
+                Ok(input) => {
+                    let policy = OutputPolicy {
+                        overwrite: true,
+                        inputs: vec![],
+                        ..OutputPolicy::default()
+                    };
+                    compute_unit(
+                        processor, &input, unit, prev, blank, out_dir, &policy, o.wait,
+                    )
+                }
+                Err(msg) => Record {
+                    error: Some(msg),
+                    ..blank
+                },
+            };
+            (rec, reason)
+        }
+    };
+    let mut rec = rec;
+    let policy = OutputPolicy {
+        overwrite: true,
+        inputs: vec![],
+        ..OutputPolicy::default()
+    };
+    let saved = super::ensure_parent(&journal)
+        .and_then(|_| write_bytes_atomic(&journal, &policy, rec.to_line()?.as_bytes()));
+    if let Err(e) = saved {
+        rec.status = manifest::Status::Failed;
+        rec.error = Some(format!("writing the unit's record: {e}"));
+    }
+    Ok((rec, Some(reason)))
+}
+
+/// Write the manifest of a run from its records (one per unit, the latest of each key
+/// kept; lines sorted, as `dataset` writes it) into OUT_DIR (`manifest.jsonl`, or the
+/// shard's file), then remove the journal files of these records. Returns the path.
+pub fn write_manifest(
+    out_dir: &Path,
+    records: impl IntoIterator<Item = Record>,
+    shard: Shard,
+) -> Result<PathBuf> {
+    let records = manifest::latest(records);
+    std::fs::create_dir_all(out_dir)
+        .map_err(Error::Io)
+        .in_file(out_dir)?;
+    let path = out_dir.join(manifest::file_name(shard));
+    let keys: Vec<(String, u32)> = records.keys().cloned().collect();
+    manifest::write_compacted(&path, records.into_values())?;
+    clear_journal(out_dir, &keys);
+    Ok(path)
+}
+
+/// Every record in OUT_DIR's journal (units written since the last manifest), unordered;
+/// unreadable files are ignored (the unit is then recomputed).
+pub fn journal_records(out_dir: &Path) -> Vec<Record> {
+    let Ok(rd) = std::fs::read_dir(out_dir.join(JOURNAL_DIR)) else {
+        return Vec::new();
+    };
+    rd.flatten()
+        .filter(|e| e.file_name().to_str().is_some_and(|n| !n.starts_with('.')))
+        .filter_map(|e| read_journal(&e.path()))
+        .collect()
+}
+
+/// Remove the journal files of these units (now in a manifest), and the journal folder
+/// when that empties it.
+pub fn clear_journal(out_dir: &Path, keys: &[(String, u32)]) {
+    let dir = out_dir.join(JOURNAL_DIR);
+    if !dir.is_dir() {
+        return;
+    }
+    for (rel, variant) in keys {
+        let _ = std::fs::remove_file(journal_path(out_dir, rel, *variant));
+    }
+    // Removed only when empty (units of another run may still be listed there).
+    let _ = std::fs::remove_dir(dir);
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn unit_ids_and_journal_names() {
+        let u = unit("a/b.dng", "x/a/b.dng".into(), Split::Val, 2, 3, 7).unwrap();
+        assert_eq!(u.id, "a__b_v2");
+        assert_eq!(u.split, Split::Val);
+        assert_eq!(
+            unit("a.dng", "a.dng".into(), Split::Train, 1, 1, 0)
+                .unwrap()
+                .id,
+            "a"
+        );
+        assert!(unit("a.dng", "a.dng".into(), Split::Train, 0, 1, 0).is_err());
+        assert!(unit("a.dng", "a.dng".into(), Split::Train, 2, 1, 0).is_err());
+        assert_eq!(
+            journal_path(Path::new("o"), "a/b.dng", 2),
+            Path::new("o/.day2night-units/a__b.v2.json")
+        );
+    }
+}
