@@ -23,6 +23,7 @@ mod dataset_memory;
 mod dataset_report;
 mod deflate_zlib;
 mod dng_bad_files;
+mod dng_compressed;
 mod dng_gps;
 mod dng_read;
 mod dng_robustness;

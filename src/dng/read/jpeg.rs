@@ -37,8 +37,8 @@ pub(super) fn decode(data: &[u8], w: usize, h: usize, spp: usize, what: &str) ->
     let (iw, ih) = (usize::from(info.width), usize::from(info.height));
     if (iw, ih) != (w, h) {
         return Err(bad(format!(
-            "decodes to {iw}x{ih} pixels, the {what} is {w}x{h} (TileWidth/TileLength or \
-             RowsPerStrip): each {what} must hold exactly its own pixels"
+            "decodes to {iw}x{ih} pixels where the tile or strip geometry \
+             (TileWidth x TileLength, or ImageWidth x RowsPerStrip) needs {w}x{h}"
         )));
     }
     if usize::from(info.components) != spp {

@@ -32,8 +32,8 @@ pub(super) fn decode(data: &[u8], w: usize, h: usize, spp: usize, what: &str) ->
     let (iw, ih) = (image.width() as usize, image.height() as usize);
     if (iw, ih) != (w, h) {
         return Err(bad(format!(
-            "decodes to {iw}x{ih} pixels, the {what} is {w}x{h} (TileWidth/TileLength or \
-             RowsPerStrip): each {what} must hold exactly its own pixels"
+            "decodes to {iw}x{ih} pixels where the tile or strip geometry \
+             (TileWidth x TileLength, or ImageWidth x RowsPerStrip) needs {w}x{h}"
         )));
     }
     let meta = &image.image_header().metadata;

@@ -53,6 +53,12 @@ pub(super) fn geometry(raw: &Ifd) -> Result<Geometry> {
     }
     let compression = raw.u32(COMPRESSION).unwrap_or(1) as u16;
     check_compression(compression, bits)?;
+    if compression == COMPRESSION_LOSSY_JPEG && !linear_raw {
+        return Err(Error::malformed(
+            "lossy JPEG (34892) in a CFA raw: the DNG specification allows it for LinearRaw \
+             (demosaiced) images only",
+        ));
+    }
     let layout = if raw.has(TILE_OFFSETS) || raw.has(TILE_WIDTH) {
         let tw = raw.require_u32(TILE_WIDTH)?;
         let th = raw.require_u32(TILE_LENGTH)?;
