@@ -176,10 +176,10 @@ mod tests {
         meta.as_shot_neutral = Some([1.0, 1.0, 1.0]);
         meta.levels = Levels {
             black_repeat: (1, 1),
-            black: vec![black.iter().cloned().fold(f64::MIN, f64::max)],
+            black: vec![black[0]],
             black_delta_h: vec![],
             black_delta_v: vec![],
-            white: white.iter().cloned().fold(f64::MAX, f64::min),
+            white: white[0],
         };
         meta.linear_raw = Some(LinearRaw {
             samples_per_pixel: 3,
@@ -231,5 +231,22 @@ mod tests {
             .iter()
             .all(|v| v.is_finite() && (0.0..=1.0).contains(v)));
         assert_eq!(out.width * out.height, 2);
+    }
+
+    proptest::proptest! {
+        #[test]
+        fn any_samples_and_levels_render_finite_in_range(
+            data in proptest::collection::vec(proptest::num::u16::ANY, 18),
+            black in proptest::collection::vec(0u16..5000, 3),
+            span in proptest::collection::vec(1u16..60000, 3),
+            neutral in proptest::collection::vec(0.01f64..100.0, 3),
+        ) {
+            let b: Vec<f64> = black.iter().map(|&x| f64::from(x)).collect();
+            let w: Vec<f64> = black.iter().zip(&span).map(|(&x, &s)| f64::from(x) + f64::from(s)).collect();
+            let img = image(3, 2, data, b, w);
+            let opts = RenderOptions { neutral: Some([neutral[0], neutral[1], neutral[2]]), ..RenderOptions::default() };
+            let out = render_linear(&img, &opts).unwrap();
+            proptest::prop_assert!(out.data.iter().all(|v| v.is_finite() && (0.0..=1.0).contains(v)));
+        }
     }
 }

@@ -236,9 +236,9 @@ pub struct RawMeta {
     /// How the source stored the raw (for `info`; the writer chooses its own layout).
     pub storage: Option<Storage>,
     /// Set for a LinearRaw (demosaiced) image: then `cfa` is empty, the pixel buffer holds
-    /// `samples_per_pixel` interleaved samples per pixel and `levels` holds, per repeat
-    /// cell, the largest black and the smallest white over the samples (the per-sample
-    /// values are here). Not serialized when `None`.
+    /// `samples_per_pixel` interleaved samples per pixel and `levels` holds sample 0's
+    /// black (per repeat cell) and white (the per-sample values are here). Not serialized
+    /// when `None`.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub linear_raw: Option<LinearRaw>,
     /// The modelled colour tags (AsShotNeutral, AsShotWhiteXY, matrices, AnalogBalance,

@@ -63,3 +63,20 @@ pub(super) fn decode(data: &[u8], w: usize, h: usize, spp: usize, what: &str) ->
     }
     Ok(out)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn empty_and_garbage_streams_are_errors() {
+        for data in [&[][..], &[0xFF, 0xD8, 0xFF, 0xD9][..], &[0xAB; 64][..]] {
+            let e = decode(data, 8, 8, 3, "tile 0").unwrap_err().to_string();
+            assert!(e.contains("lossy JPEG tile 0"), "{e}");
+        }
+        let e = decode(&[0xFF, 0xD8], 8, 8, 2, "tile 0")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("2 samples per pixel"), "{e}");
+    }
+}

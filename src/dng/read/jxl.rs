@@ -111,3 +111,16 @@ pub(super) fn decode(data: &[u8], w: usize, h: usize, spp: usize, what: &str) ->
     }
     Ok(out)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn empty_and_garbage_codestreams_are_errors() {
+        for data in [&[][..], &[0xFF, 0x0A][..], &[0xAB; 64][..]] {
+            let e = decode(data, 8, 8, 1, "tile 0").unwrap_err().to_string();
+            assert!(e.contains("JPEG XL tile 0"), "{e}");
+        }
+    }
+}

@@ -51,8 +51,8 @@ pub(super) fn times_samples(spp: usize) -> String {
 
 /// The levels of the model from the file's: unchanged for CFA (`spp == 1`). For LinearRaw,
 /// `black` holds `rows x cols x spp` values and WhiteLevel one per sample (one value is
-/// taken for all samples); returns, per repeat cell, the largest black over the samples, the
-/// smallest white, and the per-sample values in a [`LinearRaw`].
+/// taken for all samples); returns sample 0's black per repeat cell and white, and the
+/// per-sample values in a [`LinearRaw`].
 pub(super) fn split_levels(
     raw: &Ifd,
     black: Vec<f64>,
@@ -78,19 +78,14 @@ pub(super) fn split_levels(
         }
         None => vec![white; spp],
     };
+    // The model's CFA-shaped levels hold sample 0's (each sample is validated on its own by
+    // LinearRaw::validate; a max/min over samples could refuse valid files).
     let cells = repeat.0 * repeat.1;
-    let per_cell: Vec<f64> = (0..cells)
-        .map(|c| {
-            black[c * spp..(c + 1) * spp]
-                .iter()
-                .cloned()
-                .fold(f64::NEG_INFINITY, f64::max)
-        })
-        .collect();
-    let min_white = whites.iter().cloned().fold(f64::INFINITY, f64::min);
+    let per_cell: Vec<f64> = (0..cells).map(|c| black[c * spp]).collect();
+    let first_white = whites[0];
     Ok((
         per_cell,
-        min_white,
+        first_white,
         Some(LinearRaw {
             samples_per_pixel: spp as u16,
             black,
