@@ -43,7 +43,7 @@ def main():
     d = sys.argv[1]
     for name in sys.argv[2:]:
         path = os.path.join(d, name + ".dng")
-        lossy = "jpeg" in name and "jxl" not in name
+        lossy = ("jpeg" in name and "jxl" not in name) or "lossy" in name
         tol = 1 if lossy else 0
         import tifffile
 

@@ -12,6 +12,7 @@ wrote for lossless files and tifffile's (libjpeg) decode for lossy ones:
   cfa_jxl_strips     the same pixels in lossless JPEG XL strips of 64 rows (last strip 44)
   linear_jxl_tiles   16-bit LinearRaw (3 samples), lossless JPEG XL tiles 128x128, per-sample
                      BlackLevel and WhiteLevel
+  linear_jxl_lossy   the linear_jxl_tiles pixels in lossy JPEG XL (distance 1, XYB/VarDCT)
   linear_jpeg_tiles  8-bit LinearRaw, lossy JPEG (34892) tiles 128x128, quality 90, YCbCr
                      4:4:4 (no chroma subsampling, so decoders agree to a code or two)
   bad_jxl_tile_size  as cfa_jxl_tiles, but tile 1's codestream is 64x64: must be refused
@@ -148,6 +149,9 @@ def main():
     write(os.path.join(out, "linear_jxl_tiles.dng"), lin16, 34892, 52546, tags,
           tile=(TILE, TILE), compressionargs=jxl)
     save("linear_jxl_tiles", lin16, True)
+    write(os.path.join(out, "linear_jxl_lossy.dng"), lin16, 34892, 52546, tags,
+          tile=(TILE, TILE), compressionargs=dict(distance=1.0))
+    save("linear_jxl_lossy", lin16, False)
 
     lin8 = scene(H, W, 3, 255, 3)
     tags = dng_tags("lossy LinearRaw", False, [0, 0, 0], [255, 255, 255])
