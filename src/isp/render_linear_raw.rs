@@ -233,6 +233,21 @@ mod tests {
         assert_eq!(out.width * out.height, 2);
     }
 
+    #[test]
+    fn bands_equal_the_whole_render() {
+        let (w, h) = (5, 70);
+        let data: Vec<u16> = (0..w * h * 3).map(|i| (i * 7919 % 4096) as u16).collect();
+        let img = image(w, h, data, vec![10.0, 20.0, 30.0], vec![4095.0; 3]);
+        let opts = RenderOptions::default();
+        let whole = render_linear(&img, &opts).unwrap();
+        let bands = render_linear_bands(&img, &opts, |_, _, rows| Ok(rows.to_vec()))
+            .unwrap()
+            .unwrap();
+        assert_eq!((bands.width, bands.height), (whole.width, whole.height));
+        assert_eq!(bands.bands.len(), h.div_ceil(BAND));
+        assert_eq!(bands.bands.concat(), whole.data);
+    }
+
     proptest::proptest! {
         #[test]
         fn any_samples_and_levels_render_finite_in_range(
