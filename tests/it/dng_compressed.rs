@@ -19,6 +19,17 @@ fn generated() -> Option<&'static Path> {
         let py = common::python()?;
         let dir = tempfile::tempdir().unwrap().keep();
         let out = common::run_validator(&py, "make_compressed_dngs.py", &[dir.as_os_str()]);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        if stderr.contains("No module named 'imagecodecs'")
+            && std::env::var("D2N_REQUIRE_VALIDATORS").as_deref() != Ok("1")
+        {
+            eprintln!(
+                "SKIP: {} has no imagecodecs (tests/validators/requirements.txt; \
+                 scripts/test.sh installs it)",
+                py.display()
+            );
+            return None;
+        }
         assert!(
             out.status.success(),
             "make_compressed_dngs.py failed (is imagecodecs installed? \
