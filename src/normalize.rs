@@ -53,6 +53,11 @@ pub struct Normalizer {
 impl Normalizer {
     /// Constants for `img`; errors on inconsistent geometry or black >= white.
     pub fn new(img: &RawImage) -> Result<Normalizer> {
+        if img.meta.linear_raw.is_some() {
+            return Err(crate::error::Error::unsupported(
+                crate::raw::meta::LINEAR_RAW_NOT_CFA,
+            ));
+        }
         img.validate()?;
         let l = &img.meta.levels;
         Ok(Normalizer {

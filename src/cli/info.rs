@@ -242,6 +242,15 @@ fn describe(out: &mut String, file: &std::path::Path, i: &DngInfo) {
             }
         );
         let _ = writeln!(out, "  white level:   {}", nums(&[l.white]));
+        if let Some(lr) = &m.linear_raw {
+            let _ = writeln!(
+                out,
+                "  per sample:    black {}, white {} (LinearRaw, {} samples)",
+                nums(&lr.black),
+                nums(&lr.white),
+                lr.samples_per_pixel
+            );
+        }
         if let Some(n) = m.linearization_table_len {
             let _ = writeln!(out, "  linearization: table of {n} entries");
         }

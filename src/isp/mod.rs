@@ -9,8 +9,10 @@
 pub mod color;
 pub mod demosaic;
 pub mod geometry;
+pub mod linear_raw_opcodes;
 pub mod render;
 pub mod render_crop;
+pub mod render_linear_raw;
 pub mod tone;
 
 pub use demosaic::Demosaic;

@@ -108,6 +108,9 @@ fn clip_row(row: &mut [f32]) {
 
 /// [`render_camera_unclipped`] clipped to [0, 1]: the network input before geometry.
 pub fn render_camera(img: &RawImage, neutral: [f64; 3], method: Demosaic) -> Result<RgbImage> {
+    if img.meta.linear_raw.is_some() {
+        return super::render_linear_raw::render_camera(img, neutral, false, false);
+    }
     render_with(img, neutral, method, &clip_row, false, false)
 }
 
@@ -319,6 +322,9 @@ where
     T: Send,
     F: Fn(usize, usize, &[f32]) -> Result<T> + Sync,
 {
+    if img.meta.linear_raw.is_some() {
+        return super::render_linear_raw::render_linear_bands(img, opts, f);
+    }
     let Some(kernel) = row_kernel(opts.demosaic) else {
         return Ok(None);
     };
@@ -374,6 +380,9 @@ pub fn render_input(
     method: Demosaic,
 ) -> Result<RgbImage> {
     let n = resolve_neutral(&img.meta, neutral)?;
+    if img.meta.linear_raw.is_some() {
+        return super::render_linear_raw::render_camera(img, n, true, true);
+    }
     render_with(img, n, method, &clip_row, true, true)
 }
 
@@ -386,6 +395,9 @@ pub fn color_matrix(meta: &RawMeta, neutral: [f64; 3]) -> Result<Mat3> {
 /// Demosaic, colour matrix, DefaultCrop and orientation are fused per band of output rows
 /// for bilinear and MHC (no whole-image intermediate buffer); see [`render_banded`].
 pub fn render_linear(img: &RawImage, opts: &RenderOptions) -> Result<RgbImage> {
+    if img.meta.linear_raw.is_some() {
+        return super::render_linear_raw::render_linear(img, opts);
+    }
     let n = resolve_neutral(&img.meta, opts.neutral)?;
     let m = color_matrix(&img.meta, n)?;
     let mf = m.map(|r| r.map(|v| v as f32));

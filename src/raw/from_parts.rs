@@ -117,6 +117,7 @@ impl RawMeta {
             gps: vec![],
             storage: None,
             stored: Vec::new(),
+            linear_raw: None,
         }
     }
 }

@@ -11,6 +11,11 @@ use crate::raw::{Bayer, Levels, Rect};
 use crate::tiff::value::Entry;
 use serde::Serialize;
 
+/// Why a LinearRaw image cannot be used where a CFA mosaic is needed (synthesis,
+/// calibration, merging, writing).
+pub const LINEAR_RAW_NOT_CFA: &str =
+    "LinearRaw: already demosaiced; the night synthesis works on the CFA mosaic";
+
 /// TIFF byte order.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
 pub enum ByteOrder {
@@ -65,6 +70,77 @@ pub struct CfaPattern {
     pub plane_color: Vec<u8>,
     /// CFALayout (1 = rectangular).
     pub layout: u16,
+}
+
+/// What a LinearRaw image (PhotometricInterpretation 34892: already demosaiced, several
+/// samples per pixel) has beyond a CFA image: its samples per pixel and the per-sample
+/// levels. `None` in [`RawMeta::linear_raw`] for CFA images, which keep every CFA path as is.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct LinearRaw {
+    /// SamplesPerPixel (3: one per colour plane).
+    pub samples_per_pixel: u16,
+    /// BlackLevel, `black_repeat rows x cols x samples_per_pixel` values in the DNG's
+    /// row-column-sample order (BlackLevelDeltaH/V apply to every sample).
+    pub black: Vec<f64>,
+    /// WhiteLevel per sample.
+    pub white: Vec<f64>,
+}
+
+impl LinearRaw {
+    /// Black level of sample `s` at active-area (row, col), deltas included.
+    #[inline]
+    pub fn black_at(&self, levels: &Levels, s: usize, row: usize, col: usize) -> f64 {
+        let (rr, rc) = levels.black_repeat;
+        let spp = self.samples_per_pixel as usize;
+        let mut b = self.black[((row % rr) * rc + (col % rc)) * spp + s];
+        if let Some(d) = levels.black_delta_h.get(col) {
+            b += d;
+        }
+        if let Some(d) = levels.black_delta_v.get(row) {
+            b += d;
+        }
+        b
+    }
+
+    /// Error unless the per-sample arrays fit the repeat pattern and every sample's
+    /// largest black (deltas included) is below its white, all finite.
+    pub fn validate(&self, levels: &Levels) -> Result<()> {
+        let spp = self.samples_per_pixel as usize;
+        let (rr, rc) = levels.black_repeat;
+        if spp == 0 || self.black.len() != rr * rc * spp || self.white.len() != spp {
+            return Err(Error::malformed(format!(
+                "LinearRaw levels: {} BlackLevel values for BlackLevelRepeatDim {rr}x{rc} and \
+                 {spp} samples, {} WhiteLevel values",
+                self.black.len(),
+                self.white.len()
+            )));
+        }
+        if self.black.iter().chain(&self.white).any(|v| !v.is_finite()) {
+            return Err(Error::malformed(
+                "black or white level is not a finite number",
+            ));
+        }
+        let dh = levels.black_delta_h.iter().cloned().fold(0.0, f64::max);
+        let dv = levels.black_delta_v.iter().cloned().fold(0.0, f64::max);
+        for s in 0..spp {
+            let bmax = self
+                .black
+                .iter()
+                .skip(s)
+                .step_by(spp)
+                .cloned()
+                .fold(f64::NEG_INFINITY, f64::max)
+                + dh
+                + dv;
+            if bmax >= self.white[s] {
+                return Err(Error::malformed(format!(
+                    "black level {bmax} >= white level {} (sample {s})",
+                    self.white[s]
+                )));
+            }
+        }
+        Ok(())
+    }
 }
 
 /// Exif fields the pipeline reads or rewrites.
@@ -159,6 +235,12 @@ pub struct RawMeta {
     pub gps: Vec<Entry>,
     /// How the source stored the raw (for `info`; the writer chooses its own layout).
     pub storage: Option<Storage>,
+    /// Set for a LinearRaw (demosaiced) image: then `cfa` is empty, the pixel buffer holds
+    /// `samples_per_pixel` interleaved samples per pixel and `levels` holds sample 0's
+    /// black (per repeat cell) and white (the per-sample values are here). Not serialized
+    /// when `None`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub linear_raw: Option<LinearRaw>,
     /// The modelled colour tags (AsShotNeutral, AsShotWhiteXY, matrices, AnalogBalance,
     /// BaselineExposure) exactly as the source stored them (type and value). The writer
     /// re-uses an entry while the modelled field still equals what the reader decoded from
@@ -221,6 +303,7 @@ impl RawMeta {
             exif_extra: vec![],
             gps: vec![],
             storage: None,
+            linear_raw: None,
             stored: Vec::new(),
         }
     }
@@ -228,6 +311,9 @@ impl RawMeta {
     /// The 2x2 Bayer pattern with colours mapped through CFAPlaneColor to R=0, G=1, B=2,
     /// or an error naming why this CFA is not one (non-2x2 repeat, non-RGB planes, layout).
     pub fn bayer(&self) -> Result<Bayer> {
+        if self.linear_raw.is_some() {
+            return Err(Error::unsupported(LINEAR_RAW_NOT_CFA));
+        }
         let c = &self.cfa;
         if c.rows != 2 || c.cols != 2 || c.pattern.len() != 4 {
             return Err(Error::unsupported(format!(
@@ -259,6 +345,13 @@ impl RawMeta {
             p[i] = plane;
         }
         Bayer::from_pattern(p)
+    }
+
+    /// Samples per pixel of the pixel buffer: 1 (CFA) or LinearRaw's.
+    pub fn samples_per_pixel(&self) -> usize {
+        self.linear_raw
+            .as_ref()
+            .map_or(1, |l| usize::from(l.samples_per_pixel))
     }
 
     /// ISO for writing a clean output: the Exif ISO, or 50 when unknown.

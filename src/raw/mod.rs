@@ -135,12 +135,18 @@ impl RawImage {
         if self.width == 0 || self.height == 0 {
             return Err(Error::malformed("image has zero width or height"));
         }
-        if self.data.len() != self.width * self.height {
+        let spp = self.meta.samples_per_pixel();
+        if self.data.len() != self.width * self.height * spp {
             return Err(Error::malformed(format!(
-                "pixel buffer holds {} samples, expected {}x{}",
+                "pixel buffer holds {} samples, expected {}x{}{}",
                 self.data.len(),
                 self.width,
-                self.height
+                self.height,
+                if spp == 1 {
+                    String::new()
+                } else {
+                    format!("x{spp}")
+                }
             )));
         }
         let a = self.active_area();
@@ -154,7 +160,11 @@ impl RawImage {
                 a.top, a.left, a.bottom, a.right, self.width, self.height
             )));
         }
-        self.meta.levels.validate(a.width(), a.height())
+        self.meta.levels.validate(a.width(), a.height())?;
+        match &self.meta.linear_raw {
+            Some(l) => l.validate(&self.meta.levels),
+            None => Ok(()),
+        }
     }
 }
 

@@ -539,8 +539,13 @@ impl DayInput {
             || sha256_hex(bytes),
             || crate::dng::read::read_dng_bytes(bytes),
         );
+        let raw = raw.in_file(source)?;
+        if raw.meta.linear_raw.is_some() {
+            // A day input is a CFA mosaic: refused here, before anything is planned.
+            return Err(Error::unsupported(crate::raw::meta::LINEAR_RAW_NOT_CFA).in_file(source));
+        }
         Ok(DayInput {
-            raw: raw.in_file(source)?,
+            raw,
             sha256,
             source: source.to_path_buf(),
         })

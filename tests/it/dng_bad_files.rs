@@ -26,11 +26,6 @@ fn shared_bad_files_are_refused_with_reasons() {
             "compression 9 (VC-5) is not supported",
             1,
         ),
-        (
-            "lg_g4_linearraw_lossyjpeg_subifd.dng",
-            "LinearRaw DNG is not a CFA raw",
-            0,
-        ),
         ("fuzz_subifd_empty_offsets.bin", "runs past the end", 1),
         ("fuzz_entry_count_oom.bin", "runs past the end", 1),
     ];
@@ -52,8 +47,36 @@ fn shared_bad_files_are_refused_with_reasons() {
             assert!(err.is_empty(), "{err}");
         }
     }
-    // JSON for the LinearRaw file: described, not synth-ready, reason given, no error.
+}
+
+/// The real LinearRaw file (lossy JPEG tiles in a SubIFD, Adobe lossy DNG): read, described
+/// in full and rendered; synthesis refuses it with the reason.
+#[test]
+fn shared_linear_raw_file_is_read_described_and_refused_for_synthesis() {
+    let Some(d) = common::shared_data() else {
+        return;
+    };
+    let reason = "LinearRaw: already demosaiced; the night synthesis works on the CFA mosaic";
     let p = d.join("dng-bad/lg_g4_linearraw_lossyjpeg_subifd.dng");
+    let img = read_dng(&p).unwrap();
+    assert_eq!((img.width, img.height), (600, 338));
+    let l = img.meta.linear_raw.as_ref().unwrap();
+    assert_eq!((l.samples_per_pixel, l.white.clone()), (3, vec![255.0; 3]));
+    assert!(img.bayer().unwrap_err().to_string().contains(reason));
+    let out = common::bin().arg("info").arg(&p).output().unwrap();
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(out.status.code(), Some(0), "{text}");
+    for want in [
+        "LG-H815",
+        "lossy JPEG",
+        "tiles 304x352",
+        "per sample:",
+        reason,
+    ] {
+        assert!(text.contains(want), "{want}: {text}");
+    }
+    assert!(out.stderr.is_empty());
+    // JSON: described in full, not synth-ready, reason given, no error.
     let out = common::bin()
         .args(["info", "--json"])
         .arg(&p)
@@ -62,8 +85,53 @@ fn shared_bad_files_are_refused_with_reasons() {
     let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     assert_eq!(v[0]["synth_ready"], false);
     assert_eq!(v[0]["raw_ifd"], "IFD0/SubIFD0");
-    assert!(v[0]["reason"].as_str().unwrap().contains("LinearRaw"));
+    assert!(v[0]["reason"].as_str().unwrap().contains(reason));
     assert!(v[0]["error"].is_null());
+    assert_eq!(v[0]["raw"]["meta"]["linear_raw"]["samples_per_pixel"], 3);
+    // Rendered: a daylight scene, neither black nor clipped, about neutral on average
+    // (its OpcodeList2 MapPolynomial curves are what make the 8-bit samples linear).
+    let t = tempfile::tempdir().unwrap();
+    let png = t.path().join("lg.png");
+    let out = common::bin()
+        .arg("render")
+        .arg(&p)
+        .arg("-o")
+        .arg(&png)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let rgb = image::open(&png).unwrap().to_rgb8();
+    assert_eq!(rgb.dimensions(), (600, 338));
+    let mut mean = [0f64; 3];
+    for px in rgb.pixels() {
+        for c in 0..3 {
+            mean[c] += f64::from(px[c]) / (600.0 * 338.0);
+        }
+    }
+    assert!(mean.iter().all(|&m| (60.0..200.0).contains(&m)), "{mean:?}");
+    let (lo, hi) = (
+        mean.iter().cloned().fold(255.0, f64::min),
+        mean.iter().cloned().fold(0.0, f64::max),
+    );
+    assert!(hi / lo < 1.3, "colour cast: {mean:?}");
+    // synth refuses it with the reason, writing nothing.
+    let out = common::bin()
+        .arg("synth")
+        .arg(&p)
+        .arg("-o")
+        .arg(t.path().join("night"))
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains(reason) && err.contains("lg_g4_linearraw"),
+        "{err}"
+    );
 }
 
 /// Deliberately malformed files: (name, bytes, expected reason).
@@ -135,9 +203,10 @@ fn malformed() -> Vec<(&'static str, Vec<u8>, &'static str)> {
             "CFAPattern value 3 is not a colour plane",
         ),
         (
+            // Uncompressed samples labelled JPEG XL: the decoder says what is wrong.
             "jpeg_xl",
             ok.clone().set(259, Value::Short(vec![52546])).build(),
-            "compression 52546 (JPEG XL) is not supported",
+            "JPEG XL strip 0: cannot decode",
         ),
         (
             "deflate",
@@ -147,7 +216,7 @@ fn malformed() -> Vec<(&'static str, Vec<u8>, &'static str)> {
         (
             "lossy_jpeg",
             ok.clone().set(259, Value::Short(vec![34892])).build(),
-            "compression 34892 (lossy JPEG) is not supported",
+            "lossy JPEG (34892) with 12-bit samples",
         ),
         (
             "no_dng_version",

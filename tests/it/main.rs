@@ -24,6 +24,7 @@ mod dataset_report;
 mod dataset_units;
 mod deflate_zlib;
 mod dng_bad_files;
+mod dng_compressed;
 mod dng_gps;
 mod dng_opcodes;
 mod dng_read;

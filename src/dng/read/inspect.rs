@@ -85,6 +85,10 @@ pub struct MetaSummary {
     pub carried_entries: [usize; 3],
     /// Entries of the GPS IFD (0: none), carried into written DNGs.
     pub gps_entries: usize,
+    /// LinearRaw (demosaiced) images: samples per pixel and per-sample levels (absent for
+    /// CFA images).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub linear_raw: Option<crate::raw::meta::LinearRaw>,
 }
 
 /// What `day2night info` reports about a file.
@@ -206,6 +210,10 @@ pub fn inspect_bytes(bytes: &[u8]) -> Result<DngInfo> {
                 height: img.height,
                 cfa: match &bayer {
                     Ok(b) => b.name(),
+                    Err(_) if m.linear_raw.is_some() => format!(
+                        "none: LinearRaw, {} samples per pixel (already demosaiced)",
+                        m.samples_per_pixel()
+                    ),
                     Err(_) => format!(
                         "{}x{} pattern {:?} planes {:?}",
                         m.cfa.rows, m.cfa.cols, m.cfa.pattern, m.cfa.plane_color
@@ -232,6 +240,7 @@ pub fn inspect_bytes(bytes: &[u8]) -> Result<DngInfo> {
                     storage: m.storage.clone(),
                     carried_entries: [m.ifd0_extra.len(), m.raw_extra.len(), m.exif_extra.len()],
                     gps_entries: m.gps.len(),
+                    linear_raw: m.linear_raw.clone(),
                 },
             });
             match bayer {

@@ -1,6 +1,6 @@
-//! DNG reader: finds the CFA raw IFD (NewSubFileType 0, in IFD0 or any SubIFD), decodes its
-//! pixels (uncompressed 8-16 bit incl. packed 10/12/14-bit, or lossless JPEG; strips or
-//! tiles) and fills [`RawMeta`] completely. See docs/dng-support.md ("Reading").
+//! DNG reader: finds the raw IFD (NewSubFileType 0, in IFD0 or any SubIFD; CFA, else
+//! LinearRaw), decodes its pixels (uncompressed 8-16 bit incl. packed 10/12/14-bit, lossless
+//! JPEG, JPEG XL, lossy JPEG; strips or tiles) and fills [`RawMeta`] completely. See docs/dng-support.md ("Reading").
 
 use crate::dng::ljpeg;
 use crate::error::{Error, Result, ResultExt};
@@ -13,6 +13,9 @@ use serde::Serialize;
 use std::path::Path;
 
 mod inspect;
+mod jpeg;
+mod jxl;
+mod linear_raw;
 mod pixels;
 mod tags;
 
@@ -30,11 +33,16 @@ pub const MAX_DIMENSION: u32 = 65535;
 /// Largest CFA repeat pattern (rows or columns).
 pub const MAX_CFA_DIM: usize = 16;
 
+/// Compression values decoded by jxl.rs and jpeg.rs.
+const COMPRESSION_LOSSY_JPEG: u16 = 34892;
+const COMPRESSION_JPEG_XL: u16 = 52546;
+
 /// PhotometricInterpretation values.
 const PHOTOMETRIC_CFA: u16 = 32803;
 const PHOTOMETRIC_LINEAR_RAW: u16 = 34892;
 
-/// Read the raw CFA image and metadata of a DNG file.
+/// Read the raw image (a CFA mosaic, or a demosaiced LinearRaw image: see
+/// [`RawMeta::linear_raw`]) and the metadata of a DNG file.
 pub fn read_dng(path: &Path) -> Result<RawImage> {
     let bytes = std::fs::read(path).map_err(|e| Error::Io(e).in_file(path))?;
     read_dng_bytes(&bytes).in_file(path)
@@ -62,10 +70,7 @@ pub fn read_dng_bytes(bytes: &[u8]) -> Result<RawImage> {
 
 fn check_photometric(p: u16) -> Result<()> {
     match p {
-        PHOTOMETRIC_CFA => Ok(()),
-        PHOTOMETRIC_LINEAR_RAW => Err(Error::unsupported(
-            "LinearRaw DNG is not a CFA raw (already demosaiced)",
-        )),
+        PHOTOMETRIC_CFA | PHOTOMETRIC_LINEAR_RAW => Ok(()),
         other => Err(Error::unsupported(format!(
             "PhotometricInterpretation {other} ({}) is not a CFA raw",
             photometric_name(other)
@@ -103,9 +108,13 @@ pub fn compression_name(c: u16) -> &'static str {
     }
 }
 
-fn check_compression(c: u16) -> Result<()> {
+fn check_compression(c: u16, bits: u32) -> Result<()> {
     match c {
-        1 | 7 => Ok(()),
+        1 | 7 | COMPRESSION_JPEG_XL => Ok(()),
+        COMPRESSION_LOSSY_JPEG if bits == 8 => Ok(()),
+        COMPRESSION_LOSSY_JPEG => Err(Error::unsupported(format!(
+            "lossy JPEG (34892) with {bits}-bit samples (8-bit baseline JPEG supported)"
+        ))),
         _ => Err(Error::unsupported(format!(
             "compression {c} ({}) is not supported",
             compression_name(c)

@@ -1,5 +1,6 @@
 //! Pixel decoding: the raw IFD's geometry, its strips or tiles (refused when their byte
-//! ranges overlap or repeat), uncompressed and packed samples, lossless JPEG.
+//! ranges overlap or repeat), uncompressed and packed samples, lossless JPEG; JPEG XL
+//! (jxl.rs) and lossy JPEG (jpeg.rs) blocks are decoded by their own modules.
 
 use super::*;
 
@@ -9,6 +10,8 @@ pub(super) struct Geometry {
     pub(super) bits: u16,
     pub(super) compression: u16,
     pub(super) layout: Layout,
+    /// 1 (CFA) or 3 (LinearRaw, chunky).
+    pub(super) samples_per_pixel: u16,
 }
 
 pub(super) fn geometry(raw: &Ifd) -> Result<Geometry> {
@@ -26,7 +29,10 @@ pub(super) fn geometry(raw: &Ifd) -> Result<Geometry> {
     }
     crate::limits::check_pixels("raw image", u64::from(width), u64::from(height))?;
     let spp = raw.u32(SAMPLES_PER_PIXEL).unwrap_or(1);
-    if spp != 1 {
+    let linear_raw = raw.u32(PHOTOMETRIC_INTERPRETATION) == Some(u32::from(PHOTOMETRIC_LINEAR_RAW));
+    if linear_raw {
+        super::linear_raw::check_layout(raw, spp)?;
+    } else if spp != 1 {
         return Err(Error::unsupported(format!(
             "CFA raw with {spp} samples per pixel (only 1)"
         )));
@@ -46,7 +52,13 @@ pub(super) fn geometry(raw: &Ifd) -> Result<Geometry> {
         }
     }
     let compression = raw.u32(COMPRESSION).unwrap_or(1) as u16;
-    check_compression(compression)?;
+    check_compression(compression, bits)?;
+    if compression == COMPRESSION_LOSSY_JPEG && !linear_raw {
+        return Err(Error::malformed(
+            "lossy JPEG (34892) in a CFA raw: the DNG specification allows it for LinearRaw \
+             (demosaiced) images only",
+        ));
+    }
     let layout = if raw.has(TILE_OFFSETS) || raw.has(TILE_WIDTH) {
         let tw = raw.require_u32(TILE_WIDTH)?;
         let th = raw.require_u32(TILE_LENGTH)?;
@@ -69,6 +81,7 @@ pub(super) fn geometry(raw: &Ifd) -> Result<Geometry> {
         bits: bits as u16,
         compression,
         layout,
+        samples_per_pixel: spp as u16,
     })
 }
 
@@ -189,14 +202,19 @@ pub(super) fn decode_pixels(
     raw: &Ifd,
     g: &Geometry,
 ) -> Result<Vec<u16>> {
-    let (w, h) = (g.width as usize, g.height as usize);
     let blocks = blocks(bytes, raw, g)?;
+    if matches!(g.compression, COMPRESSION_JPEG_XL | COMPRESSION_LOSSY_JPEG) {
+        return decode_codec_blocks(&blocks, g);
+    }
+    // Samples per row of the image and of a block: pixels x samples per pixel (1 for CFA).
+    let spp = g.samples_per_pixel as usize;
+    let (w, h) = (g.width as usize * spp, g.height as usize);
     let bits = g.bits as usize;
     if g.compression == 1 {
         // Check that the data covers the image before allocating it.
         for (i, b) in blocks.iter().enumerate() {
             let rows = b.h.min(h - b.y.min(h));
-            let need = row_bytes(b.w, bits).saturating_mul(rows);
+            let need = row_bytes(b.w * spp, bits).saturating_mul(rows);
             if b.data.len() < need {
                 return Err(Error::malformed(format!(
                     "{} {i} holds {} bytes, {need} needed (truncated?)",
@@ -213,25 +231,27 @@ pub(super) fn decode_pixels(
         let total: usize = blocks.iter().map(|b| b.data.len()).sum();
         if w.saturating_mul(h) > total.saturating_mul(8) {
             return Err(Error::malformed(format!(
-                "{total} bytes of lossless JPEG data cannot hold a {w}x{h} image (truncated?)"
+                "{total} bytes of lossless JPEG data cannot hold a {}x{h} image (truncated?)",
+                g.width
             )));
         }
     }
     let mut out = crate::limits::try_filled(0u16, w * h, "the raw pixels")?;
     let mut rowbuf = Vec::new();
     for b in &blocks {
-        let vis_w = b.w.min(w.saturating_sub(b.x));
+        let (bx, bw) = (b.x * spp, b.w * spp);
+        let vis_w = bw.min(w.saturating_sub(bx));
         let vis_h = b.h.min(h.saturating_sub(b.y));
         if vis_w == 0 || vis_h == 0 {
             continue;
         }
         if g.compression == 1 {
-            let rb = row_bytes(b.w, bits);
-            rowbuf.resize(b.w, 0);
+            let rb = row_bytes(bw, bits);
+            rowbuf.resize(bw, 0);
             for (r, src) in b.data.chunks_exact(rb.max(1)).take(vis_h).enumerate() {
-                let dst_start = (b.y + r) * w + b.x;
+                let dst_start = (b.y + r) * w + bx;
                 let dst = &mut out[dst_start..dst_start + vis_w];
-                if vis_w == b.w {
+                if vis_w == bw {
                     unpack_row(src, dst, bits, order);
                 } else {
                     unpack_row(src, &mut rowbuf, bits, order);
@@ -240,18 +260,65 @@ pub(super) fn decode_pixels(
             }
         } else {
             let d = ljpeg::decode(b.data)?;
-            if d.data.len() < b.w * vis_h.min(b.h) {
+            if d.data.len() < bw * vis_h.min(b.h) {
                 return Err(Error::malformed(format!(
                     "lossless JPEG {}x{}x{} frame too small for a {}x{} block",
                     d.width, d.height, d.components, b.w, b.h
                 )));
             }
-            for (r, src) in d.data.chunks_exact(b.w).take(vis_h).enumerate() {
-                let dst_start = (b.y + r) * w + b.x;
+            for (r, src) in d.data.chunks_exact(bw).take(vis_h).enumerate() {
+                let dst_start = (b.y + r) * w + bx;
                 out[dst_start..dst_start + vis_w].copy_from_slice(&src[..vis_w]);
             }
         }
     }
+    Ok(out)
+}
+
+/// JPEG XL or lossy JPEG blocks: each decoded on its own (rows of blocks in parallel, so
+/// the result does not depend on the thread count) to exactly the block's size, then its
+/// visible part copied (edge tiles are cropped).
+fn decode_codec_blocks(blocks: &[Block<'_>], g: &Geometry) -> Result<Vec<u16>> {
+    use rayon::prelude::*;
+    let spp = g.samples_per_pixel as usize;
+    let (w, h) = (g.width as usize, g.height as usize);
+    let stride = w * spp;
+    let kind = if matches!(g.layout, Layout::Strips { .. }) {
+        "strip"
+    } else {
+        "tile"
+    };
+    // Every block has the same size; tile sizes count against the pixel limit too (a
+    // tile's codestream is decoded whole, its hidden part included).
+    let (bw, bh) = blocks.first().map_or((0, 0), |b| (b.w, b.h));
+    crate::limits::check_pixels(kind, bw as u64, bh as u64)?;
+    let mut out = crate::limits::try_filled(0u16, stride * h, "the raw pixels")?;
+    let band = bh.max(1) * stride;
+    let per_row = blocks.iter().filter(|b| b.y == 0).count().max(1);
+    out.par_chunks_mut(band)
+        .enumerate()
+        .try_for_each(|(row, dst)| -> Result<()> {
+            for (k, b) in blocks.iter().enumerate().skip(row * per_row).take(per_row) {
+                let vis_w = b.w.min(w.saturating_sub(b.x));
+                let vis_h = b.h.min(h.saturating_sub(b.y));
+                if vis_w == 0 || vis_h == 0 {
+                    continue;
+                }
+                let what = format!("{kind} {k}");
+                // A tile is coded whole; the last strip holds only the image's last rows.
+                let coded_h = if kind == "strip" { vis_h } else { b.h };
+                let px = if g.compression == COMPRESSION_JPEG_XL {
+                    super::jxl::decode(b.data, b.w, coded_h, spp, &what)?
+                } else {
+                    super::jpeg::decode(b.data, b.w, coded_h, spp, &what)?
+                };
+                for (r, src) in px.chunks_exact(b.w * spp).take(vis_h).enumerate() {
+                    let start = r * stride + b.x * spp;
+                    dst[start..start + vis_w * spp].copy_from_slice(&src[..vis_w * spp]);
+                }
+            }
+            Ok(())
+        })?;
     Ok(out)
 }
 

@@ -155,12 +155,8 @@ pub(super) fn version4(v: Option<&Value>) -> Option<[u8; 4]> {
     Some([g(0), g(1), g(2), g(3)])
 }
 
-pub(super) fn build_meta(tiff: &Tiff, d: &Located<'_>, g: &Geometry) -> Result<RawMeta> {
-    let raw = d.raw;
-    let ifd0 = d.ifd0;
-    let (w, h) = (g.width, g.height);
-
-    // CFA.
+/// The CFA tags of a CFA raw IFD.
+fn cfa_pattern(raw: &Ifd) -> Result<CfaPattern> {
     let dim = raw
         .require(CFA_REPEAT_PATTERN_DIM)?
         .to_u32_vec()
@@ -207,7 +203,26 @@ pub(super) fn build_meta(tiff: &Tiff, d: &Located<'_>, g: &Geometry) -> Result<R
             planes - 1
         )));
     }
-    let layout = raw.u32(CFA_LAYOUT).unwrap_or(1) as u16;
+    Ok(CfaPattern {
+        rows: cr,
+        cols: cc,
+        pattern,
+        plane_color,
+        layout: raw.u32(CFA_LAYOUT).unwrap_or(1) as u16,
+    })
+}
+
+pub(super) fn build_meta(tiff: &Tiff, d: &Located<'_>, g: &Geometry) -> Result<RawMeta> {
+    let raw = d.raw;
+    let ifd0 = d.ifd0;
+    let (w, h) = (g.width, g.height);
+
+    // CFA (a LinearRaw image has none: linear_raw.rs).
+    let cfa = match g.samples_per_pixel {
+        1 => cfa_pattern(raw)?,
+        spp => super::linear_raw::no_cfa(spp),
+    };
+    let planes = cfa.plane_color.len();
 
     // Geometry tags.
     let active_area = match raw.get(ACTIVE_AREA) {
@@ -290,16 +305,18 @@ pub(super) fn build_meta(tiff: &Tiff, d: &Located<'_>, g: &Geometry) -> Result<R
         }
         None => (1, 1),
     };
+    let spp = usize::from(g.samples_per_pixel);
     let black = match raw.get(BLACK_LEVEL) {
         Some(v) => floats(v, BLACK_LEVEL)?,
-        None => vec![0.0; black_repeat.0 * black_repeat.1],
+        None => vec![0.0; black_repeat.0 * black_repeat.1 * spp],
     };
-    if black.len() != black_repeat.0 * black_repeat.1 {
+    if black.len() != black_repeat.0 * black_repeat.1 * spp {
         return Err(Error::malformed(format!(
-            "BlackLevel has {} values for BlackLevelRepeatDim {}x{}",
+            "BlackLevel has {} values for BlackLevelRepeatDim {}x{}{}",
             black.len(),
             black_repeat.0,
-            black_repeat.1
+            black_repeat.1,
+            super::linear_raw::times_samples(spp)
         )));
     }
     let delta = |tag: u16, n: usize| -> Result<Vec<f64>> {
@@ -329,6 +346,8 @@ pub(super) fn build_meta(tiff: &Tiff, d: &Located<'_>, g: &Geometry) -> Result<R
             None => ((1u32 << g.bits) - 1) as f64,
         },
     };
+    let (black, white, linear_raw) =
+        super::linear_raw::split_levels(raw, black, white, black_repeat, spp)?;
     let levels = Levels {
         black_repeat,
         black,
@@ -469,13 +488,7 @@ pub(super) fn build_meta(tiff: &Tiff, d: &Located<'_>, g: &Geometry) -> Result<R
         active_area,
         default_crop_origin,
         default_crop_size,
-        cfa: CfaPattern {
-            rows: cr,
-            cols: cc,
-            pattern,
-            plane_color,
-            layout,
-        },
+        cfa,
         linearization_table,
         levels,
         as_shot_neutral,
@@ -500,6 +513,7 @@ pub(super) fn build_meta(tiff: &Tiff, d: &Located<'_>, g: &Geometry) -> Result<R
             compression: g.compression,
             predictor: raw.u32(PREDICTOR).map(|p| p as u16),
         }),
+        linear_raw,
         stored: STORED_TAGS
             .iter()
             .filter_map(|&tag| {

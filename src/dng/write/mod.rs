@@ -97,6 +97,12 @@ pub fn write_dng(
 
 /// The IFD tree of a DNG: byte order and IFD0 (with its SubIFD/Exif children and data).
 fn build(img: &RawImage, opts: &WriteOptions) -> Result<(ByteOrder, Ifd)> {
+    if img.meta.linear_raw.is_some() {
+        // The writer writes CFA mosaics; a LinearRaw source is read and rendered only.
+        return Err(crate::error::Error::unsupported(
+            "LinearRaw: already demosaiced; the DNG writer writes CFA mosaics",
+        ));
+    }
     img.validate()?;
     let m = &img.meta;
     check_meta(img)?;
