@@ -42,8 +42,8 @@ pub const DEFAULT_POISSON_MAX_ELECTRONS: f64 = 1000.0;
 pub const POISSON_MAX_CAP: f64 = 1e12;
 /// Smallest sigma used in the log-log joint fit (smaller values are raised to it).
 pub const LOG_SIGMA_FLOOR: f64 = 1e-3;
-/// Accepted range of K (DN per electron).
-pub const K_RANGE: (f64, f64) = (1e-6, 1e6);
+/// Accepted range of K (DN per electron) and the largest read/row sigma (DN): the one table.
+pub use crate::bounds::{K_RANGE, MAX_SIGMA_DN};
 
 /// Parameters at one ISO: what a plan carries and sampling uses.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -77,8 +77,10 @@ impl PhysicsParams {
             && self.k <= K_RANGE.1
             && self.sigma_read.is_finite()
             && self.sigma_read >= 0.0
+            && self.sigma_read <= MAX_SIGMA_DN
             && self.sigma_row.is_finite()
             && self.sigma_row >= 0.0
+            && self.sigma_row <= MAX_SIGMA_DN
             && self.lambda.is_finite()
             && (self.gaussian_read
                 || (tukey::LAMBDA_MIN..=tukey::LAMBDA_MAX).contains(&self.lambda))
@@ -87,7 +89,7 @@ impl PhysicsParams {
         if !ok {
             return Err(Error::invalid(format!(
                 "{what}: physics noise parameters out of range (k {} in [{:e}, {:e}], \
-                 sigma_read {} and sigma_row {} finite >= 0, lambda {} in [{}, {}] unless \
+                 sigma_read {} and sigma_row {} in [0, 65535], lambda {} in [{}, {}] unless \
                  gaussian_read, poisson_max_electrons {} in [0, 1e12])",
                 self.k,
                 K_RANGE.0,
@@ -258,9 +260,8 @@ impl PhysicsModel {
             )));
         }
         for (i, p) in isos.iter().enumerate() {
-            if p.iso == 0 {
-                return Err(Error::malformed("physics noise model has a point at ISO 0"));
-            }
+            crate::bounds::iso(&format!("physics noise model isos[{i}].iso"), p.iso)
+                .map_err(crate::bounds::malformed)?;
             if i > 0 && isos[i - 1].iso == p.iso {
                 return Err(Error::malformed(format!(
                     "physics noise model has ISO {} twice",

@@ -108,6 +108,9 @@ pub struct DngInfo {
     pub synth_ready: bool,
     /// Why not, when `synth_ready` is false.
     pub reason: Option<String>,
+    /// What the metadata checks corrected (each names the tag and the value used): synthesis
+    /// works but warns ("ready, with warnings").
+    pub warnings: Vec<String>,
     /// Set when the raw data itself is unreadable (unsupported compression, malformed,
     /// over the limits): `info` reports it as an error (exit code 1).
     pub error: Option<String>,
@@ -169,6 +172,7 @@ pub fn inspect_bytes(bytes: &[u8]) -> Result<DngInfo> {
         raw: None,
         synth_ready: false,
         reason: None,
+        warnings: Vec::new(),
         error: None,
     };
     let located = match locate(&tiff) {
@@ -195,7 +199,7 @@ pub fn inspect_bytes(bytes: &[u8]) -> Result<DngInfo> {
         info.reason = Some(e.to_string());
         return Ok(info);
     }
-    match read_dng_bytes(bytes) {
+    match read_dng_bytes_unchecked(bytes) {
         Ok(img) => {
             let m = &img.meta;
             let bayer = img.bayer();
@@ -231,9 +235,19 @@ pub fn inspect_bytes(bytes: &[u8]) -> Result<DngInfo> {
                     gps_entries: m.gps.len(),
                 },
             });
-            match bayer {
-                Ok(_) => info.synth_ready = true,
-                Err(e) => info.reason = Some(e.to_string()),
+            let mut meta = img.meta.clone();
+            match (bayer, crate::dng::check::check_meta(&mut meta)) {
+                (_, Err(e)) => {
+                    // Refused by the metadata checks: described, but an error like any other
+                    // command would report.
+                    info.reason = Some(e.to_string());
+                    info.error = Some(e.to_string());
+                }
+                (Ok(_), Ok(())) => {
+                    info.synth_ready = true;
+                    info.warnings = meta.warnings;
+                }
+                (Err(e), Ok(())) => info.reason = Some(e.to_string()),
             }
         }
         Err(e) => {
