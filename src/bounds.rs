@@ -140,13 +140,19 @@ pub fn in_range(field: &str, v: f64, lo: f64, hi: f64) -> Result<()> {
     )))
 }
 
-/// Error unless `iso` is in [`ISO_RANGE`].
+/// Error unless `iso` is in [`ISO_RANGE`] (the message starts with `field: ` unless `field`
+/// is empty).
 pub fn iso(field: &str, iso: u32) -> Result<()> {
     if (ISO_RANGE.0..=ISO_RANGE.1).contains(&iso) {
         return Ok(());
     }
+    let at = if field.is_empty() {
+        String::new()
+    } else {
+        format!("{field}: ")
+    };
     Err(Error::invalid(format!(
-        "{field}: ISO {iso} is outside {}..={}",
+        "{at}ISO {iso} is outside {}..={}",
         ISO_RANGE.0, ISO_RANGE.1
     )))
 }

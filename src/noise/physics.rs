@@ -77,10 +77,8 @@ impl PhysicsParams {
             && self.k <= K_RANGE.1
             && self.sigma_read.is_finite()
             && self.sigma_read >= 0.0
-            && self.sigma_read <= MAX_SIGMA_DN
             && self.sigma_row.is_finite()
             && self.sigma_row >= 0.0
-            && self.sigma_row <= MAX_SIGMA_DN
             && self.lambda.is_finite()
             && (self.gaussian_read
                 || (tukey::LAMBDA_MIN..=tukey::LAMBDA_MAX).contains(&self.lambda))
@@ -89,7 +87,7 @@ impl PhysicsParams {
         if !ok {
             return Err(Error::invalid(format!(
                 "{what}: physics noise parameters out of range (k {} in [{:e}, {:e}], \
-                 sigma_read {} and sigma_row {} in [0, 65535], lambda {} in [{}, {}] unless \
+                 sigma_read {} and sigma_row {} finite >= 0, lambda {} in [{}, {}] unless \
                  gaussian_read, poisson_max_electrons {} in [0, 1e12])",
                 self.k,
                 K_RANGE.0,
@@ -262,6 +260,17 @@ impl PhysicsModel {
         for (i, p) in isos.iter().enumerate() {
             crate::bounds::iso(&format!("physics noise model isos[{i}].iso"), p.iso)
                 .map_err(crate::bounds::malformed)?;
+            // A file's sigmas: at most the full 16-bit range (extrapolations are bounded by
+            // the plan's noise parameters instead).
+            for (name, v) in [("sigma_read", p.sigma_read), ("sigma_row", p.sigma_row)] {
+                crate::bounds::in_range(
+                    &format!("physics noise model isos[{i}].{name}"),
+                    v,
+                    0.0,
+                    MAX_SIGMA_DN,
+                )
+                .map_err(crate::bounds::malformed)?;
+            }
             if i > 0 && isos[i - 1].iso == p.iso {
                 return Err(Error::malformed(format!(
                     "physics noise model has ISO {} twice",

@@ -107,7 +107,7 @@ pub fn parse_isos(s: &str) -> Result<Vec<u32>> {
                 part
             ))
         })?;
-        crate::bounds::iso("--iso", iso)?;
+        crate::bounds::iso("", iso)?;
         if !v.contains(&iso) {
             v.push(iso);
         }

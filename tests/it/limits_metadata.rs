@@ -437,3 +437,56 @@ fn probe_sdk_matrices() {
         eprintln!("{n}: {} {errs:?}", ok || errs.is_empty());
     }
 }
+
+/// `synth --iso` and the `--replay` sidecar check use one bound: the largest ISO synthesizes
+/// and its sidecar replays; one past it is refused by both, naming the field.
+#[test]
+fn synth_and_replay_agree_on_the_iso_bound() {
+    let (lo, hi) = day2night::bounds::ISO_RANGE;
+    assert_eq!(lo, 1);
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let day = common::fixtures().join("day.dng");
+    let synth = |args: &[&str]| {
+        common::bin()
+            .arg("synth")
+            .arg(&day)
+            .args(args)
+            .output()
+            .unwrap()
+    };
+    let at = hi.to_string();
+    let past = (hi + 1).to_string();
+    let a = d.join("a");
+    let o = synth(&["-o", s(&a), "--iso", &at, "--target", "none"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let sidecar = a.join("day.json");
+    let o = synth(&["-o", s(&d.join("r")), "--replay", s(&sidecar)]);
+    assert!(
+        o.status.success(),
+        "replay at the bound: {}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    // One past: the option is a usage error...
+    let o = synth(&["-o", s(&d.join("b")), "--iso", &past, "--target", "none"]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains(&format!("--iso: ISO {past} is outside 1..={hi}")),
+        "{err}"
+    );
+    assert!(!d.join("b").join("day.json").exists());
+    // ...and a sidecar saying so is refused by the replay check, naming the field.
+    let text = std::fs::read_to_string(&sidecar).unwrap();
+    let needle = format!("\"iso\": {at}");
+    assert!(text.contains(&needle), "{text}");
+    let bad = d.join("bad.json");
+    std::fs::write(&bad, text.replace(&needle, &format!("\"iso\": {past}"))).unwrap();
+    let o = synth(&["-o", s(&d.join("r2")), "--replay", s(&bad)]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains(&format!("plan field noise[0].iso: ISO {past} is outside")),
+        "{err}"
+    );
+}
