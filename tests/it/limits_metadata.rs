@@ -1,7 +1,7 @@
 //! Absurd metadata: every extreme case (made here with the independent builder) is run
 //! through the Adobe DNG SDK (dngpy, tests/validators/sdk_accepts.py) and through day2night
-//! (`info`, `synth` clean + noisy, `convert`). Whenever the SDK accepts the input, every DNG
-//! day2night writes from it must pass the SDK too; inputs the SDK rejects must be refused
+//! (`info`, `render`, `synth` clean + noisy, `convert`). Whenever the SDK accepts the input,
+//! every DNG day2night writes from it must pass the SDK too; inputs the SDK rejects must be refused
 //! (exit 1, the tag named) or corrected with a warning naming the tag. Each case also states
 //! day2night's expected verdict (docs/limits.md, "Metadata").
 use crate::common;
@@ -377,6 +377,12 @@ fn extreme_metadata_never_gives_a_dng_the_sdk_rejects() {
                 .output()
                 .unwrap();
             check_verdict(name, "synth", &synth, *want);
+            let png = dir.path().join(format!("{name}_render.png"));
+            let render = common::bin()
+                .args(["render", s(input), "-o", s(&png)])
+                .output()
+                .unwrap();
+            check_verdict(name, "render", &render, *want);
             let conv = dir.path().join(format!("{name}_conv.dng"));
             let convert = common::bin()
                 .args(["convert", s(input), s(&conv)])

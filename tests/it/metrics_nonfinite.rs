@@ -1,23 +1,16 @@
 //! `day2night eval` on images holding NaN or Inf: an error naming the file and the count by
 //! default; `--nonfinite zero` replaces them by 0, warns, and says so in the JSON.
 use crate::common;
-use day2night::encode::exr::{write_exr, ExrOptions};
-use day2night::isp::RgbImage;
-use day2night::output::OutputPolicy;
 use std::path::{Path, PathBuf};
 
+/// An 8 x 8 f32 RGB EXR holding `data` as is (day2night's own writer sanitizes NaN/Inf).
 fn exr(dir: &Path, name: &str, data: Vec<f32>) -> PathBuf {
     let p = dir.join(name);
-    let img = RgbImage {
-        width: 8,
-        height: 8,
-        data,
-    };
-    let opts = ExrOptions {
-        half: false,
-        ..ExrOptions::default()
-    };
-    write_exr(&img, &p, &opts, &[], &OutputPolicy::default()).unwrap();
+    exr::prelude::write_rgb_file(&p, 8, 8, |x, y| {
+        let i = 3 * (y * 8 + x);
+        (data[i], data[i + 1], data[i + 2])
+    })
+    .unwrap();
     p
 }
 

@@ -240,6 +240,29 @@ mod tests {
     use super::*;
 
     #[test]
+    fn absurd_illuminant_ratios_and_gaussians_are_refused_naming_the_field() {
+        let err = |json: &str| {
+            let v: Value = serde_json::from_str(json).unwrap();
+            parse_illuminants("x", &v).unwrap_err().to_string()
+        };
+        let e = err(r#"{"illuminants_rgb_over_g": [[0.5, 1.0, 0.3], [1e6, 1.0, 1.0]]}"#);
+        assert!(
+            e.contains("illuminants_rgb_over_g[1] (r/g, b/g)[0]: 1e6 is outside [0.001, 1000]"),
+            "{e}"
+        );
+        let e = err(r#"{"illuminants": [[1e-4, 0.5]]}"#);
+        assert!(
+            e.contains("illuminants[0] (r/g, b/g)[0]: 1e-4 is outside"),
+            "{e}"
+        );
+        // At the bound: used.
+        let v: Value = serde_json::from_str(r#"{"illuminants": [[1e3, 1e-3]]}"#).unwrap();
+        assert!(parse_illuminants("x", &v).is_ok());
+        let e = err(r#"{"mean": [2000, 0.3], "covariance": [[0.1, 0], [0, 0.1]]}"#);
+        assert!(e.contains("mean[0]: 2000 is outside [-1000, 1000]"), "{e}");
+    }
+
+    #[test]
     fn parses_release_style_and_pairs_and_gaussian() {
         let v: Value = serde_json::from_str(
             r#"{"illuminants_rgb_over_g": [[0.5, 1.0, 0.3], [1.0, 2.0, 0.8]]}"#,
