@@ -221,7 +221,8 @@ mod tests {
 
     #[test]
     fn refusals_name_the_tag() {
-        let cases: Vec<(&str, Box<dyn Fn(&mut RawMeta)>)> = vec![
+        type Edit = Box<dyn Fn(&mut RawMeta)>;
+        let cases: Vec<(&str, Edit)> = vec![
             ("WhiteLevel 16384", Box::new(|m| m.levels.white = 16384.0)),
             (
                 "LinearizationTable has 1",
