@@ -201,7 +201,7 @@ impl SynthOptions {
             )));
         }
         for &iso in &self.isos {
-            crate::bounds::iso("ISO", iso)?;
+            crate::bounds::iso("", iso)?;
         }
         if self.isos.len() > plan_bounds::MAX_NOISE_ENTRIES {
             return Err(Error::invalid(format!(

@@ -189,10 +189,14 @@ pub fn parse_brightness(name: &str, v: &Value) -> Result<BrightnessDict> {
             if vals.is_empty() {
                 return Err(Error::malformed(format!("{}: empty", key)));
             }
-            if vals.iter().any(|&x| !(x > 0.0 && x <= 1.0)) {
+            if let Some((i, x)) = vals
+                .iter()
+                .enumerate()
+                .find(|(_, &x)| !(x > 0.0 && x <= 1.0))
+            {
                 return Err(Error::malformed(format!(
-                    "{}: values must be normalized intensities in (0, 1]",
-                    key
+                    "{key}[{i}]: {} is outside (0, 1] (normalized intensities)",
+                    crate::bounds::short(*x)
                 )));
             }
             let n = vals.len() as f64;
@@ -212,11 +216,14 @@ pub fn parse_brightness(name: &str, v: &Value) -> Result<BrightnessDict> {
     }
     if let (Some(m), Some(s)) = (v.get("mean"), v.get("std")) {
         let (mean, std) = (num(m, "mean")?, num(s, "std")?);
-        if !(mean > 0.0 && mean <= 1.0 && (0.0..=1.0).contains(&std)) {
-            return Err(Error::malformed(
-                "brightness mean must be in (0, 1], std in [0, 1]",
-            ));
+        if !(mean > 0.0 && mean <= 1.0) {
+            return Err(Error::malformed(format!(
+                "brightness mean: {} is outside (0, 1]",
+                crate::bounds::short(mean)
+            )));
         }
+        crate::bounds::in_range("brightness std", std, 0.0, 1.0)
+            .map_err(crate::bounds::malformed)?;
         return Ok(BrightnessDict {
             name: name.into(),
             mean,
