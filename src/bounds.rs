@@ -2,7 +2,8 @@
 //! lie in (ISOs, noise parameters, neutrals and illuminant ratios, gains, colour-matrix
 //! conditioning, NoiseProfile entries, calibration files), with why each value, and the small
 //! check helpers that turn a violation into an error naming the field and the value in short
-//! number form (`ColorMatrix1 [...] is ill-conditioned: condition number 4.61169e18 is above 10000`).
+//! number form (`ColorMatrix1 [...] is ill-conditioned: condition number 4.61169e18 is
+//! above 10000`).
 //!
 //! Everything that samples such a value (the synthesis planner, the CLI's option parsing) and
 //! everything that reads one back (the sidecar reader of `synth --replay`, the calibration-file
