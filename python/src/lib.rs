@@ -255,6 +255,26 @@ fn meta_dict<'py>(py: Python<'py>, raw: &RawImage) -> PyResult<Bound<'py, PyDict
     Ok(d)
 }
 
+/// Raise each metadata correction of the reader (`day2night::dng::check`) as a Python
+/// `UserWarning`: `<file>: <message>`, as the command line says `day2night: <file>: warning:`.
+fn warn_meta(
+    py: Python<'_>,
+    path: &std::path::Path,
+    meta: &day2night::raw::meta::RawMeta,
+) -> PyResult<()> {
+    for w in &meta.warnings {
+        let msg = std::ffi::CString::new(format!("{}: {w}", path.display()))
+            .unwrap_or_else(|_| c"metadata corrected".into());
+        PyErr::warn(
+            py,
+            &py.get_type::<pyo3::exceptions::PyUserWarning>(),
+            &msg,
+            1,
+        )?;
+    }
+    Ok(())
+}
+
 /// Read a DNG into memory (the GIL is released while it is read and decoded).
 ///
 /// >>> raw = day2night.read_dng("day.dng")
@@ -271,6 +291,7 @@ fn read_dng(py: Python<'_>, path: PathBuf) -> PyResult<Raw> {
         .file_stem()
         .map(|n| n.to_string_lossy().into_owned())
         .unwrap_or_else(|| file_name.clone());
+    warn_meta(py, &path, &day.raw.meta)?;
     Ok(Raw {
         day: Arc::new(day),
         name,

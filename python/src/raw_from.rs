@@ -455,9 +455,12 @@ pub(crate) fn from_array(
     };
     let max_sample = samples.iter().copied().max().unwrap_or(0);
     let (rmeta, notes) = parse_meta(&Meta { d: d.clone() }, width, height, max_sample)?;
-    let raw = RawImage::from_parts(width, height, samples, rmeta).map_err(meta_err)?;
+    let mut raw = RawImage::from_parts(width, height, samples, rmeta).map_err(meta_err)?;
+    // The DNG layer's value checks (matrix conditioning, neutral ratios, NoiseProfile, ...),
+    // exactly as `read_dng` applies them to a file: corrections come back as warnings.
+    day2night::dng::check::check_meta(&mut raw.meta).map_err(meta_err)?;
     let warn_type = py.get_type::<PyUserWarning>();
-    for n in notes {
+    for n in notes.into_iter().chain(raw.meta.warnings.iter().cloned()) {
         let msg = CString::new(format!("day2night: {file_name}: {n}"))
             .unwrap_or_else(|_| c"day2night: metadata default used".to_owned());
         PyErr::warn(py, warn_type.as_any(), &msg, 2)?;

@@ -207,15 +207,15 @@ pub fn parse_chromaticity_list(text: &str) -> Result<Vec<[f64; 3]>> {
     let arr = list
         .as_array()
         .ok_or_else(|| Error::malformed("`illuminants_rgb_over_g` is not a list"))?;
-    let max = crate::synth::dictionaries::MAX_DICT_ENTRIES;
+    let max = crate::bounds::MAX_DICT_ENTRIES;
     if arr.len() > max {
         return Err(Error::limits(format!(
             "{} chromaticities (at most {max})",
             arr.len()
         )));
     }
-    let big = crate::synth::dictionaries::MAX_CHROMA;
-    let ok = |c: [f64; 3]| c.iter().all(|&x| x > 0.0 && x <= big);
+    let big = crate::bounds::MAX_NEUTRAL_RATIO;
+    let ok = |c: [f64; 3]| c.iter().all(|&x| x >= 1.0 / big && x <= big);
     arr.iter()
         .enumerate()
         .map(|(i, e)| {
@@ -228,7 +228,9 @@ pub fn parse_chromaticity_list(text: &str) -> Result<Vec<[f64; 3]>> {
                 Some([r, b]) if ok([*r, 1.0, *b]) => Ok([*r, 1.0, *b]),
                 _ => Err(Error::malformed(format!(
                     "chromaticity #{i} is not [r/g, 1, b/g] or [r/g, b/g] numbers with \
-                     ratios in (0, {big}]"
+                     ratios in [{}, {}]",
+                    crate::bounds::short(1.0 / big),
+                    crate::bounds::short(big)
                 ))),
             }
         })

@@ -72,6 +72,7 @@ pub fn run(args: ConvertArgs) -> CmdResult {
     // Fail before reading a large input when the output is refused anyway.
     policy.check(&output)?;
     let img = read_dng(&args.input)?;
+    super::print_meta_warnings(&args.input, &img.meta);
     let opts = WriteOptions {
         compression: match args.compression {
             CompressionArg::None => Compression::None,

@@ -13,7 +13,9 @@ TIFF as linear light. When one image is linear and the other display-encoded, th
 is sRGB-encoded (clipped to [0, 1]) for PSNR and SSIM; Delta E always decodes each image to \
 linear sRGB -> XYZ -> Lab (D65). SSIM is scikit-image's default (7x7 uniform window, sample \
 covariance); --ssim-window gaussian gives Wang et al. 2004's 11x11 Gaussian. PSNR of identical \
-images is infinite (null in JSON). NaN/Inf samples are replaced by 0 (with a warning).\n\n\
+images is infinite (null in JSON). NaN or Inf samples in either image are an error (naming the \
+file and the count) unless --nonfinite zero, which replaces them by 0 with a warning and says so \
+in the JSON.\n\n\
 Examples:\n  day2night eval pred.png target.png\n  day2night eval out.exr ref.exr --json"
 )]
 pub struct EvalArgs {
@@ -32,6 +34,10 @@ pub struct EvalArgs {
     /// SSIM window: uniform (default, scikit-image) or gaussian.
     #[arg(long, default_value = "uniform", value_name = "W")]
     pub ssim_window: String,
+    /// NaN/Inf samples: error (default: refuse, naming the file and the count) or zero
+    /// (replace them by 0, with a warning; the JSON says so).
+    #[arg(long, default_value = "error", value_name = "MODE")]
+    pub nonfinite: String,
 }
 
 /// A library error as a failure with exit code 1 (its Display already names the file and
@@ -53,6 +59,11 @@ pub fn run(args: EvalArgs) -> CmdResult {
                 "--ssim-window {w:?}: use uniform or gaussian"
             )))
         }
+    };
+    let zero = match args.nonfinite.to_ascii_lowercase().as_str() {
+        "error" => false,
+        "zero" => true,
+        m => return Err(usage(format!("--nonfinite {m:?}: use error or zero"))),
     };
     if !(args.data_range.is_finite() && args.data_range > 0.0) {
         return Err(usage(format!(
@@ -89,9 +100,19 @@ pub fn run(args: EvalArgs) -> CmdResult {
         (&args.pred, r.non_finite[0]),
         (&args.target, r.non_finite[1]),
     ] {
+        if n > 0 && !zero {
+            return Err(super::Failure {
+                code: 1,
+                error: anyhow::anyhow!(
+                    "{}: {n} NaN/Inf samples: metrics would be meaningless (use \
+                     --nonfinite zero to replace them by 0)",
+                    path.display()
+                ),
+            });
+        }
         if n > 0 {
             eprintln!(
-                "day2night: {}: warning: {n} NaN/Inf samples replaced by 0 or the largest finite value",
+                "day2night: {}: warning: {n} NaN/Inf samples replaced by 0 (--nonfinite zero)",
                 path.display()
             );
         }
@@ -109,6 +130,8 @@ pub fn run(args: EvalArgs) -> CmdResult {
             "height": a.height,
             "data_range": args.data_range,
             "ssim_window": if window == SsimWindow::Gaussian { "gaussian" } else { "uniform" },
+            "nonfinite": if zero { "zero" } else { "error" },
+            "nonfinite_replaced": r.non_finite,
         });
         println!("{}", serde_json::to_string_pretty(&v)?);
     } else {

@@ -26,6 +26,9 @@ pub fn run(args: InfoArgs) -> CmdResult {
     for f in &args.files {
         match inspect(f) {
             Ok(info) => {
+                for w in &info.warnings {
+                    eprintln!("day2night: {}: warning: {w}", f.display());
+                }
                 if let Some(e) = &info.error {
                     eprintln!("day2night: {}: {e}", f.display());
                     failed += 1;
@@ -325,8 +328,10 @@ fn describe(out: &mut String, file: &std::path::Path, i: &DngInfo) {
     let _ = writeln!(
         out,
         "  synthesis:     {}",
-        if i.synth_ready {
+        if i.synth_ready && i.warnings.is_empty() {
             "ready".to_string()
+        } else if i.synth_ready {
+            format!("ready, with warnings: {}", i.warnings.join("; "))
         } else {
             format!("not usable: {}", opt(&i.reason))
         }

@@ -145,3 +145,10 @@ pub fn main() -> ExitCode {
         }
     }
 }
+
+/// Print what the metadata checks corrected in `meta` (`day2night: <file>: warning: ...`).
+pub fn print_meta_warnings(file: &std::path::Path, meta: &day2night::raw::meta::RawMeta) {
+    for w in &meta.warnings {
+        eprintln!("day2night: {}: warning: {w}", file.display());
+    }
+}

@@ -135,6 +135,7 @@ pub fn run(args: RenderArgs) -> CmdResult {
     // Refuse an existing output before the (slow) render.
     policy.check(&args.output).map_err(lib)?;
     let img = day2night::dng::read::read_dng(&args.input).map_err(lib)?;
+    super::print_meta_warnings(&args.input, &img.meta);
     let in_file = |e: day2night::Error| lib(e.in_file(&args.input));
     let n = resolve_neutral(&img.meta, neutral).map_err(in_file)?;
     let rgb = if args.camera_rgb {

@@ -55,7 +55,12 @@ impl Processor for SynthProcessor {
     }
 
     fn load(&self, path: &Path, bytes: &[u8]) -> Result<DayInput> {
-        DayInput::from_bytes(path, bytes)
+        let day = DayInput::from_bytes(path, bytes)?;
+        // Metadata corrections: said once per input here, and recorded in every sidecar.
+        for w in &day.raw.meta.warnings {
+            eprintln!("day2night: {}: warning: {w}", path.display());
+        }
+        Ok(day)
     }
 
     fn process(&self, input: &DayInput, unit: &Unit, sink: &Sink) -> Result<UnitInfo> {

@@ -2,6 +2,7 @@
 //! into the raw image model ([`crate::raw::RawImage`], [`crate::raw::RawMeta`]), the writer
 //! maps the model back into tags.
 
+pub mod check;
 pub mod ljpeg;
 pub mod ljpeg_encode;
 pub mod opcodes;

@@ -72,8 +72,17 @@ pub fn invert(m: &Mat3) -> Result<Mat3> {
         - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0])
         + m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0]);
     let scale = m.iter().flatten().fold(0.0f64, |a, v| a.max(v.abs()));
-    if !det.is_finite() || scale == 0.0 || det.abs() < 1e-12 * scale.powi(3) {
+    if !det.is_finite() || scale == 0.0 || det == 0.0 {
         return Err(Error::malformed(format!("colour matrix {m:?} is singular")));
+    }
+    if det.abs() < 1e-12 * scale.powi(3) {
+        // Not singular (e.g. diag(2^31, 1, 2^-31) has determinant 1): ill-conditioned. Files
+        // are refused earlier by its condition number (crate::dng::check).
+        return Err(Error::malformed(format!(
+            "colour matrix {m:?} is ill-conditioned (determinant {} relative to its largest \
+             entry cubed)",
+            crate::bounds::short(det / scale.powi(3))
+        )));
     }
     let inv = 1.0 / det;
     Ok([

@@ -33,7 +33,18 @@ pub struct EvalResult {
 }
 
 /// Evaluate `pred` against `target` in bands of `band_rows` rows (see the module docs).
-/// Non-finite samples are replaced as `eval` does (NaN -> 0, +-Inf -> +-f32::MAX) and counted.
+/// Replace every NaN or infinite sample by 0; the number replaced.
+pub fn zero_non_finite(img: &mut RgbImage) -> usize {
+    let mut n = 0;
+    for v in img.data.iter_mut().filter(|v| !v.is_finite()) {
+        *v = 0.0;
+        n += 1;
+    }
+    n
+}
+
+/// Non-finite samples (NaN, +-Inf) are replaced by 0 and counted (`eval` refuses them unless
+/// `--nonfinite zero`, see [`EvalResult::non_finite`]).
 pub fn evaluate(
     pred: &BandSource,
     target: &BandSource,
@@ -68,8 +79,8 @@ pub fn evaluate(
         let yin = (y1 + k - 1).min(h);
         let mut a = pred.rows(y0, yin)?;
         let mut b = target.rows(y0, yin)?;
-        non_finite[0] += a.sanitize(f32::MAX);
-        non_finite[1] += b.sanitize(f32::MAX);
+        non_finite[0] += zero_non_finite(&mut a);
+        non_finite[1] += zero_non_finite(&mut b);
         let own = |img: &RgbImage| RgbImage {
             width: w,
             height: y1 - y0,

@@ -108,7 +108,7 @@ impl NoiseParams {
 }
 
 /// Most ISO points in a noise model file.
-pub const MAX_ISO_POINTS: usize = 1000;
+pub use crate::bounds::MAX_ISO_POINTS;
 
 /// One calibrated ISO.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -185,18 +185,10 @@ impl NoiseModel {
                 self.isos.len()
             )));
         }
-        let (lo, hi) = crate::synth::plan_bounds::ISO_RANGE;
         for (i, p) in self.isos.iter().enumerate() {
-            if p.iso == 0 {
-                return Err(Error::malformed("noise model has a point at ISO 0"));
-            }
-            if p.iso > hi {
-                return Err(Error::malformed(format!(
-                    "noise model isos[{i}].iso: ISO {} is outside {lo}..={hi}",
-                    p.iso
-                )));
-            }
-            let big = crate::synth::plan_bounds::MAX_NOISE_PARAM;
+            crate::bounds::iso(&format!("noise model isos[{i}].iso"), p.iso)
+                .map_err(crate::bounds::malformed)?;
+            let big = crate::bounds::MAX_NOISE_PARAM;
             if p.positions.iter().flatten().any(|v| v.abs() > big) {
                 return Err(Error::malformed(format!(
                     "noise model isos[{i}].positions: |S| and |O| must be <= {big} \

@@ -42,8 +42,8 @@ pub const DEFAULT_POISSON_MAX_ELECTRONS: f64 = 1000.0;
 pub const POISSON_MAX_CAP: f64 = 1e12;
 /// Smallest sigma used in the log-log joint fit (smaller values are raised to it).
 pub const LOG_SIGMA_FLOOR: f64 = 1e-3;
-/// Accepted range of K (DN per electron).
-pub const K_RANGE: (f64, f64) = (1e-6, 1e6);
+/// Accepted range of K (DN per electron) and the largest read/row sigma (DN): the one table.
+pub use crate::bounds::{K_RANGE, MAX_SIGMA_DN};
 
 /// Parameters at one ISO: what a plan carries and sampling uses.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -258,8 +258,18 @@ impl PhysicsModel {
             )));
         }
         for (i, p) in isos.iter().enumerate() {
-            if p.iso == 0 {
-                return Err(Error::malformed("physics noise model has a point at ISO 0"));
+            crate::bounds::iso(&format!("physics noise model isos[{i}].iso"), p.iso)
+                .map_err(crate::bounds::malformed)?;
+            // A file's sigmas: at most the full 16-bit range (extrapolations are bounded by
+            // the plan's noise parameters instead).
+            for (name, v) in [("sigma_read", p.sigma_read), ("sigma_row", p.sigma_row)] {
+                crate::bounds::in_range(
+                    &format!("physics noise model isos[{i}].{name}"),
+                    v,
+                    0.0,
+                    MAX_SIGMA_DN,
+                )
+                .map_err(crate::bounds::malformed)?;
             }
             if i > 0 && isos[i - 1].iso == p.iso {
                 return Err(Error::malformed(format!(

@@ -118,6 +118,7 @@ impl RawMeta {
             storage: None,
             stored: Vec::new(),
             linear_raw: None,
+            warnings: Vec::new(),
         }
     }
 }

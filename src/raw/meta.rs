@@ -247,6 +247,11 @@ pub struct RawMeta {
     /// it, so that values nobody changed round-trip unchanged. Empty for generated images.
     #[serde(skip)]
     pub stored: Vec<Entry>,
+    /// What [`crate::dng::check::check_meta`] corrected, one message per correction naming
+    /// the tag and the value used (printed by the CLI as `day2night: <file>: warning: ...`,
+    /// recorded in synth sidecars, raised as Python warnings). Not written to files.
+    #[serde(skip)]
+    pub warnings: Vec<String>,
 }
 
 impl RawMeta {
@@ -305,6 +310,7 @@ impl RawMeta {
             storage: None,
             linear_raw: None,
             stored: Vec::new(),
+            warnings: Vec::new(),
         }
     }
 

@@ -244,7 +244,8 @@ impl Levels {
         let bmax = self.black_max();
         if bmax >= self.white {
             return Err(Error::malformed(format!(
-                "black level {} >= white level {}",
+                "black level {} >= white level {} (BlackLevel with BlackLevelDeltaH/V \
+                 against WhiteLevel)",
                 bmax, self.white
             )));
         }

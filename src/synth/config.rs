@@ -107,9 +107,7 @@ pub fn parse_isos(s: &str) -> Result<Vec<u32>> {
                 part
             ))
         })?;
-        if iso == 0 {
-            return Err(Error::invalid("ISO 0"));
-        }
+        crate::bounds::iso("", iso)?;
         if !v.contains(&iso) {
             v.push(iso);
         }

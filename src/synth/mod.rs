@@ -200,8 +200,8 @@ impl SynthOptions {
                 MAX_LIGHTS
             )));
         }
-        if self.isos.contains(&0) {
-            return Err(Error::invalid("ISO 0"));
+        for &iso in &self.isos {
+            crate::bounds::iso("", iso)?;
         }
         if self.isos.len() > plan_bounds::MAX_NOISE_ENTRIES {
             return Err(Error::invalid(format!(

@@ -18,8 +18,16 @@
 use crate::error::{Error, Result};
 use crate::raw::meta::RawMeta;
 
-/// Smallest accepted neutral component (relative to green).
-pub const MIN_NEUTRAL: f64 = 1e-3;
+/// Smallest accepted neutral component (relative to green): the one table's bound.
+pub const MIN_NEUTRAL: f64 = 1.0 / crate::bounds::MAX_NEUTRAL_RATIO;
+
+/// [`check_neutral`] for a day (camera) neutral, which also may not exceed
+/// [`crate::bounds::MAX_NEUTRAL_RATIO`] times green.
+pub fn check_day_neutral(n: [f64; 3], what: &str) -> Result<[f64; 3]> {
+    let out = check_neutral(n, what)?;
+    crate::bounds::ratios(what, &out, crate::bounds::MAX_NEUTRAL_RATIO)?;
+    Ok(out)
+}
 
 /// Normalize a neutral to green = 1 and check it.
 pub fn check_neutral(n: [f64; 3], what: &str) -> Result<[f64; 3]> {
@@ -136,16 +144,22 @@ pub fn neutral_from_white_xy(meta: &RawMeta, xy: [f64; 2]) -> Result<[f64; 3]> {
             v[i] *= ab[i];
         }
     }
-    check_neutral(v, "camera neutral from AsShotWhiteXY")
+    check_day_neutral(v, "camera neutral from AsShotWhiteXY")
 }
 
 /// The day neutral and a word on where it came from.
 pub fn day_neutral(meta: &RawMeta, user: Option<[f64; 3]>) -> Result<([f64; 3], String)> {
     if let Some(n) = user {
-        return Ok((check_neutral(n, "--day-neutral")?, "--day-neutral".into()));
+        return Ok((
+            check_day_neutral(n, "--day-neutral")?,
+            "--day-neutral".into(),
+        ));
     }
     if let Some(n) = meta.as_shot_neutral {
-        return Ok((check_neutral(n, "AsShotNeutral")?, "AsShotNeutral".into()));
+        return Ok((
+            check_day_neutral(n, "AsShotNeutral")?,
+            "AsShotNeutral".into(),
+        ));
     }
     if let Some(xy) = meta.as_shot_white_xy {
         return Ok((

@@ -136,7 +136,8 @@ pub fn plan(
     let (w, h) = (a.width(), a.height());
     let (dn, dn_src) = day_neutral_for(&img.meta, opts)?;
     let mut rng = SynthRng::new(seed, input_name, variant);
-    let mut warnings = Vec::new();
+    // What the metadata checks corrected on reading (dng::check) comes first.
+    let mut warnings = img.meta.warnings.clone();
     let mut stages: Vec<String> = vec!["normalize".into(), "remove_day_illuminant".into()];
 
     let dim = if opts.mode == Mode::Day {
@@ -338,7 +339,7 @@ pub fn plan(
     if !noise.is_empty() {
         stages.push("noise".into());
     }
-    Ok(Plan {
+    let plan = Plan {
         format: PLAN_FORMAT.into(),
         input_name: input_name.into(),
         seed,
@@ -365,7 +366,12 @@ pub fn plan(
         noise,
         stages,
         warnings,
-    })
+    };
+    // The replay check (`synth --replay`) applies the same table: a plan synth writes is a
+    // plan it reads back (e.g. a physics model extrapolated past the noise bounds is
+    // refused here, naming the field, rather than written to a sidecar nobody can replay).
+    plan.validate_bounds()?;
+    Ok(plan)
 }
 
 impl Plan {

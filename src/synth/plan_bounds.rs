@@ -12,43 +12,21 @@ use crate::error::{Error, Result};
 /// Most lights in a plan: the ambient light plus [`MAX_LIGHTS`] local lights and
 /// [`MAX_LIGHTS`] bulbs.
 pub const MAX_PLAN_LIGHTS: usize = 1 + 2 * MAX_LIGHTS as usize;
-/// Most noisy outputs (ISOs) per plan.
-pub const MAX_NOISE_ENTRIES: usize = 64;
-/// ISO range accepted: the highest ISO of any camera sold is 3,280,000 (Nikon D5, Hi 5).
-pub const ISO_RANGE: (u32, u32) = (1, 4_000_000);
-/// Largest magnitude of a noise parameter (normalized units: a variance of 1e3 is already
-/// 30 times the full signal range as a standard deviation).
-pub const MAX_NOISE_PARAM: f64 = 1e3;
-/// Largest gain or weight of a light (released bulbs: 50 to 100).
-pub const MAX_GAIN: f64 = 1e6;
-/// Illuminants and neutrals (channel / green) must be within `[1/MAX_RATIO, MAX_RATIO]`.
-pub const MAX_RATIO: f64 = 1e6;
-/// Sigmas, windows and centres are bounded by this many times the image's larger side.
-pub const MAX_EXTENT_FACTOR: f64 = 100.0;
-/// Most stages or warnings listed.
-pub const MAX_LIST: usize = 1000;
+// The value bounds live in the one table, crate::bounds (re-exported here by their old names).
+pub use crate::bounds::{
+    ISO_RANGE, MAX_EXTENT_FACTOR, MAX_GAIN, MAX_LIST, MAX_NOISE_ENTRIES, MAX_NOISE_PARAM, MAX_RATIO,
+};
 
 fn field(name: impl std::fmt::Display, why: impl std::fmt::Display) -> Error {
     Error::invalid(format!("plan field {name}: {why}"))
 }
 
 fn in_range(name: &str, v: f64, lo: f64, hi: f64) -> Result<()> {
-    if !(v.is_finite() && v >= lo && v <= hi) {
-        return Err(field(name, format!("{v} is outside [{lo}, {hi}]")));
-    }
-    Ok(())
+    crate::bounds::in_range(&format!("plan field {name}"), v, lo, hi)
 }
 
 fn ratio(name: &str, v: &[f64]) -> Result<()> {
-    for (i, &x) in v.iter().enumerate() {
-        if !(x.is_finite() && (1.0 / MAX_RATIO..=MAX_RATIO).contains(&x)) {
-            return Err(field(
-                format!("{name}[{i}]"),
-                format!("{x} is outside [{}, {MAX_RATIO}]", 1.0 / MAX_RATIO),
-            ));
-        }
-    }
-    Ok(())
+    crate::bounds::ratios(&format!("plan field {name}"), v, MAX_RATIO)
 }
 
 fn noise_params(name: &str, p: &crate::noise::NoiseParams) -> Result<()> {
@@ -62,13 +40,7 @@ fn noise_params(name: &str, p: &crate::noise::NoiseParams) -> Result<()> {
 }
 
 fn iso(name: &str, v: u32) -> Result<()> {
-    if !(ISO_RANGE.0..=ISO_RANGE.1).contains(&v) {
-        return Err(field(
-            name,
-            format!("ISO {v} is outside {}..={}", ISO_RANGE.0, ISO_RANGE.1),
-        ));
-    }
-    Ok(())
+    crate::bounds::iso(&format!("plan field {name}"), v)
 }
 
 impl Plan {

@@ -690,3 +690,44 @@ fn physics_model_plan_carries_params_and_gaussian_plans_do_not() {
     assert_eq!(out.noisy.len(), 3);
     assert_ne!(out.noisy[0].1.data, out.clean.data);
 }
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(48))]
+    /// Anything the sampler produces passes the replay bounds (crate::bounds), whatever the
+    /// input's neutral (within the metadata bound), levels, ISOs (within ISO_RANGE), mode,
+    /// formula and seed: `synth` never writes a sidecar that `--replay` refuses.
+    #[test]
+    fn sampled_plans_pass_the_replay_bounds(
+        seed in any::<u64>(),
+        log_isos in proptest::collection::vec(0.0f64..=6.602, 0..4),
+        log_r in -3.0f64..=3.0,
+        log_b in -3.0f64..=3.0,
+        bits in 8u16..=16,
+        mode in 0usize..4,
+        paper in any::<bool>(),
+    ) {
+        let white = ((1u32 << bits) - 1) as f64;
+        let mut img = frame(Bayer::GRBG, 8, 6, [500, 700, 300]);
+        img.meta.levels.white = white;
+        img.meta.levels.black = vec![0.0];
+        img.meta.bits_per_sample = bits;
+        img.meta.as_shot_neutral = Some([10f64.powf(log_r), 1.0, 10f64.powf(log_b)]);
+        crate::dng::check::check_meta(&mut img.meta).unwrap();
+        let (lo, hi) = crate::bounds::ISO_RANGE;
+        let mut o = SynthOptions {
+            isos: log_isos
+                .iter()
+                .map(|l| (10f64.powf(*l).round() as u32).clamp(lo, hi))
+                .collect(),
+            mode: [Mode::Local, Mode::Day, Mode::Dimmed, Mode::Global][mode],
+            ..SynthOptions::default()
+        };
+        o.isos.dedup();
+        if paper {
+            o.formula = RelightFormula::Paper;
+        }
+        let cal = Calibration::embedded(&o).unwrap();
+        let p = plan(&img, "b", seed, 0, &o, &cal).unwrap();
+        prop_assert!(p.validate_bounds().is_ok());
+    }
+}

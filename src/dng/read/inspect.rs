@@ -114,6 +114,9 @@ pub struct DngInfo {
     pub synth_ready: bool,
     /// Why not, when `synth_ready` is false.
     pub reason: Option<String>,
+    /// What the metadata checks corrected (each names the tag and the value used): synthesis
+    /// works but warns ("ready, with warnings").
+    pub warnings: Vec<String>,
     /// Set when the raw data itself is unreadable (unsupported compression, malformed,
     /// over the limits): `info` reports it as an error (exit code 1).
     pub error: Option<String>,
@@ -175,6 +178,7 @@ pub fn inspect_bytes(bytes: &[u8]) -> Result<DngInfo> {
         raw: None,
         synth_ready: false,
         reason: None,
+        warnings: Vec::new(),
         error: None,
     };
     let located = match locate(&tiff) {
@@ -201,7 +205,7 @@ pub fn inspect_bytes(bytes: &[u8]) -> Result<DngInfo> {
         info.reason = Some(e.to_string());
         return Ok(info);
     }
-    match read_dng_bytes(bytes) {
+    match read_dng_bytes_unchecked(bytes) {
         Ok(img) => {
             let m = &img.meta;
             let bayer = img.bayer();
@@ -243,9 +247,19 @@ pub fn inspect_bytes(bytes: &[u8]) -> Result<DngInfo> {
                     linear_raw: m.linear_raw.clone(),
                 },
             });
-            match bayer {
-                Ok(_) => info.synth_ready = true,
-                Err(e) => info.reason = Some(e.to_string()),
+            let mut meta = img.meta.clone();
+            match (bayer, crate::dng::check::check_meta(&mut meta)) {
+                (_, Err(e)) => {
+                    // Refused by the metadata checks: described, but an error like any other
+                    // command would report.
+                    info.reason = Some(e.to_string());
+                    info.error = Some(e.to_string());
+                }
+                (Ok(_), Ok(())) => {
+                    info.synth_ready = true;
+                    info.warnings = meta.warnings;
+                }
+                (Err(e), Ok(())) => info.reason = Some(e.to_string()),
             }
             // A malformed opcode list is described (the rest of the file too) but makes the
             // file unusable for synthesis, whose targets apply the opcodes.

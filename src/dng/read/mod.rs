@@ -48,8 +48,17 @@ pub fn read_dng(path: &Path) -> Result<RawImage> {
     read_dng_bytes(&bytes).in_file(path)
 }
 
-/// Read the raw CFA image and metadata of a DNG held in memory.
+/// Read the raw CFA image and metadata of a DNG held in memory. The metadata passed
+/// [`crate::dng::check::check_meta`]: corrections are listed in `meta.warnings`.
 pub fn read_dng_bytes(bytes: &[u8]) -> Result<RawImage> {
+    let mut img = read_dng_bytes_unchecked(bytes)?;
+    crate::dng::check::check_meta(&mut img.meta)?;
+    Ok(img)
+}
+
+/// [`read_dng_bytes`] without the metadata checks (for `info`, which describes a file the
+/// checks refuse).
+fn read_dng_bytes_unchecked(bytes: &[u8]) -> Result<RawImage> {
     let tiff = parse(bytes)?;
     let dng = locate(&tiff)?;
     let raw = dng.raw;

@@ -36,12 +36,11 @@ pub enum IlluminantSource {
     Gaussian(String, [f64; 2], [[f64; 2]; 2]),
 }
 
-/// Largest calibration JSON file read (calibration files are kilobytes).
-pub const MAX_CALIBRATION_FILE_BYTES: u64 = 64 << 20;
-/// Most entries in an illuminant or brightness list.
-pub const MAX_DICT_ENTRIES: usize = 1_000_000;
-/// Illuminant ratios (r/g, b/g) and Gaussian parameters must lie within +-this.
-pub const MAX_CHROMA: f64 = 1e6;
+// File size, entry counts, illuminant ratios (r/g, b/g within [1/MAX_NEUTRAL_RATIO,
+// MAX_NEUTRAL_RATIO]) and Gaussian parameters (within +-MAX_CHROMA): the one table.
+pub use crate::bounds::{
+    MAX_CALIBRATION_FILE_BYTES, MAX_CHROMA, MAX_DICT_ENTRIES, MAX_NEUTRAL_RATIO,
+};
 
 /// Read a calibration text file, refusing files over [`MAX_CALIBRATION_FILE_BYTES`].
 pub fn read_calibration_text(path: &Path) -> Result<String> {
@@ -58,12 +57,7 @@ pub fn read_calibration_text(path: &Path) -> Result<String> {
 }
 
 fn check_count(key: &str, n: usize) -> Result<()> {
-    if n > MAX_DICT_ENTRIES {
-        return Err(Error::limits(format!(
-            "{key}: {n} entries (at most {MAX_DICT_ENTRIES})"
-        )));
-    }
-    Ok(())
+    crate::bounds::count(key, n, MAX_DICT_ENTRIES)
 }
 
 fn read_json(path: &Path) -> Result<Value> {
@@ -111,11 +105,8 @@ pub fn parse_illuminants(name: &str, v: &Value) -> Result<IlluminantSource> {
                         )))
                     }
                 };
-                if c.iter().any(|&x| !(x > 0.0 && x <= MAX_CHROMA)) {
-                    return Err(Error::malformed(format!(
-                        "{what}: ratios {c:?} must be in (0, {MAX_CHROMA}]"
-                    )));
-                }
+                crate::bounds::ratios(&format!("{what} (r/g, b/g)"), &c, MAX_NEUTRAL_RATIO)
+                    .map_err(crate::bounds::malformed)?;
                 out.push(c);
             }
             if out.is_empty() {
@@ -141,10 +132,19 @@ pub fn parse_illuminants(name: &str, v: &Value) -> Result<IlluminantSource> {
             .ok_or_else(|| Error::malformed("covariance: expected a 2x2 matrix"))?;
         let cov = [pair(&rows[0], "covariance")?, pair(&rows[1], "covariance")?];
         let all = [mean[0], mean[1], cov[0][0], cov[0][1], cov[1][0], cov[1][1]];
-        if all.iter().any(|x| x.abs() > MAX_CHROMA) {
-            return Err(Error::malformed(format!(
-                "mean/covariance values must be within +-{MAX_CHROMA}"
-            )));
+        for (name, x) in [
+            "mean[0]",
+            "mean[1]",
+            "covariance[0][0]",
+            "covariance[0][1]",
+            "covariance[1][0]",
+            "covariance[1][1]",
+        ]
+        .iter()
+        .zip(all)
+        {
+            crate::bounds::in_range(name, x, -MAX_CHROMA, MAX_CHROMA)
+                .map_err(crate::bounds::malformed)?;
         }
         if !(cov[0][0] > 0.0 && cov[1][1] > 0.0) {
             return Err(Error::malformed(
@@ -189,10 +189,14 @@ pub fn parse_brightness(name: &str, v: &Value) -> Result<BrightnessDict> {
             if vals.is_empty() {
                 return Err(Error::malformed(format!("{}: empty", key)));
             }
-            if vals.iter().any(|&x| !(x > 0.0 && x <= 1.0)) {
+            if let Some((i, x)) = vals
+                .iter()
+                .enumerate()
+                .find(|(_, &x)| !(x > 0.0 && x <= 1.0))
+            {
                 return Err(Error::malformed(format!(
-                    "{}: values must be normalized intensities in (0, 1]",
-                    key
+                    "{key}[{i}]: {} is outside (0, 1] (normalized intensities)",
+                    crate::bounds::short(*x)
                 )));
             }
             let n = vals.len() as f64;
@@ -212,11 +216,14 @@ pub fn parse_brightness(name: &str, v: &Value) -> Result<BrightnessDict> {
     }
     if let (Some(m), Some(s)) = (v.get("mean"), v.get("std")) {
         let (mean, std) = (num(m, "mean")?, num(s, "std")?);
-        if !(mean > 0.0 && mean <= 1.0 && (0.0..=1.0).contains(&std)) {
-            return Err(Error::malformed(
-                "brightness mean must be in (0, 1], std in [0, 1]",
-            ));
+        if !(mean > 0.0 && mean <= 1.0) {
+            return Err(Error::malformed(format!(
+                "brightness mean: {} is outside (0, 1]",
+                crate::bounds::short(mean)
+            )));
         }
+        crate::bounds::in_range("brightness std", std, 0.0, 1.0)
+            .map_err(crate::bounds::malformed)?;
         return Ok(BrightnessDict {
             name: name.into(),
             mean,
@@ -238,6 +245,29 @@ pub fn load_brightness(path: &Path) -> Result<BrightnessDict> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn absurd_illuminant_ratios_and_gaussians_are_refused_naming_the_field() {
+        let err = |json: &str| {
+            let v: Value = serde_json::from_str(json).unwrap();
+            parse_illuminants("x", &v).unwrap_err().to_string()
+        };
+        let e = err(r#"{"illuminants_rgb_over_g": [[0.5, 1.0, 0.3], [1e6, 1.0, 1.0]]}"#);
+        assert!(
+            e.contains("illuminants_rgb_over_g[1] (r/g, b/g)[0]: 1e6 is outside [0.001, 1000]"),
+            "{e}"
+        );
+        let e = err(r#"{"illuminants": [[1e-4, 0.5]]}"#);
+        assert!(
+            e.contains("illuminants[0] (r/g, b/g)[0]: 1e-4 is outside"),
+            "{e}"
+        );
+        // At the bound: used.
+        let v: Value = serde_json::from_str(r#"{"illuminants": [[1e3, 1e-3]]}"#).unwrap();
+        assert!(parse_illuminants("x", &v).is_ok());
+        let e = err(r#"{"mean": [2000, 0.3], "covariance": [[0.1, 0], [0, 0.1]]}"#);
+        assert!(e.contains("mean[0]: 2000 is outside [-1000, 1000]"), "{e}");
+    }
 
     #[test]
     fn parses_release_style_and_pairs_and_gaussian() {

@@ -1,0 +1,400 @@
+//! The one table of value bounds: every range a number read from a file or an option must
+//! lie in (ISOs, noise parameters, neutrals and illuminant ratios, gains, colour-matrix
+//! conditioning, NoiseProfile entries, calibration files), with why each value, and the small
+//! check helpers that turn a violation into an error naming the field and the value in short
+//! number form (`ColorMatrix1 [...] is ill-conditioned: condition number 4.61169e18 is
+//! above 10000`).
+//!
+//! Everything that samples such a value (the synthesis planner, the CLI's option parsing) and
+//! everything that reads one back (the sidecar reader of `synth --replay`, the calibration-file
+//! readers, the DNG metadata checks of [`crate::dng::check`]) uses these constants, so a
+//! sampled plan always passes the replay check. Resource limits (pixels, allocations) are in
+//! [`crate::limits`]. The rules are listed in docs/limits.md ("Value bounds").
+
+use crate::error::{Error, Result};
+
+// ---------------------------------------------------------------------------------------
+// ISO and noise.
+
+/// ISO range accepted everywhere (`--iso`, Exif ISO, noise models, sidecars): the highest ISO
+/// of any camera sold is 3,280,000 (Nikon D5, Hi 5).
+pub const ISO_RANGE: (u32, u32) = (1, 4_000_000);
+/// Most noisy outputs (ISOs) per plan, and the most ISOs `--iso` takes.
+pub const MAX_NOISE_ENTRIES: usize = 64;
+/// Most ISO points in a noise model file.
+pub const MAX_ISO_POINTS: usize = 1000;
+/// Largest magnitude of a Gaussian noise parameter S or O (variance of the normalized
+/// signal): a variance of 1e3 is already 30 times the full signal range as a standard
+/// deviation.
+pub const MAX_NOISE_PARAM: f64 = 1e3;
+/// Largest DNG NoiseProfile entry S or O (variance of the normalized signal at full scale):
+/// above 1 the noise standard deviation at white exceeds the whole signal range. Real
+/// cameras: S about 1e-5..1e-2, O about 1e-9..1e-3.
+pub const MAX_NOISE_PROFILE: f64 = 1.0;
+/// Physics noise model: DN per electron K (a sensor with 1e6 DN per electron or 1e6
+/// electrons per DN does not exist).
+pub const K_RANGE: (f64, f64) = (1e-6, 1e6);
+/// Physics noise model: largest read or row noise sigma, in DN (the full 16-bit range).
+pub const MAX_SIGMA_DN: f64 = 65535.0;
+
+// ---------------------------------------------------------------------------------------
+// Colour.
+
+/// A neutral (AsShotNeutral, `--day-neutral`) or an illuminant of a calibration file may have
+/// no channel more than this many times above or below green: a white-balance gain of 1000
+/// is beyond any real light or sensor (tungsten on a phone sensor: about 3).
+pub const MAX_NEUTRAL_RATIO: f64 = 1e3;
+/// Illuminants and neutrals of a plan (channel / green) lie within `[1/MAX_RATIO, MAX_RATIO]`:
+/// [`MAX_NEUTRAL_RATIO`] squared, since a night neutral is a day neutral times an
+/// illuminant ratio.
+pub const MAX_RATIO: f64 = MAX_NEUTRAL_RATIO * MAX_NEUTRAL_RATIO;
+/// Gaussian illuminant files: mean and covariance entries within +-this (chromaticity
+/// ratios; [`MAX_NEUTRAL_RATIO`] bounds the ratios themselves).
+pub const MAX_CHROMA: f64 = MAX_NEUTRAL_RATIO;
+/// Largest condition number (2-norm) of a ColorMatrix or CameraCalibration. The Adobe DNG SDK
+/// normalizes a ColorMatrix (D50 maps to at most 1) and rounds it to 4 decimals before
+/// inverting it, so beyond about 2e4 its smallest direction rounds away and the SDK refuses
+/// the file ("ColorMatrix1 is not invertible"); camera matrices are below 100.
+pub const MAX_MATRIX_CONDITION: f64 = 1e4;
+/// The DNG SDK's own test after that normalization: |determinant| below this is "not
+/// invertible" (dng_matrix.cpp, `kNearZero`).
+pub const SDK_MIN_DETERMINANT: f64 = 1e-10;
+/// Decimal places the DNG SDK rounds a normalized ColorMatrix to.
+pub const SDK_MATRIX_ROUNDING: f64 = 1e4;
+
+// ---------------------------------------------------------------------------------------
+// Lights and plans.
+
+/// Largest gain or weight of a light (released bulbs: 50 to 100).
+pub const MAX_GAIN: f64 = 1e6;
+/// Sigmas, windows and centres are bounded by this many times the image's larger side.
+pub const MAX_EXTENT_FACTOR: f64 = 100.0;
+/// Most stages or warnings listed in a plan.
+pub const MAX_LIST: usize = 1000;
+
+// ---------------------------------------------------------------------------------------
+// Calibration files.
+
+/// Largest calibration JSON file read (calibration files are kilobytes).
+pub const MAX_CALIBRATION_FILE_BYTES: u64 = 64 << 20;
+/// Most entries in an illuminant or brightness list.
+pub const MAX_DICT_ENTRIES: usize = 1_000_000;
+
+// ---------------------------------------------------------------------------------------
+// Helpers.
+
+/// A number in short form: integers as integers up to 1e6, others with at most 6
+/// significant digits, scientific notation outside [1e-3, 1e6) (`1e6`, `4.61e18`, `0.001`,
+/// `3.2e-4`).
+pub fn short(x: f64) -> String {
+    if !x.is_finite() {
+        return format!("{x}");
+    }
+    if x == 0.0 {
+        return "0".into();
+    }
+    let a = x.abs();
+    if (1e-3..1e6).contains(&a) {
+        let s = format!("{:.*}", (5 - a.log10().floor() as i32).max(0) as usize, x);
+        if s.contains('.') {
+            return s.trim_end_matches('0').trim_end_matches('.').to_string();
+        }
+        return s;
+    }
+    let s = format!("{x:.5e}");
+    match s.split_once('e') {
+        Some((m, e)) => {
+            let m = if m.contains('.') {
+                m.trim_end_matches('0').trim_end_matches('.')
+            } else {
+                m
+            };
+            format!("{m}e{e}")
+        }
+        None => s,
+    }
+}
+
+/// Numbers in short form, space separated.
+pub fn short_list(v: &[f64]) -> String {
+    v.iter().map(|&x| short(x)).collect::<Vec<_>>().join(" ")
+}
+
+/// The same error as a malformed-input error (for bounds on values read from files).
+pub fn malformed(e: Error) -> Error {
+    match e {
+        Error::InvalidParam(m) => Error::Malformed(m),
+        e => e,
+    }
+}
+
+/// Error unless `v` is finite and in `[lo, hi]`; the message names `field`.
+pub fn in_range(field: &str, v: f64, lo: f64, hi: f64) -> Result<()> {
+    if v.is_finite() && v >= lo && v <= hi {
+        return Ok(());
+    }
+    Err(Error::invalid(format!(
+        "{field}: {} is outside [{}, {}]",
+        short(v),
+        short(lo),
+        short(hi)
+    )))
+}
+
+/// Error unless `iso` is in [`ISO_RANGE`] (the message starts with `field: ` unless `field`
+/// is empty).
+pub fn iso(field: &str, iso: u32) -> Result<()> {
+    if (ISO_RANGE.0..=ISO_RANGE.1).contains(&iso) {
+        return Ok(());
+    }
+    let at = if field.is_empty() {
+        String::new()
+    } else {
+        format!("{field}: ")
+    };
+    Err(Error::invalid(format!(
+        "{at}ISO {iso} is outside {}..={}",
+        ISO_RANGE.0, ISO_RANGE.1
+    )))
+}
+
+/// Error unless every component is finite and within `[1/max, max]`.
+pub fn ratios(field: &str, v: &[f64], max: f64) -> Result<()> {
+    for (i, &x) in v.iter().enumerate() {
+        in_range(&format!("{field}[{i}]"), x, 1.0 / max, max)?;
+    }
+    Ok(())
+}
+
+/// Error unless `n <= max` (a count of entries).
+pub fn count(field: &str, n: usize, max: usize) -> Result<()> {
+    if n <= max {
+        return Ok(());
+    }
+    Err(Error::limits(format!(
+        "{field}: {n} entries (at most {max})"
+    )))
+}
+
+/// Singular values of a 3x3 matrix (row-major), largest first: square roots of the
+/// eigenvalues of `M^T M`, by cyclic Jacobi rotations (exact to rounding for 3x3).
+pub fn singular_values(m: &[[f64; 3]; 3]) -> [f64; 3] {
+    // A = M^T M, symmetric positive semi-definite. Scale first so that huge or tiny entries
+    // do not overflow or underflow the products.
+    let scale = m.iter().flatten().fold(0.0f64, |a, v| a.max(v.abs()));
+    if scale == 0.0 || !scale.is_finite() {
+        return [scale, 0.0, 0.0];
+    }
+    let n: Vec<[f64; 3]> = m.iter().map(|r| r.map(|v| v / scale)).collect();
+    let mut a = [[0.0f64; 3]; 3];
+    for (i, row) in a.iter_mut().enumerate() {
+        for (j, v) in row.iter_mut().enumerate() {
+            *v = (0..3).map(|k| n[k][i] * n[k][j]).sum();
+        }
+    }
+    for _ in 0..64 {
+        let off = a[0][1].abs() + a[0][2].abs() + a[1][2].abs();
+        if off <= 1e-300 {
+            break;
+        }
+        for (p, q) in [(0, 1), (0, 2), (1, 2)] {
+            if a[p][q].abs() <= 1e-300 {
+                continue;
+            }
+            let theta = (a[q][q] - a[p][p]) / (2.0 * a[p][q]);
+            let t = theta.signum() / (theta.abs() + (theta * theta + 1.0).sqrt());
+            let t = if theta == 0.0 { 1.0 } else { t };
+            let c = 1.0 / (t * t + 1.0).sqrt();
+            let s = t * c;
+            for row in a.iter_mut() {
+                let (akp, akq) = (row[p], row[q]);
+                row[p] = c * akp - s * akq;
+                row[q] = s * akp + c * akq;
+            }
+            let (rp, rq) = (a[p], a[q]);
+            for k in 0..3 {
+                a[p][k] = c * rp[k] - s * rq[k];
+                a[q][k] = s * rp[k] + c * rq[k];
+            }
+        }
+    }
+    let mut s = [a[0][0], a[1][1], a[2][2]].map(|e| e.max(0.0).sqrt() * scale);
+    s.sort_by(|x, y| y.total_cmp(x));
+    s
+}
+
+/// 2-norm condition number of a 3x3 matrix (infinite when singular).
+pub fn condition_number(m: &[[f64; 3]; 3]) -> f64 {
+    let s = singular_values(m);
+    if s[2] == 0.0 {
+        f64::INFINITY
+    } else {
+        s[0] / s[2]
+    }
+}
+
+/// The determinant of a 3x3 matrix.
+pub fn determinant(m: &[[f64; 3]; 3]) -> f64 {
+    m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1])
+        - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0])
+        + m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0])
+}
+
+/// Error unless the 3x3 matrix `m` (row-major, 9 values) can be inverted by every DNG reader:
+/// finite; not singular; condition number at most [`MAX_MATRIX_CONDITION`]; and, for a
+/// ColorMatrix (`sdk_normalized`), still invertible after the Adobe DNG SDK's normalization
+/// (scaled so that D50 maps to at most 1, rounded to 4 decimals, |det| >= 1e-10).
+pub fn matrix3(field: &str, v: &[f64], sdk_normalized: bool) -> Result<()> {
+    if v.len() != 9 {
+        return Ok(()); // Not a 3x3 matrix (non-RGB CFA): its size is checked by the reader.
+    }
+    if let Some(x) = v.iter().find(|x| !x.is_finite()) {
+        return Err(Error::malformed(format!(
+            "{field}: {} is not finite",
+            short(*x)
+        )));
+    }
+    let m = [[v[0], v[1], v[2]], [v[3], v[4], v[5]], [v[6], v[7], v[8]]];
+    let cond = condition_number(&m);
+    if !cond.is_finite() || determinant(&m) == 0.0 {
+        return Err(Error::malformed(format!(
+            "{field} [{}] is singular (rank below 3): colours cannot be mapped back",
+            short_list(v)
+        )));
+    }
+    if cond > MAX_MATRIX_CONDITION {
+        return Err(Error::malformed(format!(
+            "{field} [{}] is ill-conditioned: condition number {} is above {} \
+             (DNG readers round it away; camera matrices are below 100)",
+            short_list(v),
+            short(cond),
+            short(MAX_MATRIX_CONDITION)
+        )));
+    }
+    if sdk_normalized {
+        // dng_camera_profile::NormalizeColorMatrix, then Invert's determinant test.
+        // D50 (x 0.3457, y 0.3585) as XYZ with Y = 1, the SDK's PCS white.
+        let d50 = [0.3457 / 0.3585, 1.0, (1.0 - 0.3457 - 0.3585) / 0.3585];
+        let max = m
+            .iter()
+            .map(|r| r[0] * d50[0] + r[1] * d50[1] + r[2] * d50[2])
+            .fold(f64::NEG_INFINITY, f64::max);
+        let k = if max > 0.0 && !(0.99..=1.01).contains(&max) {
+            1.0 / max
+        } else {
+            1.0
+        };
+        let r =
+            m.map(|row| row.map(|x| (x * k * SDK_MATRIX_ROUNDING).round() / SDK_MATRIX_ROUNDING));
+        let det = determinant(&r);
+        if det.abs() < SDK_MIN_DETERMINANT {
+            return Err(Error::malformed(format!(
+                "{field} [{}] is not invertible once normalized and rounded to 4 decimals \
+                 as the DNG SDK does (determinant {})",
+                short_list(v),
+                short(det)
+            )));
+        }
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    #[test]
+    fn short_numbers() {
+        assert_eq!(short(1e6), "1e6");
+        assert_eq!(short(4_000_001.0), "4e6");
+        assert_eq!(short(1e-3), "0.001");
+        assert_eq!(short(3.2e-4), "3.2e-4");
+        assert_eq!(short(2f64.powi(62)), "4.61169e18");
+        assert_eq!(short(65535.0), "65535");
+        assert_eq!(short(-700.0), "-700");
+        assert_eq!(short(0.5), "0.5");
+        assert_eq!(short(1.0 / 3.0), "0.333333");
+        assert_eq!(short(0.0), "0");
+    }
+
+    #[test]
+    fn iso_bounds_at_and_past_the_edge() {
+        assert!(iso("x", ISO_RANGE.1).is_ok());
+        let e = iso("--iso", ISO_RANGE.1 + 1).unwrap_err().to_string();
+        assert!(e.contains("--iso") && e.contains("4000001"), "{e}");
+        assert!(iso("x", 0).is_err());
+    }
+
+    #[test]
+    fn huge_but_unit_determinant_is_ill_conditioned_not_singular() {
+        let t = 2f64.powi(31);
+        let v = [t, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0 / t];
+        let e = matrix3("ColorMatrix1", &v, true).unwrap_err().to_string();
+        assert!(e.contains("condition number 4.61169e18"), "{e}");
+        assert!(!e.contains("singular"), "{e}");
+        let e = matrix3("ColorMatrix1", &[1., 2., 3., 2., 4., 6., 0., 0., 1.], true)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("singular"), "{e}");
+    }
+
+    #[test]
+    fn sdk_normalization_matches_the_measured_limit() {
+        // Measured with dngpy (SDK 1.7.1): diag(1e4, 1, 1) accepted, diag(10^4.5, 1, 1)
+        // refused; a tiny but well-conditioned matrix is accepted (it is normalized first).
+        let d = |a: f64, b: f64, c: f64| [a, 0., 0., 0., b, 0., 0., 0., c];
+        assert!(matrix3("CM", &d(1e4, 1.0, 1.0), true).is_ok());
+        assert!(matrix3("CM", &d(1e-4, 1e-4, 1e-4), true).is_ok());
+        assert!(matrix3("CM", &d(10f64.powf(4.5), 1.0, 1.0), true).is_err());
+        let srgb = [
+            3.2404542, -1.5371385, -0.4985314, -0.969266, 1.8760108, 0.041556, 0.0556434,
+            -0.2040259, 1.0572252,
+        ];
+        assert!(matrix3("CM", &srgb, true).is_ok());
+    }
+
+    fn inverse(m: &[[f64; 3]; 3]) -> Option<[[f64; 3]; 3]> {
+        let d = determinant(m);
+        if d == 0.0 || !d.is_finite() {
+            return None;
+        }
+        let c = |r0: usize, c0: usize, r1: usize, c1: usize| {
+            m[r0][c0] * m[r1][c1] - m[r0][c1] * m[r1][c0]
+        };
+        Some([
+            [c(1, 1, 2, 2) / d, -c(0, 1, 2, 2) / d, c(0, 1, 1, 2) / d],
+            [-c(1, 0, 2, 2) / d, c(0, 0, 2, 2) / d, -c(0, 0, 1, 2) / d],
+            [c(1, 0, 2, 1) / d, -c(0, 0, 2, 1) / d, c(0, 0, 1, 1) / d],
+        ])
+    }
+
+    fn frobenius(m: &[[f64; 3]; 3]) -> f64 {
+        m.iter().flatten().map(|v| v * v).sum::<f64>().sqrt()
+    }
+
+    proptest! {
+        /// The SVD-free bound: cond_2 <= ||M||_F ||M^-1||_F <= 3 cond_2.
+        #[test]
+        fn condition_number_within_the_frobenius_bound(v in proptest::array::uniform9(-10.0f64..10.0)) {
+            let m = [[v[0], v[1], v[2]], [v[3], v[4], v[5]], [v[6], v[7], v[8]]];
+            if let Some(inv) = inverse(&m) {
+                let cf = frobenius(&m) * frobenius(&inv);
+                let c2 = condition_number(&m);
+                prop_assume!(cf < 1e8);
+                prop_assert!(c2 <= cf * (1.0 + 1e-9), "cond2 {} > condF {}", c2, cf);
+                prop_assert!(cf <= 3.0 * c2 * (1.0 + 1e-9), "condF {} > 3 cond2 {}", cf, c2);
+            }
+        }
+
+        /// Scaling a matrix changes neither its condition number nor the verdict.
+        #[test]
+        fn verdict_is_scale_free(v in proptest::array::uniform9(-10.0f64..10.0), e in -6i32..6) {
+            let k = 10f64.powi(e);
+            let m = [[v[0], v[1], v[2]], [v[3], v[4], v[5]], [v[6], v[7], v[8]]];
+            let mk = m.map(|r| r.map(|x| x * k));
+            let (a, b) = (condition_number(&m), condition_number(&mk));
+            prop_assert!(a == b || (a - b).abs() <= 1e-6 * a.max(b));
+        }
+    }
+}
