@@ -9,6 +9,7 @@
 pub mod color;
 pub mod demosaic;
 pub mod geometry;
+pub mod opcodes;
 pub mod render;
 pub mod render_crop;
 pub mod tone;
