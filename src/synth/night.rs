@@ -36,9 +36,10 @@ use super::crop::{crop_meta, Crop};
 use super::relight::{run_clean, run_clean_crop, RunReport};
 use super::{night_meta, run_noise, Plan};
 use crate::error::{Error, Result};
-use crate::isp::render::{render_linear_bands, Bands};
-use crate::isp::render_crop::{render_linear_crop, CROP_MARGIN};
-use crate::isp::{render_input, render_linear, Demosaic, RenderOptions, RgbImage};
+use crate::isp::opcodes::{self, pipeline};
+use crate::isp::render::{color_matrix, matrix_row, render_input_with, render_linear_bands, Bands};
+use crate::isp::render_crop::{render_linear_crop_with, CROP_MARGIN};
+use crate::isp::{render_linear, Demosaic, RenderOptions, RgbImage};
 use crate::noise::apply::apply_noise_crop_with;
 use crate::noise::apply_physics_noise_crop;
 use crate::raw::RawImage;
@@ -186,6 +187,7 @@ fn whole_frame<S: NightSink>(
             target_res = Some((|| {
                 let ropts = RenderOptions {
                     neutral: Some(neutral),
+                    opcodes: plan.opcode_mode(),
                     ..RenderOptions::default()
                 };
                 if sink.banded() {
@@ -208,7 +210,7 @@ fn whole_frame<S: NightSink>(
     target_res.unwrap_or(Ok(()))?;
     if req.input {
         let src = first_noisy.as_ref().unwrap_or(&clean);
-        let rgb = render_input(src, Some(neutral), Default::default())?;
+        let rgb = render_input_with(src, Some(neutral), Default::default(), plan.opcode_mode())?;
         sink.input(&rgb)?;
     }
     Ok((clean, report))
@@ -281,14 +283,36 @@ fn cropped<S: NightSink>(
                     if !target {
                         return Ok(());
                     }
-                    let rgb = render_linear_crop(
-                        day,
-                        Some(plan.night_neutral),
-                        Demosaic::default(),
-                        &outer,
-                        &plane,
-                        crop,
-                    )?;
+                    let mode = plan.opcode_mode();
+                    let rgb = match opcodes::active(&day.meta, mode)? {
+                        // Bad pixels, warps, TrimBounds: the crop's region of the frame's
+                        // render (the whole frame is synthesized for it).
+                        Some(p) if p.needs_whole_frame() => {
+                            let (mut full, _) = run_clean(day, plan)?;
+                            full.meta =
+                                night_meta(&day.meta, plan, plan.clean_iso, &plan.clean_noise);
+                            let n = plan.night_neutral;
+                            let mf = color_matrix(&full.meta, n)?.map(|r| r.map(|v| v as f32));
+                            let post = move |row: &mut [f32]| matrix_row(row, &mf);
+                            pipeline::render_frame_region(
+                                &full,
+                                &p,
+                                n,
+                                Demosaic::default(),
+                                &post,
+                                crop,
+                            )?
+                        }
+                        _ => render_linear_crop_with(
+                            day,
+                            Some(plan.night_neutral),
+                            Demosaic::default(),
+                            &outer,
+                            &plane,
+                            crop,
+                            mode,
+                        )?,
+                    };
                     sink.target(TargetOut::Image(rgb))
                 },
             )

@@ -283,19 +283,9 @@ fn inverse_wb(n: [f64; 3]) -> [f32; 3] {
     [(1.0 / n[0]) as f32, 1.0, (1.0 / n[2]) as f32]
 }
 
-/// The whole-frame render of `img` with the opcodes `p`: white balance by `neutral`,
-/// `method`, `post` on every row of the stage-3 image, then DefaultCrop (if `crop`) and
-/// orientation (if `orient`).
-pub fn render_frame(
-    img: &RawImage,
-    p: &Prepared,
-    neutral: [f64; 3],
-    method: Demosaic,
-    post: &Post,
-    crop: bool,
-    orient: bool,
-) -> Result<RgbImage> {
-    let n = normalize_neutral(neutral)?;
+/// The stage-3 image of the whole frame of `img` with the opcodes `p` (white balanced by
+/// the normalized neutral `n`), before `post`.
+fn frame_stage3(img: &RawImage, p: &Prepared, n: [f64; 3], method: Demosaic) -> Result<Stage3> {
     let bayer = img.bayer()?;
     let a = img.active_area();
     let (aw, ah) = (a.width(), a.height());
@@ -330,6 +320,58 @@ pub fn render_frame(
         bounds: Bounds::of_size(aw, ah),
     };
     stage3(p.list(ListId::List3), &mut s3, n)?;
+    Ok(s3)
+}
+
+/// The active-area rectangle `region` of the whole-frame render of `img` with the opcodes
+/// `p` (no DefaultCrop, no orientation): what a crop's target is when the opcodes need the
+/// whole frame. Errors when a TrimBounds removed part of `region`.
+pub fn render_frame_region(
+    img: &RawImage,
+    p: &Prepared,
+    neutral: [f64; 3],
+    method: Demosaic,
+    post: &Post,
+    region: &Crop,
+) -> Result<RgbImage> {
+    let n = normalize_neutral(neutral)?;
+    let s3 = frame_stage3(img, p, n, method)?;
+    let b = s3.bounds;
+    let inside = region.top as i64 >= b.t
+        && region.left as i64 >= b.l
+        && (region.top + region.height) as i64 <= b.b
+        && (region.left + region.width) as i64 <= b.r;
+    if !inside || region.width == 0 || region.height == 0 {
+        return Err(Error::invalid(format!(
+            "the crop {region:?} is not inside the image left by OpcodeList3's TrimBounds"
+        )));
+    }
+    let (w, x0) = (s3.rgb.width, (region.left as i64 - b.l) as usize);
+    let mut out = RgbImage::try_new(region.width, region.height)?;
+    for (y, row) in out.data.chunks_exact_mut(3 * region.width).enumerate() {
+        let sy = (region.top as i64 - b.t) as usize + y;
+        row.copy_from_slice(&s3.rgb.data[3 * (sy * w + x0)..][..3 * region.width]);
+        post(row);
+    }
+    Ok(out)
+}
+
+/// The whole-frame render of `img` with the opcodes `p`: white balance by `neutral`,
+/// `method`, `post` on every row of the stage-3 image, then DefaultCrop (if `crop`) and
+/// orientation (if `orient`).
+pub fn render_frame(
+    img: &RawImage,
+    p: &Prepared,
+    neutral: [f64; 3],
+    method: Demosaic,
+    post: &Post,
+    crop: bool,
+    orient: bool,
+) -> Result<RgbImage> {
+    let n = normalize_neutral(neutral)?;
+    let a = img.active_area();
+    let (aw, ah) = (a.width(), a.height());
+    let mut s3 = frame_stage3(img, p, n, method)?;
     let w = s3.rgb.width.max(1);
     s3.rgb.data.par_chunks_mut(3 * w).for_each(|row| post(row));
     if s3.bounds == Bounds::of_size(aw, ah) {
