@@ -152,6 +152,28 @@ pub fn try_filled<T: Clone>(value: T, n: usize, what: &str) -> Result<Vec<T>> {
     Ok(v)
 }
 
+// ---- Opcode lists (DNG 1.6 chapter 6; see docs/dng-support.md) --------------------------------
+// Checked by `dng::opcodes::parse_list` before anything is allocated: a hostile 4-byte count
+// is refused, never reserved. Every list is also bounded by its own byte count (a count that
+// does not fit the bytes is malformed), so these only cap what a well-formed list may ask.
+
+/// Most opcodes in one list. Phones write up to about ten (four GainMaps, a warp, bad pixels).
+pub const MAX_OPCODES_PER_LIST: u32 = 4096;
+/// Most gains in one GainMap (`MapPointsV * MapPointsH * MapPlanes`): 2^22 (16 MiB of `f32`);
+/// phones write 17 x 13 x 1 to 51 x 39 x 4.
+pub const MAX_GAIN_MAP_POINTS: u64 = 1 << 22;
+/// Longest MapTable: 65536 entries (every 16-bit value; the Adobe SDK's limit too).
+pub const MAX_MAP_TABLE_LEN: u32 = 1 << 16;
+/// Most bad points plus bad rectangles in one FixBadPixelsList: 2^22.
+pub const MAX_BAD_PIXEL_ENTRIES: u64 = 1 << 22;
+/// Most entries in one DeltaPerRow/Column or ScalePerRow/Column (one per row or column step:
+/// the readers' largest side is 65535).
+pub const MAX_PER_LINE_ENTRIES: u64 = 1 << 16;
+/// Most planes a WarpRectilinear or WarpFisheye may describe (the DNG SDK's kMaxColorPlanes).
+pub const MAX_WARP_PLANES: u32 = 4;
+/// Highest MapPolynomial degree (DNG 1.6, MapPolynomial: "Degree ... from 0 to 8").
+pub const MAX_POLYNOMIAL_DEGREE: u32 = 8;
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -124,6 +124,29 @@ fn nums(v: &[f64]) -> String {
         .join(" ")
 }
 
+/// One line per opcode list and per opcode, below the "opcode lists" line.
+fn describe_opcodes(out: &mut String, lists: &[day2night::dng::opcodes::describe::OpcodeListInfo]) {
+    for l in lists {
+        match &l.error {
+            Some(e) => {
+                let _ = writeln!(out, "    {} ({} bytes): {e}", l.list, l.bytes);
+            }
+            None => {
+                let _ = writeln!(
+                    out,
+                    "    {} ({} bytes, {} opcodes):",
+                    l.list,
+                    l.bytes,
+                    l.opcodes.len()
+                );
+                for (i, op) in l.opcodes.iter().enumerate() {
+                    let _ = writeln!(out, "      {}. {}", i + 1, op.text());
+                }
+            }
+        }
+    }
+}
+
 fn describe(out: &mut String, file: &std::path::Path, i: &DngInfo) {
     let _ = writeln!(out, "{}", file.display());
     let _ = writeln!(
@@ -288,6 +311,7 @@ fn describe(out: &mut String, file: &std::path::Path, i: &DngInfo) {
                     .join(", ")
             }
         );
+        describe_opcodes(out, &m.opcodes);
     }
     let _ = writeln!(
         out,

@@ -24,6 +24,7 @@ mod dataset_report;
 mod deflate_zlib;
 mod dng_bad_files;
 mod dng_gps;
+mod dng_opcodes;
 mod dng_read;
 mod dng_robustness;
 mod dng_roundtrip;

@@ -8,6 +8,16 @@
 
 use serde::Serialize;
 
+pub mod describe;
+mod encode;
+mod parse;
+
+pub use encode::{encode_list, encode_params};
+pub use parse::{area_col_steps, area_row_steps, parse_list};
+
+use crate::error::Result;
+use crate::raw::meta::RawMeta;
+
 /// Which of the three lists an opcode came from: where in the pipeline it applies.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize)]
 pub enum ListId {
@@ -62,6 +72,18 @@ pub struct Opcode {
 }
 
 impl Opcode {
+    /// An opcode of a known kind (its id from [`OpcodeKind::id`]; 0 for
+    /// [`OpcodeKind::Unknown`], whose id the caller sets), DNG version 1.3.0.0 (the version
+    /// that introduced opcodes) and `flags`.
+    pub fn new(kind: OpcodeKind, flags: u32) -> Opcode {
+        Opcode {
+            id: kind.id().unwrap_or(0),
+            dng_version: [1, 3, 0, 0],
+            flags,
+            kind,
+        }
+    }
+
     /// Bit 0 of the flags: a reader may skip it when it cannot apply it.
     pub fn optional(&self) -> bool {
         self.flags & FLAG_OPTIONAL != 0
@@ -226,6 +248,43 @@ pub enum OpcodeKind {
     },
 }
 
+impl OpcodeKind {
+    /// The opcode id of this kind (`None` for [`OpcodeKind::Unknown`]).
+    pub fn id(&self) -> Option<u32> {
+        Some(match self {
+            OpcodeKind::WarpRectilinear { .. } => 1,
+            OpcodeKind::WarpFisheye { .. } => 2,
+            OpcodeKind::FixVignetteRadial { .. } => 3,
+            OpcodeKind::FixBadPixelsConstant { .. } => 4,
+            OpcodeKind::FixBadPixelsList { .. } => 5,
+            OpcodeKind::TrimBounds { .. } => 6,
+            OpcodeKind::MapTable { .. } => 7,
+            OpcodeKind::MapPolynomial { .. } => 8,
+            OpcodeKind::GainMap(_) => 9,
+            OpcodeKind::DeltaPerRow { .. } => 10,
+            OpcodeKind::DeltaPerColumn { .. } => 11,
+            OpcodeKind::ScalePerRow { .. } => 12,
+            OpcodeKind::ScalePerColumn { .. } => 13,
+            OpcodeKind::Unknown { .. } => return None,
+        })
+    }
+
+    /// The area of the area-family opcodes (MapTable, MapPolynomial, GainMap, Delta/Scale per
+    /// row/column); `None` for the others.
+    pub fn area(&self) -> Option<&AreaSpec> {
+        match self {
+            OpcodeKind::MapTable { area, .. }
+            | OpcodeKind::MapPolynomial { area, .. }
+            | OpcodeKind::DeltaPerRow { area, .. }
+            | OpcodeKind::DeltaPerColumn { area, .. }
+            | OpcodeKind::ScalePerRow { area, .. }
+            | OpcodeKind::ScalePerColumn { area, .. } => Some(area),
+            OpcodeKind::GainMap(g) => Some(&g.area),
+            _ => None,
+        }
+    }
+}
+
 /// The name of an opcode id, as the DNG specification spells it.
 pub fn opcode_name(id: u32) -> &'static str {
     match id {
@@ -260,3 +319,26 @@ pub struct OpcodeList {
     /// The opcodes in the order they apply.
     pub opcodes: Vec<Opcode>,
 }
+
+/// Each of the three lists of `meta` parsed, in pipeline order: `None` where the tag is
+/// absent, else the parse result, its error prefixed with the tag name
+/// ("OpcodeList2: GainMap (opcode 1 of 4): MapPointsV is 0, ..."). `info` uses this to
+/// describe the good lists of a file whose other list is malformed.
+pub fn list_results(meta: &RawMeta) -> [Option<Result<OpcodeList>>; 3] {
+    ListId::ALL.map(|id| {
+        meta.opcode_lists[id.index()]
+            .as_deref()
+            .map(|b| parse_list(b).map_err(|e| parse::prefixed(e, id.tag_name())))
+    })
+}
+
+/// The three lists of `meta` parsed, in pipeline order (an empty list where the tag is
+/// absent); the first malformed one is an error naming its tag.
+pub fn lists(meta: &RawMeta) -> Result<[OpcodeList; 3]> {
+    let [a, b, c] = list_results(meta);
+    let get = |r: Option<Result<OpcodeList>>| r.unwrap_or_else(|| Ok(OpcodeList::default()));
+    Ok([get(a)?, get(b)?, get(c)?])
+}
+
+#[cfg(test)]
+mod tests;

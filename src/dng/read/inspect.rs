@@ -77,6 +77,8 @@ pub struct MetaSummary {
     pub exif: ExifInfo,
     /// Which OpcodeLists are present (1, 2, 3).
     pub opcode_lists: Vec<u8>,
+    /// Each present list's opcodes (or why it is malformed).
+    pub opcodes: Vec<crate::dng::opcodes::describe::OpcodeListInfo>,
     /// Storage of the raw.
     pub storage: Option<Storage>,
     /// Counts of carried entries (IFD0, raw IFD, Exif).
@@ -226,6 +228,7 @@ pub fn inspect_bytes(bytes: &[u8]) -> Result<DngInfo> {
                     opcode_lists: (1..=3u8)
                         .filter(|&i| m.opcode_lists[i as usize - 1].is_some())
                         .collect(),
+                    opcodes: crate::dng::opcodes::describe::describe_lists(m),
                     storage: m.storage.clone(),
                     carried_entries: [m.ifd0_extra.len(), m.raw_extra.len(), m.exif_extra.len()],
                     gps_entries: m.gps.len(),
@@ -234,6 +237,14 @@ pub fn inspect_bytes(bytes: &[u8]) -> Result<DngInfo> {
             match bayer {
                 Ok(_) => info.synth_ready = true,
                 Err(e) => info.reason = Some(e.to_string()),
+            }
+            // A malformed opcode list is described (the rest of the file too) but makes the
+            // file unusable for synthesis, whose targets apply the opcodes.
+            if let Err(e) = crate::dng::opcodes::lists(m) {
+                if info.synth_ready {
+                    info.synth_ready = false;
+                    info.reason = Some(e.to_string());
+                }
             }
         }
         Err(e) => {

@@ -70,6 +70,19 @@ impl Builder {
         self.overrides.push((tag, v));
         self
     }
+    /// Attach the bytes of OpcodeList`n` (1, 2 or 3; e.g. from
+    /// `day2night::dng::opcodes::encode_list`) to the raw IFD, and declare DNG backward
+    /// version 1.3 (the version that introduced opcode lists).
+    pub fn opcode_list(self, n: u8, bytes: Vec<u8>) -> Self {
+        let tag = match n {
+            1 => 51008,
+            2 => 51009,
+            3 => 51022,
+            _ => panic!("OpcodeList{n} does not exist"),
+        };
+        self.set(tag, Value::Undefined(bytes))
+            .set(50707, Value::Byte(vec![1, 3, 0, 0]))
+    }
     pub fn without(mut self, tag: u16) -> Self {
         self.remove.push(tag);
         self
