@@ -250,18 +250,13 @@ pub fn prepare(meta: &RawMeta, mode: OpcodeMode) -> Result<Option<Prepared>> {
             },
         }));
     }
-    prepare_lists(&parse_lists(meta)?, mode)
+    prepare_lists(&crate::dng::opcodes::lists(meta)?, mode)
 }
 
 /// The applicable opcodes of `meta` for a render in `mode`, `None` when the render takes
 /// the plain path (no opcode, [`OpcodeMode::Ignore`], or nothing applicable).
 pub fn active(meta: &RawMeta, mode: OpcodeMode) -> Result<Option<Prepared>> {
     Ok(prepare(meta, mode)?.filter(|p| !p.is_noop()))
-}
-
-// TEMPORARY until the opc-dng parser is merged.
-fn parse_lists(_meta: &RawMeta) -> Result<[OpcodeList; 3]> {
-    Err(Error::unsupported("opcode parser not merged yet"))
 }
 
 /// A rectangle `[t, b) x [l, r)` in the coordinates of a stage image.
