@@ -157,7 +157,7 @@ fn warp_rectilinear_moves_dots_where_the_formula_says() {
             }
         }
     }
-    let kr = [1.0, 0.08, 0.0, 0.0];
+    let kr = [1.0, 0.2, 0.0, 0.0];
     let kt = [0.002, -0.001];
     let img = with_lists(
         RawImage {
@@ -189,6 +189,7 @@ fn warp_rectilinear_moves_dots_where_the_formula_says() {
     .unwrap();
     let luma = |x: usize, y: usize| out.pixel(x, y).map_or(0.0, |p| p.iter().sum::<f32>());
     let floor = luma(2, 2);
+    let mut moved = 0.0f64;
     for &(py, px) in &dots {
         // destination d with source(d) = p, by fixed-point iteration
         let (mut dy, mut dx) = (py, px);
@@ -216,9 +217,10 @@ fn warp_rectilinear_moves_dots_where_the_formula_says() {
             (my - dy).abs() < 1.0 && (mx - dx).abs() < 1.0,
             "dot ({py},{px}): expected at ({dy:.2},{dx:.2}), centroid ({my:.2},{mx:.2})"
         );
-        // the warp really moved it (away from the centre for kr1 < 0 is not asked: just moved)
-        assert!((dy - py).abs() + (dx - px).abs() > 0.3 || (py, px) == (60.0, 80.0));
+        moved = moved.max((dy - py).abs().max((dx - px).abs()));
     }
+    // the corner dots really moved (by more than the tolerance)
+    assert!(moved > 2.0, "largest move {moved}");
 }
 
 #[test]
@@ -265,7 +267,7 @@ fn list1_acts_on_stored_values_before_the_black_level() {
 #[test]
 fn degenerate_maps_give_finite_renders() {
     let (w, h) = (12usize, 10usize);
-    for gains in [vec![0.0f32], vec![f32::NAN], vec![1e30]] {
+    for gains in [vec![0.0f32], vec![1e30], vec![f32::NAN]] {
         let mut map = falloff_map(w as u32, h as u32, 2, 2, 0.0);
         map.points_v = 1;
         map.points_h = 1;
@@ -278,7 +280,14 @@ fn degenerate_maps_give_finite_renders() {
                 vec![],
             ],
         );
-        let out = render_linear(&img, &RenderOptions::default()).unwrap();
+        let out = match render_linear(&img, &RenderOptions::default()) {
+            Ok(o) => o,
+            Err(e) => {
+                // the parser refuses non-finite gains, naming them
+                assert!(gains[0].is_nan() && e.to_string().contains("NaN"), "{e}");
+                continue;
+            }
+        };
         assert_eq!(out.count_non_finite(), 0, "{gains:?}");
         if gains[0] == 0.0 {
             assert!(out.data.iter().all(|&v| v == 0.0));
