@@ -61,7 +61,7 @@ pub struct RenderArgs {
     pub no_orient: bool,
     /// DNG opcode lists (lens shading GainMap, distortion WarpRectilinear, ...): apply
     /// (default, as the Adobe DNG SDK) or ignore (as LibRaw and the authors' renders).
-    #[arg(long, default_value = "apply", value_name = "apply|ignore")]
+    #[arg(long, default_value = "apply", value_name = "MODE")]
     pub opcodes: String,
     /// Replace an existing output.
     #[arg(long)]

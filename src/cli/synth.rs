@@ -203,7 +203,7 @@ pub struct ExtraArgs {
     pub exr_zip_level: u8,
     /// DNG opcode lists of the input in the rendered targets and inputs: apply (default) or
     /// ignore (implied by --compat release). The night DNGs keep the lists either way.
-    #[arg(long, value_name = "apply|ignore")]
+    #[arg(long, value_name = "MODE")]
     pub opcodes: Option<String>,
 }
 
