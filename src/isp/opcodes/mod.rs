@@ -326,11 +326,14 @@ pub fn pin(v: f32, range: f32) -> f32 {
     }
 }
 
+/// A per-row operation: `(stage row, samples of the row)`.
+type RowFn<'a> = dyn Fn(usize, &mut [f32]) + Sync + 'a;
+
 /// Apply one pointwise opcode to every row of `reg` (in parallel over rows).
 fn apply_pointwise(kind: &OpcodeKind, reg: &mut Region) {
     let (left, width, planes, top) = (reg.left, reg.width, reg.planes, reg.top);
     let (bounds, range) = (reg.bounds, reg.range);
-    let row_fn: Box<dyn Fn(usize, &mut [f32]) + Sync> = match kind {
+    let row_fn: Box<RowFn<'_>> = match kind {
         OpcodeKind::GainMap(g) => {
             let gm = gain_map::Prepared::new(g, bounds);
             Box::new(move |r, row| gm.row(r, left, planes, range, row))
@@ -424,7 +427,7 @@ mod tests {
         let mut lists: [OpcodeList; 3] = Default::default();
         lists[1].opcodes = vec![scale.clone(), unknown(FLAG_OPTIONAL)];
         let p = prepare_lists(&lists, OpcodeMode::Apply).unwrap().unwrap();
-        assert_eq!(p.list(ListId::List2), &[scale.clone()]);
+        assert_eq!(p.list(ListId::List2), std::slice::from_ref(&scale));
         assert_eq!(p.report.applied.len(), 1);
         assert_eq!(p.report.skipped[0].id, 99);
         assert!(p.report.warnings()[0].contains("OpcodeList2: unknown (id 99)"));

@@ -373,7 +373,7 @@ pub fn render_frame(
     let (aw, ah) = (a.width(), a.height());
     let mut s3 = frame_stage3(img, p, n, method)?;
     let w = s3.rgb.width.max(1);
-    s3.rgb.data.par_chunks_mut(3 * w).for_each(|row| post(row));
+    s3.rgb.data.par_chunks_mut(3 * w).for_each(post);
     if s3.bounds == Bounds::of_size(aw, ah) {
         return Ok(apply_geometry(s3.rgb, &img.meta, crop, orient));
     }
@@ -474,6 +474,6 @@ pub fn render_crop(
     };
     stage3(p.list(ListId::List3), &mut s3, n)?;
     let w = s3.rgb.width.max(1);
-    s3.rgb.data.par_chunks_mut(3 * w).for_each(|row| post(row));
+    s3.rgb.data.par_chunks_mut(3 * w).for_each(post);
     Ok(s3.rgb)
 }
