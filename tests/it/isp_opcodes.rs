@@ -496,3 +496,49 @@ fn adobe_sdk_gain_map_renders_as_its_gains_say() {
     let (med, p95) = (e[e.len() / 2], e[e.len() * 95 / 100]);
     assert!(med < 0.01 && p95 < 0.03, "median {med}, p95 {p95}");
 }
+
+#[test]
+fn opcode_renders_are_identical_for_any_thread_count() {
+    let (w, h) = (70usize, 50usize);
+    let img = with_lists(
+        scene(w, h),
+        [
+            vec![Opcode::new(
+                OpcodeKind::FixBadPixelsList {
+                    bayer_phase: 0,
+                    points: vec![[5, 5], [20, 31]],
+                    rects: vec![[10, 10, 12, 14]],
+                },
+                0,
+            )],
+            vec![Opcode::new(
+                OpcodeKind::GainMap(falloff_map(w as u32, h as u32, 4, 5, 1.0)),
+                0,
+            )],
+            vec![Opcode::new(
+                OpcodeKind::WarpRectilinear {
+                    planes: vec![WarpPlane {
+                        kr: [1.0, -0.04, 0.0, 0.0],
+                        kt: [0.0, 0.0],
+                    }],
+                    center: [0.4, 0.6],
+                },
+                0,
+            )],
+        ],
+    );
+    for d in day2night::isp::Demosaic::ALL {
+        let opts = RenderOptions {
+            demosaic: d,
+            ..RenderOptions::default()
+        };
+        let a = render_linear(&img, &opts).unwrap();
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(1)
+            .build()
+            .unwrap();
+        let b = pool.install(|| render_linear(&img, &opts).unwrap());
+        assert_eq!(a, b, "{d}");
+        assert_eq!(a.count_non_finite(), 0);
+    }
+}
