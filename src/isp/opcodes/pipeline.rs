@@ -397,28 +397,21 @@ pub fn render_frame(
         height: (bt - t) as usize,
         width: (r - l) as usize,
     };
-    let whole_img = Crop::whole(s3.rgb.width, s3.rgb.height);
+    let sw = s3.rgb.width;
+    let mut data = Vec::with_capacity(3 * cut.width * cut.height);
+    for y in cut.top..cut.top + cut.height {
+        data.extend_from_slice(&s3.rgb.data[3 * (y * sw + cut.left)..][..3 * cut.width]);
+    }
     let rgb = RgbImage {
         width: cut.width,
         height: cut.height,
-        data: cut
-            .cut_from(&whole_img, &rgb_pixels(&s3.rgb))
-            .into_iter()
-            .flatten()
-            .collect(),
+        data,
     };
     Ok(if orient && (2..=8).contains(&img.meta.orientation) {
         orient_image(&rgb, img.meta.orientation)
     } else {
         rgb
     })
-}
-
-fn rgb_pixels(rgb: &RgbImage) -> Vec<[f32; 3]> {
-    rgb.data
-        .chunks_exact(3)
-        .map(|p| [p[0], p[1], p[2]])
-        .collect()
 }
 
 /// The render of the active-area rectangle `crop` of a frame (levels and colour from

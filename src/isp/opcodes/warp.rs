@@ -169,27 +169,40 @@ pub fn apply(
         return out;
     }
     let clampi = |v: i64, n: usize| v.clamp(0, n as i64 - 1) as usize;
+    // One set of coefficients for every plane (the usual case): one source position and
+    // one set of tap weights per pixel.
+    let shared = warp.planes.windows(2).all(|p| p[0] == p[1]);
     out.par_chunks_mut(w * planes)
         .enumerate()
         .for_each(|(y, orow)| {
             let row = (bounds.t + y as i64) as f64;
+            let mut cache = None;
             for x in 0..w {
                 let col = (bounds.l + x as i64) as f64;
                 for p in 0..planes {
-                    let (sv, sh) = warp.source(p, row, col);
-                    let (y0, wy) = taps(sv - bounds.t as f64);
-                    let (x0, wx) = taps(sh - bounds.l as f64);
+                    let ((y0, wy), (x0, wx)) = match cache {
+                        Some(t) if shared && p > 0 => t,
+                        _ => {
+                            let (sv, sh) = warp.source(p, row, col);
+                            let t = (taps(sv - bounds.t as f64), taps(sh - bounds.l as f64));
+                            cache = Some(t);
+                            t
+                        }
+                    };
                     let mut total = 0.0f64;
                     for (i, wyi) in wy.iter().enumerate() {
                         let yy = clampi(y0 + i as i64, h);
                         let srow = &data[yy * w * planes..];
+                        let mut acc = 0.0f64;
                         for (j, wxj) in wx.iter().enumerate() {
                             let xx = clampi(x0 + j as i64, w);
-                            total += wyi * wxj * srow[xx * planes + p] as f64;
+                            acc += wxj * srow[xx * planes + p] as f64;
                         }
+                        total += wyi * acc;
                     }
                     orow[x * planes + p] = super::pin(total as f32, 1.0);
                 }
+                cache = None;
             }
         });
     out
