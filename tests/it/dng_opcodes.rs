@@ -118,28 +118,34 @@ fn info_text(path: &Path) -> (bool, String) {
 fn builder_lists_are_read_listed_and_carried() {
     let t = tempfile::tempdir().unwrap();
     let want = three_lists();
-    let mut b = Builder::new(16, 12, 12);
-    for (i, l) in want.iter().enumerate() {
-        b = b.opcode_list(i as u8 + 1, encode_list(l));
-    }
     let src = t.path().join("ops.dng");
-    std::fs::write(&src, b.build()).unwrap();
+    // Lists are big-endian whatever the file's byte order: the same bytes in MM and II
+    // files, raw in a SubIFD or in IFD0 (the last one stays for the `info` checks below).
+    for (big_endian, raw_in_sub) in [(true, true), (false, false)] {
+        let mut b = Builder::new(16, 12, 12);
+        b.big_endian = big_endian;
+        b.raw_in_sub = raw_in_sub;
+        for (i, l) in want.iter().enumerate() {
+            b = b.opcode_list(i as u8 + 1, encode_list(l));
+        }
+        std::fs::write(&src, b.build()).unwrap();
 
-    let img = read_dng(&src).unwrap();
-    for (i, l) in want.iter().enumerate() {
-        assert_eq!(
-            img.meta.opcode_lists[i].as_deref(),
-            Some(&encode_list(l)[..])
-        );
+        let img = read_dng(&src).unwrap();
+        for (i, l) in want.iter().enumerate() {
+            assert_eq!(
+                img.meta.opcode_lists[i].as_deref(),
+                Some(&encode_list(l)[..])
+            );
+        }
+        assert_eq!(lists(&img.meta).unwrap(), want);
+
+        // The writer carries the bytes unchanged.
+        let out = t.path().join("written.dng");
+        let bytes = day2night::dng::write::encode_dng(&img, &Default::default()).unwrap();
+        std::fs::write(&out, bytes).unwrap();
+        let back = read_dng(&out).unwrap();
+        assert_eq!(back.meta.opcode_lists, img.meta.opcode_lists);
     }
-    assert_eq!(lists(&img.meta).unwrap(), want);
-
-    // The writer carries the bytes unchanged.
-    let out = t.path().join("written.dng");
-    let bytes = day2night::dng::write::encode_dng(&img, &Default::default()).unwrap();
-    std::fs::write(&out, bytes).unwrap();
-    let back = read_dng(&out).unwrap();
-    assert_eq!(back.meta.opcode_lists, img.meta.opcode_lists);
 
     let (ok, text) = info_text(&src);
     assert!(ok, "{text}");
