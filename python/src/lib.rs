@@ -321,6 +321,7 @@ fn job_config(
         }
     }
     let mut release = false;
+    let mut opcodes = None;
     if let Some(opts) = options {
         for (k, v) in opts.iter() {
             let key: String = k.extract()?;
@@ -370,13 +371,20 @@ fn job_config(
                         }
                     }
                 }
+                "opcodes" => {
+                    opcodes = Some(
+                        v.extract::<String>()?
+                            .parse::<day2night::isp::opcodes::OpcodeMode>()
+                            .map_err(py_err)?,
+                    )
+                }
                 "illuminants" => cfg.illuminants = path(&v)?,
                 "brightness" => cfg.brightness = path(&v)?,
                 "noise_model" => cfg.noise_model = path(&v)?,
                 other => {
                     return Err(value_err(format!(
                     "unknown option {other:?} (known: relight_formula, bulbs, lights, truncate, \
-covariance, day_neutral, mask_eval, illuminants, brightness, noise_model)"
+covariance, day_neutral, mask_eval, opcodes, illuminants, brightness, noise_model)"
                 )))
                 }
             }
@@ -385,6 +393,9 @@ covariance, day_neutral, mask_eval, illuminants, brightness, noise_model)"
     if release {
         // Applied last, like --compat release: it checks the other options.
         cfg.options = cfg.options.clone().release_compat().map_err(py_err)?;
+    }
+    if let Some(m) = opcodes {
+        cfg.options.opcodes = m;
     }
     cfg.target = if want_target {
         Target::Exr
@@ -721,11 +732,12 @@ fn write_files(
 /// Linear sRGB (Rec.709, D65) render of a raw, float32 HxWx3 in [0, 1], as ``day2night
 /// render --format exr`` computes it: white balance by ``neutral`` (default: the file's
 /// AsShotNeutral), demosaic (``"mhc"``, ``"bilinear"`` or ``"menon"``), colour matrices,
-/// DefaultCrop (``crop``) and orientation (``orient``).
+/// DefaultCrop (``crop``) and orientation (``orient``); the DNG opcode lists (lens shading,
+/// distortion) are applied unless ``opcodes="ignore"``.
 ///
 /// >>> rgb = day2night.render(raw)
 #[pyfunction]
-#[pyo3(signature = (raw, neutral=None, demosaic="mhc", crop=true, orient=true))]
+#[pyo3(signature = (raw, neutral=None, demosaic="mhc", crop=true, orient=true, opcodes="apply"))]
 fn render<'py>(
     py: Python<'py>,
     raw: &Bound<'py, Raw>,
@@ -733,14 +745,17 @@ fn render<'py>(
     demosaic: &str,
     crop: bool,
     orient: bool,
+    opcodes: &str,
 ) -> PyResult<Bound<'py, PyAny>> {
     let method: Demosaic = demosaic.parse().map_err(py_err)?;
+    let opcodes: day2night::isp::opcodes::OpcodeMode = opcodes.parse().map_err(py_err)?;
     let day = raw.get().day.clone();
     let opts = RenderOptions {
         demosaic: method,
         neutral: neutral.map(|(r, g, b)| [r, g, b]),
         crop,
         orient,
+        opcodes,
     };
     let rgb = py
         .detach(move || on_pool(move || render_linear(&day.raw, &opts)))

@@ -2,7 +2,8 @@
 use super::{usage, CmdResult};
 use day2night::encode::exr::{standard_attributes, write_exr, ExrCompression, ExrOptions};
 use day2night::encode::png::{write_png, write_tiff, PngOptions};
-use day2night::isp::render::{render_input, render_linear, resolve_neutral, RenderOptions};
+use day2night::isp::opcodes::OpcodeMode;
+use day2night::isp::render::{render_input_opts, render_linear, resolve_neutral, RenderOptions};
 use day2night::isp::tone::DisplayTone;
 use day2night::isp::Demosaic;
 use day2night::output::OutputPolicy;
@@ -58,6 +59,10 @@ pub struct RenderArgs {
     /// Do not apply the Orientation tag.
     #[arg(long)]
     pub no_orient: bool,
+    /// DNG opcode lists (lens shading GainMap, distortion WarpRectilinear, ...): apply
+    /// (default, as the Adobe DNG SDK) or ignore (as LibRaw and the authors' renders).
+    #[arg(long, default_value = "apply", value_name = "MODE")]
+    pub opcodes: String,
     /// Replace an existing output.
     #[arg(long)]
     pub overwrite: bool,
@@ -104,6 +109,10 @@ pub fn run(args: RenderArgs) -> CmdResult {
     let compression: ExrCompression = args.exr_compression.parse().map_err(usage)?;
     let zip_level = super::synth::parse_zip_level(args.exr_zip_level)?;
     let tone: DisplayTone = args.tone.parse().map_err(usage)?;
+    let opcodes: OpcodeMode = args
+        .opcodes
+        .parse()
+        .map_err(|e: day2night::Error| usage(format!("--opcodes: {e}")))?;
     let ext = args
         .output
         .extension()
@@ -138,26 +147,22 @@ pub fn run(args: RenderArgs) -> CmdResult {
     super::print_meta_warnings(&args.input, &img.meta);
     let in_file = |e: day2night::Error| lib(e.in_file(&args.input));
     let n = resolve_neutral(&img.meta, neutral).map_err(in_file)?;
-    let rgb = if args.camera_rgb {
-        let mut r = render_input(&img, Some(n), demosaic).map_err(in_file)?;
-        if args.no_crop || args.no_orient {
-            // render_input applies both; redo geometry from the uncropped camera render
-            let cam = day2night::isp::render::render_camera(&img, n, demosaic).map_err(in_file)?;
-            r = day2night::isp::render::apply_geometry(
-                cam,
-                &img.meta,
-                !args.no_crop,
-                !args.no_orient,
-            );
+    // Optional opcodes that cannot be applied are skipped with a warning; others are errors.
+    if let Some(p) = day2night::isp::opcodes::prepare(&img.meta, opcodes).map_err(in_file)? {
+        for w in p.report.warnings() {
+            eprintln!("day2night: {}: warning: {w}", args.input.display());
         }
-        r
+    }
+    let opts = RenderOptions {
+        demosaic,
+        neutral: Some(n),
+        crop: !args.no_crop,
+        orient: !args.no_orient,
+        opcodes,
+    };
+    let rgb = if args.camera_rgb {
+        render_input_opts(&img, &opts).map_err(in_file)?
     } else {
-        let opts = RenderOptions {
-            demosaic,
-            neutral: Some(n),
-            crop: !args.no_crop,
-            orient: !args.no_orient,
-        };
         render_linear(&img, &opts).map_err(in_file)?
     };
     match format {

@@ -201,6 +201,10 @@ pub struct ExtraArgs {
     /// docs/benchmarks.md.
     #[arg(long = "exr-zip-level", default_value_t = 1, value_name = "N")]
     pub exr_zip_level: u8,
+    /// DNG opcode lists of the input in the rendered targets and inputs: apply (default) or
+    /// ignore (implied by --compat release). The night DNGs keep the lists either way.
+    #[arg(long, value_name = "MODE")]
+    pub opcodes: Option<String>,
 }
 
 pub(super) fn parse_zip_level(level: u8) -> Result<u8, Failure> {
@@ -252,10 +256,13 @@ impl SynthOpts {
             mask_eval: flag("--mask-eval", self.extra.mask_eval.parse())?,
             ..SynthOptions::default()
         };
-        let options = match self.compat {
+        let mut options = match self.compat {
             Some(CompatArg::Release) => flag("--compat release", options.release_compat())?,
             None => options,
         };
+        if let Some(m) = &self.extra.opcodes {
+            options.opcodes = flag("--opcodes", m.parse())?;
+        }
         options.validate().map_err(usage)?;
         Ok(JobConfig {
             options,

@@ -10,6 +10,7 @@ pub mod color;
 pub mod demosaic;
 pub mod geometry;
 pub mod linear_raw_opcodes;
+pub mod opcodes;
 pub mod render;
 pub mod render_crop;
 pub mod render_linear_raw;

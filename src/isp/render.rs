@@ -3,6 +3,7 @@
 
 use super::color::{normalize_neutral, CameraColor, Mat3};
 use super::demosaic::{demosaic_rect, demosaic_rows, row_kernel, Demosaic, Post, RowKernel};
+use super::opcodes::{self, pipeline, OpcodeMode};
 use super::RgbImage;
 use crate::error::{Error, Result};
 use crate::normalize::{Normalizer, SiteTable};
@@ -26,6 +27,9 @@ pub struct RenderOptions {
     pub crop: bool,
     /// Apply the EXIF/TIFF Orientation.
     pub orient: bool,
+    /// Apply the file's DNG opcode lists ([`super::opcodes`]); files without opcodes take
+    /// the plain path either way.
+    pub opcodes: OpcodeMode,
 }
 
 impl Default for RenderOptions {
@@ -35,6 +39,7 @@ impl Default for RenderOptions {
             neutral: None,
             crop: true,
             orient: true,
+            opcodes: OpcodeMode::Apply,
         }
     }
 }
@@ -328,6 +333,10 @@ where
     let Some(kernel) = row_kernel(opts.demosaic) else {
         return Ok(None);
     };
+    if opcodes::active(&img.meta, opts.opcodes)?.is_some() {
+        // The opcode path is not banded: render_linear makes the whole image.
+        return Ok(None);
+    }
     let n = resolve_neutral(&img.meta, opts.neutral)?;
     let m = color_matrix(&img.meta, n)?;
     let mf = m.map(|r| r.map(|v| v as f32));
@@ -374,16 +383,53 @@ pub struct Bands<T> {
 /// The network input of the paper: normalized, white-balanced, demosaiced camera RGB
 /// (no colour matrix), with the same DefaultCrop and orientation as [`render_linear`]'s
 /// defaults so that input and target align. `neutral` None = the file's neutral.
+/// The file's opcode lists are applied ([`render_input_with`] chooses).
 pub fn render_input(
     img: &RawImage,
     neutral: Option<[f64; 3]>,
     method: Demosaic,
 ) -> Result<RgbImage> {
-    let n = resolve_neutral(&img.meta, neutral)?;
+    render_input_with(img, neutral, method, OpcodeMode::Apply)
+}
+
+/// [`render_input`] with the opcode lists applied or ignored.
+pub fn render_input_with(
+    img: &RawImage,
+    neutral: Option<[f64; 3]>,
+    method: Demosaic,
+    mode: OpcodeMode,
+) -> Result<RgbImage> {
+    render_input_opts(
+        img,
+        &RenderOptions {
+            demosaic: method,
+            neutral,
+            crop: true,
+            orient: true,
+            opcodes: mode,
+        },
+    )
+}
+
+/// The network input (see [`render_input`]) with the crop, orientation and opcode choices
+/// of `opts`.
+pub fn render_input_opts(img: &RawImage, opts: &RenderOptions) -> Result<RgbImage> {
+    let n = resolve_neutral(&img.meta, opts.neutral)?;
     if img.meta.linear_raw.is_some() {
-        return super::render_linear_raw::render_camera(img, n, true, true);
+        return super::render_linear_raw::render_camera(img, n, opts.crop, opts.orient);
     }
-    render_with(img, n, method, &clip_row, true, true)
+    if let Some(p) = opcodes::active(&img.meta, opts.opcodes)? {
+        return pipeline::render_frame(
+            img,
+            &p,
+            n,
+            opts.demosaic,
+            &clip_row,
+            opts.crop,
+            opts.orient,
+        );
+    }
+    render_with(img, n, opts.demosaic, &clip_row, opts.crop, opts.orient)
 }
 
 /// The white-balanced camera -> linear sRGB matrix this render uses.
@@ -402,6 +448,9 @@ pub fn render_linear(img: &RawImage, opts: &RenderOptions) -> Result<RgbImage> {
     let m = color_matrix(&img.meta, n)?;
     let mf = m.map(|r| r.map(|v| v as f32));
     let post = move |row: &mut [f32]| matrix_row(row, &mf);
+    if let Some(p) = opcodes::active(&img.meta, opts.opcodes)? {
+        return pipeline::render_frame(img, &p, n, opts.demosaic, &post, opts.crop, opts.orient);
+    }
     render_with(img, n, opts.demosaic, &post, opts.crop, opts.orient)
 }
 
@@ -705,6 +754,7 @@ mod tests {
                                     crop,
                                     orient,
                                     neutral: None,
+                                    ..RenderOptions::default()
                                 };
                                 let a = render_linear(&img, &opts).unwrap();
                                 let b = render_linear_reference(&img, &opts).unwrap();

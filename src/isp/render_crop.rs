@@ -11,6 +11,7 @@
 
 use super::color::normalize_neutral;
 use super::demosaic::{demosaic_rect, row_kernel, Demosaic, PAD};
+use super::opcodes::{self, pipeline, OpcodeMode};
 use super::render::{color_matrix, matrix_row, resolve_neutral};
 use super::RgbImage;
 use crate::error::{Error, Result};
@@ -28,7 +29,8 @@ pub const CROP_MARGIN: usize = PAD;
 /// `plane`, the samples of the rectangle `outer` (row-major), which must contain `crop`
 /// grown by [`CROP_MARGIN`] and cut to the active area ([`Crop::grown`]). No DefaultCrop,
 /// no orientation: the result is `crop.width x crop.height`, aligned with the crop's CFA
-/// samples. Bilinear and MHC only (Menon needs the whole frame).
+/// samples. Bilinear and MHC only (Menon needs the whole frame). The frame's opcode lists
+/// are applied ([`render_linear_crop_with`] chooses).
 pub fn render_linear_crop(
     frame: &RawImage,
     neutral: Option<[f64; 3]>,
@@ -36,6 +38,30 @@ pub fn render_linear_crop(
     outer: &Crop,
     plane: &[u16],
     crop: &Crop,
+) -> Result<RgbImage> {
+    render_linear_crop_with(
+        frame,
+        neutral,
+        method,
+        outer,
+        plane,
+        crop,
+        OpcodeMode::Apply,
+    )
+}
+
+/// [`render_linear_crop`] with the frame's opcode lists applied or ignored. With opcodes
+/// that need the whole frame ([`crate::isp::opcodes::Prepared::needs_whole_frame`]: bad
+/// pixels, warps, TrimBounds) this is an error: render the frame and cut the region
+/// (`synth::night` does).
+pub fn render_linear_crop_with(
+    frame: &RawImage,
+    neutral: Option<[f64; 3]>,
+    method: Demosaic,
+    outer: &Crop,
+    plane: &[u16],
+    crop: &Crop,
+    mode: OpcodeMode,
 ) -> Result<RgbImage> {
     let Some(kernel) = row_kernel(method) else {
         return Err(Error::unsupported(format!(
@@ -62,6 +88,9 @@ pub fn render_linear_crop(
     let m = color_matrix(&frame.meta, n)?;
     let mf = m.map(|r| r.map(|v| v as f32));
     let post = move |row: &mut [f32]| matrix_row(row, &mf);
+    if let Some(p) = opcodes::active(&frame.meta, mode)? {
+        return pipeline::render_crop(frame, &p, n, method, outer, plane, crop, &post);
+    }
     let norm = Normalizer::new(frame)?.without_linearization();
     let inv = [1.0 / n[0], 1.0, 1.0 / n[2]];
     let site = |x: u16, r: usize, c: usize, black: f64| -> f32 {

@@ -34,6 +34,7 @@ pub use plan::{plan, NoisePlan, Plan};
 pub use relight::{run, run_clean, RunReport};
 
 use crate::error::{Error, Result};
+use crate::isp::opcodes::OpcodeMode;
 use crate::noise::{NoiseModel, NoiseParams};
 use crate::raw::meta::RawMeta;
 use crate::raw::RawImage;
@@ -128,6 +129,11 @@ pub struct SynthOptions {
     /// Release-compatibility switches (absent from serialized options when all off).
     #[serde(default, skip_serializing_if = "Compat::is_off")]
     pub compat: Compat,
+    /// Apply the input's DNG opcode lists in the rendered targets and inputs (`apply`, the
+    /// default, absent from serialized options) or ignore them (`--compat release`). The
+    /// raws never change: the night DNGs keep the lists byte for byte.
+    #[serde(default, skip_serializing_if = "OpcodeMode::is_apply")]
+    pub opcodes: OpcodeMode,
 }
 
 impl Default for SynthOptions {
@@ -149,6 +155,7 @@ impl Default for SynthOptions {
             day_neutral: None,
             mask_eval: MaskEval::Separable,
             compat: Compat::default(),
+            opcodes: OpcodeMode::Apply,
         }
     }
 }
@@ -184,6 +191,8 @@ impl SynthOptions {
         self.compat = Compat::RELEASE;
         self.sampler.max_mahalanobis = NO_MAHALANOBIS_CUT;
         self.mask_eval = MaskEval::Release;
+        // The authors' data preparation renders without the DNG opcodes.
+        self.opcodes = OpcodeMode::Ignore;
         Ok(self)
     }
 }

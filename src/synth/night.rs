@@ -36,9 +36,10 @@ use super::crop::{crop_meta, Crop};
 use super::relight::{run_clean, run_clean_crop, RunReport};
 use super::{night_meta, run_noise, Plan};
 use crate::error::{Error, Result};
-use crate::isp::render::{render_linear_bands, Bands};
-use crate::isp::render_crop::{render_linear_crop, CROP_MARGIN};
-use crate::isp::{render_input, render_linear, Demosaic, RenderOptions, RgbImage};
+use crate::isp::opcodes::{self, pipeline};
+use crate::isp::render::{color_matrix, matrix_row, render_input_with, render_linear_bands, Bands};
+use crate::isp::render_crop::{render_linear_crop_with, CROP_MARGIN};
+use crate::isp::{render_linear, Demosaic, RenderOptions, RgbImage};
 use crate::noise::apply::apply_noise_crop_with;
 use crate::noise::apply_physics_noise_crop;
 use crate::raw::RawImage;
@@ -186,6 +187,7 @@ fn whole_frame<S: NightSink>(
             target_res = Some((|| {
                 let ropts = RenderOptions {
                     neutral: Some(neutral),
+                    opcodes: plan.opcode_mode(),
                     ..RenderOptions::default()
                 };
                 if sink.banded() {
@@ -208,7 +210,7 @@ fn whole_frame<S: NightSink>(
     target_res.unwrap_or(Ok(()))?;
     if req.input {
         let src = first_noisy.as_ref().unwrap_or(&clean);
-        let rgb = render_input(src, Some(neutral), Default::default())?;
+        let rgb = render_input_with(src, Some(neutral), Default::default(), plan.opcode_mode())?;
         sink.input(&rgb)?;
     }
     Ok((clean, report))
@@ -281,14 +283,36 @@ fn cropped<S: NightSink>(
                     if !target {
                         return Ok(());
                     }
-                    let rgb = render_linear_crop(
-                        day,
-                        Some(plan.night_neutral),
-                        Demosaic::default(),
-                        &outer,
-                        &plane,
-                        crop,
-                    )?;
+                    let mode = plan.opcode_mode();
+                    let rgb = match opcodes::active(&day.meta, mode)? {
+                        // Bad pixels, warps, TrimBounds: the crop's region of the frame's
+                        // render (the whole frame is synthesized for it).
+                        Some(p) if p.needs_whole_frame() => {
+                            let (mut full, _) = run_clean(day, plan)?;
+                            full.meta =
+                                night_meta(&day.meta, plan, plan.clean_iso, &plan.clean_noise);
+                            let n = plan.night_neutral;
+                            let mf = color_matrix(&full.meta, n)?.map(|r| r.map(|v| v as f32));
+                            let post = move |row: &mut [f32]| matrix_row(row, &mf);
+                            pipeline::render_frame_region(
+                                &full,
+                                &p,
+                                n,
+                                Demosaic::default(),
+                                &post,
+                                crop,
+                            )?
+                        }
+                        _ => render_linear_crop_with(
+                            day,
+                            Some(plan.night_neutral),
+                            Demosaic::default(),
+                            &outer,
+                            &plane,
+                            crop,
+                            mode,
+                        )?,
+                    };
                     sink.target(TargetOut::Image(rgb))
                 },
             )
@@ -508,6 +532,170 @@ mod tests {
                 assert_eq!(bare.clean.data, c.clean.data);
                 assert_eq!(bare.noisy[0].1.data, c.noisy[0].1.data);
             }
+        }
+    }
+
+    /// A GainMap over the active area (radial falloff 1 .. 2.6), for opcode tests.
+    fn shading(aw: u32, ah: u32) -> crate::dng::opcodes::Opcode {
+        use crate::dng::opcodes::{AreaSpec, GainMap, Opcode, OpcodeKind};
+        let (pv, ph) = (5u32, 7u32);
+        let gains = (0..pv * ph)
+            .map(|i| {
+                let v = (i / ph) as f32 / (pv - 1) as f32 * 2.0 - 1.0;
+                let h = (i % ph) as f32 / (ph - 1) as f32 * 2.0 - 1.0;
+                1.0 + 0.8 * (v * v + h * h)
+            })
+            .collect();
+        Opcode::new(
+            OpcodeKind::GainMap(GainMap {
+                area: AreaSpec {
+                    top: 0,
+                    left: 0,
+                    bottom: ah,
+                    right: aw,
+                    plane: 0,
+                    planes: 1,
+                    row_pitch: 1,
+                    col_pitch: 1,
+                },
+                points_v: pv,
+                points_h: ph,
+                spacing_v: 1.0 / (pv - 1) as f64,
+                spacing_h: 1.0 / (ph - 1) as f64,
+                origin_v: 0.0,
+                origin_h: 0.0,
+                map_planes: 1,
+                gains,
+            }),
+            0,
+        )
+    }
+
+    #[test]
+    fn crop_targets_equal_the_frame_region_with_opcodes() {
+        use crate::dng::opcodes::{encode_list, Opcode, OpcodeKind, OpcodeList, WarpPlane};
+        let mut day = day();
+        let a = day.active_area();
+        let (aw, ah) = (a.width(), a.height());
+        let poly = Opcode::new(
+            OpcodeKind::MapPolynomial {
+                area: crate::dng::opcodes::AreaSpec {
+                    top: 0,
+                    left: 0,
+                    bottom: 0,
+                    right: 0,
+                    plane: 0,
+                    planes: 1,
+                    row_pitch: 1,
+                    col_pitch: 1,
+                },
+                coefficients: vec![3.0, 0.97, 1e-6],
+            },
+            0,
+        );
+        let warp = Opcode::new(
+            OpcodeKind::WarpRectilinear {
+                planes: vec![WarpPlane {
+                    kr: [1.0, -0.03, 0.0, 0.0],
+                    kt: [0.001, 0.0],
+                }],
+                center: [0.45, 0.55],
+            },
+            0,
+        );
+        let cases = [
+            // pointwise: the crop path computes the crop only
+            [
+                vec![poly.clone()],
+                vec![shading(aw as u32, ah as u32)],
+                vec![],
+            ],
+            // a warp: the crop's target is cut from the frame render
+            [vec![], vec![shading(aw as u32, ah as u32)], vec![warp]],
+        ];
+        for (ci, lists) in cases.into_iter().enumerate() {
+            for (i, l) in lists.into_iter().enumerate() {
+                day.meta.opcode_lists[i] =
+                    (!l.is_empty()).then(|| encode_list(&OpcodeList { opcodes: l }));
+            }
+            let p = planned(&day, Mode::Local, vec![]);
+            let report = p.opcodes.as_ref().unwrap();
+            assert_eq!(report.mode, crate::isp::opcodes::OpcodeMode::Apply);
+            assert!(p.stages.iter().any(|s| s == "apply_opcodes"));
+            let full = synthesize(
+                &day,
+                &p,
+                &Request {
+                    target: true,
+                    ..Request::default()
+                },
+            )
+            .unwrap();
+            assert_eq!(full.clean.meta.opcode_lists, day.meta.opcode_lists);
+            let ft = full.target.as_ref().unwrap();
+            assert_eq!(ft.count_non_finite(), 0);
+            for crop in [
+                Crop {
+                    top: 0,
+                    left: 0,
+                    height: 6,
+                    width: 8,
+                },
+                Crop {
+                    top: 10,
+                    left: 20,
+                    height: 17,
+                    width: 23,
+                },
+                Crop {
+                    top: ah - ah % 2 - 10,
+                    left: aw - aw % 2 - 12,
+                    height: 10,
+                    width: 12,
+                },
+            ] {
+                let c = synthesize(
+                    &day,
+                    &p,
+                    &Request {
+                        target: true,
+                        crop: Some(crop),
+                        ..Request::default()
+                    },
+                )
+                .unwrap();
+                let t = c.target.as_ref().unwrap();
+                let Some((oy, ox)) = target_origin(&full.clean.meta, aw, ah, &crop) else {
+                    continue;
+                };
+                for r in 0..crop.height {
+                    for k in 0..crop.width {
+                        assert_eq!(
+                            t.pixel(k, r),
+                            ft.pixel(ox + k, oy + r),
+                            "case {ci} {crop:?} ({r},{k})"
+                        );
+                    }
+                }
+            }
+            // ignoring them gives the plain target
+            let plain = {
+                let mut d = day.clone();
+                d.meta.opcode_lists = [None, None, None];
+                let p = planned(&d, Mode::Local, vec![]);
+                synthesize(
+                    &d,
+                    &p,
+                    &Request {
+                        target: true,
+                        ..Request::default()
+                    },
+                )
+                .unwrap()
+                .target
+                .unwrap()
+            };
+            assert_ne!(&plain, ft, "case {ci}: opcodes change the target");
         }
     }
 

@@ -9,6 +9,7 @@ use super::neutral::day_neutral_for;
 use super::rng::SynthRng;
 use super::{Calibration, Mode, RelightFormula, SynthOptions};
 use crate::error::{Error, Result};
+use crate::isp::opcodes::{OpcodeMode, OpcodeReport};
 use crate::noise::{Evaluated, NoiseModel, NoiseParams, PhysicsParams};
 use crate::raw::{Bayer, RawImage};
 use serde::{Deserialize, Serialize};
@@ -91,6 +92,19 @@ pub struct Plan {
     pub stages: Vec<String>,
     /// Warnings raised while planning (e.g. ISO extrapolation).
     pub warnings: Vec<String>,
+    /// What the renders (target, network input) do with the input's DNG opcode lists: the
+    /// mode and the opcodes applied and skipped. Absent when the input has no opcode list,
+    /// and in sidecars written before opcodes were applied: the renders then ignore them,
+    /// so such sidecars replay byte for byte.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub opcodes: Option<OpcodeReport>,
+}
+
+impl Plan {
+    /// The opcode mode of this plan's renders ([`Plan::opcodes`]; ignore when absent).
+    pub fn opcode_mode(&self) -> OpcodeMode {
+        self.opcodes.as_ref().map_or(OpcodeMode::Ignore, |r| r.mode)
+    }
 }
 
 fn window_len(rng: &mut SynthRng, n: usize) -> f64 {
@@ -339,6 +353,14 @@ pub fn plan(
     if !noise.is_empty() {
         stages.push("noise".into());
     }
+    // The renders' opcodes: unapplicable optional ones are warnings, mandatory ones errors.
+    let opcodes = crate::isp::opcodes::prepare(&img.meta, opts.opcodes)?.map(|p| p.report);
+    if let Some(r) = &opcodes {
+        warnings.extend(r.warnings());
+        if !r.applied.is_empty() {
+            stages.push("apply_opcodes".into());
+        }
+    }
     let plan = Plan {
         format: PLAN_FORMAT.into(),
         input_name: input_name.into(),
@@ -366,6 +388,7 @@ pub fn plan(
         noise,
         stages,
         warnings,
+        opcodes,
     };
     // The replay check (`synth --replay`) applies the same table: a plan synth writes is a
     // plan it reads back (e.g. a physics model extrapolated past the noise bounds is

@@ -71,6 +71,11 @@ impl Plan {
         if self.stages.len() > MAX_LIST || self.warnings.len() > MAX_LIST {
             return Err(field("stages/warnings", format!("more than {MAX_LIST}")));
         }
+        if let Some(o) = &self.opcodes {
+            if o.applied.len() > MAX_LIST || o.skipped.len() > MAX_LIST {
+                return Err(field("opcodes", format!("more than {MAX_LIST} entries")));
+            }
+        }
         ratio("day_neutral", &self.day_neutral)?;
         ratio("night_neutral", &self.night_neutral)?;
         match &self.dim {

@@ -35,6 +35,7 @@ mod fuzz_regressions;
 mod isp_banded;
 mod isp_demosaic_accuracy;
 mod isp_exr;
+mod isp_opcodes;
 mod isp_render;
 mod limits_bombs;
 mod limits_files;

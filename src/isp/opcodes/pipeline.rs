@@ -1,0 +1,472 @@
+//! The render stages with opcodes, in the Adobe DNG SDK's order (DNG 1.6 ch. 6):
+//! 1. OpcodeList1 on a copy of the stored values (stored-image coordinates, stored units),
+//!    rounded back to 16 bits;
+//! 2. normalization (the shared [`Normalizer`]: linearization, black, scale) pinned into
+//!    [0, 1] like the SDK's 16-bit stage-2 image, then OpcodeList2 (active-area coordinates);
+//! 3. white balance by the neutral and clip (as the plain render), demosaic;
+//! 4. OpcodeList3 on the demosaiced camera RGB of the active area: the white balance is
+//!    taken out for it (`x * n`, pinned into [0, 1] like the SDK's stage-3 image) and put
+//!    back after, so non-linear opcodes see camera values;
+//! 5. the caller's per-row `post` (colour matrix, or the [0, 1] clip of the network input),
+//!    then DefaultCrop and orientation (DefaultCrop intersected with a TrimBounds).
+//!
+//! Only files with applicable opcodes take this path ([`super::active`]); it holds a
+//! normalized CFA plane and the RGB image of the active area (no banding). A crop's render
+//! ([`render_crop`]) computes the same expressions on the crop's rectangle, so it equals the
+//! frame render's region bit for bit, when every applied opcode is pointwise
+//! ([`super::Prepared::needs_whole_frame`]).
+
+use super::{apply_region, pin, Bounds, Prepared, Region};
+use crate::dng::opcodes::{ListId, Opcode, OpcodeKind};
+use crate::error::{Error, Result};
+use crate::isp::color::normalize_neutral;
+use crate::isp::demosaic::{demosaic_rect, demosaic_rows, row_kernel, Demosaic, Post};
+use crate::isp::geometry::{apply_geometry, default_crop, orient_image};
+use crate::isp::RgbImage;
+use crate::normalize::Normalizer;
+use crate::raw::{Bayer, RawImage};
+use crate::synth::crop::Crop;
+use rayon::prelude::*;
+
+/// Rows per parallel band.
+const BAND: usize = 32;
+
+/// OpcodeList1 on the stored samples `data` of the stored-image rectangle at (`top`,
+/// `left`) of `width x height` pixels, in an image of `stored_w x stored_h`. Returns the new
+/// samples (rounded, pinned to 16 bits).
+pub fn stage1(
+    ops: &[Opcode],
+    data: &[u16],
+    (top, left, width, height): (usize, usize, usize, usize),
+    (stored_w, stored_h): (usize, usize),
+) -> Vec<u16> {
+    let mut f: Vec<f32> = data.iter().map(|&v| v as f32).collect();
+    let mut reg = Region {
+        data: &mut f,
+        top,
+        left,
+        width,
+        height,
+        planes: 1,
+        bounds: Bounds::of_size(stored_w, stored_h),
+        range: 65535.0,
+    };
+    apply_region(ops, &mut reg);
+    f.iter().map(|&v| pin(v, 65535.0).round() as u16).collect()
+}
+
+/// The stage-2 plane of an active-area rectangle: normalized values pinned into [0, 1],
+/// OpcodeList2 applied.
+struct Stage2 {
+    data: Vec<f32>,
+    top: usize,
+    left: usize,
+    width: usize,
+}
+
+impl Stage2 {
+    #[inline]
+    fn get(&self, r: usize, c: usize) -> f32 {
+        self.data[(r - self.top) * self.width + (c - self.left)]
+    }
+}
+
+/// Normalize the stored samples `at(r, c)` (active-area coordinates) of `rect` and apply
+/// `ops` (OpcodeList2) over an active area of `aw x ah`.
+fn stage2(
+    norm: &Normalizer,
+    at: &(dyn Fn(usize, usize) -> u16 + Sync),
+    rect: &Crop,
+    ops: &[Opcode],
+    (aw, ah): (usize, usize),
+) -> Result<Stage2> {
+    let n = rect.width * rect.height;
+    let mut data = crate::limits::try_filled(0.0f32, n, "a normalized CFA plane")?;
+    data.par_chunks_mut(rect.width.max(1))
+        .enumerate()
+        .for_each(|(i, row)| {
+            let r = rect.top + i;
+            for (k, o) in row.iter_mut().enumerate() {
+                let c = rect.left + k;
+                *o = pin(norm.normalize(at(r, c), r, c) as f32, 1.0);
+            }
+        });
+    let mut reg = Region {
+        data: &mut data,
+        top: rect.top,
+        left: rect.left,
+        width: rect.width,
+        height: rect.height,
+        planes: 1,
+        bounds: Bounds::of_size(aw, ah),
+        range: 1.0,
+    };
+    apply_region(ops, &mut reg);
+    Ok(Stage2 {
+        data,
+        top: rect.top,
+        left: rect.left,
+        width: rect.width,
+    })
+}
+
+/// Demosaic the rectangle `out` of the white-balanced, clipped stage-2 plane (which must
+/// hold `out` and the demosaicer's neighbourhood, or the whole active area for Menon).
+fn demosaic_stage(
+    s2: &Stage2,
+    bayer: Bayer,
+    inv: [f32; 3],
+    method: Demosaic,
+    out: &Crop,
+    (aw, ah): (usize, usize),
+) -> Result<RgbImage> {
+    let site = |r: usize, c: usize| -> f32 {
+        (s2.get(r, c) * inv[bayer.color_at(r, c) as usize]).clamp(0.0, 1.0)
+    };
+    let Some(kernel) = row_kernel(method) else {
+        if (out.width, out.height) != (aw, ah) {
+            return Err(Error::unsupported(format!(
+                "a crop render needs a row demosaicer (bilinear or mhc), not {}",
+                method.name()
+            )));
+        }
+        return Ok(demosaic_rows(
+            aw,
+            ah,
+            bayer,
+            method,
+            |r, row| {
+                for (c, o) in row.iter_mut().enumerate() {
+                    *o = site(r, c);
+                }
+            },
+            &|_| {},
+        ));
+    };
+    let mut rgb = RgbImage::try_new(out.width, out.height)?;
+    let w = out.width;
+    rgb.data
+        .par_chunks_mut(3 * w * BAND)
+        .enumerate()
+        .for_each(|(bi, band)| {
+            let r0 = out.top + bi * BAND;
+            let rows = r0..r0 + band.len() / (3 * w);
+            demosaic_rect(
+                aw,
+                ah,
+                bayer,
+                kernel,
+                rows,
+                out.cols(),
+                |r, cs, o| {
+                    for (v, &c) in o.iter_mut().zip(cs) {
+                        *v = site(r, c);
+                    }
+                },
+                &|_| {},
+                |i, px| band[3 * w * i..][..3 * w].copy_from_slice(px),
+            );
+        });
+    Ok(rgb)
+}
+
+/// The stage-3 image: `rgb` covers (`top`, `left`) .. of the image `bounds`.
+struct Stage3 {
+    rgb: RgbImage,
+    top: usize,
+    left: usize,
+    bounds: Bounds,
+}
+
+/// OpcodeList3 on the white-balanced camera RGB `s3` (white balance `n` taken out and put
+/// back). Warps and TrimBounds need `s3` to cover its bounds (the whole frame).
+fn stage3(ops: &[Opcode], s3: &mut Stage3, n: [f64; 3]) -> Result<()> {
+    if ops.is_empty() {
+        return Ok(());
+    }
+    let nf = n.map(|v| v as f32);
+    let inv = n.map(|v| (1.0 / v) as f32);
+    s3.rgb.data.par_chunks_mut(3 * 1024).for_each(|c| {
+        for px in c.chunks_exact_mut(3) {
+            for k in 0..3 {
+                px[k] = pin(px[k] * nf[k], 1.0);
+            }
+        }
+    });
+    let mut i = 0;
+    while i < ops.len() {
+        // Runs of in-place opcodes go through apply_region; warps and trims one by one.
+        let j = ops[i..]
+            .iter()
+            .position(|o| {
+                matches!(
+                    o.kind,
+                    OpcodeKind::WarpRectilinear { .. }
+                        | OpcodeKind::WarpFisheye { .. }
+                        | OpcodeKind::TrimBounds { .. }
+                )
+            })
+            .map_or(ops.len(), |k| i + k);
+        if j > i {
+            let (w, h) = (s3.rgb.width, s3.rgb.height);
+            let mut reg = Region {
+                data: &mut s3.rgb.data,
+                top: s3.top,
+                left: s3.left,
+                width: w,
+                height: h,
+                planes: 3,
+                bounds: s3.bounds,
+                range: 1.0,
+            };
+            apply_region(&ops[i..j], &mut reg);
+        }
+        if j == ops.len() {
+            break;
+        }
+        let whole = s3.top as i64 == s3.bounds.t
+            && s3.left as i64 == s3.bounds.l
+            && s3.rgb.width as i64 == s3.bounds.w()
+            && s3.rgb.height as i64 == s3.bounds.h();
+        if !whole {
+            return Err(Error::invalid(format!(
+                "OpcodeList3: {} needs the whole image, not a crop",
+                ops[j].name()
+            )));
+        }
+        match &ops[j].kind {
+            OpcodeKind::TrimBounds { bounds } => {
+                let (d, b) = super::trim::trim(&s3.rgb.data, 3, s3.bounds, *bounds)?;
+                s3.rgb = RgbImage {
+                    width: b.w() as usize,
+                    height: b.h() as usize,
+                    data: d,
+                };
+                s3.bounds = b;
+                s3.top = b.t as usize;
+                s3.left = b.l as usize;
+            }
+            kind => {
+                use super::warp::{apply, Model, Warp};
+                let (models, center) = match kind {
+                    OpcodeKind::WarpRectilinear { planes, center } => (
+                        planes
+                            .iter()
+                            .map(|p| Model::Rectilinear { kr: p.kr, kt: p.kt })
+                            .collect(),
+                        *center,
+                    ),
+                    OpcodeKind::WarpFisheye { planes, center } => (
+                        planes.iter().map(|&kr| Model::Fisheye { kr }).collect(),
+                        *center,
+                    ),
+                    _ => (vec![], [0.5, 0.5]),
+                };
+                let warp = Warp::new(models, center, s3.bounds, 3)?;
+                let (w, h) = (s3.rgb.width, s3.rgb.height);
+                s3.rgb.data = apply(&warp, &s3.rgb.data, w, h, 3, s3.bounds);
+            }
+        }
+        i = j + 1;
+    }
+    s3.rgb.data.par_chunks_mut(3 * 1024).for_each(|c| {
+        for px in c.chunks_exact_mut(3) {
+            for k in 0..3 {
+                px[k] *= inv[k];
+            }
+        }
+    });
+    Ok(())
+}
+
+fn inverse_wb(n: [f64; 3]) -> [f32; 3] {
+    [(1.0 / n[0]) as f32, 1.0, (1.0 / n[2]) as f32]
+}
+
+/// The stage-3 image of the whole frame of `img` with the opcodes `p` (white balanced by
+/// the normalized neutral `n`), before `post`.
+fn frame_stage3(img: &RawImage, p: &Prepared, n: [f64; 3], method: Demosaic) -> Result<Stage3> {
+    let bayer = img.bayer()?;
+    let a = img.active_area();
+    let (aw, ah) = (a.width(), a.height());
+    let (top, left) = (a.top as usize, a.left as usize);
+    if aw == 0 || ah == 0 || (top + ah - 1) * img.width + left + aw > img.data.len() {
+        return Err(Error::invalid(
+            "the active area is empty or outside the pixel buffer",
+        ));
+    }
+    let l1 = p.list(ListId::List1);
+    let stored: std::borrow::Cow<[u16]> = if l1.is_empty() {
+        std::borrow::Cow::Borrowed(&img.data)
+    } else {
+        std::borrow::Cow::Owned(stage1(
+            l1,
+            &img.data,
+            (0, 0, img.width, img.height),
+            (img.width, img.height),
+        ))
+    };
+    let norm = Normalizer::new(img)?;
+    let sw = img.width;
+    let at = |r: usize, c: usize| stored[(r + top) * sw + left + c];
+    let whole = Crop::whole(aw, ah);
+    let s2 = stage2(&norm, &at, &whole, p.list(ListId::List2), (aw, ah))?;
+    let rgb = demosaic_stage(&s2, bayer, inverse_wb(n), method, &whole, (aw, ah))?;
+    drop(s2);
+    let mut s3 = Stage3 {
+        rgb,
+        top: 0,
+        left: 0,
+        bounds: Bounds::of_size(aw, ah),
+    };
+    stage3(p.list(ListId::List3), &mut s3, n)?;
+    Ok(s3)
+}
+
+/// The active-area rectangle `region` of the whole-frame render of `img` with the opcodes
+/// `p` (no DefaultCrop, no orientation): what a crop's target is when the opcodes need the
+/// whole frame. Errors when a TrimBounds removed part of `region`.
+pub fn render_frame_region(
+    img: &RawImage,
+    p: &Prepared,
+    neutral: [f64; 3],
+    method: Demosaic,
+    post: &Post,
+    region: &Crop,
+) -> Result<RgbImage> {
+    let n = normalize_neutral(neutral)?;
+    let s3 = frame_stage3(img, p, n, method)?;
+    let b = s3.bounds;
+    let inside = region.top as i64 >= b.t
+        && region.left as i64 >= b.l
+        && (region.top + region.height) as i64 <= b.b
+        && (region.left + region.width) as i64 <= b.r;
+    if !inside || region.width == 0 || region.height == 0 {
+        return Err(Error::invalid(format!(
+            "the crop {region:?} is not inside the image left by OpcodeList3's TrimBounds"
+        )));
+    }
+    let (w, x0) = (s3.rgb.width, (region.left as i64 - b.l) as usize);
+    let mut out = RgbImage::try_new(region.width, region.height)?;
+    for (y, row) in out.data.chunks_exact_mut(3 * region.width).enumerate() {
+        let sy = (region.top as i64 - b.t) as usize + y;
+        row.copy_from_slice(&s3.rgb.data[3 * (sy * w + x0)..][..3 * region.width]);
+        post(row);
+    }
+    Ok(out)
+}
+
+/// The whole-frame render of `img` with the opcodes `p`: white balance by `neutral`,
+/// `method`, `post` on every row of the stage-3 image, then DefaultCrop (if `crop`) and
+/// orientation (if `orient`).
+pub fn render_frame(
+    img: &RawImage,
+    p: &Prepared,
+    neutral: [f64; 3],
+    method: Demosaic,
+    post: &Post,
+    crop: bool,
+    orient: bool,
+) -> Result<RgbImage> {
+    let n = normalize_neutral(neutral)?;
+    let a = img.active_area();
+    let (aw, ah) = (a.width(), a.height());
+    let mut s3 = frame_stage3(img, p, n, method)?;
+    let w = s3.rgb.width.max(1);
+    s3.rgb.data.par_chunks_mut(3 * w).for_each(post);
+    if s3.bounds == Bounds::of_size(aw, ah) {
+        return Ok(apply_geometry(s3.rgb, &img.meta, crop, orient));
+    }
+    // Trimmed: DefaultCrop (or the whole area) intersected with the trimmed bounds.
+    let (x0, y0, cw, ch) = if crop {
+        default_crop(&img.meta, aw, ah)
+    } else {
+        (0, 0, aw, ah)
+    };
+    let b = s3.bounds;
+    let (t, l) = ((y0 as i64).max(b.t), (x0 as i64).max(b.l));
+    let (bt, r) = (((y0 + ch) as i64).min(b.b), ((x0 + cw) as i64).min(b.r));
+    if bt <= t || r <= l {
+        return Err(Error::malformed(
+            "OpcodeList3: TrimBounds leaves nothing of the DefaultCrop area",
+        ));
+    }
+    let cut = Crop {
+        top: (t - b.t) as usize,
+        left: (l - b.l) as usize,
+        height: (bt - t) as usize,
+        width: (r - l) as usize,
+    };
+    let sw = s3.rgb.width;
+    let mut data = Vec::with_capacity(3 * cut.width * cut.height);
+    for y in cut.top..cut.top + cut.height {
+        data.extend_from_slice(&s3.rgb.data[3 * (y * sw + cut.left)..][..3 * cut.width]);
+    }
+    let rgb = RgbImage {
+        width: cut.width,
+        height: cut.height,
+        data,
+    };
+    Ok(if orient && (2..=8).contains(&img.meta.orientation) {
+        orient_image(&rgb, img.meta.orientation)
+    } else {
+        rgb
+    })
+}
+
+/// The render of the active-area rectangle `crop` of a frame (levels and colour from
+/// `frame`, LinearizationTable ignored as in [`crate::isp::render_crop`]) from the stored
+/// samples `plane` of the rectangle `outer` (which holds the crop and the demosaicer's
+/// margin), with the pointwise opcodes `p`: the same expressions as [`render_frame`], so
+/// the result equals the frame render's region (before DefaultCrop and orientation).
+#[allow(clippy::too_many_arguments)]
+pub fn render_crop(
+    frame: &RawImage,
+    p: &Prepared,
+    neutral: [f64; 3],
+    method: Demosaic,
+    outer: &Crop,
+    plane: &[u16],
+    crop: &Crop,
+    post: &Post,
+) -> Result<RgbImage> {
+    if p.needs_whole_frame() {
+        return Err(Error::invalid(
+            "the file's opcodes (bad pixels, warps, TrimBounds) need the whole frame: render it and cut the crop",
+        ));
+    }
+    let n = normalize_neutral(neutral)?;
+    let bayer = frame.bayer()?;
+    let a = frame.active_area();
+    let (aw, ah) = (a.width(), a.height());
+    let l1 = p.list(ListId::List1);
+    let values: std::borrow::Cow<[u16]> = if l1.is_empty() {
+        std::borrow::Cow::Borrowed(plane)
+    } else {
+        std::borrow::Cow::Owned(stage1(
+            l1,
+            plane,
+            (
+                outer.top + a.top as usize,
+                outer.left + a.left as usize,
+                outer.width,
+                outer.height,
+            ),
+            (frame.width, frame.height),
+        ))
+    };
+    let norm = Normalizer::new(frame)?.without_linearization();
+    let at = |r: usize, c: usize| values[(r - outer.top) * outer.width + (c - outer.left)];
+    let s2 = stage2(&norm, &at, outer, p.list(ListId::List2), (aw, ah))?;
+    let rgb = demosaic_stage(&s2, bayer, inverse_wb(n), method, crop, (aw, ah))?;
+    let mut s3 = Stage3 {
+        rgb,
+        top: crop.top,
+        left: crop.left,
+        bounds: Bounds::of_size(aw, ah),
+    };
+    stage3(p.list(ListId::List3), &mut s3, n)?;
+    let w = s3.rgb.width.max(1);
+    s3.rgb.data.par_chunks_mut(3 * w).for_each(post);
+    Ok(s3.rgb)
+}
