@@ -4,9 +4,9 @@
 //! `OSError` (I/O) or `ValueError` (everything else) with the command line's message.
 #![forbid(unsafe_code)]
 
-mod raw_from;
 mod dataset_units;
 mod pairs;
+mod raw_from;
 
 use day2night::isp::render::{render_linear, RenderOptions};
 use day2night::isp::{Demosaic, RgbImage};

@@ -9,7 +9,6 @@
 pub mod color;
 pub mod demosaic;
 pub mod geometry;
-pub mod linear_raw_opcodes;
 pub mod opcodes;
 pub mod render;
 pub mod render_crop;

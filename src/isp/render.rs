@@ -114,7 +114,13 @@ fn clip_row(row: &mut [f32]) {
 /// [`render_camera_unclipped`] clipped to [0, 1]: the network input before geometry.
 pub fn render_camera(img: &RawImage, neutral: [f64; 3], method: Demosaic) -> Result<RgbImage> {
     if img.meta.linear_raw.is_some() {
-        return super::render_linear_raw::render_camera(img, neutral, false, false);
+        return super::render_linear_raw::render_camera(
+            img,
+            neutral,
+            false,
+            false,
+            OpcodeMode::Apply,
+        );
     }
     render_with(img, neutral, method, &clip_row, false, false)
 }
@@ -416,7 +422,13 @@ pub fn render_input_with(
 pub fn render_input_opts(img: &RawImage, opts: &RenderOptions) -> Result<RgbImage> {
     let n = resolve_neutral(&img.meta, opts.neutral)?;
     if img.meta.linear_raw.is_some() {
-        return super::render_linear_raw::render_camera(img, n, opts.crop, opts.orient);
+        return super::render_linear_raw::render_camera(
+            img,
+            n,
+            opts.crop,
+            opts.orient,
+            opts.opcodes,
+        );
     }
     if let Some(p) = opcodes::active(&img.meta, opts.opcodes)? {
         return pipeline::render_frame(

@@ -1,22 +1,28 @@
-//! The render of a LinearRaw image (already demosaiced, three samples per pixel): per
-//! sample LinearizationTable, black subtraction (BlackLevel per sample and repeat cell,
-//! plus BlackLevelDeltaH/V) and scaling by `white - black_max` of that sample (DNG
-//! chapter 5, as [`crate::normalize::Normalizer`] does for a CFA site), clipped to [0, 1];
-//! OpcodeList2's MapPolynomial curves (the linearization of 8-bit lossy DNGs,
-//! `linear_raw_opcodes.rs`); white balance by the neutral; the camera -> linear sRGB matrix; DefaultCrop and
-//! orientation. No demosaicing: the demosaic option is ignored. `render.rs` dispatches
-//! here when [`RawMeta::linear_raw`](crate::raw::meta::RawMeta::linear_raw) is set.
+//! The render of a LinearRaw image (already demosaiced, three samples per pixel), in the
+//! Adobe DNG SDK's stage order: OpcodeList1 on the stored values; per sample
+//! LinearizationTable, black subtraction (BlackLevel per sample and repeat cell, plus
+//! BlackLevelDeltaH/V) and scaling by `white - black_max` of that sample (DNG chapter 5, as
+//! [`crate::normalize::Normalizer`] does for a CFA site), clipped to [0, 1]; OpcodeList2
+//! (e.g. the MapPolynomial curves that linearize 8-bit lossy DNGs) and then OpcodeList3 on
+//! that 3-plane image (a LinearRaw stage-2 image is already the SDK's stage-3 image); white
+//! balance by the neutral; the camera -> linear sRGB matrix; DefaultCrop and orientation.
+//! The opcodes are those of the shared stage ([`super::opcodes`], with the LinearRaw rules of
+//! [`super::opcodes::unsupported_reason_linear_raw`]) and follow
+//! [`RenderOptions::opcodes`]. No demosaicing: the demosaic option is ignored. `render.rs`
+//! dispatches here when [`RawMeta::linear_raw`](crate::raw::meta::RawMeta::linear_raw) is
+//! set.
 
 use super::color::normalize_neutral;
-use super::linear_raw_opcodes::{apply as apply_maps, map_polynomials};
-use super::render::{
-    apply_geometry, color_matrix, matrix_row, resolve_neutral, Bands, RenderOptions, BAND,
-};
+use super::opcodes::pipeline::{apply_list3, finish_geometry, stage1_planes, Stage3};
+use super::opcodes::{self, apply_region, Bounds, OpcodeMode, Prepared, Region};
+use super::render::{color_matrix, matrix_row, resolve_neutral, Bands, RenderOptions, BAND};
 use super::RgbImage;
+use crate::dng::opcodes::ListId;
 use crate::error::{Error, Result};
 use crate::raw::meta::LinearRaw;
 use crate::raw::RawImage;
 use rayon::prelude::*;
+use std::borrow::Cow;
 
 fn linear_raw(img: &RawImage) -> Result<&LinearRaw> {
     img.meta
@@ -25,9 +31,10 @@ fn linear_raw(img: &RawImage) -> Result<&LinearRaw> {
         .ok_or_else(|| Error::invalid("not a LinearRaw image"))
 }
 
-/// Normalized, white-balanced camera RGB of the active area, each sample clipped to
-/// [0, 1] (no colour matrix, no crop, no orientation).
-pub fn camera_rgb(img: &RawImage, neutral: [f64; 3]) -> Result<RgbImage> {
+/// Normalized camera RGB of the active area with the opcodes `p` applied (none: `None`),
+/// each sample in [0, 1], and its bounds in active-area coordinates (smaller than the
+/// active area after an OpcodeList3 TrimBounds; `rgb` covers exactly the bounds).
+fn stage_rgb(img: &RawImage, p: Option<&Prepared>) -> Result<(RgbImage, Bounds)> {
     img.validate()?;
     let lr = linear_raw(img)?;
     let spp = usize::from(lr.samples_per_pixel);
@@ -36,8 +43,6 @@ pub fn camera_rgb(img: &RawImage, neutral: [f64; 3]) -> Result<RgbImage> {
             "LinearRaw with {spp} samples per pixel (3 supported)"
         )));
     }
-    let n = normalize_neutral(neutral)?;
-    let inv = [1.0 / n[0], 1.0, 1.0 / n[2]];
     let levels = &img.meta.levels;
     let (rr, rc) = levels.black_repeat;
     let dh = levels.black_delta_h.iter().cloned().fold(0.0, f64::max);
@@ -63,12 +68,25 @@ pub fn camera_rgb(img: &RawImage, neutral: [f64; 3]) -> Result<RgbImage> {
             None => f64::from(x),
         }
     };
+    let list = |id: ListId| p.map_or(&[][..], |p| p.list(id));
+    // Stage 1: OpcodeList1 on the stored values (stored-image coordinates).
+    let l1 = list(ListId::List1);
+    let data: Cow<[u16]> = if l1.is_empty() {
+        Cow::Borrowed(&img.data)
+    } else {
+        Cow::Owned(stage1_planes(
+            l1,
+            &img.data,
+            spp,
+            (0, 0, img.width, img.height),
+            (img.width, img.height),
+        ))
+    };
     let a = img.active_area();
     let (w, h) = (a.width(), a.height());
     let (top, left) = (a.top as usize, a.left as usize);
     let stride = img.width * spp;
     let mut rgb = RgbImage::try_new(w, h)?;
-    let data = &img.data;
     rgb.data
         .par_chunks_mut(3 * w.max(1))
         .enumerate()
@@ -90,20 +108,74 @@ pub fn camera_rgb(img: &RawImage, neutral: [f64; 3]) -> Result<RgbImage> {
                 }
             }
         });
-    // OpcodeList2's MapPolynomial curves (linear_raw_opcodes.rs), then white balance.
-    if let Some(list) = &img.meta.opcode_lists[1] {
-        let maps = map_polynomials(list)?;
-        apply_maps(&mut rgb, &maps);
+    let bounds = Bounds::of_size(w, h);
+    // Stage 2: OpcodeList2 on the linear reference values (active-area coordinates).
+    let l2 = list(ListId::List2);
+    if !l2.is_empty() {
+        let mut reg = Region {
+            data: &mut rgb.data,
+            top: 0,
+            left: 0,
+            width: w,
+            height: h,
+            planes: 3,
+            bounds,
+            range: 1.0,
+        };
+        apply_region(l2, &mut reg);
     }
-    let invf = inv.map(|v| v as f32);
-    rgb.data.par_chunks_mut(3 * w.max(1)).for_each(|row| {
+    // Stage 3: OpcodeList3 on the same image (nothing to demosaic), before white balance.
+    let l3 = list(ListId::List3);
+    if l3.is_empty() {
+        return Ok((rgb, bounds));
+    }
+    let mut s3 = Stage3 {
+        rgb,
+        top: 0,
+        left: 0,
+        bounds,
+    };
+    apply_list3(l3, &mut s3)?;
+    Ok((s3.rgb, s3.bounds))
+}
+
+/// White balance by the normalized neutral `n`, clipped to [0, 1].
+fn white_balance(rgb: &mut RgbImage, n: [f64; 3]) {
+    let invf = [1.0 / n[0], 1.0, 1.0 / n[2]].map(|v| v as f32);
+    let w = rgb.width.max(1);
+    rgb.data.par_chunks_mut(3 * w).for_each(|row| {
         for px in row.chunks_exact_mut(3) {
             for (v, k) in px.iter_mut().zip(invf) {
                 *v = (*v * k).clamp(0.0, 1.0);
             }
         }
     });
-    Ok(rgb)
+}
+
+/// White-balanced camera RGB before geometry, its bounds and the active area's size.
+fn balanced(
+    img: &RawImage,
+    neutral: [f64; 3],
+    mode: OpcodeMode,
+) -> Result<(RgbImage, Bounds, (usize, usize))> {
+    let n = normalize_neutral(neutral)?;
+    let p = opcodes::active(&img.meta, mode)?;
+    let (mut rgb, b) = stage_rgb(img, p.as_ref())?;
+    white_balance(&mut rgb, n);
+    let a = img.active_area();
+    Ok((rgb, b, (a.width(), a.height())))
+}
+
+/// Normalized, white-balanced camera RGB of the active area, each sample clipped to
+/// [0, 1], the file's opcodes applied (no colour matrix, no crop, no orientation; after
+/// an OpcodeList3 TrimBounds, the trimmed rectangle).
+pub fn camera_rgb(img: &RawImage, neutral: [f64; 3]) -> Result<RgbImage> {
+    camera_rgb_with(img, neutral, OpcodeMode::Apply)
+}
+
+/// [`camera_rgb`] with the opcode lists applied or ignored.
+pub fn camera_rgb_with(img: &RawImage, neutral: [f64; 3], mode: OpcodeMode) -> Result<RgbImage> {
+    Ok(balanced(img, neutral, mode)?.0)
 }
 
 /// Linear sRGB render (see the module docs); the LinearRaw form of
@@ -112,12 +184,12 @@ pub fn render_linear(img: &RawImage, opts: &RenderOptions) -> Result<RgbImage> {
     let n = resolve_neutral(&img.meta, opts.neutral)?;
     let m = color_matrix(&img.meta, n)?;
     let mf = m.map(|r| r.map(|v| v as f32));
-    let mut rgb = camera_rgb(img, n)?;
+    let (mut rgb, b, area) = balanced(img, n, opts.opcodes)?;
     let w = rgb.width.max(1);
     rgb.data
         .par_chunks_mut(3 * w)
         .for_each(|row| matrix_row(row, &mf));
-    Ok(apply_geometry(rgb, &img.meta, opts.crop, opts.orient))
+    finish_geometry(rgb, b, &img.meta, area, opts.crop, opts.orient)
 }
 
 /// [`render_linear`] handed to `f` band by band ([`BAND`] rows), as
@@ -147,24 +219,24 @@ where
 }
 
 /// White-balanced camera RGB with DefaultCrop and orientation if asked (the network
-/// input's form; see [`super::render::render_input`]).
+/// input's form; see [`super::render::render_input`]), the opcode lists per `mode`.
 pub fn render_camera(
     img: &RawImage,
     neutral: [f64; 3],
     crop: bool,
     orient: bool,
+    mode: OpcodeMode,
 ) -> Result<RgbImage> {
-    Ok(apply_geometry(
-        camera_rgb(img, neutral)?,
-        &img.meta,
-        crop,
-        orient,
-    ))
+    let (rgb, b, area) = balanced(img, neutral, mode)?;
+    finish_geometry(rgb, b, &img.meta, area, crop, orient)
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::dng::opcodes::{
+        encode_list, AreaSpec, Opcode, OpcodeKind, OpcodeList, FLAG_OPTIONAL,
+    };
     use crate::raw::meta::RawMeta;
     use crate::raw::{Bayer, Levels};
 
@@ -192,6 +264,163 @@ mod tests {
             data,
             meta,
         }
+    }
+
+    fn area(plane: u32, planes: u32, (bottom, right): (u32, u32)) -> AreaSpec {
+        AreaSpec {
+            top: 0,
+            left: 0,
+            bottom,
+            right,
+            plane,
+            planes,
+            row_pitch: 1,
+            col_pitch: 1,
+        }
+    }
+
+    fn poly(plane: u32, c: &[f64]) -> Opcode {
+        Opcode::new(
+            OpcodeKind::MapPolynomial {
+                area: area(plane, 1, (2, 2)),
+                coefficients: c.to_vec(),
+            },
+            0,
+        )
+    }
+
+    fn with_list(img: &mut RawImage, id: ListId, opcodes: Vec<Opcode>) {
+        img.meta.opcode_lists[id.index()] = Some(encode_list(&OpcodeList { opcodes }));
+    }
+
+    /// A 2x2 image of 0.5 in every sample (black 0, white 100).
+    fn half() -> RawImage {
+        image(2, 2, vec![50; 12], vec![0.0; 3], vec![100.0; 3])
+    }
+
+    #[test]
+    fn opcode_list2_map_polynomial_per_plane_through_the_shared_stage() {
+        // The linearization curves of an Adobe lossy DNG: one MapPolynomial per plane.
+        let mut img = half();
+        with_list(
+            &mut img,
+            ListId::List2,
+            vec![poly(1, &[0.0, 0.5]), poly(2, &[0.1, 0.0, 1.0])],
+        );
+        let rgb = camera_rgb(&img, [1.0, 1.0, 1.0]).unwrap();
+        assert_eq!(&rgb.data[..3], &[0.5, 0.25, 0.35]);
+        assert_eq!(rgb.data.chunks(3).filter(|p| p[1] == 0.25).count(), 4);
+        // Results are pinned into [0, 1]; white balance comes after the curves.
+        with_list(
+            &mut img,
+            ListId::List2,
+            vec![poly(0, &[-1.0]), poly(2, &[3.0])],
+        );
+        let rgb = camera_rgb(&img, [1.0, 1.0, 2.0]).unwrap();
+        assert_eq!(&rgb.data[..3], &[0.0, 0.5, 0.5]);
+        // --opcodes ignore leaves them out; the render follows RenderOptions::opcodes.
+        let rgb = camera_rgb_with(&img, [1.0, 1.0, 1.0], OpcodeMode::Ignore).unwrap();
+        assert!(rgb.data.iter().all(|&v| v == 0.5));
+        let opts = |opcodes| RenderOptions {
+            neutral: Some([1.0, 1.0, 1.0]),
+            opcodes,
+            ..RenderOptions::default()
+        };
+        assert_ne!(
+            render_linear(&img, &opts(OpcodeMode::Apply)).unwrap(),
+            render_linear(&img, &opts(OpcodeMode::Ignore)).unwrap()
+        );
+    }
+
+    #[test]
+    fn malformed_lists_are_errors_unless_ignored() {
+        let mut img = half();
+        with_list(&mut img, ListId::List2, vec![poly(0, &[0.0, 1.0])]);
+        let list = img.meta.opcode_lists[1].as_mut().unwrap();
+        list.truncate(list.len() - 3);
+        let e = camera_rgb(&img, [1.0; 3]).unwrap_err().to_string();
+        assert!(e.contains("OpcodeList2"), "{e}");
+        assert!(camera_rgb_with(&img, [1.0; 3], OpcodeMode::Ignore).is_ok());
+        for c in [vec![f64::NAN], vec![0.0; 12]] {
+            with_list(&mut img, ListId::List2, vec![poly(0, &c)]);
+            assert!(camera_rgb(&img, [1.0; 3]).is_err(), "{c:?}");
+        }
+    }
+
+    #[test]
+    fn unsupported_opcodes_are_skipped_when_optional_else_errors() {
+        let mut img = half();
+        let bad_pixels = |flags| {
+            Opcode::new(
+                OpcodeKind::FixBadPixelsConstant {
+                    constant: 0,
+                    bayer_phase: 0,
+                },
+                flags,
+            )
+        };
+        // Bad pixels repair a CFA mosaic: a LinearRaw image has none.
+        with_list(
+            &mut img,
+            ListId::List2,
+            vec![bad_pixels(FLAG_OPTIONAL), poly(0, &[0.25])],
+        );
+        let p = opcodes::prepare(&img.meta, OpcodeMode::Apply)
+            .unwrap()
+            .unwrap();
+        assert_eq!(p.report.applied.len(), 1);
+        assert!(p.report.warnings()[0].contains("OpcodeList2: FixBadPixelsConstant (id 4)"));
+        assert_eq!(camera_rgb(&img, [1.0; 3]).unwrap().data[0], 0.25);
+        with_list(&mut img, ListId::List2, vec![bad_pixels(0)]);
+        let e = camera_rgb(&img, [1.0; 3]).unwrap_err().to_string();
+        assert!(e.contains("not optional"), "{e}");
+        assert!(camera_rgb_with(&img, [1.0; 3], OpcodeMode::Ignore).is_ok());
+    }
+
+    #[test]
+    fn list1_on_stored_values_and_list3_before_white_balance() {
+        // List 1: stored units, whole stored image (2x2 here).
+        let mut img = half();
+        with_list(
+            &mut img,
+            ListId::List1,
+            vec![Opcode::new(
+                OpcodeKind::ScalePerRow {
+                    area: area(0, 3, (2, 2)),
+                    scales: vec![2.0, 1.0],
+                },
+                0,
+            )],
+        );
+        let rgb = camera_rgb(&img, [1.0; 3]).unwrap();
+        assert_eq!(&rgb.data[..6], &[1.0; 6]);
+        assert_eq!(&rgb.data[6..], &[0.5; 6]);
+        // List 3 on the camera values (not white balanced), TrimBounds shrinking the image.
+        let mut img = half();
+        with_list(
+            &mut img,
+            ListId::List3,
+            vec![
+                Opcode::new(
+                    OpcodeKind::MapPolynomial {
+                        area: area(0, 1, (2, 2)),
+                        coefficients: vec![0.0, 1.5],
+                    },
+                    0,
+                ),
+                Opcode::new(
+                    OpcodeKind::TrimBounds {
+                        bounds: [0, 1, 2, 2],
+                    },
+                    0,
+                ),
+            ],
+        );
+        let rgb = camera_rgb(&img, [0.5, 1.0, 1.0]).unwrap();
+        assert_eq!((rgb.width, rgb.height), (1, 2));
+        assert_eq!(&rgb.data[..3], &[1.0, 0.5, 0.5]);
+        let out = render_linear(&img, &RenderOptions::default()).unwrap();
+        assert_eq!((out.width, out.height), (1, 2));
     }
 
     #[test]

@@ -118,6 +118,28 @@ fn shared_linear_raw_file_is_read_described_and_refused_for_synthesis() {
         mean.iter().cloned().fold(0.0, f64::max),
     );
     assert!(hi / lo < 1.3, "colour cast: {mean:?}");
+    // --opcodes ignore leaves the curves out (shared opcode stage): washed out, colour cast.
+    let png2 = t.path().join("lg_ignore.png");
+    let out = common::bin()
+        .arg("render")
+        .arg(&p)
+        .arg("-o")
+        .arg(&png2)
+        .args(["--opcodes", "ignore"])
+        .output()
+        .unwrap();
+    assert!(out.status.success() && out.stderr.is_empty());
+    let raw = image::open(&png2).unwrap().to_rgb8();
+    let mut mean2 = [0f64; 3];
+    for px in raw.pixels() {
+        for c in 0..3 {
+            mean2[c] += f64::from(px[c]) / (600.0 * 338.0);
+        }
+    }
+    assert!(
+        (0..3).all(|c| mean2[c] > mean[c] + 40.0),
+        "{mean2:?} {mean:?}"
+    );
     // synth refuses it with the reason, writing nothing.
     let out = common::bin()
         .arg("synth")

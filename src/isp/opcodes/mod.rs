@@ -183,6 +183,18 @@ pub fn unsupported_reason(list: ListId, kind: &OpcodeKind) -> Option<&'static st
     }
 }
 
+/// Why `kind` cannot be applied in `list` of a LinearRaw image (already demosaiced, three
+/// planes; [`crate::isp::render_linear_raw`]): as [`unsupported_reason`], except that the
+/// bad-pixel fixes, which repair a CFA mosaic, have nothing to work on.
+pub fn unsupported_reason_linear_raw(list: ListId, kind: &OpcodeKind) -> Option<&'static str> {
+    match kind {
+        OpcodeKind::FixBadPixelsConstant { .. } | OpcodeKind::FixBadPixelsList { .. } => {
+            Some("bad pixels are fixed on a CFA mosaic; a LinearRaw image has none")
+        }
+        k => unsupported_reason(list, k),
+    }
+}
+
 fn entry(list: ListId, op: &Opcode, reason: Option<&str>) -> OpcodeEntry {
     OpcodeEntry {
         list: list.tag_name().into(),
@@ -198,6 +210,21 @@ fn entry(list: ListId, op: &Opcode, reason: Option<&str>) -> OpcodeEntry {
 /// cannot be applied is skipped when its optional flag is set, else an
 /// [`Error::Unsupported`] naming the list, the opcode and its id.
 pub fn prepare_lists(lists: &[OpcodeList; 3], mode: OpcodeMode) -> Result<Option<Prepared>> {
+    prepare_lists_for(lists, mode, false)
+}
+
+/// [`prepare_lists`] for a CFA image (`linear_raw` false, [`unsupported_reason`]) or a
+/// LinearRaw one ([`unsupported_reason_linear_raw`]).
+pub fn prepare_lists_for(
+    lists: &[OpcodeList; 3],
+    mode: OpcodeMode,
+    linear_raw: bool,
+) -> Result<Option<Prepared>> {
+    let reason = if linear_raw {
+        unsupported_reason_linear_raw
+    } else {
+        unsupported_reason
+    };
     if lists.iter().all(|l| l.opcodes.is_empty()) {
         return Ok(None);
     }
@@ -212,7 +239,7 @@ pub fn prepare_lists(lists: &[OpcodeList; 3], mode: OpcodeMode) -> Result<Option
     }
     for id in ListId::ALL {
         for op in &lists[id.index()].opcodes {
-            match unsupported_reason(id, &op.kind) {
+            match reason(id, &op.kind) {
                 None => {
                     report.applied.push(entry(id, op, None));
                     out[id.index()].push(op.clone());
@@ -233,8 +260,9 @@ pub fn prepare_lists(lists: &[OpcodeList; 3], mode: OpcodeMode) -> Result<Option
     Ok(Some(Prepared { lists: out, report }))
 }
 
-/// [`prepare_lists`] on the lists of `meta` (parsed by [`crate::dng::opcodes::lists`]). Cheap
-/// when the file has no list tag (no parsing).
+/// [`prepare_lists_for`] on the lists of `meta` (parsed by [`crate::dng::opcodes::lists`]),
+/// with the LinearRaw rules when `meta` is a LinearRaw image. Cheap when the file has no
+/// list tag (no parsing).
 pub fn prepare(meta: &RawMeta, mode: OpcodeMode) -> Result<Option<Prepared>> {
     if meta.opcode_lists.iter().all(|l| l.is_none()) {
         return Ok(None);
@@ -250,7 +278,11 @@ pub fn prepare(meta: &RawMeta, mode: OpcodeMode) -> Result<Option<Prepared>> {
             },
         }));
     }
-    prepare_lists(&crate::dng::opcodes::lists(meta)?, mode)
+    prepare_lists_for(
+        &crate::dng::opcodes::lists(meta)?,
+        mode,
+        meta.linear_raw.is_some(),
+    )
 }
 
 /// The applicable opcodes of `meta` for a render in `mode`, `None` when the render takes

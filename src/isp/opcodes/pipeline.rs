@@ -37,6 +37,17 @@ const BAND: usize = 32;
 pub fn stage1(
     ops: &[Opcode],
     data: &[u16],
+    rect: (usize, usize, usize, usize),
+    stored: (usize, usize),
+) -> Vec<u16> {
+    stage1_planes(ops, data, 1, rect, stored)
+}
+
+/// [`stage1`] on `planes` interleaved samples per pixel (3 for a LinearRaw image).
+pub fn stage1_planes(
+    ops: &[Opcode],
+    data: &[u16],
+    planes: usize,
     (top, left, width, height): (usize, usize, usize, usize),
     (stored_w, stored_h): (usize, usize),
 ) -> Vec<u16> {
@@ -47,7 +58,7 @@ pub fn stage1(
         left,
         width,
         height,
-        planes: 1,
+        planes,
         bounds: Bounds::of_size(stored_w, stored_h),
         range: 65535.0,
     };
@@ -171,11 +182,15 @@ fn demosaic_stage(
 }
 
 /// The stage-3 image: `rgb` covers (`top`, `left`) .. of the image `bounds`.
-struct Stage3 {
-    rgb: RgbImage,
-    top: usize,
-    left: usize,
-    bounds: Bounds,
+pub(crate) struct Stage3 {
+    /// Samples (three planes, in [0, 1]).
+    pub(crate) rgb: RgbImage,
+    /// Stage row of the first row.
+    pub(crate) top: usize,
+    /// Stage column of the first column.
+    pub(crate) left: usize,
+    /// The whole stage image (moved by a TrimBounds).
+    pub(crate) bounds: Bounds,
 }
 
 /// OpcodeList3 on the white-balanced camera RGB `s3` (white balance `n` taken out and put
@@ -193,6 +208,21 @@ fn stage3(ops: &[Opcode], s3: &mut Stage3, n: [f64; 3]) -> Result<()> {
             }
         }
     });
+    apply_list3(ops, s3)?;
+    s3.rgb.data.par_chunks_mut(3 * 1024).for_each(|c| {
+        for px in c.chunks_exact_mut(3) {
+            for k in 0..3 {
+                px[k] *= inv[k];
+            }
+        }
+    });
+    Ok(())
+}
+
+/// OpcodeList3 `ops` on the camera RGB `s3` (values in [0, 1], no white balance): runs of
+/// in-place opcodes through [`apply_region`], warps and TrimBounds one by one (they need
+/// `s3` to cover its bounds).
+pub(crate) fn apply_list3(ops: &[Opcode], s3: &mut Stage3) -> Result<()> {
     let mut i = 0;
     while i < ops.len() {
         // Runs of in-place opcodes go through apply_region; warps and trims one by one.
@@ -269,13 +299,6 @@ fn stage3(ops: &[Opcode], s3: &mut Stage3, n: [f64; 3]) -> Result<()> {
         }
         i = j + 1;
     }
-    s3.rgb.data.par_chunks_mut(3 * 1024).for_each(|c| {
-        for px in c.chunks_exact_mut(3) {
-            for k in 0..3 {
-                px[k] *= inv[k];
-            }
-        }
-    });
     Ok(())
 }
 
@@ -374,16 +397,29 @@ pub fn render_frame(
     let mut s3 = frame_stage3(img, p, n, method)?;
     let w = s3.rgb.width.max(1);
     s3.rgb.data.par_chunks_mut(3 * w).for_each(post);
-    if s3.bounds == Bounds::of_size(aw, ah) {
-        return Ok(apply_geometry(s3.rgb, &img.meta, crop, orient));
+    finish_geometry(s3.rgb, s3.bounds, &img.meta, (aw, ah), crop, orient)
+}
+
+/// DefaultCrop (if `crop`) and orientation (if `orient`) of the stage-3 image `rgb` of the
+/// stage bounds `b` in an active area of `aw x ah`: after a TrimBounds, the DefaultCrop
+/// (or the whole area) intersected with `b`.
+pub(crate) fn finish_geometry(
+    rgb: RgbImage,
+    b: Bounds,
+    meta: &crate::raw::meta::RawMeta,
+    (aw, ah): (usize, usize),
+    crop: bool,
+    orient: bool,
+) -> Result<RgbImage> {
+    if b == Bounds::of_size(aw, ah) {
+        return Ok(apply_geometry(rgb, meta, crop, orient));
     }
     // Trimmed: DefaultCrop (or the whole area) intersected with the trimmed bounds.
     let (x0, y0, cw, ch) = if crop {
-        default_crop(&img.meta, aw, ah)
+        default_crop(meta, aw, ah)
     } else {
         (0, 0, aw, ah)
     };
-    let b = s3.bounds;
     let (t, l) = ((y0 as i64).max(b.t), (x0 as i64).max(b.l));
     let (bt, r) = (((y0 + ch) as i64).min(b.b), ((x0 + cw) as i64).min(b.r));
     if bt <= t || r <= l {
@@ -397,20 +433,20 @@ pub fn render_frame(
         height: (bt - t) as usize,
         width: (r - l) as usize,
     };
-    let sw = s3.rgb.width;
+    let sw = rgb.width;
     let mut data = Vec::with_capacity(3 * cut.width * cut.height);
     for y in cut.top..cut.top + cut.height {
-        data.extend_from_slice(&s3.rgb.data[3 * (y * sw + cut.left)..][..3 * cut.width]);
+        data.extend_from_slice(&rgb.data[3 * (y * sw + cut.left)..][..3 * cut.width]);
     }
-    let rgb = RgbImage {
+    let out = RgbImage {
         width: cut.width,
         height: cut.height,
         data,
     };
-    Ok(if orient && (2..=8).contains(&img.meta.orientation) {
-        orient_image(&rgb, img.meta.orientation)
+    Ok(if orient && (2..=8).contains(&meta.orientation) {
+        orient_image(&out, meta.orientation)
     } else {
-        rgb
+        out
     })
 }
 
