@@ -92,8 +92,8 @@ impl Opcode {
 
 /// The area an opcode of the "area" family acts on (MapTable, MapPolynomial, GainMap,
 /// Delta/Scale per row/column): a rectangle of the image (in image coordinates of the stage:
-/// stored-image coordinates for lists 1 and 2, active-area coordinates for list 3 as in the
-/// Adobe SDK), a range of planes, and a row/column pitch (only every `row_pitch`-th row and
+/// stored-image coordinates for list 1; active-area coordinates for lists 2 and 3, whose
+/// stage images the Adobe SDK builds with the active area's origin at (0, 0)), a range of planes, and a row/column pitch (only every `row_pitch`-th row and
 /// `col_pitch`-th column from `top`/`left` is touched).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
 pub struct AreaSpec {
