@@ -7,8 +7,8 @@
 //! [`RawImage::from_parts`] checks the whole as the DNG reader checks a file's tags (plus
 //! [`RawImage::validate`]) before anything uses it. Nothing here reads or writes a file.
 
-use super::meta::{CfaPattern, ColorInfo, ExifInfo, RawMeta};
-use super::{Bayer, Levels, RawImage};
+use super::meta::RawMeta;
+use super::RawImage;
 use crate::error::{Error, Result};
 
 /// The XYZ (D65) -> linear sRGB matrix (IEC 61966-2-1), row-major: the default
@@ -77,48 +77,6 @@ impl ColorDefault {
                 meta.noise_profile = None;
                 "no noise profile: the built-in noise model gives the clean raw's noise".into()
             }
-        }
-    }
-}
-
-impl RawMeta {
-    /// Metadata of a Bayer raw with only its levels and bit depth known: no colour
-    /// metadata, no neutral, no ISO, no make or model, no ActiveArea or DefaultCrop.
-    pub fn bare(bayer: Bayer, levels: Levels, bits_per_sample: u16) -> RawMeta {
-        RawMeta {
-            dng_version: [1, 4, 0, 0],
-            dng_backward_version: None,
-            make: None,
-            model: None,
-            unique_camera_model: None,
-            bits_per_sample,
-            active_area: None,
-            default_crop_origin: None,
-            default_crop_size: None,
-            cfa: CfaPattern {
-                rows: 2,
-                cols: 2,
-                pattern: bayer.0.to_vec(),
-                plane_color: vec![0, 1, 2],
-                layout: 1,
-            },
-            linearization_table: None,
-            levels,
-            as_shot_neutral: None,
-            as_shot_white_xy: None,
-            color: ColorInfo::default(),
-            noise_profile: None,
-            orientation: 1,
-            exif: ExifInfo::default(),
-            opcode_lists: [None, None, None],
-            ifd0_extra: vec![],
-            raw_extra: vec![],
-            exif_extra: vec![],
-            gps: vec![],
-            storage: None,
-            stored: Vec::new(),
-            linear_raw: None,
-            warnings: Vec::new(),
         }
     }
 }
@@ -291,7 +249,7 @@ impl RawImage {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::raw::Rect;
+    use crate::raw::{Bayer, Levels, Rect};
 
     fn levels(black: f64, white: f64) -> Levels {
         Levels {

@@ -262,13 +262,43 @@ impl RawMeta {
 
     /// A minimal valid metadata set for a Bayer image: used by generators and tests.
     pub fn new_bayer(bayer: Bayer, bits: u16, black: f64, white: f64) -> RawMeta {
+        let levels = Levels {
+            black_repeat: (1, 1),
+            black: vec![black],
+            black_delta_h: vec![],
+            black_delta_v: vec![],
+            white,
+        };
         RawMeta {
-            dng_version: [1, 4, 0, 0],
             dng_backward_version: Some([1, 1, 0, 0]),
             make: Some("day2night".into()),
             model: Some("Synthetic".into()),
             unique_camera_model: Some("day2night Synthetic".into()),
-            bits_per_sample: bits,
+            as_shot_neutral: Some([0.5, 1.0, 0.6]),
+            color: ColorInfo {
+                // A plausible sRGB-like camera: XYZ(D65) -> camera is the inverse of the
+                // sRGB primaries matrix; illuminant 21 = D65.
+                color_matrix1: Some(vec![
+                    3.2404542, -1.5371385, -0.4985314, -0.9692660, 1.8760108, 0.0415560, 0.0556434,
+                    -0.2040259, 1.0572252,
+                ]),
+                calibration_illuminant1: Some(21),
+                ..ColorInfo::default()
+            },
+            ..RawMeta::bare(bayer, levels, bits)
+        }
+    }
+
+    /// Metadata of a Bayer raw with only its levels and bit depth known: no colour
+    /// metadata, no neutral, no ISO, no make or model, no ActiveArea or DefaultCrop.
+    pub fn bare(bayer: Bayer, levels: Levels, bits_per_sample: u16) -> RawMeta {
+        RawMeta {
+            dng_version: [1, 4, 0, 0],
+            dng_backward_version: None,
+            make: None,
+            model: None,
+            unique_camera_model: None,
+            bits_per_sample,
             active_area: None,
             default_crop_origin: None,
             default_crop_size: None,
@@ -280,25 +310,10 @@ impl RawMeta {
                 layout: 1,
             },
             linearization_table: None,
-            levels: Levels {
-                black_repeat: (1, 1),
-                black: vec![black],
-                black_delta_h: vec![],
-                black_delta_v: vec![],
-                white,
-            },
-            as_shot_neutral: Some([0.5, 1.0, 0.6]),
+            levels,
+            as_shot_neutral: None,
             as_shot_white_xy: None,
-            color: ColorInfo {
-                // A plausible sRGB-like camera: XYZ(D65) -> camera is the inverse of the
-                // sRGB primaries matrix; illuminant 21 = D65.
-                color_matrix1: Some(vec![
-                    3.2404542, -1.5371385, -0.4985314, -0.9692660, 1.8760108, 0.0415560, 0.0556434,
-                    -0.2040259, 1.0572252,
-                ]),
-                calibration_illuminant1: Some(21),
-                ..ColorInfo::default()
-            },
+            color: ColorInfo::default(),
             noise_profile: None,
             orientation: 1,
             exif: ExifInfo::default(),
@@ -308,8 +323,8 @@ impl RawMeta {
             exif_extra: vec![],
             gps: vec![],
             storage: None,
-            linear_raw: None,
             stored: Vec::new(),
+            linear_raw: None,
             warnings: Vec::new(),
         }
     }
