@@ -140,27 +140,25 @@ impl Sampler {
         })
     }
 
-    /// Read noise in DN.
-    #[inline(always)]
-    fn read(&self, rng: &mut SiteRng) -> f64 {
-        if let Some(t) = &self.tukey {
-            t.sample(rng.next_u64())
-        } else {
-            // Gaussian read noise or none (the Tukey case always has a table).
-            gaussian_read(self.sigma_read, rng)
-        }
-    }
-
     /// The noisy value of a site: stored value `x`, black `b`, tables `level`, row offset
-    /// `row_dn`, the site's random word `word` (module docs).
+    /// `row_dn`, the site's random word `word` (module docs); `read` draws the read noise
+    /// in DN.
     #[inline(always)]
-    fn site(&self, word: u64, x: u16, b: f64, level: Option<&LevelTables>, row_dn: f64) -> u16 {
+    fn site<R: Fn(&mut SiteRng) -> f64>(
+        &self,
+        read: &R,
+        word: u64,
+        x: u16,
+        b: f64,
+        level: Option<&LevelTables>,
+        row_dn: f64,
+    ) -> u16 {
         let mut site = SiteRng(word);
         let shot = match level.and_then(|l| l.get(x)) {
             Some(t) => self.k * t.sample(word),
             None => shot(x as f64 - b, self.k, self.poisson_max, &mut site),
         };
-        let v = b + shot + self.read(&mut site);
+        let v = b + shot + read(&mut site);
         round_clamp_to(v + row_dn, self.white, self.white_u)
     }
 }
@@ -310,37 +308,56 @@ impl<'a, 'n> Region<'a, 'n> {
             .for_each_init(
                 || vec![0.0f64; self.aw],
                 |blk, (line, r)| {
-                    let cols = self.cols.clone();
-                    let (row_dn, row_seed) = row_draws(&self.key, r, s.sigma_row);
-                    // the row's SplitMix64 positioned before site cols.start
-                    let start = (cols.start as u64).wrapping_mul(GAMMA);
-                    let mut rng = SiteRng(row_seed.wrapping_add(start));
-                    let xs = &(self.src)(r)[cols.start - self.src_left..][..w];
                     let out = &mut line[dst_left..][..w];
-                    let mut site_at = |x: u16, b: f64, level: Option<&LevelTables>| {
-                        s.site(rng.next_u64(), x, b, level, row_dn)
-                    };
-                    if let Some(t) = &s.shots {
-                        // black periodic over the 2x2 tile: the tables' levels, by parity
-                        let lv = |c: usize| t.level(crate::raw::Bayer::position(r, c));
-                        let (l0, l1) = (lv(cols.start), lv(cols.start + 1));
-                        let (b0, b1) = (l0.black(), l1.black());
-                        let mut pairs = out.chunks_exact_mut(2).zip(xs.chunks_exact(2));
-                        for (o, x) in &mut pairs {
-                            o[0] = site_at(x[0], b0, Some(l0));
-                            o[1] = site_at(x[1], b1, Some(l1));
-                        }
-                        if w % 2 == 1 {
-                            out[w - 1] = site_at(xs[w - 1], b0, Some(l0));
-                        }
-                    } else {
-                        self.norm.black_row(r, &mut blk[..cols.end]);
-                        for ((o, &x), &b) in out.iter_mut().zip(xs).zip(&blk[cols]) {
-                            *o = site_at(x, b, None);
-                        }
+                    // one copy of the row loop per kind of read noise
+                    match &s.tukey {
+                        Some(t) => self.noise_row(r, out, blk, &|g| t.sample(g.next_u64())),
+                        None => self.noise_row(r, out, blk, &|g| gaussian_read(s.sigma_read, g)),
                     }
                 },
             );
+    }
+
+    /// Noise active-area row `r` into `out` (its `cols`); `blk` is scratch of the
+    /// active-area width.
+    #[inline(always)]
+    fn noise_row<R: Fn(&mut SiteRng) -> f64>(
+        &self,
+        r: usize,
+        out: &mut [u16],
+        blk: &mut [f64],
+        read: &R,
+    ) {
+        let s = &self.sampler;
+        let cols = self.cols.clone();
+        let w = cols.len();
+        let (row_dn, row_seed) = row_draws(&self.key, r, s.sigma_row);
+        // the row's SplitMix64 positioned before site cols.start
+        let start = (cols.start as u64).wrapping_mul(GAMMA);
+        let mut rng = SiteRng(row_seed.wrapping_add(start));
+        let xs = &(self.src)(r)[cols.start - self.src_left..][..w];
+        let mut site_at = |x: u16, b: f64, level: Option<&LevelTables>| {
+            s.site(read, rng.next_u64(), x, b, level, row_dn)
+        };
+        if let Some(t) = &s.shots {
+            // black periodic over the 2x2 tile: the tables' levels, by parity
+            let lv = |c: usize| t.level(crate::raw::Bayer::position(r, c));
+            let (l0, l1) = (lv(cols.start), lv(cols.start + 1));
+            let (b0, b1) = (l0.black(), l1.black());
+            let mut pairs = out.chunks_exact_mut(2).zip(xs.chunks_exact(2));
+            for (o, x) in &mut pairs {
+                o[0] = site_at(x[0], b0, Some(l0));
+                o[1] = site_at(x[1], b1, Some(l1));
+            }
+            if w % 2 == 1 {
+                out[w - 1] = site_at(xs[w - 1], b0, Some(l0));
+            }
+        } else {
+            self.norm.black_row(r, &mut blk[..cols.end]);
+            for ((o, &x), &b) in out.iter_mut().zip(xs).zip(&blk[cols]) {
+                *o = site_at(x, b, None);
+            }
+        }
     }
 }
 

@@ -47,32 +47,47 @@ impl PoissonTable {
     /// The table of `Poisson(e)`, `e` finite, `0 < e <= MAX_TABLE_MEAN`.
     pub fn new(e: f64) -> PoissonTable {
         debug_assert!(e > 0.0 && e <= MAX_TABLE_MEAN);
-        let (lo, pmf) = pmf(e);
+        let (lo, pmf, mode) = pmf(e);
         let n = pmf.len();
         let g = n.next_power_of_two().trailing_zeros().max(1);
         let buckets = 1usize << g;
-        let cap: u128 = TOTAL >> g;
-        // integer weights summing to exactly 2^64
-        let total: f64 = pmf.iter().sum();
-        let mut w: Vec<u128> = pmf
-            .iter()
-            .map(|p| (p / total * TOTAL as f64).round() as u128)
-            .collect();
-        let sum: i128 = w.iter().map(|&x| x as i128).sum();
-        let mode = (0..n)
-            .max_by(|&a, &b| pmf[a].total_cmp(&pmf[b]))
-            .unwrap_or(0);
+        if n == 1 {
+            // one count holds all the mass: every bucket keeps it
+            return PoissonTable {
+                lo,
+                g,
+                cells: vec![0; buckets].into(),
+            };
+        }
+        let cap: u64 = 1 << (64 - g);
+        // integer weights summing to exactly 2^64 (each at least one unit: p >= 2^-64)
+        let scale = TOTAL as f64 / pmf.iter().sum::<f64>();
+        let mut w: Vec<u64> = Vec::with_capacity(buckets);
+        let mut sum: u128 = 0;
+        for p in &pmf {
+            let x = (p * scale).round() as u64;
+            sum += x as u128;
+            w.push(x);
+        }
         // the remainder is about 1e-16 of the total, far below the mode's weight
-        w[mode] = (w[mode] as i128 + (TOTAL as i128 - sum)).max(0) as u128;
+        let fixed = w[mode] as i128 + (TOTAL as i128 - sum as i128);
+        w[mode] = fixed.clamp(0, u64::MAX as i128) as u64;
         w.resize(buckets, 0);
-        // Vose's alias construction, exact in integers
-        let mut thr: Vec<u128> = vec![cap; buckets];
-        let mut alias: Vec<usize> = (0..buckets).collect();
-        let (mut small, mut large): (Vec<usize>, Vec<usize>) =
-            (0..buckets).partition(|&j| w[j] < cap);
+        // Vose's alias construction, exact in integers; a bucket not split keeps its units
+        // (threshold 0, alias itself)
+        let mut cells: Vec<u64> = (0..buckets as u64).collect();
+        let mut small = Vec::with_capacity(buckets);
+        let mut large = Vec::with_capacity(buckets);
+        for (j, &x) in w.iter().enumerate() {
+            if x < cap {
+                small.push(j);
+            } else {
+                large.push(j);
+            }
+        }
         while let (Some(&l), Some(s)) = (large.last(), small.pop()) {
-            thr[s] = w[s];
-            alias[s] = l;
+            // w[s] < cap = 2^(64-g): the shift keeps every bit
+            cells[s] = (w[s] << g) | l as u64;
             w[l] -= cap - w[s];
             if w[l] < cap {
                 large.pop();
@@ -80,16 +95,11 @@ impl PoissonTable {
             }
         }
         // what is left holds exactly `cap` (the weights sum to buckets * cap)
-        let cells = (0..buckets)
-            .map(|j| {
-                if thr[j] >= cap {
-                    j as u64
-                } else {
-                    ((thr[j] as u64) << g) | alias[j] as u64
-                }
-            })
-            .collect();
-        PoissonTable { lo, g, cells }
+        PoissonTable {
+            lo,
+            g,
+            cells: cells.into(),
+        }
     }
 
     /// The count that the 64 random bits `v` select, as f64.
@@ -134,8 +144,9 @@ impl PoissonTable {
     }
 }
 
-/// The probabilities of `Poisson(e)` above [`PMF_FLOOR`], from the first count on.
-fn pmf(e: f64) -> (u32, Vec<f64>) {
+/// The probabilities of `Poisson(e)` above [`PMF_FLOOR`]: the first count, the
+/// probabilities from it on, the index of the mode.
+fn pmf(e: f64) -> (u32, Vec<f64>, usize) {
     let mode = e.floor();
     let pm = (mode * e.ln() - e - ln_gamma(mode + 1.0)).exp();
     // downwards from the mode
@@ -151,6 +162,7 @@ fn pmf(e: f64) -> (u32, Vec<f64>) {
         down.push(p);
     }
     let lo = mode as u32 - down.len() as u32;
+    let at = down.len();
     let mut pmf: Vec<f64> = down.into_iter().rev().collect();
     pmf.push(pm);
     let mut p = pm;
@@ -163,7 +175,7 @@ fn pmf(e: f64) -> (u32, Vec<f64>) {
         }
         pmf.push(p);
     }
-    (lo, pmf)
+    (lo, pmf, at)
 }
 
 /// Largest mean tabulated: a table of mean `e` holds about `17 sqrt(e)` entries.
@@ -318,7 +330,7 @@ mod tests {
 
     #[test]
     fn weights_match_direct_sums() {
-        for e in [1e-9, 0.3, 1.0, 3.0, 11.99, 12.5, 100.0, 428.1, 999.7] {
+        for e in [1e-25, 1e-9, 0.3, 1.0, 3.0, 11.99, 12.5, 100.0, 428.1, 999.7] {
             let t = PoissonTable::new(e);
             let (lo, w) = t.weights();
             assert_eq!(w.iter().sum::<u128>(), TOTAL, "e {e}");
