@@ -1,11 +1,15 @@
 //! Synthesis stages on a 12 MP (4000 x 3000) RGGB 14-bit frame generated here:
 //! normalize, the fused clean pass in `day` mode (normalize + denormalize only),
 //! relight local (release formula, 4 lights + 5 bulbs, each mask evaluation), and noise
-//! (one ISO). Before timing, prints the error of each mask evaluation against the exact one
+//! (one ISO: the Gaussian model, and the physics model of issue 14 with a bench model of
+//! the same total variance at that ISO). Before timing, prints the error of each mask evaluation against the exact one
 //! (max and mean absolute difference in DN over the frame) for docs/benchmarks.md.
 //!
-//! Run: `cargo bench --bench synth` (D2N_BENCH_QUICK=1 for a shorter run).
+//! Run: `cargo bench --bench synth` (D2N_BENCH_QUICK=1 for a shorter run;
+//! D2N_BENCH_NO_ACCURACY=1 skips the accuracy table; `-- noise` times the noise stages only).
 use criterion::{criterion_group, criterion_main, Criterion};
+use day2night::noise::physics::{PhysicsModel, PhysicsPoint};
+use day2night::noise::NoiseModel;
 use day2night::normalize::{normalize, NormalizeOptions};
 use day2night::raw::meta::RawMeta;
 use day2night::raw::{Bayer, RawImage};
@@ -38,14 +42,36 @@ fn frame() -> RawImage {
 }
 
 fn plan_for(img: &RawImage, mode: Mode, eval: MaskEval) -> synth::Plan {
+    plan_with(img, mode, eval, false)
+}
+
+/// The plan, with the physics noise model of [`physics_model`] when `physics`.
+fn plan_with(img: &RawImage, mode: Mode, eval: MaskEval, physics: bool) -> synth::Plan {
     let o = SynthOptions {
         mode,
         mask_eval: eval,
         isos: vec![3200],
         ..SynthOptions::default()
     };
-    let cal = Calibration::embedded(&o).unwrap();
+    let mut cal = Calibration::embedded(&o).unwrap();
+    if physics {
+        cal.noise = Some(NoiseModel::from_physics(physics_model()).unwrap());
+    }
     synth::plan(img, "bench.dng", 1, 0, &o, &cal).unwrap()
+}
+
+/// A physics model for the bench frame's levels (14-bit, black 512): at ISO 3200 K = 4
+/// DN/e-, Tukey read noise lambda 0.05 of 6 DN, row noise 1.5 DN.
+fn physics_model() -> PhysicsModel {
+    let pt = |iso, k: f64| PhysicsPoint {
+        iso,
+        k,
+        sigma_read: 1.5 * k,
+        lambda: 0.05,
+        gaussian_read: false,
+        sigma_row: 0.375 * k,
+    };
+    PhysicsModel::new("bench", 512.0, 16383.0, vec![pt(1600, 2.0), pt(3200, 4.0)]).unwrap()
 }
 
 fn accuracy(img: &RawImage) {
@@ -84,7 +110,9 @@ fn accuracy(img: &RawImage) {
 
 fn bench(c: &mut Criterion) {
     let img = frame();
-    accuracy(&img);
+    if std::env::var_os("D2N_BENCH_NO_ACCURACY").is_none() {
+        accuracy(&img);
+    }
     let mut g = c.benchmark_group("synth_12mp");
     g.sample_size(10);
     if std::env::var_os("D2N_BENCH_QUICK").is_some() {
@@ -115,6 +143,10 @@ fn bench(c: &mut Criterion) {
     let (clean, _) = synth::run_clean(&img, &p).unwrap();
     g.bench_function("noise_one_iso", |b| {
         b.iter(|| black_box(synth::run_noise(&clean, &p, 0).unwrap()))
+    });
+    let pp = plan_with(&img, Mode::Local, MaskEval::Separable, true);
+    g.bench_function("noise_one_iso_physics", |b| {
+        b.iter(|| black_box(synth::run_noise(&clean, &pp, 0).unwrap()))
     });
     g.finish();
 }

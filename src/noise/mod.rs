@@ -1,13 +1,16 @@
 //! Noise models and noise synthesis: the heteroscedastic Gaussian model per 2x2 CFA position
 //! and ISO ([`model`]), and applying it to a clean night raw ([`apply`]); the physics-based
-//! model (shot, Tukey-lambda read, row noise; [`physics`], [`physics_apply`], [`tukey`]).
+//! model (shot, Tukey-lambda read, row noise; [`physics`], [`physics_apply`], [`tukey`],
+//! and the sampler's tables [`poisson_table`], [`tukey_table`]).
 //! See docs/noise.md.
 
 pub mod apply;
 pub mod model;
 pub mod physics;
 pub mod physics_apply;
+pub mod poisson_table;
 pub mod tukey;
+pub mod tukey_table;
 
 pub use apply::apply_noise;
 pub use model::{Evaluated, IsoPoint, NoiseModel, NoiseParams, NOISE_MODEL_FORMAT};

@@ -10,15 +10,24 @@
 //! - `noisy = clip(round(black + shot + read + row), 0, white)`.
 //!
 //! Randomness: one ChaCha8 stream per active-area row (key = SHA-256 of the seed with its own
-//! domain tag, stream number = row). Each site reads exactly one `u64` from it, at word
-//! position `2 (c + 1)` (the row offset's seed is at 0), and draws its shot and read noise
-//! from a SplitMix64 generator seeded with that word. So any crop (rows x cols) gives the
-//! same samples as the whole frame at the same sites, for any thread count.
+//! domain tag, stream number = row) gives two `u64`: the first seeds the row offset's normal
+//! draw, the second `k_r` seeds the row's SplitMix64 sequence. Site `c` takes that
+//! sequence's output `c + 1`, `w = mix(k_r + (c + 1) gamma)` (random access: no need to
+//! generate the sites before it): a tabulated shot draw uses `w` itself, and the rest of
+//! the site's draws (the read noise; an untabulated shot draw, which may take several
+//! uniforms) come from a SplitMix64 generator seeded with `w`. So any crop (rows x cols)
+//! gives the same samples as the whole frame at the same sites, for any thread count.
+//! (Issue 20: the previous layout read each site's word from the ChaCha stream; SplitMix64
+//! gives it in a third of the instructions.)
 
 use super::physics::PhysicsParams;
+use super::poisson_table::{LevelTables, ShotTables};
 use super::tukey;
+use super::tukey_table::TukeyTable;
 use crate::error::{Error, Result};
-use crate::normalize::{round_clamp, Normalizer};
+#[cfg(test)]
+use crate::normalize::round_clamp;
+use crate::normalize::Normalizer;
 use crate::raw::RawImage;
 use rand::{Rng, SeedableRng, TryRng};
 use rand_chacha::ChaCha8Rng;
@@ -31,12 +40,24 @@ use std::ops::Range;
 /// The 32-byte ChaCha key of a physics noise seed.
 pub fn physics_key(seed: u64) -> [u8; 32] {
     let mut h = Sha256::new();
-    h.update(b"day2night physics noise rows v1\0");
+    h.update(b"day2night physics noise rows v2\0");
     h.update(seed.to_le_bytes());
     h.finalize().into()
 }
 
-/// SplitMix64 (Steele, Lea, Flood 2014): a small generator seeded per site.
+/// SplitMix64's increment (the golden ratio in 64-bit fixed point).
+const GAMMA: u64 = 0x9E37_79B9_7F4A_7C15;
+
+/// SplitMix64's output function of state `z`.
+#[inline(always)]
+fn mix(mut z: u64) -> u64 {
+    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+    z ^ (z >> 31)
+}
+
+/// SplitMix64 (Steele, Lea, Flood 2014): a small generator, one per row (its outputs are
+/// the sites' words) and one per site (seeded with the site's word).
 struct SiteRng(u64);
 
 impl TryRng for SiteRng {
@@ -47,11 +68,8 @@ impl TryRng for SiteRng {
     }
     #[inline]
     fn try_next_u64(&mut self) -> std::result::Result<u64, Infallible> {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        Ok(z ^ (z >> 31))
+        self.0 = self.0.wrapping_add(GAMMA);
+        Ok(mix(self.0))
     }
     fn try_fill_bytes(&mut self, dst: &mut [u8]) -> std::result::Result<(), Infallible> {
         for chunk in dst.chunks_mut(8) {
@@ -62,14 +80,10 @@ impl TryRng for SiteRng {
     }
 }
 
-/// Uniform in the open interval (0, 1).
-#[inline]
-fn open01(rng: &mut SiteRng) -> f64 {
-    ((rng.next_u64() >> 11) as f64 + 0.5) * (1.0 / (1u64 << 53) as f64)
-}
-
-/// Shot noise term in DN for signal `s` DN above black.
-#[inline]
+/// Shot noise term in DN for signal `s` DN above black, without a table: an exact
+/// `rand_distr::Poisson` draw at or below `poisson_max` electrons, the normal approximation
+/// above.
+#[inline(never)]
 fn shot(s: f64, k: f64, poisson_max: f64, rng: &mut SiteRng) -> f64 {
     if s.is_nan() || s <= 0.0 {
         return if s.is_nan() { 0.0 } else { s };
@@ -90,55 +104,97 @@ fn shot(s: f64, k: f64, poisson_max: f64, rng: &mut SiteRng) -> f64 {
     }
 }
 
-/// Precomputed per-call constants.
+/// Precomputed per-call constants and tables.
 struct Sampler {
     k: f64,
     poisson_max: f64,
     sigma_read: f64,
-    lambda: f64,
-    gaussian: bool,
-    /// `sigma_read / sd(lambda)`.
-    read_scale: f64,
     sigma_row: f64,
+    /// `sigma_read * Q_lambda / sd(lambda)` tabulated (Tukey read noise, sigma_read > 0).
+    tukey: Option<TukeyTable>,
+    /// Inverse-CDF tables of the shot noise (black level periodic over the 2x2 tile).
+    shots: Option<ShotTables>,
+    /// White level (at most 65535) and `white as u32`.
+    white: f64,
+    white_u: u32,
 }
 
 impl Sampler {
-    fn new(p: &PhysicsParams) -> Result<Sampler> {
+    fn new(p: &PhysicsParams, norm: &Normalizer, white: f64) -> Result<Sampler> {
         p.check("physics noise")?;
+        let tukey = (!p.gaussian_read && p.sigma_read > 0.0)
+            .then(|| TukeyTable::new(p.lambda, p.sigma_read / tukey::std_dev(p.lambda)));
+        let shots = norm.black_is_2x2_periodic().then(|| {
+            let blacks = std::array::from_fn(|pos| norm.black_at(pos >> 1, pos & 1));
+            ShotTables::new(p.k, p.poisson_max_electrons, blacks, white as usize)
+        });
         Ok(Sampler {
             k: p.k,
             poisson_max: p.poisson_max_electrons,
             sigma_read: p.sigma_read,
-            lambda: p.lambda,
-            gaussian: p.gaussian_read,
-            read_scale: if p.gaussian_read {
-                0.0
-            } else {
-                p.sigma_read / tukey::std_dev(p.lambda)
-            },
             sigma_row: p.sigma_row,
+            tukey,
+            shots,
+            white,
+            white_u: white as u32,
         })
     }
-    #[inline]
-    fn read(&self, rng: &mut SiteRng) -> f64 {
-        if self.sigma_read == 0.0 {
-            0.0
-        } else if self.gaussian {
-            let z: f64 = StandardNormal.sample(rng);
-            self.sigma_read * z
-        } else {
-            self.read_scale * tukey::quantile(open01(rng), self.lambda)
-        }
+
+    /// The noisy value of a site: stored value `x`, black `b`, tables `level`, row offset
+    /// `row_dn`, the site's random word `word` (module docs); `read` draws the read noise
+    /// in DN.
+    #[inline(always)]
+    fn site<R: Fn(&mut SiteRng) -> f64>(
+        &self,
+        read: &R,
+        word: u64,
+        x: u16,
+        b: f64,
+        level: Option<&LevelTables>,
+        row_dn: f64,
+    ) -> u16 {
+        let mut site = SiteRng(word);
+        let shot = match level.and_then(|l| l.get(x)) {
+            Some(t) => self.k * t.sample(word),
+            None => shot(x as f64 - b, self.k, self.poisson_max, &mut site),
+        };
+        let v = b + shot + read(&mut site);
+        round_clamp_to(v + row_dn, self.white, self.white_u)
     }
 }
 
-/// The row offset (DN) of active-area row `r`.
-fn row_offset(key: &[u8; 32], r: usize, sigma_row: f64) -> f64 {
+/// `sigma * z`, `z ~ N(0, 1)` (0 when `sigma` is 0: no draw).
+#[inline(never)]
+fn gaussian_read(sigma: f64, rng: &mut SiteRng) -> f64 {
+    if sigma == 0.0 {
+        0.0
+    } else {
+        let z: f64 = StandardNormal.sample(rng);
+        sigma * z
+    }
+}
+
+/// [`round_clamp`] with `white as u32` precomputed (`white_u`): the same value for every
+/// `v` (unit test), without a float-to-integer conversion of `white` per sample.
+#[inline(always)]
+fn round_clamp_to(v: f64, white: f64, white_u: u32) -> u16 {
+    if v.is_nan() || v < 0.5 {
+        0
+    } else if v >= white {
+        white_u as u16
+    } else {
+        // 0.5 <= v < white <= 65535: v + 0.5 fits an i32 (a one-instruction conversion)
+        ((v + 0.5) as i32 as u32).min(white_u) as u16
+    }
+}
+
+/// The row offset (DN) of active-area row `r` and the seed `k_r` of its sites' words.
+fn row_draws(key: &[u8; 32], r: usize, sigma_row: f64) -> (f64, u64) {
     let mut rng = ChaCha8Rng::from_seed(*key);
     rng.set_stream(r as u64);
     let mut site = SiteRng(rng.next_u64());
     let z: f64 = StandardNormal.sample(&mut site);
-    sigma_row * z
+    (sigma_row * z, rng.next_u64())
 }
 
 /// Noisy samples of the active-area region `rows` x `cols` (active-area coordinates) of
@@ -151,12 +207,7 @@ pub fn apply_physics_noise(
     rows: Range<usize>,
     cols: Range<usize>,
 ) -> Result<Vec<u16>> {
-    let norm = Normalizer::new(clean)?;
-    if !norm.is_identity() {
-        return Err(Error::unsupported(
-            "physics noise needs linear values (the clean raw has a LinearizationTable)",
-        ));
-    }
+    let norm = linear_normalizer(clean)?;
     let a = clean.active_area();
     let (top, left, ah, aw) = (a.top as usize, a.left as usize, a.height(), a.width());
     if rows.start > rows.end || cols.start > cols.end || rows.end > ah || cols.end > aw {
@@ -166,7 +217,22 @@ pub fn apply_physics_noise(
         )));
     }
     let src = |r: usize| &clean.data[(top + r) * clean.width + left..][..aw];
-    noise_region(&norm, aw, params, seed, rows, cols, 0, &src)
+    let w = cols.len();
+    let region = Region::new(&norm, aw, params, seed, cols, 0, &src)?;
+    let mut out = crate::limits::try_filled(0u16, rows.len() * w, "a noisy raw")?;
+    region.noise_rows(rows, &mut out, w, 0);
+    Ok(out)
+}
+
+/// The clean raw's normalizer, refused when the raw is not linear.
+fn linear_normalizer(clean: &RawImage) -> Result<Normalizer> {
+    let norm = Normalizer::new(clean)?;
+    if !norm.is_identity() {
+        return Err(Error::unsupported(
+            "physics noise needs linear values (the clean raw has a LinearizationTable)",
+        ));
+    }
+    Ok(norm)
 }
 
 /// [`apply_physics_noise`] on a crop held as a plane of its own: `plane` holds the clean
@@ -188,60 +254,111 @@ pub fn apply_physics_noise_crop(
     }
     let norm = Normalizer::new(frame)?.without_linearization();
     let src = |r: usize| &plane[(r - crop.top) * crop.width..][..crop.width];
-    noise_region(
-        &norm,
-        a.width(),
-        params,
-        seed,
-        crop.rows(),
-        crop.cols(),
-        crop.left,
-        &src,
-    )
+    let region = Region::new(&norm, a.width(), params, seed, crop.cols(), crop.left, &src)?;
+    let w = crop.width;
+    let mut out = crate::limits::try_filled(0u16, crop.height * w, "a noisy raw")?;
+    region.noise_rows(crop.rows(), &mut out, w, 0);
+    Ok(out)
 }
 
-/// The noisy samples of active-area `rows` x `cols`; `src(r)` is the clean row `r` from
-/// active-area column `src_left` on.
-#[allow(clippy::too_many_arguments)]
-fn noise_region<'a>(
-    norm: &Normalizer,
+/// The noise of the active-area columns `cols` of any rows; `src(r)` is the clean row `r`
+/// from active-area column `src_left` on.
+struct Region<'a, 'n> {
+    norm: &'n Normalizer,
     aw: usize,
-    params: &PhysicsParams,
-    seed: u64,
-    rows: Range<usize>,
+    sampler: Sampler,
+    key: [u8; 32],
     cols: Range<usize>,
     src_left: usize,
-    src: &(dyn Fn(usize) -> &'a [u16] + Sync),
-) -> Result<Vec<u16>> {
-    let s = Sampler::new(params)?;
-    let white = norm.white.min(u16::MAX as f64);
-    let key = physics_key(seed);
-    let w = cols.len();
-    let mut out = crate::limits::try_filled(0u16, rows.len() * w, "a noisy raw")?;
-    if w == 0 {
-        return Ok(out);
+    src: &'n (dyn Fn(usize) -> &'a [u16] + Sync),
+}
+
+impl<'a, 'n> Region<'a, 'n> {
+    fn new(
+        norm: &'n Normalizer,
+        aw: usize,
+        params: &PhysicsParams,
+        seed: u64,
+        cols: Range<usize>,
+        src_left: usize,
+        src: &'n (dyn Fn(usize) -> &'a [u16] + Sync),
+    ) -> Result<Region<'a, 'n>> {
+        let white = norm.white.min(u16::MAX as f64);
+        Ok(Region {
+            norm,
+            aw,
+            sampler: Sampler::new(params, norm, white)?,
+            key: physics_key(seed),
+            cols,
+            src_left,
+            src,
+        })
     }
-    out.par_chunks_mut(w)
-        .zip(rows.clone().into_par_iter())
-        .for_each_init(
-            || vec![0.0f64; aw],
-            |blk, (dst, r)| {
-                let row_dn = row_offset(&key, r, s.sigma_row);
-                let mut rng = ChaCha8Rng::from_seed(key);
-                rng.set_stream(r as u64);
-                rng.set_word_pos(2 * (cols.start as u128 + 1));
-                norm.black_row(r, &mut blk[..cols.end]);
-                let srow = src(r);
-                for (c, o) in cols.clone().zip(dst.iter_mut()) {
-                    let mut site = SiteRng(rng.next_u64());
-                    let b = blk[c];
-                    let x = srow[c - src_left] as f64;
-                    let v = b + shot(x - b, s.k, s.poisson_max, &mut site) + s.read(&mut site);
-                    *o = round_clamp(v + row_dn, white);
-                }
-            },
-        );
-    Ok(out)
+
+    /// Noise active-area rows `rows` into `dst`: row `rows.start + i` goes to
+    /// `dst[i * stride + dst_left..][..cols.len()]`.
+    fn noise_rows(&self, rows: Range<usize>, dst: &mut [u16], stride: usize, dst_left: usize) {
+        let w = self.cols.len();
+        if w == 0 || stride == 0 {
+            return;
+        }
+        let s = &self.sampler;
+        dst.par_chunks_mut(stride)
+            .zip(rows.into_par_iter())
+            .for_each_init(
+                || vec![0.0f64; self.aw],
+                |blk, (line, r)| {
+                    let out = &mut line[dst_left..][..w];
+                    // one copy of the row loop per kind of read noise
+                    match &s.tukey {
+                        Some(t) => self.noise_row(r, out, blk, &|g| t.sample(g.next_u64())),
+                        None => self.noise_row(r, out, blk, &|g| gaussian_read(s.sigma_read, g)),
+                    }
+                },
+            );
+    }
+
+    /// Noise active-area row `r` into `out` (its `cols`); `blk` is scratch of the
+    /// active-area width.
+    #[inline(always)]
+    fn noise_row<R: Fn(&mut SiteRng) -> f64>(
+        &self,
+        r: usize,
+        out: &mut [u16],
+        blk: &mut [f64],
+        read: &R,
+    ) {
+        let s = &self.sampler;
+        let cols = self.cols.clone();
+        let w = cols.len();
+        let (row_dn, row_seed) = row_draws(&self.key, r, s.sigma_row);
+        // the row's SplitMix64 positioned before site cols.start
+        let start = (cols.start as u64).wrapping_mul(GAMMA);
+        let mut rng = SiteRng(row_seed.wrapping_add(start));
+        let xs = &(self.src)(r)[cols.start - self.src_left..][..w];
+        let mut site_at = |x: u16, b: f64, level: Option<&LevelTables>| {
+            s.site(read, rng.next_u64(), x, b, level, row_dn)
+        };
+        if let Some(t) = &s.shots {
+            // black periodic over the 2x2 tile: the tables' levels, by parity
+            let lv = |c: usize| t.level(crate::raw::Bayer::position(r, c));
+            let (l0, l1) = (lv(cols.start), lv(cols.start + 1));
+            let (b0, b1) = (l0.black(), l1.black());
+            let mut pairs = out.chunks_exact_mut(2).zip(xs.chunks_exact(2));
+            for (o, x) in &mut pairs {
+                o[0] = site_at(x[0], b0, Some(l0));
+                o[1] = site_at(x[1], b1, Some(l1));
+            }
+            if w % 2 == 1 {
+                out[w - 1] = site_at(xs[w - 1], b0, Some(l0));
+            }
+        } else {
+            self.norm.black_row(r, &mut blk[..cols.end]);
+            for ((o, &x), &b) in out.iter_mut().zip(xs).zip(&blk[cols]) {
+                *o = site_at(x, b, None);
+            }
+        }
+    }
 }
 
 /// A noisy copy of the whole image: [`apply_physics_noise`] over the active area, samples
@@ -251,15 +368,20 @@ pub fn apply_physics_noise_image(
     params: &PhysicsParams,
     seed: u64,
 ) -> Result<RawImage> {
+    let norm = linear_normalizer(clean)?;
     let a = clean.active_area();
     let (top, left, ah, aw) = (a.top as usize, a.left as usize, a.height(), a.width());
-    let noisy = apply_physics_noise(clean, params, seed, 0..ah, 0..aw)?;
-    let mut data = clean.data.clone();
-    if aw > 0 {
-        for (r, src) in noisy.chunks_exact(aw).enumerate() {
-            data[(top + r) * clean.width + left..][..aw].copy_from_slice(src);
-        }
-    }
+    let mut data = crate::limits::try_with_capacity::<u16>(clean.data.len(), "a noisy raw")?;
+    data.extend_from_slice(&clean.data);
+    let src = |r: usize| &clean.data[(top + r) * clean.width + left..][..aw];
+    let region = Region::new(&norm, aw, params, seed, 0..aw, 0, &src)?;
+    let width = clean.width;
+    region.noise_rows(
+        0..ah,
+        &mut data[top * width..(top + ah) * width],
+        width,
+        left,
+    );
     Ok(RawImage {
         width: clean.width,
         height: clean.height,
@@ -372,6 +494,23 @@ mod tests {
         let mut p = params(1.0, 1.0, 0.0, 0.0);
         p.poisson_max_electrons = f64::INFINITY;
         assert!(apply_physics_noise_image(&img, &p, 1).is_err());
+    }
+
+    #[test]
+    fn round_clamp_to_equals_round_clamp() {
+        for white in [1023.0, 16383.0, 65535.0, 1000.5, 0.0] {
+            let wu = white as u32;
+            let mut vs = vec![f64::NAN, -1.0, 0.0, 0.49999999, 0.5, 1.5, 2.5, white - 0.5];
+            vs.extend([white, white + 0.3, 1e300, f64::INFINITY, f64::NEG_INFINITY]);
+            vs.extend((0..200_000).map(|i| i as f64 * 0.3371 - 100.0));
+            for v in vs {
+                assert_eq!(
+                    round_clamp_to(v, white, wu),
+                    round_clamp(v, white),
+                    "{v} {white}"
+                );
+            }
+        }
     }
 
     #[test]
