@@ -55,6 +55,9 @@ def test_targets_apply_opcodes_and_crops_equal_the_frame(gainmap_raw):
         oy, ox = res["target_origin"]
         _, _, h, w = crop
         assert np.array_equal(res["target"], full["target"][oy:oy + h, ox:ox + w])
+    # Only what runs is recorded: no render, no opcode stage.
+    raw_only = day2night.synthesize(gainmap_raw, seed=3, isos=(), target=None)
+    assert "apply_opcodes" not in raw_only["stages"]
     ignored = day2night.synthesize(gainmap_raw, seed=3, isos=(), opcodes="ignore")
     assert "apply_opcodes" not in ignored["stages"]
     # Synthesis stays on stored values: the clean raw does not depend on the opcodes.

@@ -124,6 +124,10 @@ pub fn synthesize_into<S: NightSink>(
             cropped(day, plan, req.target, crop, sink)?
         }
     };
+    let renders = req.target || req.input;
+    if renders && plan.opcodes.as_ref().is_some_and(|r| !r.applied.is_empty()) {
+        stages.push("apply_opcodes".into());
+    }
     if req.target {
         stages.push("render_target".into());
     }
@@ -621,7 +625,7 @@ mod tests {
             let p = planned(&day, Mode::Local, vec![]);
             let report = p.opcodes.as_ref().unwrap();
             assert_eq!(report.mode, crate::isp::opcodes::OpcodeMode::Apply);
-            assert!(p.stages.iter().any(|s| s == "apply_opcodes"));
+            assert!(!p.stages.iter().any(|s| s == "apply_opcodes"));
             let full = synthesize(
                 &day,
                 &p,
@@ -631,6 +635,7 @@ mod tests {
                 },
             )
             .unwrap();
+            assert!(full.stages.iter().any(|s| s == "apply_opcodes"));
             assert_eq!(full.clean.meta.opcode_lists, day.meta.opcode_lists);
             let ft = full.target.as_ref().unwrap();
             assert_eq!(ft.count_non_finite(), 0);

@@ -354,12 +354,10 @@ pub fn plan(
         stages.push("noise".into());
     }
     // The renders' opcodes: unapplicable optional ones are warnings, mandatory ones errors.
+    // The stage `apply_opcodes` is recorded by the synthesis when a render runs.
     let opcodes = crate::isp::opcodes::prepare(&img.meta, opts.opcodes)?.map(|p| p.report);
     if let Some(r) = &opcodes {
         warnings.extend(r.warnings());
-        if !r.applied.is_empty() {
-            stages.push("apply_opcodes".into());
-        }
     }
     let plan = Plan {
         format: PLAN_FORMAT.into(),
