@@ -18,6 +18,31 @@ pub struct InfoArgs {
     pub json: bool,
 }
 
+/// What synthesis would make of the file's opcode lists (the ISP decides which opcodes it
+/// can apply; the DNG layer's `inspect` cannot ask it): an optional opcode the renders skip
+/// is a warning, a mandatory one they cannot apply makes the file unusable, so "ready" is
+/// said only when `synth` would run without a word.
+fn opcode_verdict(info: &mut DngInfo, path: &std::path::Path) {
+    let has_lists = info
+        .raw
+        .as_ref()
+        .is_some_and(|r| !r.meta.opcode_lists.is_empty());
+    if !info.synth_ready || !has_lists {
+        return;
+    }
+    let verdict = day2night::dng::read_dng(path).and_then(|img| {
+        day2night::isp::opcodes::prepare(&img.meta, day2night::isp::opcodes::OpcodeMode::Apply)
+    });
+    match verdict {
+        Ok(Some(p)) => info.warnings.extend(p.report.warnings()),
+        Ok(None) => {}
+        Err(e) => {
+            info.synth_ready = false;
+            info.reason = Some(e.root().to_string());
+        }
+    }
+}
+
 /// Run `day2night info`.
 pub fn run(args: InfoArgs) -> CmdResult {
     let mut failed = 0usize;
@@ -25,7 +50,8 @@ pub fn run(args: InfoArgs) -> CmdResult {
     let mut text = String::new();
     for f in &args.files {
         match inspect(f) {
-            Ok(info) => {
+            Ok(mut info) => {
+                opcode_verdict(&mut info, f);
                 for w in &info.warnings {
                     eprintln!("day2night: {}: warning: {w}", f.display());
                 }

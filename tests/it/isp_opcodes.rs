@@ -441,6 +441,19 @@ fn unknown_optional_opcodes_warn_and_mandatory_ones_fail() {
         .output()
         .unwrap();
     assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    // info says what synth would do: ready with the skip as a warning, or not usable.
+    let info = |f: &std::path::Path| {
+        let r = common::bin().arg("info").arg(f).output().unwrap();
+        String::from_utf8_lossy(&r.stdout).into_owned()
+    };
+    let i1 = info(&f1);
+    assert!(
+        i1.contains("ready, with warnings") && i1.contains("OpcodeList3: unknown (id 99)"),
+        "{i1}"
+    );
+    let i2 = info(&f2);
+    assert!(!i2.contains("ready"), "{i2}");
+    assert!(i2.contains("OpcodeList2: unknown (id 99)"), "{i2}");
 }
 
 #[test]
