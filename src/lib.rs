@@ -34,7 +34,7 @@ pub use raw::{Bayer, Levels, RawImage, Rect};
 /// Tool version written into Software tags, EXR attributes and sidecars.
 pub const VERSION: &str = env!("CARGO_PKG_VERSION");
 
-/// "day2night <version>": the Software tag value.
+/// "day2night `<version>`": the Software tag value.
 pub fn software_name() -> String {
     format!("day2night {}", VERSION)
 }

@@ -3,7 +3,7 @@
 //!
 //! `y = (lin(x) - black(site)) / (white - black_max)`, where `lin` is the LinearizationTable
 //! (values past its end map to its last entry), `black(site)` is BlackLevel (repeat pattern
-//! relative to the ActiveArea origin) plus BlackLevelDeltaH[col] plus BlackLevelDeltaV[row],
+//! relative to the ActiveArea origin) plus BlackLevelDeltaH\[col\] plus BlackLevelDeltaV\[row\],
 //! and `black_max` is the largest black over the plane.
 
 use crate::error::Result;

@@ -2,7 +2,7 @@
 //! night-illuminant dictionaries from gray cards ([`illuminants`]), night-brightness
 //! dictionaries ([`brightness`]), per-ISO noise models from bursts, pairs or NoiseProfile
 //! tags ([`noise`]), and burst merging for low-noise ground truth ([`merge`]).
-//! Every output is JSON in the formats of [`format`], consumed by `synth`.
+//! Every output is JSON in the formats of [`format`](mod@format), consumed by `synth`.
 
 pub mod brightness;
 pub mod format;

@@ -1,5 +1,5 @@
 //! The dataset job as independent units, for a scheduler of the user's (Ray Data, Dask, a
-//! queue): [`units`] lists the (input, split, variant) units that [`super::run`] makes,
+//! queue): [`units`] lists the (input, split, variant) units that [`super::run()`] makes,
 //! [`write_unit`] makes exactly one unit's files in the dataset layout and returns its
 //! manifest record, [`write_manifest`] writes the manifest of a finished run. The three
 //! together write the tree `day2night dataset` writes, byte for byte, whatever the order,
@@ -13,7 +13,7 @@
 //! processes on any number of machines can write units into one shared folder);
 //! [`write_unit`] reads its own unit's file first, so a rerun after a kill skips the units
 //! completed before it, and [`write_manifest`] removes the files of the records it writes.
-//! `dataset` ([`super::run`]) reads those files too, so it can finish such a run.
+//! `dataset` ([`super::run()`]) reads those files too, so it can finish such a run.
 
 use super::discover::sample_stem;
 use super::manifest::{self, Record};
@@ -60,7 +60,7 @@ pub struct Planned {
     pub previous: Option<Record>,
 }
 
-/// A unit from its fields (the id is derived, as [`super::run`] names it): `variant` in
+/// A unit from its fields (the id is derived, as [`super::run()`] names it): `variant` in
 /// `1..=variants`.
 pub fn unit(
     rel: &str,

@@ -451,7 +451,7 @@ pub fn color_matrix(meta: &RawMeta, neutral: [f64; 3]) -> Result<Mat3> {
 
 /// Linear sRGB (Rec.709 primaries, D65) render of a raw image, values in [0, 1].
 /// Demosaic, colour matrix, DefaultCrop and orientation are fused per band of output rows
-/// for bilinear and MHC (no whole-image intermediate buffer); see [`render_banded`].
+/// for bilinear and MHC (no whole-image intermediate buffer); see `render_banded`.
 pub fn render_linear(img: &RawImage, opts: &RenderOptions) -> Result<RgbImage> {
     if img.meta.linear_raw.is_some() {
         return super::render_linear_raw::render_linear(img, opts);

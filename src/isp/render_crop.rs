@@ -1,11 +1,11 @@
 //! The linear render of a crop: the same pixels as [`super::render_linear`]'s whole-frame
 //! render (before DefaultCrop and orientation), computed from the clean samples of the crop
-//! and the [`PAD`]-sample neighbourhood the demosaicer reads, so a training crop's target
+//! and the `PAD`-sample neighbourhood the demosaicer reads, so a training crop's target
 //! costs its own size, not the frame's.
 //!
 //! Every pixel is computed by the same expressions as the banded whole-frame render: the
 //! CFA samples are normalized and white-balanced like there (tabulated per 2x2 position
-//! when the black level allows), demosaiced by [`demosaic_rect`] over the frame's geometry
+//! when the black level allows), demosaiced by `demosaic_rect` over the frame's geometry
 //! (mirrored at the frame's edges, never at the crop's) and passed through the colour
 //! matrix. The result equals the frame render's region bit for bit.
 

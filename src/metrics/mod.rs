@@ -2,7 +2,7 @@
 //! Gaussian-window variant of Wang et al. 2004) and mean CIEDE2000 colour difference.
 //!
 //! All take two [`RgbImage`]s of the same size; a size mismatch is an
-//! [`Error::InvalidParam`](crate::Error::InvalidParam) naming both sizes.
+//! [`crate::Error::InvalidParam`] naming both sizes.
 
 pub mod banded;
 pub mod deltae;

@@ -17,7 +17,7 @@
 //! covers the crop plus the demosaicer's margin ([`run_clean_crop`]), the crop's Gaussian
 //! noise draws from its own documented stream ([`apply_noise_crop_with`]; the physics model's
 //! draws are per site, so a crop gets the frame's samples: [`apply_physics_noise_crop`])
-//! and the target is the crop's region of the frame's render ([`render_linear_crop`]).
+//! and the target is the crop's region of the frame's render ([`crate::isp::render_crop::render_linear_crop`]).
 //!
 //! ```no_run
 //! use day2night::synth::night::{synthesize, Request};

@@ -5,7 +5,7 @@
 //! out-of-range values clamp to the largest finite value of the sample type, so no NaN/Inf is
 //! ever written.
 //!
-//! None, ZIPS and ZIP go through our own encoder ([`scanline`]: rows converted straight into
+//! None, ZIPS and ZIP go through our own encoder (`scanline`: rows converted straight into
 //! each block, blocks compressed in parallel at [`ExrOptions::zip_level`]: our own
 //! run-length + Huffman zlib encoder at 1, miniz_oxide at 2..=9);
 //! the rarer RLE, PIZ, PXR24, B44 and B44A go through the `exr` crate. Either way blocks are
