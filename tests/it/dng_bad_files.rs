@@ -92,13 +92,7 @@ fn shared_linear_raw_file_is_read_described_and_refused_for_synthesis() {
     // (its OpcodeList2 MapPolynomial curves are what make the 8-bit samples linear).
     let t = tempfile::tempdir().unwrap();
     let png = t.path().join("lg.png");
-    let out = common::bin()
-        .arg("render")
-        .arg(&p)
-        .arg("-o")
-        .arg(&png)
-        .output()
-        .unwrap();
+    let out = common::cli("render", &p, &png, &[]);
     assert!(
         out.status.success(),
         "{}",
@@ -120,14 +114,7 @@ fn shared_linear_raw_file_is_read_described_and_refused_for_synthesis() {
     assert!(hi / lo < 1.3, "colour cast: {mean:?}");
     // --opcodes ignore leaves the curves out (shared opcode stage): washed out, colour cast.
     let png2 = t.path().join("lg_ignore.png");
-    let out = common::bin()
-        .arg("render")
-        .arg(&p)
-        .arg("-o")
-        .arg(&png2)
-        .args(["--opcodes", "ignore"])
-        .output()
-        .unwrap();
+    let out = common::cli("render", &p, &png2, &["--opcodes", "ignore"]);
     assert!(out.status.success() && out.stderr.is_empty());
     let raw = image::open(&png2).unwrap().to_rgb8();
     let mut mean2 = [0f64; 3];

@@ -318,14 +318,7 @@ fn adobe_sdk_gain_map_is_parsed_listed_and_kept_by_synth() {
 
     // A night DNG written from it keeps the list byte for byte, and the SDK reads it back.
     let out = t.path().join("out");
-    let o = common::bin()
-        .arg("synth")
-        .arg(&src)
-        .arg("-o")
-        .arg(&out)
-        .args(["--iso", "3200", "--target", "none"])
-        .output()
-        .unwrap();
+    let o = common::cli("synth", &src, &out, &["--iso", "3200", "--target", "none"]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     for name in ["shaded_clean.dng", "shaded_iso3200.dng"] {
         let night = out.join(name);

@@ -295,21 +295,6 @@ fn degenerate_maps_give_finite_renders() {
     }
 }
 
-fn render_cli(
-    input: &std::path::Path,
-    out: &std::path::Path,
-    extra: &[&str],
-) -> std::process::Output {
-    common::bin()
-        .arg("render")
-        .arg(input)
-        .arg("-o")
-        .arg(out)
-        .args(extra)
-        .output()
-        .unwrap()
-}
-
 #[test]
 fn ignore_gives_the_plain_bytes_and_apply_changes_them() {
     let t = tempfile::tempdir().unwrap();
@@ -340,7 +325,7 @@ fn ignore_gives_the_plain_bytes_and_apply_changes_them() {
             (&without, &o2, vec![]),
             (&with, &o3, vec![]),
         ] {
-            let r = render_cli(i, o, &x);
+            let r = common::cli("render", i, o, &x);
             assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
         }
         let (a, b, c) = (
@@ -351,7 +336,12 @@ fn ignore_gives_the_plain_bytes_and_apply_changes_them() {
         assert_eq!(a, b, "{ext}: --opcodes ignore = the file without lists");
         assert_ne!(a, c, "{ext}: the GainMap is applied by default");
     }
-    let r = render_cli(&with, &da.join("bad.exr"), &["--opcodes", "maybe"]);
+    let r = common::cli(
+        "render",
+        &with,
+        &da.join("bad.exr"),
+        &["--opcodes", "maybe"],
+    );
     assert!(!r.status.success());
 }
 
@@ -378,7 +368,7 @@ fn unknown_optional_opcodes_warn_and_mandatory_ones_fail() {
             .build(),
     )
     .unwrap();
-    let r = render_cli(&f1, &t.path().join("a.exr"), &[]);
+    let r = common::cli("render", &f1, &t.path().join("a.exr"), &[]);
     let err = String::from_utf8_lossy(&r.stderr);
     assert!(r.status.success(), "{err}");
     assert!(
@@ -397,7 +387,7 @@ fn unknown_optional_opcodes_warn_and_mandatory_ones_fail() {
     )
     .unwrap();
     let out = t.path().join("b.exr");
-    let r = render_cli(&f2, &out, &[]);
+    let r = common::cli("render", &f2, &out, &[]);
     let err = String::from_utf8_lossy(&r.stderr);
     assert!(!r.status.success());
     assert!(
@@ -406,18 +396,11 @@ fn unknown_optional_opcodes_warn_and_mandatory_ones_fail() {
     );
     assert!(!out.exists(), "no half-written output");
     // ignoring the lists renders it
-    let r = render_cli(&f2, &out, &["--opcodes", "ignore"]);
+    let r = common::cli("render", &f2, &out, &["--opcodes", "ignore"]);
     assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
     // synth: the plan records the skipped one; a mandatory one fails unless ignored
     let o = t.path().join("s");
-    let r = common::bin()
-        .arg("synth")
-        .arg(&f1)
-        .arg("-o")
-        .arg(&o)
-        .args(["--iso", "none", "--target", "none"])
-        .output()
-        .unwrap();
+    let r = common::cli("synth", &f1, &o, &["--iso", "none", "--target", "none"]);
     assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
     let sc: serde_json::Value =
         serde_json::from_slice(&std::fs::read(o.join("opt.json")).unwrap()).unwrap();

@@ -100,3 +100,16 @@ pub fn exiftool() -> Option<PathBuf> {
 pub fn bin() -> Command {
     Command::new(env!("CARGO_BIN_EXE_day2night"))
 }
+
+/// Run `day2night CMD INPUT -o OUT EXTRA...` and return its output (the shape of most CLI
+/// calls in the tests).
+pub fn cli(cmd: &str, input: &Path, out: &Path, extra: &[&str]) -> Output {
+    bin()
+        .arg(cmd)
+        .arg(input)
+        .arg("-o")
+        .arg(out)
+        .args(extra)
+        .output()
+        .unwrap()
+}
