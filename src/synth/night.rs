@@ -442,6 +442,25 @@ mod tests {
         }
     }
 
+    /// The crop's target `t` equals the frame target `ft` at `(oy, ox)`, pixel for pixel.
+    fn assert_target_region(
+        t: &crate::isp::RgbImage,
+        ft: &crate::isp::RgbImage,
+        (oy, ox): (usize, usize),
+        crop: &Crop,
+        what: &str,
+    ) {
+        for r in 0..crop.height {
+            for k in 0..crop.width {
+                assert_eq!(
+                    t.pixel(k, r),
+                    ft.pixel(ox + k, oy + r),
+                    "{what} {crop:?} ({r},{k})"
+                );
+            }
+        }
+    }
+
     #[test]
     fn crops_equal_the_whole_frame_region() {
         let day = day();
@@ -509,15 +528,7 @@ mod tests {
                 let ft = full.target.as_ref().unwrap();
                 if let Some((oy, ox)) = target_origin(&full.clean.meta, aw, ah, &crop) {
                     assert_eq!((oy, ox), (crop.top - y0, crop.left - x0));
-                    for r in 0..crop.height {
-                        for k in 0..crop.width {
-                            assert_eq!(
-                                t.pixel(k, r),
-                                ft.pixel(ox + k, oy + r),
-                                "{mode:?} {crop:?} target"
-                            );
-                        }
-                    }
+                    assert_target_region(t, ft, (oy, ox), &crop, &format!("{mode:?} target"));
                 }
                 assert_eq!(c.noisy.len(), 1);
                 assert_eq!(c.noisy[0].1.data.len(), crop.width * crop.height);
@@ -673,15 +684,7 @@ mod tests {
                 let Some((oy, ox)) = target_origin(&full.clean.meta, aw, ah, &crop) else {
                     continue;
                 };
-                for r in 0..crop.height {
-                    for k in 0..crop.width {
-                        assert_eq!(
-                            t.pixel(k, r),
-                            ft.pixel(ox + k, oy + r),
-                            "case {ci} {crop:?} ({r},{k})"
-                        );
-                    }
-                }
+                assert_target_region(t, ft, (oy, ox), &crop, &format!("case {ci}"));
             }
             // ignoring them gives the plain target
             let plain = {
