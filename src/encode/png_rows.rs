@@ -21,9 +21,9 @@
 //! same file for the same image.
 
 use crate::deflate::{adler32, adler32_combine, Encoder, FINAL_EMPTY_BLOCK};
-use crate::error::{Error, Result};
+use crate::error::{Error, Result, ResultExt};
 use crate::isp::tone::DisplayTone;
-use crate::output::{write_atomic, OutputPolicy};
+use crate::output::{write_atomic, AtomicFile, OutputPolicy};
 use rayon::prelude::*;
 use std::io::Write;
 use std::path::Path;
@@ -191,6 +191,20 @@ pub fn encode_png_rows<W: Write>(
     tone: DisplayTone,
     w: &mut W,
 ) -> Result<()> {
+    dims(width, height)?;
+    let rows: usize = groups.iter().map(|g| g.rows).sum();
+    if rows != height {
+        return Err(rows_mismatch(height, rows));
+    }
+    let mut s = PngStream::begin(w, width, height, tone)?;
+    for g in groups {
+        s.push(w, g)?;
+    }
+    s.end(w)
+}
+
+/// Width and height as the u32s of IHDR (1 ..= 2^31 - 1).
+fn dims(width: usize, height: usize) -> Result<(u32, u32)> {
     let too_big = || Error::limits("PNG dimensions over 2^31 - 1");
     let wu = u32::try_from(width)
         .ok()
@@ -200,41 +214,119 @@ pub fn encode_png_rows<W: Write>(
         .ok()
         .filter(|&v| v > 0 && v <= 0x7FFF_FFFF)
         .ok_or_else(too_big)?;
-    let rows: usize = groups.iter().map(|g| g.rows).sum();
-    if rows != height {
-        return Err(Error::invalid(format!(
-            "PNG of {height} rows given {rows} rows of data"
-        )));
+    Ok((wu, hu))
+}
+
+fn rows_mismatch(height: usize, rows: usize) -> Error {
+    Error::invalid(format!("PNG of {height} rows given {rows} rows of data"))
+}
+
+/// The file of [`encode_png_rows`] written group by group: [`PngStream::begin`] writes the
+/// signature and the header chunks, [`PngStream::push`] one IDAT per non-empty group (the
+/// zlib header before the first; the final empty block and the Adler-32, combined group by
+/// group, after the last: the group that completes the height), [`PngStream::end`] IEND.
+#[derive(Debug)]
+struct PngStream {
+    height: usize,
+    /// Rows written so far.
+    rows: usize,
+    /// Adler-32 of the filtered rows written so far.
+    adler: u32,
+}
+
+impl PngStream {
+    fn begin<W: Write>(
+        w: &mut W,
+        width: usize,
+        height: usize,
+        tone: DisplayTone,
+    ) -> Result<PngStream> {
+        let (wu, hu) = dims(width, height)?;
+        w.write_all(b"\x89PNG\r\n\x1a\n")?;
+        let mut ihdr = Vec::with_capacity(13);
+        ihdr.extend_from_slice(&wu.to_be_bytes());
+        ihdr.extend_from_slice(&hu.to_be_bytes());
+        // bit depth 8, colour type 2 (RGB), deflate, adaptive filtering, no interlace
+        ihdr.extend_from_slice(&[8, 2, 0, 0, 0]);
+        chunk(w, b"IHDR", &[&ihdr])?;
+        match tone {
+            DisplayTone::Srgb => chunk(w, b"sRGB", &[&[0]])?,
+            // 1 / 2.2 in units of 1e-5
+            DisplayTone::Gamma22 => chunk(w, b"gAMA", &[&45455u32.to_be_bytes()])?,
+            DisplayTone::Release => {}
+        }
+        Ok(PngStream {
+            height,
+            rows: 0,
+            adler: 1,
+        })
     }
-    w.write_all(b"\x89PNG\r\n\x1a\n")?;
-    let mut ihdr = Vec::with_capacity(13);
-    ihdr.extend_from_slice(&wu.to_be_bytes());
-    ihdr.extend_from_slice(&hu.to_be_bytes());
-    // bit depth 8, colour type 2 (RGB), deflate, adaptive filtering, no interlace
-    ihdr.extend_from_slice(&[8, 2, 0, 0, 0]);
-    chunk(w, b"IHDR", &[&ihdr])?;
-    match tone {
-        DisplayTone::Srgb => chunk(w, b"sRGB", &[&[0]])?,
-        // 1 / 2.2 in units of 1e-5
-        DisplayTone::Gamma22 => chunk(w, b"gAMA", &[&45455u32.to_be_bytes()])?,
-        DisplayTone::Release => {}
-    }
-    let mut adler = 1u32;
-    let n = groups.iter().filter(|g| g.rows > 0).count();
-    let mut i = 0;
-    for g in groups.iter().filter(|g| g.rows > 0) {
-        adler = adler32_combine(adler, g.adler, g.len);
-        let head: &[u8] = if i == 0 { &[0x78, 0x01] } else { &[] };
-        i += 1;
-        if i == n {
-            let tail = [&FINAL_EMPTY_BLOCK[..], &adler.to_be_bytes()[..]].concat();
+
+    fn push<W: Write>(&mut self, w: &mut W, g: &PngRows) -> Result<()> {
+        if g.rows == 0 {
+            return Ok(());
+        }
+        let rows = self.rows + g.rows;
+        if rows > self.height {
+            return Err(rows_mismatch(self.height, rows));
+        }
+        self.adler = adler32_combine(self.adler, g.adler, g.len);
+        let head: &[u8] = if self.rows == 0 { &[0x78, 0x01] } else { &[] };
+        if rows == self.height {
+            let tail = [&FINAL_EMPTY_BLOCK[..], &self.adler.to_be_bytes()[..]].concat();
             chunk(w, b"IDAT", &[head, &g.deflate, &tail])?;
         } else {
             chunk(w, b"IDAT", &[head, &g.deflate])?;
         }
+        self.rows = rows;
+        Ok(())
     }
-    chunk(w, b"IEND", &[])?;
-    Ok(())
+
+    fn end<W: Write>(self, w: &mut W) -> Result<()> {
+        if self.rows != self.height {
+            return Err(rows_mismatch(self.height, self.rows));
+        }
+        chunk(w, b"IEND", &[])
+    }
+}
+
+/// A PNG target written while it is rendered: each group of rows ([`PngRows`], in row
+/// order) is appended as one IDAT as it comes, so the compressed image is never held
+/// whole. The bytes are those of [`write_png_groups`] of the same groups (tested); dropped
+/// unfinished, nothing appears at `path` ([`AtomicFile`]).
+#[derive(Debug)]
+pub struct PngFile<'p> {
+    file: AtomicFile<'p>,
+    stream: PngStream,
+}
+
+impl<'p> PngFile<'p> {
+    /// Start a `width` x `height` PNG at `path`.
+    pub fn create(
+        path: &Path,
+        width: usize,
+        height: usize,
+        tone: DisplayTone,
+        policy: &'p OutputPolicy,
+    ) -> Result<PngFile<'p>> {
+        let mut file = AtomicFile::create(path, policy)?;
+        let stream = PngStream::begin(file.writer(), width, height, tone).in_file(path)?;
+        Ok(PngFile { file, stream })
+    }
+
+    /// Append the next group of rows.
+    pub fn push(&mut self, group: &PngRows) -> Result<()> {
+        let r = self.stream.push(self.file.writer(), group);
+        r.in_file(self.file.path())
+    }
+
+    /// Write IEND (every row must have been pushed), then sync and rename the file into
+    /// place (see [`AtomicFile::finish`]).
+    pub fn finish(mut self) -> Result<()> {
+        let r = self.stream.end(self.file.writer());
+        r.in_file(self.file.path())?;
+        self.file.finish()
+    }
 }
 
 /// Write the PNG made of `groups` (see [`encode_png_rows`]) atomically.

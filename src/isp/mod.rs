@@ -6,6 +6,7 @@
 //! sRGB/Rec.709 (D65) per DNG chapter 6 ([`color`]), DefaultCrop and orientation. Display
 //! encodings (sRGB OETF, the release's gamma + smoothstep tone) are in [`tone`].
 
+pub(crate) mod bands;
 pub mod color;
 pub mod demosaic;
 pub mod geometry;

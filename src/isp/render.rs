@@ -320,10 +320,12 @@ fn banded<R>(
 /// Band-wise consumer of [`render_linear`]: the render is made band by band ([`BAND`]
 /// output rows each, in parallel, into a per-thread buffer) and `f(first_row, width,
 /// rows)` is called on each band (`rows` is interleaved linear RGB, `width` pixels per
-/// row); the results come back in band order with the output size ([`Bands`]). The rows are exactly those of [`render_linear`]'s
-/// image (same code), so consumers that encode them (EXR blocks, 8-bit PNG samples) write
-/// the same bytes as from the whole image, without holding it. `None` when the demosaicer
-/// is not banded (Menon): use [`render_linear`].
+/// row); the results come back in band order with the output size ([`Bands`]). The rows
+/// are exactly those of [`render_linear`]'s image (same code), so consumers that encode
+/// them (EXR blocks, 8-bit PNG samples) write the same bytes as from the whole image,
+/// without holding it. `None` when the demosaicer is not banded (Menon): use
+/// [`render_linear`]. See [`render_linear_bands_sized`] for the order in which bands are
+/// made.
 pub fn render_linear_bands<T, F>(
     img: &RawImage,
     opts: &RenderOptions,
@@ -333,8 +335,31 @@ where
     T: Send,
     F: Fn(usize, usize, &[f32]) -> Result<T> + Sync,
 {
+    render_linear_bands_sized(img, opts, |_, _| Ok(()), f)
+}
+
+/// [`render_linear_bands`] that first calls `start(width, height)` with the output size,
+/// once, before any band (not at all when it returns `None`), e.g. to open a file that
+/// `f` writes the bands into.
+///
+/// Bands are made nearly in order: each thread takes the lowest band not yet taken, and no
+/// band is started more than 2 x threads + 1 bands beyond the lowest unfinished one, so a
+/// consumer that writes the bands in order (holding those that come early) holds a few
+/// bands at most. `f` must not wait for other rayon work (no parallel iterator or `join`
+/// inside): other threads may be waiting for its band.
+pub fn render_linear_bands_sized<T, S, F>(
+    img: &RawImage,
+    opts: &RenderOptions,
+    start: S,
+    f: F,
+) -> Result<Option<Bands<T>>>
+where
+    T: Send,
+    S: FnOnce(usize, usize) -> Result<()>,
+    F: Fn(usize, usize, &[f32]) -> Result<T> + Sync,
+{
     if img.meta.linear_raw.is_some() {
-        return super::render_linear_raw::render_linear_bands(img, opts, f);
+        return super::render_linear_raw::render_linear_bands(img, opts, start, f);
     }
     let Some(kernel) = row_kernel(opts.demosaic) else {
         return Ok(None);
@@ -355,21 +380,19 @@ where
         opts.crop,
         opts.orient,
         |ow, oh, body| {
+            start(ow, oh)?;
             let nb = oh.div_ceil(BAND);
-            let results: Result<Vec<T>> = (0..nb)
-                .into_par_iter()
-                .map_init(Vec::new, |scratch: &mut Vec<f32>, bi| {
-                    let rows = BAND.min(oh - bi * BAND);
-                    scratch.clear();
-                    scratch.resize(3 * ow * rows, 0.0);
-                    body(bi, scratch);
-                    f(bi * BAND, ow, scratch)
-                })
-                .collect();
+            let bands = super::bands::in_order(nb, |bi, scratch: &mut Vec<f32>| {
+                let rows = BAND.min(oh - bi * BAND);
+                scratch.clear();
+                scratch.resize(3 * ow * rows, 0.0);
+                body(bi, scratch);
+                f(bi * BAND, ow, scratch)
+            })?;
             Ok(Some(Bands {
                 width: ow,
                 height: oh,
-                bands: results?,
+                bands,
             }))
         },
     )

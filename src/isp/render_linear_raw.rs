@@ -192,29 +192,31 @@ pub fn render_linear(img: &RawImage, opts: &RenderOptions) -> Result<RgbImage> {
     finish_geometry(rgb, b, &img.meta, area, opts.crop, opts.orient)
 }
 
-/// [`render_linear`] handed to `f` band by band ([`BAND`] rows), as
-/// [`super::render::render_linear_bands`] does; always `Some`.
-pub fn render_linear_bands<T, F>(
+/// [`render_linear`] handed to `f` band by band ([`BAND`] rows) after `start(width,
+/// height)`, as [`super::render::render_linear_bands_sized`] does; always `Some`.
+pub fn render_linear_bands<T, S, F>(
     img: &RawImage,
     opts: &RenderOptions,
+    start: S,
     f: F,
 ) -> Result<Option<Bands<T>>>
 where
     T: Send,
+    S: FnOnce(usize, usize) -> Result<()>,
     F: Fn(usize, usize, &[f32]) -> Result<T> + Sync,
 {
     let rgb = render_linear(img, opts)?;
     let (ow, oh) = (rgb.width, rgb.height);
-    let bands: Result<Vec<T>> = rgb
-        .data
-        .par_chunks(3 * ow.max(1) * BAND)
-        .enumerate()
-        .map(|(bi, rows)| f(bi * BAND, ow, rows))
-        .collect();
+    start(ow, oh)?;
+    let band = 3 * ow * BAND;
+    let bands = super::bands::in_order(oh.div_ceil(BAND), |bi, _| {
+        let rows = &rgb.data[bi * band..((bi + 1) * band).min(rgb.data.len())];
+        f(bi * BAND, ow, rows)
+    })?;
     Ok(Some(Bands {
         width: ow,
         height: oh,
-        bands: bands?,
+        bands,
     }))
 }
 
@@ -469,7 +471,7 @@ mod tests {
         let img = image(w, h, data, vec![10.0, 20.0, 30.0], vec![4095.0; 3]);
         let opts = RenderOptions::default();
         let whole = render_linear(&img, &opts).unwrap();
-        let bands = render_linear_bands(&img, &opts, |_, _, rows| Ok(rows.to_vec()))
+        let bands = render_linear_bands(&img, &opts, |_, _| Ok(()), |_, _, rows| Ok(rows.to_vec()))
             .unwrap()
             .unwrap();
         assert_eq!((bands.width, bands.height), (whole.width, whole.height));

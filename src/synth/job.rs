@@ -53,22 +53,18 @@ use super::night::Night;
 use super::night::{synthesize_into, NightSink, Request, TargetOut};
 use super::relight::RunReport;
 use super::sidecar::{sha256_hex, CalibrationInfo, InputInfo, OutputInfo, Sidecar, SIDECAR_FORMAT};
+use super::target_files::TargetFiles;
 use super::{Calibration, Plan, SynthOptions};
-use crate::deflate::Encoder;
 use crate::dng::write::{write_dng, Compression, WriteOptions};
-use crate::encode::exr::{
-    encode_exr_rows, encodes_rows, standard_attributes, write_exr, write_exr_blocks, ExrOptions,
-};
-use crate::encode::png::{encode_u8_slice, write_png, PngOptions};
-use crate::encode::png_rows::{write_png_groups, PngRows};
+use crate::encode::exr::{encodes_rows, standard_attributes, write_exr, ExrOptions};
+use crate::encode::png::{write_png, PngOptions};
 use crate::error::{Error, Result, ResultExt};
-use crate::isp::render::Bands;
 use crate::isp::RgbImage;
 use crate::output::{write_bytes_atomic, DeferredSyncs, OutputPolicy};
 use crate::raw::RawImage;
 use std::path::{Path, PathBuf};
 use std::str::FromStr;
-use std::sync::Arc;
+use std::sync::{Arc, OnceLock};
 
 /// Which targets to render from the clean night raw.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -303,6 +299,7 @@ impl SynthJob {
                 ..WriteOptions::default()
             },
             attrs: exr_attributes(&day.source, plan),
+            target_files: OnceLock::new(),
         };
         let report = compute(&files)?;
         let isos: Vec<u32> = plan.noise.iter().map(|np| np.iso).collect();
@@ -392,9 +389,18 @@ pub struct FileSink<'a> {
     policy: &'a OutputPolicy,
     wopts: WriteOptions,
     attrs: Vec<(String, String)>,
+    /// The banded target's files, open while it is rendered.
+    target_files: OnceLock<TargetFiles<'a>>,
 }
 
-impl FileSink<'_> {
+impl<'a> FileSink<'a> {
+    /// The target files opened by [`NightSink::target_start`].
+    fn started(&self) -> Result<&TargetFiles<'a>> {
+        self.target_files
+            .get()
+            .ok_or_else(|| Error::invalid("a target band came before the target's size"))
+    }
+
     /// Write a whole target image (the EXR and/or PNG the job asks for).
     fn target_image(&self, rgb: &RgbImage) -> Result<()> {
         let (want_exr, want_png) = (self.job.target.exr(), self.job.target.png());
@@ -419,7 +425,7 @@ impl FileSink<'_> {
 }
 
 impl NightSink for FileSink<'_> {
-    type Band = Band;
+    type Band = ();
 
     fn clean(&self, clean: &RawImage) -> Result<()> {
         let path = self.sink.path(OutputKind::CleanDng)?;
@@ -432,71 +438,43 @@ impl NightSink for FileSink<'_> {
     }
 
     /// Band by band when every requested target can be encoded from bands (the default
-    /// ZIP/none EXRs, 8-bit PNG): same bytes, no whole f32 image, and each band is encoded
-    /// while it is in cache.
+    /// ZIP/none EXRs, 8-bit PNG): same bytes, no whole f32 image, each band is encoded
+    /// while it is in cache and written at once ([`TargetFiles`]), so the encoded target is
+    /// never held whole either.
     fn banded(&self) -> bool {
         !self.job.target.exr() || encodes_rows(&self.job.exr)
     }
 
-    fn target_band(&self, y0: usize, w: usize, rows: &[f32]) -> Result<Band> {
-        let (want_exr, want_png) = (self.job.target.exr(), self.job.target.png());
-        Ok(Band {
-            exr: if want_exr {
-                encode_exr_rows(rows, w, y0, &self.job.exr)?
-            } else {
-                Vec::new()
-            },
-            png: if want_png {
-                let rgb8 = encode_u8_slice(rows, PngOptions::default().tone);
-                PngRows::encode(&rgb8, w, &mut Encoder::new())?
-            } else {
-                PngRows::default()
-            },
-        })
+    fn target_start(&self, w: usize, h: usize) -> Result<()> {
+        let exr = match self.job.target.exr() {
+            true => Some(self.sink.path(OutputKind::TargetExr)?),
+            false => None,
+        };
+        let png = match self.job.target.png() {
+            true => Some(self.sink.path(OutputKind::TargetPng)?),
+            false => None,
+        };
+        let files = TargetFiles::create(
+            (w, h),
+            exr.as_deref(),
+            (&self.job.exr, &self.attrs),
+            png.as_deref(),
+            self.policy,
+        )?;
+        self.target_files
+            .set(files)
+            .map_err(|_| Error::invalid("the target was started twice"))
     }
 
-    fn target(&self, target: TargetOut<Band>) -> Result<()> {
-        let (want_exr, want_png) = (self.job.target.exr(), self.job.target.png());
-        let Bands {
-            width: w,
-            height: h,
-            bands,
-        } = match target {
-            TargetOut::Image(rgb) => return self.target_image(&rgb),
-            TargetOut::Bands(b) => b,
-        };
-        let mut blocks = Vec::new();
-        let mut png = Vec::with_capacity(bands.len());
-        for b in bands {
-            blocks.extend(b.exr);
-            png.push(b.png);
+    fn target_band(&self, y0: usize, w: usize, rows: &[f32]) -> Result<()> {
+        self.started()?.band(y0, w, rows)
+    }
+
+    fn target(&self, target: TargetOut<()>) -> Result<()> {
+        match target {
+            TargetOut::Image(rgb) => self.target_image(&rgb),
+            TargetOut::Bands(_) => self.started()?.finish(),
         }
-        let tone = PngOptions::default().tone;
-        let (e, p) = rayon::join(
-            || {
-                if !want_exr {
-                    return Ok(());
-                }
-                let path = self.sink.path(OutputKind::TargetExr)?;
-                write_exr_blocks(
-                    w,
-                    h,
-                    &blocks,
-                    &path,
-                    &self.job.exr,
-                    &self.attrs,
-                    self.policy,
-                )
-            },
-            || {
-                if !want_png {
-                    return Ok(());
-                }
-                let path = self.sink.path(OutputKind::TargetPng)?;
-                write_png_groups(&png, w, h, tone, &path, self.policy)
-            },
-        );
-        e.and(p)
     }
 
     fn input(&self, rgb: &RgbImage) -> Result<()> {
@@ -580,12 +558,6 @@ impl DayInput {
             source: PathBuf::from(file_name),
         }
     }
-}
-
-/// The encoded targets of one band of the render.
-pub struct Band {
-    exr: Vec<Vec<u8>>,
-    png: PngRows,
 }
 
 /// One output of a variant.

@@ -37,7 +37,9 @@ use super::relight::{run_clean, run_clean_crop, RunReport};
 use super::{night_meta, run_noise, Plan};
 use crate::error::{Error, Result};
 use crate::isp::opcodes::{self, pipeline};
-use crate::isp::render::{color_matrix, matrix_row, render_input_with, render_linear_bands, Bands};
+use crate::isp::render::{
+    color_matrix, matrix_row, render_input_with, render_linear_bands_sized, Bands,
+};
 use crate::isp::render_crop::{render_linear_crop_with, CROP_MARGIN};
 use crate::isp::{render_linear, Demosaic, RenderOptions, RgbImage};
 use crate::noise::apply::apply_noise_crop_with;
@@ -68,7 +70,10 @@ pub enum TargetOut<B> {
 
 /// A consumer of the products of [`synthesize_into`], called from concurrent rayon tasks
 /// (hence `Sync`): `clean` once, `noisy` once per ISO in plan order (from one task),
-/// `target_band` for every band in parallel then `target` once, `input` last.
+/// for a banded target `target_start` once, `target_band` for every band in parallel
+/// (nearly top to bottom: see [`crate::isp::render::render_linear_bands_sized`]) then
+/// `target` once, `input` last. After an error, `target` may never be called: a sink
+/// that opened files in `target_start` discards them when it is dropped.
 pub trait NightSink: Sync {
     /// What [`NightSink::target_band`] makes of a band (e.g. its encoded bytes).
     type Band: Send;
@@ -80,8 +85,15 @@ pub trait NightSink: Sync {
     fn banded(&self) -> bool {
         false
     }
+    /// The output size of a banded target, before its first band. Only called when
+    /// [`NightSink::banded`] and the render is made band by band.
+    fn target_start(&self, _width: usize, _height: usize) -> Result<()> {
+        Ok(())
+    }
     /// One band of the target: output rows from `y0`, `width` pixels each, interleaved
-    /// linear RGB. Only called when [`NightSink::banded`].
+    /// linear RGB. Only called when [`NightSink::banded`], after
+    /// [`NightSink::target_start`]. It must not wait for other rayon work (see
+    /// [`crate::isp::render::render_linear_bands_sized`]).
     fn target_band(&self, _y0: usize, _width: usize, _rows: &[f32]) -> Result<Self::Band> {
         Err(Error::invalid("this sink does not take target bands"))
     }
@@ -195,8 +207,9 @@ fn whole_frame<S: NightSink>(
                     ..RenderOptions::default()
                 };
                 if sink.banded() {
+                    let start = |w: usize, h: usize| sink.target_start(w, h);
                     let f = |y0: usize, w: usize, rows: &[f32]| sink.target_band(y0, w, rows);
-                    if let Some(bands) = render_linear_bands(clean, &ropts, f)? {
+                    if let Some(bands) = render_linear_bands_sized(clean, &ropts, start, f)? {
                         start_noise();
                         return sink.target(TargetOut::Bands(bands));
                     }

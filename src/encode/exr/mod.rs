@@ -15,9 +15,9 @@
 pub mod chunks;
 mod scanline;
 
-use crate::error::{Error, Result};
+use crate::error::{Error, Result, ResultExt};
 use crate::isp::RgbImage;
-use crate::output::{write_atomic, OutputPolicy};
+use crate::output::{write_atomic, AtomicFile, OutputPolicy};
 use exr::prelude::*;
 use std::io::{Seek, Write};
 use std::path::Path;
@@ -365,7 +365,7 @@ pub fn encode_exr_rows(
 }
 
 /// Write a `width` x `height` EXR from its stored `blocks` (all of them, in line order, from
-/// [`encode_exr_rows`] with the same `opts`) atomically at `path`.
+/// [`encode_exr_rows`] with the same `opts`) atomically at `path` (through [`ExrFile`]).
 pub fn write_exr_blocks(
     width: usize,
     height: usize,
@@ -380,9 +380,84 @@ pub fn write_exr_blocks(
         return Err(Error::invalid("cannot write an empty EXR image"));
     }
     scanline::check_attributes(attributes)?;
-    write_atomic(path, policy, |mut w| {
-        scanline::write_blocks(&mut w, width, height, opts, attributes, blocks)
-    })
+    if let Some(lpb) = scanline::lines_per_block(opts.compression) {
+        let nblocks = height.div_ceil(lpb);
+        if blocks.len() != nblocks {
+            return Err(Error::invalid(format!(
+                "EXR of {height} lines needs {nblocks} blocks, got {}",
+                blocks.len()
+            )));
+        }
+    }
+    let mut file = ExrFile::create(path, width, height, opts, attributes, policy)?;
+    for blk in blocks {
+        file.push_block(blk)?;
+    }
+    file.finish()
+}
+
+/// An EXR target written while it is rendered: the blocks of each band of rows
+/// ([`encode_exr_rows`]) are appended as they come, in line order, so the encoded image is
+/// never held whole. [`ExrFile::create`] writes the header and a zeroed offset table into
+/// an [`AtomicFile`], [`ExrFile::push_rows`] appends blocks, [`ExrFile::finish`] fills in
+/// the offset table and syncs and renames the file into place. The bytes are those of
+/// [`write_exr`] of the whole image (tested); dropped unfinished, nothing appears at `path`.
+#[derive(Debug)]
+pub struct ExrFile<'p> {
+    file: AtomicFile<'p>,
+    stream: scanline::BlockStream,
+}
+
+impl<'p> ExrFile<'p> {
+    /// Start a `width` x `height` EXR at `path` (options and attributes as for
+    /// [`write_exr_blocks`]; `opts` must be one [`encodes_rows`] accepts).
+    pub fn create(
+        path: &Path,
+        width: usize,
+        height: usize,
+        opts: &ExrOptions,
+        attributes: &[(String, String)],
+        policy: &'p OutputPolicy,
+    ) -> Result<ExrFile<'p>> {
+        opts.validate()?;
+        if width == 0 || height == 0 {
+            return Err(Error::invalid("cannot write an empty EXR image"));
+        }
+        scanline::check_attributes(attributes)?;
+        let mut file = AtomicFile::create(path, policy)?;
+        let stream = scanline::BlockStream::begin(file.writer(), width, height, opts, attributes)
+            .in_file(path)?;
+        Ok(ExrFile { file, stream })
+    }
+
+    /// Append the `blocks` of the rows from image line `first_row`, which must be the first
+    /// line not written yet.
+    pub fn push_rows(&mut self, first_row: usize, blocks: &[Vec<u8>]) -> Result<()> {
+        let next = self.stream.next_line();
+        if first_row != next {
+            return Err(Error::invalid(format!(
+                "EXR rows from line {first_row} given while line {next} is the next to write"
+            ))
+            .in_file(self.file.path()));
+        }
+        for blk in blocks {
+            self.push_block(blk)?;
+        }
+        Ok(())
+    }
+
+    fn push_block(&mut self, block: &[u8]) -> Result<()> {
+        let r = self.stream.push(self.file.writer(), block);
+        r.in_file(self.file.path())
+    }
+
+    /// Write the offset table (every block must have been pushed), then sync and rename
+    /// the file into place (see [`AtomicFile::finish`]).
+    pub fn finish(mut self) -> Result<()> {
+        let r = self.stream.finish(self.file.writer());
+        r.in_file(self.file.path())?;
+        self.file.finish()
+    }
 }
 
 /// The standard attributes of a day2night render: source file name, neutral, tool version.

@@ -23,7 +23,7 @@ use super::{ExrCompression, ExrOptions, HALF_MAX};
 use crate::error::{Error, Result};
 use crate::isp::RgbImage;
 use rayon::prelude::*;
-use std::io::Write;
+use std::io::{Seek, SeekFrom, Write};
 
 /// Attribute names the encoder writes itself or that OpenEXR reserves for multi-part,
 /// tiled or deep files; callers cannot set them.
@@ -452,6 +452,89 @@ pub(crate) fn write_blocks<W: Write>(
         out.write_all(blk)?;
     }
     Ok(())
+}
+
+/// A scan-line EXR written while its blocks are made, in line order, without holding them:
+/// [`BlockStream::begin`] writes the header and a zeroed offset table, [`BlockStream::push`]
+/// appends each block (`i32 first line, i32 size, data`) and records its offset, and
+/// [`BlockStream::finish`] seeks back to fill in the table. The bytes are those of
+/// [`write_blocks`] for the same blocks (tested).
+#[derive(Debug)]
+pub(crate) struct BlockStream {
+    lpb: usize,
+    height: usize,
+    nblocks: usize,
+    /// File offset of the offset table (= header length).
+    table_at: u64,
+    /// File offset of the next block.
+    pos: u64,
+    /// Offsets of the blocks pushed so far.
+    offsets: Vec<u64>,
+}
+
+impl BlockStream {
+    /// Write the header of a `w` x `h` image and a zeroed offset table into `out`, which
+    /// must be at the start of the file.
+    pub(crate) fn begin<W: Write>(
+        out: &mut W,
+        w: usize,
+        h: usize,
+        opts: &ExrOptions,
+        attributes: &[(String, String)],
+    ) -> Result<BlockStream> {
+        let lpb = check_blocks(w, h, opts)?;
+        let nblocks = h.div_ceil(lpb);
+        let head = header(w, h, opts, attributes)?;
+        out.write_all(&head)?;
+        out.write_all(&vec![0u8; 8 * nblocks])?;
+        Ok(BlockStream {
+            lpb,
+            height: h,
+            nblocks,
+            table_at: head.len() as u64,
+            pos: (head.len() + 8 * nblocks) as u64,
+            offsets: Vec::with_capacity(nblocks),
+        })
+    }
+
+    /// The first image line of the next block.
+    pub(crate) fn next_line(&self) -> usize {
+        self.offsets.len() * self.lpb
+    }
+
+    /// Append the next block (as made by [`encode_rows`]).
+    pub(crate) fn push<W: Write>(&mut self, out: &mut W, block: &[u8]) -> Result<()> {
+        if self.offsets.len() == self.nblocks {
+            return Err(Error::invalid(format!(
+                "EXR of {} blocks given another one",
+                self.nblocks
+            )));
+        }
+        out.write_all(&i32_of(self.next_line(), "line")?.to_le_bytes())?;
+        out.write_all(&i32_of(block.len(), "block size")?.to_le_bytes())?;
+        out.write_all(block)?;
+        self.offsets.push(self.pos);
+        self.pos += 8 + block.len() as u64;
+        Ok(())
+    }
+
+    /// Check that every block was pushed and write the offset table; `out` is left at the
+    /// end of the file.
+    pub(crate) fn finish<W: Write + Seek>(self, out: &mut W) -> Result<()> {
+        if self.offsets.len() != self.nblocks {
+            return Err(Error::invalid(format!(
+                "EXR of {} lines needs {} blocks, got {}",
+                self.height,
+                self.nblocks,
+                self.offsets.len()
+            )));
+        }
+        let table: Vec<u8> = self.offsets.iter().flat_map(|o| o.to_le_bytes()).collect();
+        out.seek(SeekFrom::Start(self.table_at))?;
+        out.write_all(&table)?;
+        out.seek(SeekFrom::Start(self.pos))?;
+        Ok(())
+    }
 }
 
 #[cfg(test)]
