@@ -622,6 +622,49 @@ mod tests {
     }
 
     #[test]
+    fn atomic_file_across_calls_seeks_and_cleans_up() {
+        use std::io::{Seek, SeekFrom};
+        let dir = tempfile::tempdir().unwrap();
+        let pol = OutputPolicy::default();
+        let p = dir.path().join("a.bin");
+        let mut f = AtomicFile::create(&p, &pol).unwrap();
+        f.writer().write_all(b"0000tail").unwrap();
+        f.writer().seek(SeekFrom::Start(0)).unwrap();
+        f.writer().write_all(b"head").unwrap();
+        assert!(!p.exists());
+        assert_eq!(tmp_files(dir.path()).len(), 1);
+        f.finish().unwrap();
+        assert_eq!(fs::read(&p).unwrap(), b"headtail");
+        assert!(tmp_files(dir.path()).is_empty());
+        // the policy is checked at creation
+        assert!(AtomicFile::create(&p, &pol).is_err());
+        // dropped unfinished: nothing appears, the temporary file goes
+        let q = dir.path().join("b.bin");
+        let mut f = AtomicFile::create(&q, &pol).unwrap();
+        f.writer().write_all(&[7; 3 << 20]).unwrap();
+        drop(f);
+        assert!(!q.exists() && tmp_files(dir.path()).is_empty());
+        // deferred: appears on the queue's finish only; a dropped queue removes it
+        let queue = Arc::new(DeferredSyncs::default());
+        let dpol = pol.deferring(&queue);
+        let mut f = AtomicFile::create(&q, &dpol).unwrap();
+        f.writer().write_all(b"late").unwrap();
+        f.finish().unwrap();
+        assert!(!q.exists());
+        queue.finish(&pol).unwrap();
+        assert_eq!(fs::read(&q).unwrap(), b"late");
+        let r = dir.path().join("c.bin");
+        {
+            let queue = Arc::new(DeferredSyncs::default());
+            let dpol = pol.deferring(&queue);
+            let mut f = AtomicFile::create(&r, &dpol).unwrap();
+            f.writer().write_all(b"x").unwrap();
+            f.finish().unwrap();
+        }
+        assert!(!r.exists() && tmp_files(dir.path()).is_empty());
+    }
+
+    #[test]
     fn set_lock_excludes_a_second_holder_and_is_removed_on_release() {
         let dir = tempfile::tempdir().unwrap();
         let a = OutputSetLock::acquire(dir.path(), "day", false).unwrap();

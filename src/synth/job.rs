@@ -766,6 +766,165 @@ mod tests {
         assert_eq!(SynthJob::from_sidecar(&sc).unwrap().target, Target::None);
     }
 
+    fn dir_files(dir: &Path) -> std::collections::BTreeMap<String, Vec<u8>> {
+        std::fs::read_dir(dir)
+            .unwrap()
+            .map(|e| {
+                let e = e.unwrap();
+                let name = e.file_name().to_string_lossy().into_owned();
+                (name, std::fs::read(e.path()).unwrap())
+            })
+            .collect()
+    }
+
+    fn pool(threads: usize) -> rayon::ThreadPool {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap()
+    }
+
+    /// The targets streamed band by band during the render are the bytes of the
+    /// whole-image writers ([`SynthJob::write_night`]), for any thread count, for output
+    /// heights of one row, not a multiple of the band height, and turned by the orientation.
+    #[test]
+    fn streamed_targets_equal_the_whole_image_writers() {
+        let base = small_day();
+        let a = base.raw.active_area();
+        let (aw, ah) = (a.width(), a.height());
+        assert!(
+            ah > 3 * crate::isp::render::BAND,
+            "the fixture has several bands"
+        );
+        for (k, (crop_h, orientation)) in [(None, 1u16), (Some(1), 1), (Some(33), 3), (Some(65), 6)]
+            .into_iter()
+            .enumerate()
+        {
+            let mut day = base.clone();
+            if let Some(ch) = crop_h {
+                day.raw.meta.default_crop_origin = Some([0.0, 0.0]);
+                day.raw.meta.default_crop_size = Some([aw as f64, ch as f64]);
+            }
+            day.raw.meta.orientation = orientation;
+            let job = SynthJob {
+                target: Target::Both,
+                ..SynthJob::new(SynthOptions {
+                    isos: vec![],
+                    ..SynthOptions::default()
+                })
+                .unwrap()
+            };
+            let plan = job.plan(&day, "day.dng", 5, 0).unwrap();
+            let policy = OutputPolicy::default();
+            let t = tempfile::tempdir().unwrap();
+            let whole = t.path().join("whole");
+            std::fs::create_dir(&whole).unwrap();
+            let night = crate::synth::night::synthesize(&day.raw, &plan, &job.request()).unwrap();
+            let rgb = night.target.as_ref().unwrap();
+            let want_h = crop_h.unwrap_or(rgb.height);
+            assert_eq!(
+                if orientation == 6 {
+                    rgb.width
+                } else {
+                    rgb.height
+                },
+                want_h,
+                "case {k}"
+            );
+            let sink = DirSink::new(&whole, "day", &job, &plan, &policy);
+            job.write_night(&day, &plan, &night, &sink).unwrap();
+            let want = dir_files(&whole);
+            for threads in [1, 2, 3] {
+                let d = t.path().join(format!("j{threads}"));
+                std::fs::create_dir(&d).unwrap();
+                let sink = DirSink::new(&d, "day", &job, &plan, &policy);
+                pool(threads)
+                    .install(|| job.run_variant(&day, &plan, &sink))
+                    .unwrap();
+                let got = dir_files(&d);
+                assert_eq!(
+                    got.keys().collect::<Vec<_>>(),
+                    want.keys().collect::<Vec<_>>()
+                );
+                for name in ["day_target.exr", "day_target.png"] {
+                    assert!(
+                        got[name] == want[name],
+                        "case {k}, {threads} threads: {name}"
+                    );
+                }
+            }
+        }
+    }
+
+    /// A [`FileSink`] whose target band `fail_at` fails.
+    struct FailingBand<'s, 'a> {
+        inner: &'s FileSink<'a>,
+        fail_at: usize,
+    }
+
+    impl NightSink for FailingBand<'_, '_> {
+        type Band = ();
+        fn clean(&self, clean: &RawImage) -> Result<()> {
+            self.inner.clean(clean)
+        }
+        fn noisy(&self, iso: u32, noisy: &RawImage) -> Result<()> {
+            self.inner.noisy(iso, noisy)
+        }
+        fn banded(&self) -> bool {
+            self.inner.banded()
+        }
+        fn target_start(&self, w: usize, h: usize) -> Result<()> {
+            self.inner.target_start(w, h)
+        }
+        fn target_band(&self, y0: usize, w: usize, rows: &[f32]) -> Result<()> {
+            if y0 == self.fail_at * crate::isp::render::BAND {
+                return Err(Error::invalid("band refused by the test"));
+            }
+            self.inner.target_band(y0, w, rows)
+        }
+        fn target(&self, target: TargetOut<()>) -> Result<()> {
+            self.inner.target(target)
+        }
+    }
+
+    /// A band that fails part-way through the streamed target leaves no output and no
+    /// temporary file (the target files were open and partly written).
+    #[test]
+    fn a_failing_target_band_leaves_no_file() {
+        let day = small_day();
+        let job = SynthJob {
+            target: Target::Both,
+            ..SynthJob::new(SynthOptions {
+                isos: vec![800],
+                ..SynthOptions::default()
+            })
+            .unwrap()
+        };
+        let plan = job.plan(&day, "day.dng", 1, 0).unwrap();
+        let policy = OutputPolicy::default();
+        for (threads, fail_at) in [(1, 0), (1, 3), (2, 3), (3, 1)] {
+            let dir = tempfile::tempdir().unwrap();
+            let sink = DirSink::new(dir.path(), "day", &job, &plan, &policy);
+            let e = pool(threads)
+                .install(|| {
+                    job.write_with(&day, &plan, &sink, |files| {
+                        let failing = FailingBand {
+                            inner: files,
+                            fail_at,
+                        };
+                        synthesize_into(&day.raw, &plan, &job.request(), &failing).map(|s| s.report)
+                    })
+                })
+                .unwrap_err();
+            assert!(e.to_string().contains("band refused by the test"), "{e}");
+            let left: Vec<String> = dir_files(dir.path()).into_keys().collect();
+            assert!(
+                left.is_empty(),
+                "{threads} threads, band {fail_at}: {left:?}"
+            );
+        }
+    }
+
     #[test]
     fn a_failed_output_fails_the_variant_before_the_sidecar() {
         let day = small_day();
