@@ -439,8 +439,8 @@ impl NightSink for FileSink<'_> {
 
     /// Band by band when every requested target can be encoded from bands (the default
     /// ZIP/none EXRs, 8-bit PNG): same bytes, no whole f32 image, each band is encoded
-    /// while it is in cache and written at once (`synth::target_files`), so the encoded target is
-    /// never held whole either.
+    /// while it is in cache and written at once (`synth::target_files`), so the encoded
+    /// target is never held whole either.
     fn banded(&self) -> bool {
         !self.job.target.exr() || encodes_rows(&self.job.exr)
     }
