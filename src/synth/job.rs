@@ -55,7 +55,7 @@ use super::relight::RunReport;
 use super::sidecar::{sha256_hex, CalibrationInfo, InputInfo, OutputInfo, Sidecar, SIDECAR_FORMAT};
 use super::{Calibration, Plan, SynthOptions};
 use crate::deflate::Encoder;
-use crate::dng::write::{write_dng, Compression, WriteOptions};
+use crate::dng::write::{write_dng, write_dng_rows, Compression, WriteOptions};
 use crate::encode::exr::{
     encode_exr_rows, encodes_rows, standard_attributes, write_exr, write_exr_blocks, ExrOptions,
 };
@@ -65,7 +65,8 @@ use crate::error::{Error, Result, ResultExt};
 use crate::isp::render::Bands;
 use crate::isp::RgbImage;
 use crate::output::{write_bytes_atomic, DeferredSyncs, OutputPolicy};
-use crate::raw::RawImage;
+use crate::raw::rows::RowSource;
+use crate::raw::{RawImage, RawMeta};
 use std::path::{Path, PathBuf};
 use std::str::FromStr;
 use std::sync::Arc;
@@ -429,6 +430,12 @@ impl NightSink for FileSink<'_> {
     fn noisy(&self, iso: u32, noisy: &RawImage) -> Result<()> {
         let path = self.sink.path(OutputKind::NoisyDng { iso })?;
         write_dng(noisy, &path, &self.wopts, self.policy)
+    }
+
+    /// Packed and written strip by strip: no noisy plane (same bytes as `noisy`).
+    fn noisy_rows(&self, iso: u32, meta: &RawMeta, rows: &dyn RowSource) -> Result<()> {
+        let path = self.sink.path(OutputKind::NoisyDng { iso })?;
+        write_dng_rows(meta, rows, &path, &self.wopts, self.policy)
     }
 
     /// Band by band when every requested target can be encoded from bands (the default
