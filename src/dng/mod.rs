@@ -11,4 +11,4 @@ pub mod thumbnail;
 pub mod write;
 
 pub use read::read_dng;
-pub use write::{write_dng, WriteOptions};
+pub use write::{write_dng, write_dng_rows, WriteOptions};

@@ -11,6 +11,7 @@
 use super::model::NoiseParams;
 use crate::error::Result;
 use crate::normalize::{round_clamp, Normalizer};
+use crate::raw::rows::{PlaneRows, RowSource};
 use crate::raw::{Bayer, RawImage};
 use crate::synth::crop::Crop;
 use rand::SeedableRng;
@@ -91,31 +92,71 @@ pub fn apply_noise_with(
     seed: u64,
     truncate: bool,
 ) -> Result<RawImage> {
-    let mut rows = RowNoise::new(clean, params)?;
-    rows.truncate = truncate;
-    let a = clean.active_area();
-    let (top, left, aw) = (a.top as usize, a.left as usize, a.width());
-    let width = clean.width;
-    let key = noise_key(seed);
-    let mut data = crate::limits::try_with_capacity::<u16>(clean.data.len(), "a noisy raw")?;
-    data.extend_from_slice(&clean.data);
-    data.par_chunks_mut(width)
-        .enumerate()
-        .skip(top)
-        .take(a.height())
-        .for_each_init(
-            || vec![0.0f64; aw],
-            |blk, (srow, row)| {
-                let r = srow - top;
-                rows.row(r, 0, &mut row[left..left + aw], &mut row_rng(&key, r), blk);
-            },
-        );
+    let rows = GaussianRows::new(clean, params, seed, truncate)?;
     Ok(RawImage {
-        width,
+        width: clean.width,
         height: clean.height,
-        data,
+        data: crate::raw::rows::to_plane(&rows)?,
         meta: clean.meta.clone(),
     })
+}
+
+/// The noisy raw of [`apply_noise_with`] as rows made on demand: the same samples, row by
+/// row, without a noisy plane (the DNG writer packs them strip by strip).
+pub struct GaussianRows<'a> {
+    clean: &'a RawImage,
+    rows: RowNoise<'a>,
+    key: [u8; 32],
+    active: crate::raw::Rect,
+}
+
+impl<'a> GaussianRows<'a> {
+    /// The noisy rows of `clean` (which must hold linear values) under `params` and `seed`.
+    pub fn new(
+        clean: &'a RawImage,
+        params: &'a NoiseParams,
+        seed: u64,
+        truncate: bool,
+    ) -> Result<GaussianRows<'a>> {
+        let mut rows = RowNoise::new(clean, params)?;
+        rows.truncate = truncate;
+        Ok(GaussianRows {
+            clean,
+            rows,
+            key: noise_key(seed),
+            active: clean.active_area(),
+        })
+    }
+}
+
+impl RowSource for GaussianRows<'_> {
+    fn width(&self) -> usize {
+        self.clean.width
+    }
+    fn height(&self) -> usize {
+        self.clean.height
+    }
+    /// Noisy samples are clipped to the white level; the others are the clean ones.
+    fn max_bound(&self) -> u16 {
+        let clean = PlaneRows::new(self.clean).max_bound();
+        clean.max(self.rows.white as u16)
+    }
+    fn fill_rows(&self, y0: usize, out: &mut [u16]) {
+        let w = self.clean.width;
+        let a = self.active;
+        let (top, left, aw) = (a.top as usize, a.left as usize, a.width());
+        let mut blk = vec![0.0f64; aw];
+        for (i, row) in out.chunks_exact_mut(w).enumerate() {
+            let sy = y0 + i;
+            row.copy_from_slice(&self.clean.data[sy * w..(sy + 1) * w]);
+            if (top..a.bottom as usize).contains(&sy) {
+                let r = sy - top;
+                let seg = &mut row[left..left + aw];
+                self.rows
+                    .row(r, 0, seg, &mut row_rng(&self.key, r), &mut blk);
+            }
+        }
+    }
 }
 
 /// The 32-byte ChaCha key of the noise of a crop: its own stream per crop, keyed by the
@@ -275,6 +316,37 @@ mod tests {
         let img = flat(64, 64, 0);
         let out = apply_noise(&img, &NoiseParams::uniform(0.0, 0.01), 1).unwrap();
         assert!(out.data.iter().any(|&v| v > 0));
+    }
+
+    #[test]
+    fn rows_on_demand_equal_the_whole_image_for_any_chunking() {
+        let mut img = flat(37, 23, 5000);
+        for (i, v) in img.data.iter_mut().enumerate() {
+            *v = (i * 7919 % 16383) as u16;
+        }
+        img.meta.active_area = Some(crate::raw::Rect {
+            top: 3,
+            left: 2,
+            bottom: 20,
+            right: 36,
+        });
+        let p = NoiseParams::uniform(1e-3, 1e-5);
+        for truncate in [false, true] {
+            let whole = apply_noise_with(&img, &p, 5, truncate).unwrap();
+            let rows = GaussianRows::new(&img, &p, 5, truncate).unwrap();
+            assert!(whole.data.iter().all(|&v| v <= rows.max_bound()));
+            let mut out = vec![0u16; 37 * 23];
+            for (k, chunk) in out.chunks_mut(37 * 4).enumerate() {
+                rows.fill_rows(k * 4, chunk);
+            }
+            assert_eq!(out, whole.data);
+            // outside the active area the clean samples, inside noisy ones
+            assert_eq!(out[..37 * 3], img.data[..37 * 3]);
+            assert_ne!(
+                out[37 * 5 + 2..37 * 5 + 36],
+                img.data[37 * 5 + 2..37 * 5 + 36]
+            );
+        }
     }
 
     #[test]

@@ -15,4 +15,6 @@ pub mod tukey_table;
 pub use apply::apply_noise;
 pub use model::{Evaluated, IsoPoint, NoiseModel, NoiseParams, NOISE_MODEL_FORMAT};
 pub use physics::{PhysicsModel, PhysicsParams};
-pub use physics_apply::{apply_physics_noise, apply_physics_noise_crop, apply_physics_noise_image};
+pub use physics_apply::{
+    apply_physics_noise, apply_physics_noise_crop, apply_physics_noise_image, with_physics_rows,
+};

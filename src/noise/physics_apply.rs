@@ -28,6 +28,7 @@ use crate::error::{Error, Result};
 #[cfg(test)]
 use crate::normalize::round_clamp;
 use crate::normalize::Normalizer;
+use crate::raw::rows::{PlaneRows, RowSource};
 use crate::raw::RawImage;
 use rand::{Rng, SeedableRng, TryRng};
 use rand_chacha::ChaCha8Rng;
@@ -302,20 +303,23 @@ impl<'a, 'n> Region<'a, 'n> {
         if w == 0 || stride == 0 {
             return;
         }
-        let s = &self.sampler;
         dst.par_chunks_mut(stride)
             .zip(rows.into_par_iter())
             .for_each_init(
                 || vec![0.0f64; self.aw],
-                |blk, (line, r)| {
-                    let out = &mut line[dst_left..][..w];
-                    // one copy of the row loop per kind of read noise
-                    match &s.tukey {
-                        Some(t) => self.noise_row(r, out, blk, &|g| t.sample(g.next_u64())),
-                        None => self.noise_row(r, out, blk, &|g| gaussian_read(s.sigma_read, g)),
-                    }
-                },
+                |blk, (line, r)| self.noise_one_row(r, &mut line[dst_left..][..w], blk),
             );
+    }
+
+    /// Noise active-area row `r` into `out` (its `cols`); `blk` is scratch of the
+    /// active-area width.
+    fn noise_one_row(&self, r: usize, out: &mut [u16], blk: &mut [f64]) {
+        let s = &self.sampler;
+        // one copy of the row loop per kind of read noise
+        match &s.tukey {
+            Some(t) => self.noise_row(r, out, blk, &|g| t.sample(g.next_u64())),
+            None => self.noise_row(r, out, blk, &|g| gaussian_read(s.sigma_read, g)),
+        }
     }
 
     /// Noise active-area row `r` into `out` (its `cols`); `blk` is scratch of the
@@ -390,6 +394,61 @@ pub fn apply_physics_noise_image(
     })
 }
 
+/// Hand `f` the noisy raw of [`apply_physics_noise_image`] as rows made on demand: the
+/// same samples, row by row, without a noisy plane (the DNG writer packs them strip by
+/// strip). The sampler's tables are built once, before `f` runs.
+pub fn with_physics_rows<T>(
+    clean: &RawImage,
+    params: &PhysicsParams,
+    seed: u64,
+    f: impl FnOnce(&dyn RowSource) -> Result<T>,
+) -> Result<T> {
+    let norm = linear_normalizer(clean)?;
+    let a = clean.active_area();
+    let (top, left, aw) = (a.top as usize, a.left as usize, a.width());
+    let src = |r: usize| &clean.data[(top + r) * clean.width + left..][..aw];
+    let region = Region::new(&norm, aw, params, seed, 0..aw, 0, &src)?;
+    f(&PhysicsRows {
+        clean,
+        region: &region,
+        active: a,
+    })
+}
+
+struct PhysicsRows<'r, 'a, 'n> {
+    clean: &'a RawImage,
+    region: &'r Region<'a, 'n>,
+    active: crate::raw::Rect,
+}
+
+impl RowSource for PhysicsRows<'_, '_, '_> {
+    fn width(&self) -> usize {
+        self.clean.width
+    }
+    fn height(&self) -> usize {
+        self.clean.height
+    }
+    /// Noisy samples are clipped to the white level; the others are the clean ones.
+    fn max_bound(&self) -> u16 {
+        let clean = PlaneRows::new(self.clean).max_bound();
+        clean.max(self.region.norm.white.min(u16::MAX as f64) as u16)
+    }
+    fn fill_rows(&self, y0: usize, out: &mut [u16]) {
+        let w = self.clean.width;
+        let a = self.active;
+        let (top, left, aw) = (a.top as usize, a.left as usize, a.width());
+        let mut blk = vec![0.0f64; self.region.aw];
+        for (i, row) in out.chunks_exact_mut(w).enumerate() {
+            let sy = y0 + i;
+            row.copy_from_slice(&self.clean.data[sy * w..(sy + 1) * w]);
+            if (top..a.bottom as usize).contains(&sy) {
+                self.region
+                    .noise_one_row(sy - top, &mut row[left..left + aw], &mut blk);
+            }
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -422,6 +481,32 @@ mod tests {
             *v = ((i * 7919) % 17000) as u16;
         }
         img
+    }
+
+    #[test]
+    fn rows_on_demand_equal_the_whole_image_for_any_chunking() {
+        let mut img = ramp(37, 23);
+        img.meta.active_area = Some(crate::raw::Rect {
+            top: 2,
+            left: 4,
+            bottom: 21,
+            right: 34,
+        });
+        for p in [params(2.0, 3.0, 0.0, 1.5), params(0.5, 1.0, 0.14, 0.0)] {
+            let whole = apply_physics_noise_image(&img, &p, 9).unwrap();
+            with_physics_rows(&img, &p, 9, |rows| {
+                assert_eq!(crate::raw::rows::to_plane(rows)?, whole.data);
+                assert!(whole.data.iter().all(|&v| v <= rows.max_bound()));
+                // odd chunks, one at a time
+                let mut out = vec![0u16; 37 * 23];
+                for (k, chunk) in out.chunks_mut(37 * 5).enumerate() {
+                    rows.fill_rows(k * 5, chunk);
+                }
+                assert_eq!(out, whole.data);
+                Ok(())
+            })
+            .unwrap();
+        }
     }
 
     #[test]

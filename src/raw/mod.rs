@@ -3,6 +3,7 @@
 
 pub mod from_parts;
 pub mod meta;
+pub mod rows;
 
 use crate::error::{Error, Result};
 pub use meta::RawMeta;
@@ -149,22 +150,36 @@ impl RawImage {
                 }
             )));
         }
-        let a = self.active_area();
-        if a.top >= a.bottom
-            || a.left >= a.right
-            || a.bottom as usize > self.height
-            || a.right as usize > self.width
-        {
-            return Err(Error::malformed(format!(
-                "ActiveArea {},{},{},{} is empty or outside the {}x{} image",
-                a.top, a.left, a.bottom, a.right, self.width, self.height
-            )));
-        }
-        self.meta.levels.validate(a.width(), a.height())?;
-        match &self.meta.linear_raw {
-            Some(l) => l.validate(&self.meta.levels),
-            None => Ok(()),
-        }
+        check_layout(self.width, self.height, &self.meta)
+    }
+}
+
+/// The checks of [`RawImage::validate`] that do not need the samples: a `width` x `height`
+/// image with metadata `meta` has its active area inside it and sane levels.
+pub fn check_layout(width: usize, height: usize, meta: &RawMeta) -> Result<()> {
+    if width == 0 || height == 0 {
+        return Err(Error::malformed("image has zero width or height"));
+    }
+    let a = meta.active_area.unwrap_or(Rect {
+        top: 0,
+        left: 0,
+        bottom: height as u32,
+        right: width as u32,
+    });
+    if a.top >= a.bottom
+        || a.left >= a.right
+        || a.bottom as usize > height
+        || a.right as usize > width
+    {
+        return Err(Error::malformed(format!(
+            "ActiveArea {},{},{},{} is empty or outside the {}x{} image",
+            a.top, a.left, a.bottom, a.right, width, height
+        )));
+    }
+    meta.levels.validate(a.width(), a.height())?;
+    match &meta.linear_raw {
+        Some(l) => l.validate(&meta.levels),
+        None => Ok(()),
     }
 }
 

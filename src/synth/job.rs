@@ -55,13 +55,14 @@ use super::relight::RunReport;
 use super::sidecar::{sha256_hex, CalibrationInfo, InputInfo, OutputInfo, Sidecar, SIDECAR_FORMAT};
 use super::target_files::TargetFiles;
 use super::{Calibration, Plan, SynthOptions};
-use crate::dng::write::{write_dng, Compression, WriteOptions};
+use crate::dng::write::{write_dng, write_dng_rows, Compression, WriteOptions};
 use crate::encode::exr::{encodes_rows, standard_attributes, write_exr, ExrOptions};
 use crate::encode::png::{write_png, PngOptions};
 use crate::error::{Error, Result, ResultExt};
 use crate::isp::RgbImage;
 use crate::output::{write_bytes_atomic, DeferredSyncs, OutputPolicy};
-use crate::raw::RawImage;
+use crate::raw::rows::RowSource;
+use crate::raw::{RawImage, RawMeta};
 use std::path::{Path, PathBuf};
 use std::str::FromStr;
 use std::sync::{Arc, OnceLock};
@@ -435,6 +436,12 @@ impl NightSink for FileSink<'_> {
     fn noisy(&self, iso: u32, noisy: &RawImage) -> Result<()> {
         let path = self.sink.path(OutputKind::NoisyDng { iso })?;
         write_dng(noisy, &path, &self.wopts, self.policy)
+    }
+
+    /// Packed and written strip by strip: no noisy plane (same bytes as `noisy`).
+    fn noisy_rows(&self, iso: u32, meta: &RawMeta, rows: &dyn RowSource) -> Result<()> {
+        let path = self.sink.path(OutputKind::NoisyDng { iso })?;
+        write_dng_rows(meta, rows, &path, &self.wopts, self.policy)
     }
 
     /// Band by band when every requested target can be encoded from bands (the default
@@ -869,6 +876,9 @@ mod tests {
         }
         fn noisy(&self, iso: u32, noisy: &RawImage) -> Result<()> {
             self.inner.noisy(iso, noisy)
+        }
+        fn noisy_rows(&self, iso: u32, meta: &RawMeta, rows: &dyn RowSource) -> Result<()> {
+            self.inner.noisy_rows(iso, meta, rows)
         }
         fn banded(&self) -> bool {
             self.inner.banded()

@@ -318,18 +318,45 @@ pub fn night_meta(src: &RawMeta, plan: &Plan, iso: u32, params: &NoiseParams) ->
 
 /// The noisy raw of the plan's `index`-th ISO from the clean night raw.
 pub fn run_noise(clean: &RawImage, plan: &Plan, index: usize) -> Result<(u32, RawImage)> {
+    with_noisy_rows(clean, plan, index, |iso, meta, rows| {
+        let img = RawImage {
+            width: rows.width(),
+            height: rows.height(),
+            data: crate::raw::rows::to_plane(rows)?,
+            meta: meta.clone(),
+        };
+        Ok((iso, img))
+    })
+}
+
+/// Hand `f` the plan's `index`-th ISO, the noisy raw's metadata and its rows made on demand
+/// from the clean night raw (the samples of [`run_noise`], without a noisy plane: a file
+/// sink packs them strip by strip).
+pub fn with_noisy_rows<T>(
+    clean: &RawImage,
+    plan: &Plan,
+    index: usize,
+    f: impl FnOnce(u32, &RawMeta, &dyn crate::raw::rows::RowSource) -> Result<T>,
+) -> Result<T> {
     let np = plan
         .noise
         .get(index)
         .ok_or_else(|| Error::invalid(format!("plan has no noise entry {}", index)))?;
-    let mut img = match &np.physics {
-        Some(p) => crate::noise::apply_physics_noise_image(clean, p, np.seed)?,
-        None => {
-            crate::noise::apply::apply_noise_with(clean, &np.params, np.seed, plan.truncate_noise)?
+    let meta = night_meta(&clean.meta, plan, np.iso, &np.params);
+    match &np.physics {
+        Some(p) => {
+            crate::noise::with_physics_rows(clean, p, np.seed, |rows| f(np.iso, &meta, rows))
         }
-    };
-    img.meta = night_meta(&clean.meta, plan, np.iso, &np.params);
-    Ok((np.iso, img))
+        None => {
+            let rows = crate::noise::apply::GaussianRows::new(
+                clean,
+                &np.params,
+                np.seed,
+                plan.truncate_noise,
+            )?;
+            f(np.iso, &meta, &rows)
+        }
+    }
 }
 
 #[cfg(test)]

@@ -6,7 +6,9 @@
 //!
 //! Products, computed only when asked for ([`Request`]):
 //! 1. the clean night raw (always): [`run_clean`] + [`night_meta`];
-//! 2. one noisy raw per planned ISO ([`run_noise`]), one after another (at most one alive);
+//! 2. one noisy raw per planned ISO, one after another, each handed over as rows made on
+//!    demand ([`NightSink::noisy_rows`]: a file sink never holds a noisy plane; the first
+//!    is made whole by [`run_noise`] when the network input is rendered from it);
 //! 3. the linear target rendered from the clean raw (`request.target`), band by band when
 //!    the sink can take bands ([`NightSink::banded`]), else as one image;
 //! 4. the network input render of the first noisy raw (`request.input`, whole frame only).
@@ -34,7 +36,7 @@
 
 use super::crop::{crop_meta, Crop};
 use super::relight::{run_clean, run_clean_crop, RunReport};
-use super::{night_meta, run_noise, Plan};
+use super::{night_meta, run_noise, with_noisy_rows, Plan};
 use crate::error::{Error, Result};
 use crate::isp::opcodes::{self, pipeline};
 use crate::isp::render::{
@@ -44,7 +46,8 @@ use crate::isp::render_crop::{render_linear_crop_with, CROP_MARGIN};
 use crate::isp::{render_linear, Demosaic, RenderOptions, RgbImage};
 use crate::noise::apply::apply_noise_crop_with;
 use crate::noise::apply_physics_noise_crop;
-use crate::raw::RawImage;
+use crate::raw::rows::RowSource;
+use crate::raw::{RawImage, RawMeta};
 use std::sync::Mutex;
 
 /// What to compute of one variant besides the clean raw and the plan's noisy raws.
@@ -81,6 +84,19 @@ pub trait NightSink: Sync {
     fn clean(&self, clean: &RawImage) -> Result<()>;
     /// The noisy night raw at `iso` (with its output metadata).
     fn noisy(&self, iso: u32, noisy: &RawImage) -> Result<()>;
+    /// The noisy night raw at `iso` as rows made on demand, with its output metadata `meta`
+    /// (the samples [`NightSink::noisy`] would get). The default makes the plane and hands
+    /// it to [`NightSink::noisy`]; a sink that writes files packs the rows strip by strip
+    /// instead, so no noisy plane is ever held.
+    fn noisy_rows(&self, iso: u32, meta: &RawMeta, rows: &dyn RowSource) -> Result<()> {
+        let noisy = RawImage {
+            width: rows.width(),
+            height: rows.height(),
+            data: crate::raw::rows::to_plane(rows)?,
+            meta: meta.clone(),
+        };
+        self.noisy(iso, &noisy)
+    }
     /// True when the sink takes the target band by band ([`NightSink::target_band`]).
     fn banded(&self) -> bool {
         false
@@ -180,10 +196,15 @@ fn whole_frame<S: NightSink>(
             *noisy_res = Some((|| {
                 let mut first_noisy = None;
                 for i in 0..plan.noise.len() {
-                    let (iso, noisy) = run_noise(clean, plan, i)?;
-                    sink.noisy(iso, &noisy)?;
-                    if first_noisy.is_none() && req.input {
+                    if i == 0 && req.input {
+                        // kept whole: the network input is rendered from it
+                        let (iso, noisy) = run_noise(clean, plan, i)?;
+                        sink.noisy(iso, &noisy)?;
                         first_noisy = Some(noisy);
+                    } else {
+                        with_noisy_rows(clean, plan, i, |iso, meta, rows| {
+                            sink.noisy_rows(iso, meta, rows)
+                        })?;
                     }
                 }
                 Ok(first_noisy)

@@ -27,14 +27,49 @@ pub enum Chunks {
     Strips(Vec<Vec<u8>>),
     /// Tiles: written as TileOffsets (324) / TileByteCounts (325).
     Tiles(Vec<Vec<u8>>),
+    /// Strips of these byte counts whose bytes the caller of [`write_tiff_head`] writes
+    /// after the head, in order, at the offsets it returns (they must be the file's last
+    /// chunks).
+    StreamedStrips(Vec<u32>),
 }
 
 impl Chunks {
-    fn parts(&self) -> (&[Vec<u8>], u16, u16) {
+    /// The (offsets, byte counts) tags.
+    fn tags(&self) -> (u16, u16) {
         match self {
-            Chunks::Strips(c) => (c, tags::STRIP_OFFSETS, tags::STRIP_BYTE_COUNTS),
-            Chunks::Tiles(c) => (c, tags::TILE_OFFSETS, tags::TILE_BYTE_COUNTS),
+            Chunks::Strips(_) | Chunks::StreamedStrips(_) => {
+                (tags::STRIP_OFFSETS, tags::STRIP_BYTE_COUNTS)
+            }
+            Chunks::Tiles(_) => (tags::TILE_OFFSETS, tags::TILE_BYTE_COUNTS),
         }
+    }
+    /// The byte count of every chunk.
+    fn lens(&self) -> Vec<u64> {
+        match self {
+            Chunks::Strips(c) | Chunks::Tiles(c) => c.iter().map(|c| c.len() as u64).collect(),
+            Chunks::StreamedStrips(l) => l.iter().map(|&l| l as u64).collect(),
+        }
+    }
+}
+
+/// What [`write_tiff_head`] leaves to its caller: where the streamed strips go, and where
+/// IFD0's out-of-line values are (to patch one in place once the data it depends on has
+/// been written).
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Tail {
+    ifd0_values: BTreeMap<u16, u64>,
+    /// (offset, byte count) of each streamed strip, in file order.
+    pub strips: Vec<(u64, u64)>,
+    /// Bytes written so far (the head and every chunk before the streamed strips).
+    pub written: u64,
+    /// Length of the whole file (the last strip plus its alignment padding).
+    pub end: u64,
+}
+
+impl Tail {
+    /// File offset of the value of `tag` of IFD0, if it is stored out of line.
+    pub fn ifd0_value_offset(&self, tag: u16) -> Option<u64> {
+        self.ifd0_values.get(&tag).copied()
     }
 }
 
@@ -217,6 +252,23 @@ pub fn encode_tiff(order: ByteOrder, chain: &[Ifd]) -> Result<Vec<u8>> {
 /// Write a TIFF file whose IFD chain is `chain` to `sink`: the directories and values are
 /// assembled in memory, the (large) strips and tiles are streamed straight from the IFDs.
 pub fn write_tiff<W: std::io::Write>(order: ByteOrder, chain: &[Ifd], sink: &mut W) -> Result<()> {
+    let tail = write_tiff_head(order, chain, sink)?;
+    if !tail.strips.is_empty() {
+        return Err(Error::invalid(
+            "streamed strips are written by the caller of write_tiff_head",
+        ));
+    }
+    Ok(())
+}
+
+/// [`write_tiff`] up to the [`Chunks::StreamedStrips`] (if any): the head and every chunk
+/// before them. The caller writes the strips at the returned offsets (zero padding between
+/// them), pads the file to [`Tail::end`], and may patch IFD0 values.
+pub fn write_tiff_head<W: std::io::Write>(
+    order: ByteOrder,
+    chain: &[Ifd],
+    sink: &mut W,
+) -> Result<Tail> {
     if chain.is_empty() {
         return Err(Error::invalid("a TIFF file needs at least one IFD"));
     }
@@ -243,12 +295,13 @@ pub fn write_tiff<W: std::io::Write>(order: ByteOrder, chain: &[Ifd], sink: &mut
             entries.insert(*tag, Value::Long(vec![0; ids.len()]));
         }
         if let Some(ch) = &n.ifd.chunks {
-            let (c, off_tag, cnt_tag) = ch.parts();
-            entries.insert(off_tag, Value::Long(vec![0; c.len()]));
-            let mut counts = Vec::with_capacity(c.len());
-            for chunk in c {
+            let (off_tag, cnt_tag) = ch.tags();
+            let lens = ch.lens();
+            entries.insert(off_tag, Value::Long(vec![0; lens.len()]));
+            let mut counts = Vec::with_capacity(lens.len());
+            for &len in &lens {
                 counts.push(
-                    u32::try_from(chunk.len())
+                    u32::try_from(len)
                         .map_err(|_| Error::limits("strip or tile larger than 4 GiB"))?,
                 );
             }
@@ -280,11 +333,10 @@ pub fn write_tiff<W: std::io::Write>(order: ByteOrder, chain: &[Ifd], sink: &mut
     }
     for n in nodes.iter_mut() {
         if let Some(ch) = &n.ifd.chunks {
-            let (c, _, _) = ch.parts();
-            for chunk in c {
+            for len in ch.lens() {
                 cursor = align2(cursor);
                 n.chunk_offsets.push(cursor);
-                cursor += chunk.len() as u64;
+                cursor += len;
             }
         }
     }
@@ -302,7 +354,7 @@ pub fn write_tiff<W: std::io::Write>(order: ByteOrder, chain: &[Ifd], sink: &mut
             .iter()
             .map(|(t, ids)| (*t, ids.iter().map(|&i| dir_offsets[i] as u32).collect()))
             .collect();
-        let chunk_tag = n.ifd.chunks.as_ref().map(|c| c.parts().1);
+        let chunk_tag = n.ifd.chunks.as_ref().map(|c| c.tags().0);
         let chunk_vals: Vec<u32> = n.chunk_offsets.iter().map(|&o| o as u32).collect();
         for (tag, v) in n.entries.iter_mut() {
             if let Some((_, offs)) = child_vals.iter().find(|(t, _)| t == tag) {
@@ -354,24 +406,46 @@ pub fn write_tiff<W: std::io::Write>(order: ByteOrder, chain: &[Ifd], sink: &mut
     }
     o.pad_to(head_len);
     sink.write_all(&o.buf)?;
+    let mut tail = Tail {
+        ifd0_values: nodes[0]
+            .entries
+            .iter()
+            .zip(&nodes[0].value_offsets)
+            .filter(|(_, &off)| off != 0)
+            .map(|((tag, _), &off)| (*tag, off))
+            .collect(),
+        strips: vec![],
+        written: head_len,
+        end: cursor,
+    };
     // Stream the chunks, with their alignment padding.
     let mut pos = head_len;
     for n in &nodes {
-        if let Some(ch) = &n.ifd.chunks {
-            let (c, _, _) = ch.parts();
-            for (chunk, &off) in c.iter().zip(&n.chunk_offsets) {
-                if off > pos {
-                    sink.write_all(&vec![0u8; (off - pos) as usize])?;
+        let Some(ch) = &n.ifd.chunks else { continue };
+        for (i, (len, &off)) in ch.lens().into_iter().zip(&n.chunk_offsets).enumerate() {
+            match ch {
+                Chunks::StreamedStrips(_) => tail.strips.push((off, len)),
+                Chunks::Strips(c) | Chunks::Tiles(c) => {
+                    if !tail.strips.is_empty() {
+                        return Err(Error::invalid(
+                            "streamed strips must be the last chunks of a file",
+                        ));
+                    }
+                    if off > pos {
+                        sink.write_all(&vec![0u8; (off - pos) as usize])?;
+                    }
+                    sink.write_all(&c[i])?;
+                    pos = off + len;
                 }
-                sink.write_all(chunk)?;
-                pos = off + chunk.len() as u64;
             }
         }
     }
-    if cursor > pos {
+    if tail.strips.is_empty() && cursor > pos {
         sink.write_all(&vec![0u8; (cursor - pos) as usize])?;
+        pos = cursor;
     }
-    Ok(())
+    tail.written = pos;
+    Ok(tail)
 }
 
 #[cfg(test)]

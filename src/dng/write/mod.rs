@@ -17,15 +17,17 @@ use crate::dng::thumbnail;
 use crate::error::{Error, Result};
 use crate::output::OutputPolicy;
 use crate::raw::meta::{ByteOrder, RawMeta};
+use crate::raw::rows::{PlaneRows, RowSource};
 use crate::raw::RawImage;
 use crate::tiff::tags as t;
 use crate::tiff::value::{Entry, Value};
-use crate::tiff::write::{encode_tiff, write_tiff, Chunks, Ifd};
+use crate::tiff::write::{encode_tiff, write_tiff, write_tiff_head, Chunks, Ifd};
 use rayon::prelude::*;
 use sha2::{Digest, Sha256};
 use std::path::Path;
 
 mod pixels;
+mod stream;
 mod tags;
 
 use pixels::*;
@@ -36,6 +38,8 @@ use tags::*;
 const LJPEG_TILE: usize = 256;
 /// Target size of one uncompressed strip.
 const STRIP_BYTES: usize = 1 << 20;
+/// Bytes of RawDataUniqueID.
+const UNIQUE_ID_LEN: usize = 16;
 
 /// Raw image compression of written DNGs.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
@@ -82,8 +86,10 @@ pub fn encode_dng(img: &RawImage, opts: &WriteOptions) -> Result<Vec<u8>> {
     encode_tiff(order, &[ifd0])
 }
 
-/// Encode and write a DNG atomically under `policy` (strips/tiles are streamed to the
-/// temporary file, not assembled in memory first).
+/// Encode and write a DNG atomically under `policy`: the same bytes as [`encode_dng`]. In
+/// the default layout the strips are packed and written a batch at a time
+/// ([`write_dng_rows`]); otherwise the tiles/strips are encoded first and streamed to the
+/// temporary file.
 pub fn write_dng(
     img: &RawImage,
     path: &Path,
@@ -91,48 +97,140 @@ pub fn write_dng(
     policy: &OutputPolicy,
 ) -> Result<()> {
     policy.check(path)?;
+    if stream::streams(opts) {
+        check_written(img).map_err(|e| e.in_file(path))?;
+        return write_dng_rows(&img.meta, &PlaneRows::new(img), path, opts, policy);
+    }
     let (order, ifd0) = build(img, opts).map_err(|e| e.in_file(path))?;
     crate::output::write_atomic(path, policy, |w| write_tiff(order, &[ifd0], w))
 }
 
+/// Write the raw whose rows `src` makes, with metadata `meta`, atomically under `policy`:
+/// the same bytes as [`write_dng`] of the plane of those rows. In the default layout
+/// (uncompressed strips in IFD0) and when `src`'s sample bound decides the stored bit depth,
+/// the rows are made, packed and written a batch of strips at a time and never held whole;
+/// otherwise the plane is made first ([`crate::raw::rows::to_plane`]).
+pub fn write_dng_rows(
+    meta: &RawMeta,
+    src: &dyn RowSource,
+    path: &Path,
+    opts: &WriteOptions,
+    policy: &OutputPolicy,
+) -> Result<()> {
+    policy.check(path)?;
+    let (w, h) = (src.width(), src.height());
+    let checked = (|| {
+        refuse_linear_raw(meta)?;
+        if meta.samples_per_pixel() != 1 {
+            return Err(Error::invalid("a streamed raw has one sample per pixel"));
+        }
+        crate::raw::check_layout(w, h, meta)?;
+        check_meta(meta, w, h)
+    })();
+    checked.map_err(|e| e.in_file(path))?;
+    let streamed = stream::streams(opts)
+        .then(|| {
+            let bound = src.max_bound();
+            stream::strip_bits(meta, bound, src.plane().is_some(), opts).map(|b| (b, bound))
+        })
+        .flatten();
+    match streamed {
+        Some(bits) => stream::write_streamed(meta, src, bits, path, opts, policy),
+        None => {
+            let img = RawImage {
+                width: w,
+                height: h,
+                data: crate::raw::rows::to_plane(src).map_err(|e| e.in_file(path))?,
+                meta: meta.clone(),
+            };
+            let (order, ifd0) = build(&img, opts).map_err(|e| e.in_file(path))?;
+            crate::output::write_atomic(path, policy, |w| write_tiff(order, &[ifd0], w))
+        }
+    }
+}
+
+/// The checks [`build`] makes before encoding, for a raw written from its plane.
+fn check_written(img: &RawImage) -> Result<()> {
+    refuse_linear_raw(&img.meta)?;
+    img.validate()?;
+    check_meta(&img.meta, img.width, img.height)
+}
+
 /// The IFD tree of a DNG: byte order and IFD0 (with its SubIFD/Exif children and data).
 fn build(img: &RawImage, opts: &WriteOptions) -> Result<(ByteOrder, Ifd)> {
-    if img.meta.linear_raw.is_some() {
-        // The writer writes CFA mosaics; a LinearRaw source is read and rendered only.
+    check_written(img)?;
+    let order = byte_order(opts);
+    let (raw_chunks, digests, bits, compression, layout_tags) = encode_pixels(img, opts, order)?;
+    let tiled = matches!(raw_chunks, Chunks::Tiles(_));
+    let unique_id = raw_data_unique_id(&img.meta, img.width, img.height, tiled, &digests);
+    let thumb = match opts.raw_ifd {
+        RawIfd::Main => None,
+        RawIfd::Sub => Some(thumbnail::render(img, 256)?),
+    };
+    let raw = RawPart {
+        width: img.width,
+        height: img.height,
+        chunks: raw_chunks,
+        bits,
+        compression,
+        layout_tags,
+    };
+    Ok((order, assemble(&img.meta, raw, unique_id, thumb)))
+}
+
+/// The writer writes CFA mosaics; a LinearRaw source is read and rendered only.
+fn refuse_linear_raw(m: &RawMeta) -> Result<()> {
+    if m.linear_raw.is_some() {
         return Err(crate::error::Error::unsupported(
             "LinearRaw: already demosaiced; the DNG writer writes CFA mosaics",
         ));
     }
-    img.validate()?;
-    let m = &img.meta;
-    check_meta(img)?;
-    let order = if opts.big_endian {
+    Ok(())
+}
+
+fn byte_order(opts: &WriteOptions) -> ByteOrder {
+    if opts.big_endian {
         ByteOrder::Big
     } else {
         ByteOrder::Little
-    };
+    }
+}
 
-    let (raw_chunks, digests, bits, compression, layout_tags) = encode_pixels(img, opts, order)?;
-    let tiled = matches!(raw_chunks, Chunks::Tiles(_));
-    let unique_id = raw_data_unique_id(img, tiled, &digests);
+/// The raw image's IFD parts that depend on how its samples are stored.
+struct RawPart {
+    width: usize,
+    height: usize,
+    chunks: Chunks,
+    bits: u16,
+    compression: u16,
+    layout_tags: Vec<(u16, Value)>,
+}
 
+/// IFD0 (with the raw in it or in a SubIFD behind `thumb`, and the Exif/GPS children).
+fn assemble(
+    m: &RawMeta,
+    part: RawPart,
+    unique_id: Vec<u8>,
+    thumb: Option<thumbnail::Thumbnail>,
+) -> Ifd {
     let mut raw = Ifd::new();
     raw.set(t::NEW_SUBFILE_TYPE, Value::Long(vec![0]));
-    raw.set(t::IMAGE_WIDTH, Value::Long(vec![img.width as u32]));
-    raw.set(t::IMAGE_LENGTH, Value::Long(vec![img.height as u32]));
-    raw.set(t::BITS_PER_SAMPLE, Value::Short(vec![bits]));
-    raw.set(t::COMPRESSION, Value::Short(vec![compression]));
+    raw.set(t::IMAGE_WIDTH, Value::Long(vec![part.width as u32]));
+    raw.set(t::IMAGE_LENGTH, Value::Long(vec![part.height as u32]));
+    raw.set(t::BITS_PER_SAMPLE, Value::Short(vec![part.bits]));
+    raw.set(t::COMPRESSION, Value::Short(vec![part.compression]));
     raw.set(t::PHOTOMETRIC_INTERPRETATION, Value::Short(vec![32803]));
     raw.set(t::SAMPLES_PER_PIXEL, Value::Short(vec![1]));
     raw.set(t::PLANAR_CONFIGURATION, Value::Short(vec![1]));
-    for (tag, v) in layout_tags {
+    for (tag, v) in part.layout_tags {
         raw.set(tag, v);
     }
-    raw.set_chunks(raw_chunks);
+    raw.set_chunks(part.chunks);
     set_raw_tags(&mut raw, m);
 
-    let mut ifd0 = match opts.raw_ifd {
-        RawIfd::Main => {
+    let raw_in_sub = thumb.is_some();
+    let mut ifd0 = match thumb {
+        None => {
             for e in &m.raw_extra {
                 if !is_dropped(e.tag) {
                     raw.set_if_absent(e.tag, e.value.clone());
@@ -140,8 +238,7 @@ fn build(img: &RawImage, opts: &WriteOptions) -> Result<(ByteOrder, Ifd)> {
             }
             raw
         }
-        RawIfd::Sub => {
-            let th = thumbnail::render(img, 256)?;
+        Some(th) => {
             let mut ifd0 = Ifd::new();
             ifd0.set(t::NEW_SUBFILE_TYPE, Value::Long(vec![1]));
             ifd0.set(t::IMAGE_WIDTH, Value::Long(vec![th.width as u32]));
@@ -169,7 +266,7 @@ fn build(img: &RawImage, opts: &WriteOptions) -> Result<(ByteOrder, Ifd)> {
             ifd0
         }
     };
-    set_ifd0_tags(&mut ifd0, img, unique_id, opts.raw_ifd == RawIfd::Sub);
+    set_ifd0_tags(&mut ifd0, m, unique_id, raw_in_sub);
     ifd0.set_children(t::EXIF_IFD, vec![exif_ifd(m)]);
     if !m.gps.is_empty() {
         let mut gps = Ifd::new();
@@ -178,7 +275,7 @@ fn build(img: &RawImage, opts: &WriteOptions) -> Result<(ByteOrder, Ifd)> {
         }
         ifd0.set_children(t::GPS_IFD, vec![gps]);
     }
-    Ok((order, ifd0))
+    ifd0
 }
 
 /// Carried tags that describe the raw image itself (DNG spec: "IFD: Raw IFD"); with the raw
@@ -303,8 +400,7 @@ pub fn is_dropped(tag: u16) -> bool {
     )
 }
 
-fn check_meta(img: &RawImage) -> Result<()> {
-    let m = &img.meta;
+fn check_meta(m: &RawMeta, width: usize, height: usize) -> Result<()> {
     if !(1..=16).contains(&m.bits_per_sample) {
         return Err(Error::invalid(format!(
             "BitsPerSample {} outside 1..=16",
@@ -320,7 +416,7 @@ fn check_meta(img: &RawImage) -> Result<()> {
             c.cols
         )));
     }
-    if img.width > u32::MAX as usize || img.height > u32::MAX as usize {
+    if width > u32::MAX as usize || height > u32::MAX as usize {
         return Err(Error::limits("image dimensions exceed 32 bits"));
     }
     Ok(())
@@ -335,18 +431,24 @@ type Digest32 = Vec<u8>;
 /// dropped entries). Deterministic: the same image written the same way always gets the
 /// same ID, a change of pixels or meaning a new one. Hashing the encoded (packed or
 /// compressed) data rather than the `u16` samples keeps it cheap.
-fn raw_data_unique_id(img: &RawImage, tiled: bool, digests: &[Digest32]) -> Vec<u8> {
+fn raw_data_unique_id(
+    m: &RawMeta,
+    width: usize,
+    height: usize,
+    tiled: bool,
+    digests: &[Digest32],
+) -> Vec<u8> {
     let mut h = Sha256::new();
     h.update(b"day2night RawDataUniqueID v2\0");
-    h.update((img.width as u64).to_le_bytes());
-    h.update((img.height as u64).to_le_bytes());
+    h.update((width as u64).to_le_bytes());
+    h.update((height as u64).to_le_bytes());
     h.update([tiled as u8]);
     for d in digests {
         h.update(d);
     }
     // Canonical metadata: what this writer actually writes, so that re-writing a file it
     // wrote reproduces the same ID (a fixed point) while any change of meaning changes it.
-    let mut meta = img.meta.clone();
+    let mut meta = m.clone();
     meta.storage = None;
     meta.dng_version = [1, 4, 0, 0];
     meta.dng_backward_version = None;
@@ -363,7 +465,7 @@ fn raw_data_unique_id(img: &RawImage, tiled: bool, digests: &[Digest32]) -> Vec<
     if let Ok(json) = serde_json::to_vec(&meta) {
         h.update(&json);
     }
-    h.finalize()[..16].to_vec()
+    h.finalize()[..UNIQUE_ID_LEN].to_vec()
 }
 
 /// Entries of an IFD that the writer will carry (helper for docs/tests).

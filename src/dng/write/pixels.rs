@@ -96,12 +96,7 @@ pub(super) fn encode_pixels(
                     ],
                 ));
             }
-            let row_bytes = (w * bits as usize).div_ceil(8).max(1);
-            let rps = match opts.rows_per_strip {
-                Some(0) => return Err(Error::invalid("rows per strip must be positive")),
-                Some(r) => (r as usize).min(h),
-                None => STRIP_BYTES.div_ceil(row_bytes).clamp(1, h),
-            };
+            let rps = super::stream::rows_per_strip(w, h, bits, opts)?;
             let strips: Vec<(Vec<u8>, Digest32)> = img
                 .data
                 .par_chunks(rps * w)

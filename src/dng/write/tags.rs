@@ -215,8 +215,7 @@ pub(super) fn set_raw_tags(ifd: &mut Ifd, m: &RawMeta) {
 }
 
 /// Tags of IFD0 (camera, colour, version, provenance).
-pub(super) fn set_ifd0_tags(ifd: &mut Ifd, img: &RawImage, unique_id: Vec<u8>, raw_in_sub: bool) {
-    let m = &img.meta;
+pub(super) fn set_ifd0_tags(ifd: &mut Ifd, m: &RawMeta, unique_id: Vec<u8>, raw_in_sub: bool) {
     let has_opcodes = m.opcode_lists.iter().any(|o| o.is_some());
     ifd.set(t::DNG_VERSION, Value::Byte(vec![1, 4, 0, 0]));
     ifd.set(
