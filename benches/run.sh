@@ -20,7 +20,7 @@
 #   (r) optional (REF_CMD set): the reference, a shell command run with `bash -c` REF_RUNS
 #       times (default 3), interleaved with (a): one (a) run, then one (r) run, and so on.
 #       It sees REF_IN (the input DNG) and REF_OUT (an output directory, emptied before each
-#       run) in its environment; its output goes to $WORK/ref.log. The speed-up column then
+#       run) in its environment; its output goes to $WORK/refcmd.log. The speed-up column then
 #       divides (r)'s measured median by each row's median. Without REF_CMD it divides the
 #       issue-7 constant (29.2 s, 3.0 GB), which was not measured in this run.
 #       docs/benchmarks.md says how to set up the authors' release for REF_CMD.
@@ -70,15 +70,15 @@ time_runs() {
     done
 }
 
-# time_ref: one run of the reference command (r), output in $WORK/ref.log
+# time_ref: one run of the reference command (r), output in $WORK/refcmd.log
 time_ref() {
     rm -rf "$REF_OUT"
     mkdir -p "$REF_OUT"
-    if ! /usr/bin/time -f "%e %M %U %S" -o "$WORK/ref.one" bash -c "$REF_CMD" >>"$WORK/ref.log" 2>&1; then
-        echo "benches/run.sh: REF_CMD failed; its output is in $WORK/ref.log" >&2
+    if ! /usr/bin/time -f "%e %M %U %S" -o "$WORK/refcmd.one" bash -c "$REF_CMD" >>"$WORK/refcmd.log" 2>&1; then
+        echo "benches/run.sh: REF_CMD failed; its output is in $WORK/refcmd.log" >&2
         exit 1
     fi
-    cat "$WORK/ref.one" >>"$WORK/ref.times"
+    cat "$WORK/refcmd.one" >>"$WORK/refcmd.times"
 }
 
 # reference output directory for the I/O floor (one untimed run of (a))
@@ -88,10 +88,10 @@ time_ref() {
 if [ "${SKIP_RUNS:-0}" != 1 ]; then
     if [ -n "${REF_CMD:-}" ]; then
         # (a) interleaved with (r), so that both see the same machine load
-        export REF_IN=$IN REF_OUT=$WORK/ref_out
+        export REF_IN=$IN REF_OUT=$WORK/refcmd_out
         : >"$WORK/synth_j2.times"
-        : >"$WORK/ref.times"
-        : >"$WORK/ref.log"
+        : >"$WORK/refcmd.times"
+        : >"$WORK/refcmd.log"
         n=$((RUNS > REF_RUNS ? RUNS : REF_RUNS))
         for i in $(seq "$n"); do
             [ "$i" -gt "$RUNS" ] || time_one synth_j2 "$BIN" synth "$IN" -o "$WORK/out" --target both --jobs 2 --seed 1
@@ -99,7 +99,7 @@ if [ "${SKIP_RUNS:-0}" != 1 ]; then
         done
         rm -rf "$REF_OUT"
     else
-        rm -f "$WORK/ref.times"
+        rm -f "$WORK/refcmd.times"
         time_runs synth_j2 "$RUNS" "$BIN" synth "$IN" -o "$WORK/out" --target both --jobs 2 --seed 1
     fi
 fi
@@ -130,10 +130,10 @@ stats() {
 }
 
 read -r floor_med _ <<<"$(stats "$WORK/io_floor.times")"
-if [ -s "$WORK/ref.times" ]; then
-    read -r ref_med _ _ _ ref_rss _ <<<"$(stats "$WORK/ref.times")"
+if [ -s "$WORK/refcmd.times" ]; then
+    read -r ref_med _ _ _ ref_rss _ <<<"$(stats "$WORK/refcmd.times")"
     ref_note="authors' release measured in this run (r): median ${ref_med} s, ${ref_rss} MB peak"
-    ref_runs=$(wc -l <"$WORK/ref.times")
+    ref_runs=$(wc -l <"$WORK/refcmd.times")
 else
     ref_med=$REF_WALL
     ref_rss=$REF_RSS_MB
@@ -159,13 +159,13 @@ if [ "${DATASET:-0}" = 1 ]; then
     printf "%-34s %8s %8s %8s %9s %7s   %s images/s (median)\n" "(d) dataset 20 images --jobs 2" \
         "$med" "$mn" "$mx" "$rss" "$cpu" "$(echo "20 / $med" | bc -l | xargs printf %.2f)"
 fi
-[ ! -s "$WORK/ref.times" ] || row "(r) reference (REF_CMD)" "$WORK/ref.times"
+[ ! -s "$WORK/refcmd.times" ] || row "(r) reference (REF_CMD)" "$WORK/refcmd.times"
 echo "reference: $ref_note;" \
     "vs_ref = reference median / row median (speed-up, higher is better)," \
     "vs_floor = run time / I/O floor, cpu_s = median user+system CPU time"
-if [ -s "$WORK/ref.times" ]; then
+if [ -s "$WORK/refcmd.times" ]; then
     read -r _ _ _ _ a_rss _ <<<"$(stats "$WORK/synth_j2.times")"
     echo "peak RSS: (r) / (a) = $(echo "$ref_rss / $a_rss" | bc -l | xargs printf %.1f)x;" \
-        "REF_CMD: ${REF_CMD:-(not set: times reprinted from $WORK/ref.times)}"
+        "REF_CMD: ${REF_CMD:-(not set: times reprinted from $WORK/refcmd.times)}"
 fi
 echo "raw times (wall_s rss_kb user_s sys_s per run): $WORK/*.times"
