@@ -11,7 +11,7 @@
 use super::model::NoiseParams;
 use crate::error::Result;
 use crate::normalize::{round_clamp, Normalizer};
-use crate::raw::rows::{PlaneRows, RowSource};
+use crate::raw::rows::{ActiveRowMap, MappedRows};
 use crate::raw::{Bayer, RawImage};
 use crate::synth::crop::Crop;
 use rand::SeedableRng;
@@ -92,7 +92,7 @@ pub fn apply_noise_with(
     seed: u64,
     truncate: bool,
 ) -> Result<RawImage> {
-    let rows = GaussianRows::new(clean, params, seed, truncate)?;
+    let rows = gaussian_rows(clean, params, seed, truncate)?;
     Ok(RawImage {
         width: clean.width,
         height: clean.height,
@@ -103,59 +103,36 @@ pub fn apply_noise_with(
 
 /// The noisy raw of [`apply_noise_with`] as rows made on demand: the same samples, row by
 /// row, without a noisy plane (the DNG writer packs them strip by strip).
-pub struct GaussianRows<'a> {
-    clean: &'a RawImage,
+pub type GaussianRows<'a> = MappedRows<'a, GaussianMap<'a>>;
+
+/// The Gaussian noise of the active-area rows (an [`ActiveRowMap`]).
+pub struct GaussianMap<'a> {
     rows: RowNoise<'a>,
     key: [u8; 32],
-    active: crate::raw::Rect,
 }
 
-impl<'a> GaussianRows<'a> {
-    /// The noisy rows of `clean` (which must hold linear values) under `params` and `seed`.
-    pub fn new(
-        clean: &'a RawImage,
-        params: &'a NoiseParams,
-        seed: u64,
-        truncate: bool,
-    ) -> Result<GaussianRows<'a>> {
-        let mut rows = RowNoise::new(clean, params)?;
-        rows.truncate = truncate;
-        Ok(GaussianRows {
-            clean,
-            rows,
-            key: noise_key(seed),
-            active: clean.active_area(),
-        })
-    }
+/// The noisy rows of `clean` (which must hold linear values) under `params` and `seed`.
+pub fn gaussian_rows<'a>(
+    clean: &'a RawImage,
+    params: &'a NoiseParams,
+    seed: u64,
+    truncate: bool,
+) -> Result<GaussianRows<'a>> {
+    let mut rows = RowNoise::new(clean, params)?;
+    rows.truncate = truncate;
+    let key = noise_key(seed);
+    Ok(MappedRows::new(clean, GaussianMap { rows, key }))
 }
 
-impl RowSource for GaussianRows<'_> {
-    fn width(&self) -> usize {
-        self.clean.width
+impl ActiveRowMap for GaussianMap<'_> {
+    fn map_row(&self, r: usize, seg: &mut [u16], scratch: &mut Vec<f64>) {
+        scratch.resize(seg.len(), 0.0);
+        self.rows
+            .row(r, 0, seg, &mut row_rng(&self.key, r), scratch);
     }
-    fn height(&self) -> usize {
-        self.clean.height
-    }
-    /// Noisy samples are clipped to the white level; the others are the clean ones.
-    fn max_bound(&self) -> u16 {
-        let clean = PlaneRows::new(self.clean).max_bound();
-        clean.max(self.rows.white as u16)
-    }
-    fn fill_rows(&self, y0: usize, out: &mut [u16]) {
-        let w = self.clean.width;
-        let a = self.active;
-        let (top, left, aw) = (a.top as usize, a.left as usize, a.width());
-        let mut blk = vec![0.0f64; aw];
-        for (i, row) in out.chunks_exact_mut(w).enumerate() {
-            let sy = y0 + i;
-            row.copy_from_slice(&self.clean.data[sy * w..(sy + 1) * w]);
-            if (top..a.bottom as usize).contains(&sy) {
-                let r = sy - top;
-                let seg = &mut row[left..left + aw];
-                self.rows
-                    .row(r, 0, seg, &mut row_rng(&self.key, r), &mut blk);
-            }
-        }
+    /// Noisy samples are clipped to the white level.
+    fn bound(&self) -> u16 {
+        self.rows.white as u16
     }
 }
 
@@ -293,6 +270,7 @@ impl<'a> RowNoise<'a> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::raw::rows::RowSource;
     use crate::raw::meta::RawMeta;
 
     fn flat(w: usize, h: usize, v: u16) -> RawImage {
@@ -333,7 +311,7 @@ mod tests {
         let p = NoiseParams::uniform(1e-3, 1e-5);
         for truncate in [false, true] {
             let whole = apply_noise_with(&img, &p, 5, truncate).unwrap();
-            let rows = GaussianRows::new(&img, &p, 5, truncate).unwrap();
+            let rows = gaussian_rows(&img, &p, 5, truncate).unwrap();
             assert!(whole.data.iter().all(|&v| v <= rows.max_bound()));
             let mut out = vec![0u16; 37 * 23];
             for (k, chunk) in out.chunks_mut(37 * 4).enumerate() {

@@ -28,7 +28,7 @@ use crate::error::{Error, Result};
 #[cfg(test)]
 use crate::normalize::round_clamp;
 use crate::normalize::Normalizer;
-use crate::raw::rows::{PlaneRows, RowSource};
+use crate::raw::rows::{ActiveRowMap, MappedRows, RowSource};
 use crate::raw::RawImage;
 use rand::{Rng, SeedableRng, TryRng};
 use rand_chacha::ChaCha8Rng;
@@ -408,44 +408,20 @@ pub fn with_physics_rows<T>(
     let (top, left, aw) = (a.top as usize, a.left as usize, a.width());
     let src = |r: usize| &clean.data[(top + r) * clean.width + left..][..aw];
     let region = Region::new(&norm, aw, params, seed, 0..aw, 0, &src)?;
-    f(&PhysicsRows {
-        clean,
-        region: &region,
-        active: a,
-    })
+    f(&MappedRows::new(clean, PhysicsMap(&region)))
 }
 
-struct PhysicsRows<'r, 'a, 'n> {
-    clean: &'a RawImage,
-    region: &'r Region<'a, 'n>,
-    active: crate::raw::Rect,
-}
+/// The physics noise of the active-area rows (an [`ActiveRowMap`]).
+struct PhysicsMap<'r, 'a, 'n>(&'r Region<'a, 'n>);
 
-impl RowSource for PhysicsRows<'_, '_, '_> {
-    fn width(&self) -> usize {
-        self.clean.width
+impl ActiveRowMap for PhysicsMap<'_, '_, '_> {
+    fn map_row(&self, r: usize, seg: &mut [u16], scratch: &mut Vec<f64>) {
+        scratch.resize(self.0.aw, 0.0);
+        self.0.noise_one_row(r, seg, scratch);
     }
-    fn height(&self) -> usize {
-        self.clean.height
-    }
-    /// Noisy samples are clipped to the white level; the others are the clean ones.
-    fn max_bound(&self) -> u16 {
-        let clean = PlaneRows::new(self.clean).max_bound();
-        clean.max(self.region.norm.white.min(u16::MAX as f64) as u16)
-    }
-    fn fill_rows(&self, y0: usize, out: &mut [u16]) {
-        let w = self.clean.width;
-        let a = self.active;
-        let (top, left, aw) = (a.top as usize, a.left as usize, a.width());
-        let mut blk = vec![0.0f64; self.region.aw];
-        for (i, row) in out.chunks_exact_mut(w).enumerate() {
-            let sy = y0 + i;
-            row.copy_from_slice(&self.clean.data[sy * w..(sy + 1) * w]);
-            if (top..a.bottom as usize).contains(&sy) {
-                self.region
-                    .noise_one_row(sy - top, &mut row[left..left + aw], &mut blk);
-            }
-        }
+    /// Noisy samples are clipped to the white level.
+    fn bound(&self) -> u16 {
+        self.0.norm.white.min(u16::MAX as f64) as u16
     }
 }
 

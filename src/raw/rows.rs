@@ -50,6 +50,64 @@ pub fn to_plane(src: &dyn RowSource) -> Result<Vec<u16>> {
     Ok(v)
 }
 
+/// The largest sample of `data` (0 when empty), computed in parallel.
+pub fn plane_max(data: &[u16]) -> u16 {
+    data.par_chunks(1 << 16)
+        .map(|c| c.iter().copied().max().unwrap_or(0))
+        .max()
+        .unwrap_or(0)
+}
+
+/// A change of the active-area part of each active-area row of a raw (e.g. noise added to a
+/// clean raw): [`MappedRows`] makes the changed raw row by row.
+pub trait ActiveRowMap: Sync {
+    /// Rewrite `seg`, the samples of active-area row `r` (all active-area columns);
+    /// `scratch` is a buffer of the caller's that the map may use (any length).
+    fn map_row(&self, r: usize, seg: &mut [u16], scratch: &mut Vec<f64>);
+    /// An upper bound of every sample [`ActiveRowMap::map_row`] writes.
+    fn bound(&self) -> u16;
+}
+
+/// The rows of `img` with an [`ActiveRowMap`] applied to their active-area part (the
+/// samples outside the active area are `img`'s).
+pub struct MappedRows<'a, M> {
+    img: &'a RawImage,
+    map: M,
+}
+
+impl<'a, M: ActiveRowMap> MappedRows<'a, M> {
+    /// `img` changed by `map`.
+    pub fn new(img: &'a RawImage, map: M) -> MappedRows<'a, M> {
+        MappedRows { img, map }
+    }
+}
+
+impl<M: ActiveRowMap> RowSource for MappedRows<'_, M> {
+    fn width(&self) -> usize {
+        self.img.width
+    }
+    fn height(&self) -> usize {
+        self.img.height
+    }
+    fn max_bound(&self) -> u16 {
+        plane_max(&self.img.data).max(self.map.bound())
+    }
+    fn fill_rows(&self, y0: usize, out: &mut [u16]) {
+        let w = self.img.width;
+        let a = self.img.active_area();
+        let (top, left, aw) = (a.top as usize, a.left as usize, a.width());
+        let mut scratch = Vec::new();
+        for (i, row) in out.chunks_exact_mut(w).enumerate() {
+            let sy = y0 + i;
+            row.copy_from_slice(&self.img.data[sy * w..(sy + 1) * w]);
+            if (top..a.bottom as usize).contains(&sy) {
+                let seg = &mut row[left..left + aw];
+                self.map.map_row(sy - top, seg, &mut scratch);
+            }
+        }
+    }
+}
+
 /// A [`RawImage`]'s plane as a [`RowSource`] (its exact maximum is computed once).
 pub struct PlaneRows<'a> {
     img: &'a RawImage,
@@ -59,13 +117,10 @@ pub struct PlaneRows<'a> {
 impl<'a> PlaneRows<'a> {
     /// The rows of `img`.
     pub fn new(img: &'a RawImage) -> PlaneRows<'a> {
-        let max = img
-            .data
-            .par_chunks(1 << 16)
-            .map(|c| c.iter().copied().max().unwrap_or(0))
-            .max()
-            .unwrap_or(0);
-        PlaneRows { img, max }
+        PlaneRows {
+            img,
+            max: plane_max(&img.data),
+        }
     }
 }
 

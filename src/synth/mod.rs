@@ -348,7 +348,7 @@ pub fn with_noisy_rows<T>(
             crate::noise::with_physics_rows(clean, p, np.seed, |rows| f(np.iso, &meta, rows))
         }
         None => {
-            let rows = crate::noise::apply::GaussianRows::new(
+            let rows = crate::noise::apply::gaussian_rows(
                 clean,
                 &np.params,
                 np.seed,

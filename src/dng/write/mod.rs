@@ -479,8 +479,18 @@ mod tests {
     use crate::raw::Bayer;
 
     fn sample_image(w: usize, h: usize, bits: u16) -> RawImage {
+        sample_image_upto(w, h, bits, (1u32 << bits) - 1)
+    }
+
+    /// A `bits`-bit image of hashed samples `& max` (`max` = 2^k - 1; above the depth's
+    /// range for the 16-bit fallback).
+    pub(in crate::dng::write) fn sample_image_upto(
+        w: usize,
+        h: usize,
+        bits: u16,
+        max: u32,
+    ) -> RawImage {
         let meta = RawMeta::new_bayer(Bayer::RGGB, bits, 64.0, ((1u32 << bits) - 1) as f64);
-        let max = (1u32 << bits) - 1;
         let data = (0..w * h)
             .map(|i| (((i as u32).wrapping_mul(2654435761u32) >> 7) & max) as u16)
             .collect();

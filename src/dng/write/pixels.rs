@@ -16,12 +16,7 @@ pub(super) fn encode_pixels(
     order: ByteOrder,
 ) -> Result<Pixels> {
     let (w, h) = (img.width, img.height);
-    let max = img
-        .data
-        .par_chunks(1 << 16)
-        .map(|c| c.iter().copied().max().unwrap_or(0))
-        .max()
-        .unwrap_or(0);
+    let max = crate::raw::rows::plane_max(&img.data);
     let src_bits = img.meta.bits_per_sample;
     // Bits actually written: the source depth unless a sample does not fit in it.
     let fit_bits = if (max as u32) < (1u32 << src_bits) {

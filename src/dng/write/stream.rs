@@ -192,19 +192,7 @@ mod tests {
     use crate::raw::rows::PlaneRows;
     use crate::raw::Bayer;
 
-    fn image(w: usize, h: usize, bits: u16, max: u32) -> RawImage {
-        let meta = RawMeta::new_bayer(Bayer::RGGB, bits, 0.0, ((1u32 << bits) - 1) as f64);
-        let data = (0..w * h)
-            .map(|i| ((i as u32).wrapping_mul(2654435761u32) >> 7) % (max + 1))
-            .map(|v| v as u16)
-            .collect();
-        RawImage {
-            width: w,
-            height: h,
-            data,
-            meta,
-        }
-    }
+    use super::super::tests::sample_image_upto as image;
 
     /// The rows of a plane without the plane (made on demand) and with a chosen bound.
     struct Made<'a>(&'a RawImage, u16);
