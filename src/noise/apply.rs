@@ -270,8 +270,8 @@ impl<'a> RowNoise<'a> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::raw::rows::RowSource;
     use crate::raw::meta::RawMeta;
+    use crate::raw::rows::RowSource;
 
     fn flat(w: usize, h: usize, v: u16) -> RawImage {
         RawImage {
