@@ -388,7 +388,7 @@ where
     F: FnOnce(&mut BufWriter<File>) -> Result<()>,
 {
     let mut file = AtomicFile::create(path, policy)?;
-    fill(file.writer()).in_file(path)?;
+    fill(file.writer()?).in_file(path)?;
     file.finish()
 }
 
@@ -442,12 +442,12 @@ impl<'p> AtomicFile<'p> {
         &self.path
     }
 
-    /// The buffered temporary file (seekable: `BufWriter` flushes before a seek).
-    pub fn writer(&mut self) -> &mut BufWriter<File> {
-        // Some until `finish` or drop, which both consume self.
+    /// The buffered temporary file (seekable: `BufWriter` flushes before a seek). It is
+    /// there until `finish` or drop, which both consume the `AtomicFile`.
+    pub fn writer(&mut self) -> Result<&mut BufWriter<File>> {
         self.w
             .as_mut()
-            .expect("an AtomicFile holds its writer until finished")
+            .ok_or_else(|| Error::invalid("output already finished"))
     }
 
     /// Flush, then sync and rename into place (re-checking the policy just before the
@@ -628,9 +628,9 @@ mod tests {
         let pol = OutputPolicy::default();
         let p = dir.path().join("a.bin");
         let mut f = AtomicFile::create(&p, &pol).unwrap();
-        f.writer().write_all(b"0000tail").unwrap();
-        f.writer().seek(SeekFrom::Start(0)).unwrap();
-        f.writer().write_all(b"head").unwrap();
+        f.writer().unwrap().write_all(b"0000tail").unwrap();
+        f.writer().unwrap().seek(SeekFrom::Start(0)).unwrap();
+        f.writer().unwrap().write_all(b"head").unwrap();
         assert!(!p.exists());
         assert_eq!(tmp_files(dir.path()).len(), 1);
         f.finish().unwrap();
@@ -641,14 +641,14 @@ mod tests {
         // dropped unfinished: nothing appears, the temporary file goes
         let q = dir.path().join("b.bin");
         let mut f = AtomicFile::create(&q, &pol).unwrap();
-        f.writer().write_all(&[7; 3 << 20]).unwrap();
+        f.writer().unwrap().write_all(&[7; 3 << 20]).unwrap();
         drop(f);
         assert!(!q.exists() && tmp_files(dir.path()).is_empty());
         // deferred: appears on the queue's finish only; a dropped queue removes it
         let queue = Arc::new(DeferredSyncs::default());
         let dpol = pol.deferring(&queue);
         let mut f = AtomicFile::create(&q, &dpol).unwrap();
-        f.writer().write_all(b"late").unwrap();
+        f.writer().unwrap().write_all(b"late").unwrap();
         f.finish().unwrap();
         assert!(!q.exists());
         queue.finish(&pol).unwrap();
@@ -658,7 +658,7 @@ mod tests {
             let queue = Arc::new(DeferredSyncs::default());
             let dpol = pol.deferring(&queue);
             let mut f = AtomicFile::create(&r, &dpol).unwrap();
-            f.writer().write_all(b"x").unwrap();
+            f.writer().unwrap().write_all(b"x").unwrap();
             f.finish().unwrap();
         }
         assert!(!r.exists() && tmp_files(dir.path()).is_empty());

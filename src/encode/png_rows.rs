@@ -310,20 +310,20 @@ impl<'p> PngFile<'p> {
         policy: &'p OutputPolicy,
     ) -> Result<PngFile<'p>> {
         let mut file = AtomicFile::create(path, policy)?;
-        let stream = PngStream::begin(file.writer(), width, height, tone).in_file(path)?;
+        let stream = PngStream::begin(file.writer()?, width, height, tone).in_file(path)?;
         Ok(PngFile { file, stream })
     }
 
     /// Append the next group of rows.
     pub fn push(&mut self, group: &PngRows) -> Result<()> {
-        let r = self.stream.push(self.file.writer(), group);
+        let r = self.file.writer().and_then(|w| self.stream.push(w, group));
         r.in_file(self.file.path())
     }
 
     /// Write IEND (every row must have been pushed), then sync and rename the file into
     /// place (see [`AtomicFile::finish`]).
     pub fn finish(mut self) -> Result<()> {
-        let r = self.stream.end(self.file.writer());
+        let r = self.file.writer().and_then(|w| self.stream.end(w));
         r.in_file(self.file.path())?;
         self.file.finish()
     }

@@ -425,7 +425,7 @@ impl<'p> ExrFile<'p> {
         }
         scanline::check_attributes(attributes)?;
         let mut file = AtomicFile::create(path, policy)?;
-        let stream = scanline::BlockStream::begin(file.writer(), width, height, opts, attributes)
+        let stream = scanline::BlockStream::begin(file.writer()?, width, height, opts, attributes)
             .in_file(path)?;
         Ok(ExrFile { file, stream })
     }
@@ -447,14 +447,14 @@ impl<'p> ExrFile<'p> {
     }
 
     fn push_block(&mut self, block: &[u8]) -> Result<()> {
-        let r = self.stream.push(self.file.writer(), block);
+        let r = self.file.writer().and_then(|w| self.stream.push(w, block));
         r.in_file(self.file.path())
     }
 
     /// Write the offset table (every block must have been pushed), then sync and rename
     /// the file into place (see [`AtomicFile::finish`]).
     pub fn finish(mut self) -> Result<()> {
-        let r = self.stream.finish(self.file.writer());
+        let r = self.file.writer().and_then(|w| self.stream.finish(w));
         r.in_file(self.file.path())?;
         self.file.finish()
     }
