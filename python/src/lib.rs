@@ -275,6 +275,22 @@ fn warn_meta(
     Ok(())
 }
 
+/// Raise each of `warnings` about the raw `name` as a `UserWarning` (`<name>: <message>`),
+/// as the command line prints `day2night: <file>: warning: <message>`.
+fn warn_lines(py: Python<'_>, name: &str, warnings: &[String]) -> PyResult<()> {
+    for w in warnings {
+        let msg = std::ffi::CString::new(format!("{name}: {w}"))
+            .unwrap_or_else(|_| c"day2night warning".into());
+        PyErr::warn(
+            py,
+            &py.get_type::<pyo3::exceptions::PyUserWarning>(),
+            &msg,
+            1,
+        )?;
+    }
+    Ok(())
+}
+
 /// Read a DNG into memory (the GIL is released while it is read and decoded).
 ///
 /// >>> raw = day2night.read_dng("day.dng")
@@ -537,6 +553,11 @@ fn synthesize<'py>(
         crop,
         ..
     } = night;
+    // The plan's warnings after the reader's (raised by read_dng already), then the run's.
+    let skip = r.day.raw.meta.warnings.len().min(plan.warnings.len());
+    let mut new = plan.warnings[skip..].to_vec();
+    new.extend(report.warnings.iter().cloned());
+    warn_lines(py, &r.file_name, &new)?;
     let d = PyDict::new(py);
     let bayer = plan.bayer;
     let profile = |p: &day2night::noise::NoiseParams| -> Vec<Vec<f64>> {
@@ -757,9 +778,22 @@ fn render<'py>(
         orient,
         opcodes,
     };
-    let rgb = py
-        .detach(move || on_pool(move || render_linear(&day.raw, &opts)))
+    let name = raw.get().file_name.clone();
+    // The command line's warnings: opcodes that make their samples constant, a TrimBounds
+    // that changes the size, skipped optional opcodes, a render that comes out constant.
+    let (rgb, warnings) = py
+        .detach(move || {
+            on_pool(move || {
+                use day2night::isp::opcodes::check::check_render;
+                let checked = check_render(&day.raw, opts.opcodes, opts.crop, opts.orient)?;
+                let rgb = render_linear(&day.raw, &opts)?;
+                let mut w = checked.warnings;
+                w.extend(day2night::isp::flat::warning(&rgb, "the render"));
+                Ok((rgb, w))
+            })
+        })
         .map_err(py_err)?;
+    warn_lines(py, &name, &warnings)?;
     rgb_array(py, rgb)
 }
 

@@ -148,10 +148,12 @@ pub fn run(args: RenderArgs) -> CmdResult {
     let in_file = |e: day2night::Error| lib(e.in_file(&args.input));
     let n = resolve_neutral(&img.meta, neutral).map_err(in_file)?;
     // Optional opcodes that cannot be applied are skipped with a warning; others are errors.
-    if let Some(p) = day2night::isp::opcodes::prepare(&img.meta, opcodes).map_err(in_file)? {
-        for w in p.report.warnings() {
-            eprintln!("day2night: {}: warning: {w}", args.input.display());
-        }
+    // Opcodes that make their samples constant and a TrimBounds that changes the size warn.
+    let checked =
+        day2night::isp::opcodes::check::check_render(&img, opcodes, !args.no_crop, !args.no_orient)
+            .map_err(in_file)?;
+    for w in &checked.warnings {
+        eprintln!("day2night: {}: warning: {w}", args.input.display());
     }
     let opts = RenderOptions {
         demosaic,
@@ -165,6 +167,9 @@ pub fn run(args: RenderArgs) -> CmdResult {
     } else {
         render_linear(&img, &opts).map_err(in_file)?
     };
+    if let Some(w) = day2night::isp::flat::warning(&rgb, "the render") {
+        eprintln!("day2night: {}: warning: {w}", args.input.display());
+    }
     match format {
         Format::Exr => {
             let mut attrs = standard_attributes(&args.input, n);

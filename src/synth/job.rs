@@ -190,14 +190,18 @@ impl SynthJob {
 
     /// Sample the plan of variant `variant` (0-based) of `day`; the random stream is keyed
     /// by (`seed`, `name`, `variant`), and `name` is recorded as the sidecar's input name.
+    /// A job that renders nothing (no target, no input EXR) does not fail on opcode lists
+    /// a render could not apply ([`super::plan_for`]).
     pub fn plan(&self, day: &DayInput, name: &str, seed: u64, variant: u32) -> Result<Plan> {
-        super::plan(
+        let req = self.request();
+        super::plan_for(
             &day.raw,
             name,
             seed,
             variant,
             &self.options,
             &self.calibration,
+            req.target || req.input,
         )
     }
 
@@ -303,6 +307,7 @@ impl SynthJob {
             target_files: OnceLock::new(),
         };
         let report = compute(&files)?;
+        let warnings = report.warnings.clone();
         let isos: Vec<u32> = plan.noise.iter().map(|np| np.iso).collect();
         let (want_exr, want_png) = (self.target.exr(), self.target.png());
         let mut stages = plan.stages.clone();
@@ -377,6 +382,7 @@ impl SynthJob {
             files,
             stages,
             isos,
+            warnings,
         })
     }
 }
@@ -660,6 +666,9 @@ pub struct VariantOutputs {
     pub stages: Vec<String>,
     /// ISO of each noisy raw, in order.
     pub isos: Vec<u32>,
+    /// Warnings about what the renders made (the sidecar's `run.warnings`: a constant
+    /// target or input); the plan's warnings are in [`Plan::warnings`].
+    pub warnings: Vec<String>,
 }
 
 #[cfg(test)]

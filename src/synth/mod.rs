@@ -31,7 +31,7 @@ mod target_files;
 
 pub use illuminant::{Covariance, Gaussian2, SamplerRules};
 pub use masks::{Light, LightKind, MaskEval};
-pub use plan::{plan, NoisePlan, Plan};
+pub use plan::{plan, plan_for, NoisePlan, Plan};
 pub use relight::{run, run_clean, RunReport};
 
 use crate::error::{Error, Result};

@@ -16,6 +16,7 @@
 
 pub mod area;
 pub mod bad_pixels;
+pub mod check;
 pub mod gain_map;
 pub mod pipeline;
 pub mod trim;
