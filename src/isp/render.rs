@@ -152,15 +152,6 @@ fn render_with(
     }
 }
 
-/// The fused render of a single-pass demosaicer: the output image (after crop and
-/// orientation) is cut into bands of [`BAND`] rows, processed in parallel; each band maps
-/// to a rectangle of the active area (rows for orientations 1-4, columns for 5-8), whose
-/// CFA samples (normalized and white-balanced, plus the 2-sample neighbourhood the
-/// kernels read) are computed into a band-sized plane, demosaiced row by row, passed
-/// through `post` and written straight to their final place. No whole-image buffer but
-/// the output. Every pixel is computed by the same expressions as in the whole-image path
-/// ([`render_camera_with`] + [`apply_geometry`]), so the results are identical bit for
-/// bit, for any thread count.
 fn render_banded(
     img: &RawImage,
     neutral: [f64; 3],
@@ -169,19 +160,39 @@ fn render_banded(
     crop: bool,
     orient: bool,
 ) -> Result<RgbImage> {
-    banded(img, neutral, kernel, post, crop, orient, |ow, oh, body| {
-        let mut out = RgbImage::try_new(ow, oh)?;
+    banded(img, neutral, kernel, post, crop, orient, collect_bands)
+}
+
+/// The `run` of [`place`] that keeps the whole image: every band rendered in parallel into
+/// its place in the output.
+pub(crate) fn collect_bands(ow: usize, oh: usize, body: &BandBody) -> Result<RgbImage> {
+    let mut out = RgbImage::try_new(ow, oh)?;
+    if ow > 0 {
         out.data
             .par_chunks_mut(3 * ow * BAND)
             .enumerate()
-            .for_each(|(bi, band)| body(bi, band));
-        Ok(out)
-    })
+            .try_for_each(|(bi, band)| body(bi, band))?;
+    }
+    Ok(out)
 }
 
-/// The set-up of [`render_banded`]: resolves the geometry and calls `run(ow, oh, body)`,
-/// where `body(bi, band)` renders output rows `[bi * BAND, bi * BAND + band.len() / (3 *
-/// ow))` into `band` (interleaved RGB, `ow` pixels per row).
+/// Renders the active-area rectangle `rows x cols` of a render, calling `emit(i, rgb)` for
+/// each of its rows in order (`3 * cols.len()` samples, the caller's `post` applied). Must
+/// not wait for other rayon work (it runs inside [`super::bands::in_order`]).
+pub(crate) type RectFn<'a> = dyn Fn(
+        std::ops::Range<usize>,
+        std::ops::Range<usize>,
+        &mut dyn FnMut(usize, &mut [f32]),
+    ) -> Result<()>
+    + Sync
+    + 'a;
+
+/// `body(bi, band)`: renders output rows `[bi * BAND, bi * BAND + band.len() / (3 * ow))`
+/// into `band` (interleaved RGB, `ow` pixels per row).
+pub(crate) type BandBody<'a> = dyn Fn(usize, &mut [f32]) -> Result<()> + Sync + 'a;
+
+/// The set-up of [`render_banded`]: the plain path's rectangle renderer (normalize, white
+/// balance, demosaic, `post`), placed by [`place`].
 fn banded<R>(
     img: &RawImage,
     neutral: [f64; 3],
@@ -189,7 +200,7 @@ fn banded<R>(
     post: &Post,
     crop: bool,
     orient: bool,
-    run: impl FnOnce(usize, usize, &(dyn Fn(usize, &mut [f32]) + Sync)) -> Result<R>,
+    run: impl FnOnce(usize, usize, &BandBody) -> Result<R>,
 ) -> Result<R> {
     let bayer = img.bayer()?;
     let n = normalize_neutral(neutral)?;
@@ -243,75 +254,76 @@ fn banded<R>(
             }
         }
     };
+    let rect = |rows: std::ops::Range<usize>,
+                cols: std::ops::Range<usize>,
+                emit: &mut dyn FnMut(usize, &mut [f32])| {
+        let mut blacks = Vec::new();
+        let fill = |r: usize, cs: &[usize], out: &mut [f32]| fill(&mut blacks, r, cs, out);
+        demosaic_rect(w, h, bayer, kernel, rows, cols, fill, post, emit);
+        Ok(())
+    };
+    place(&img.meta, (w, h), crop, orient, &rect, run)
+}
+
+/// The output geometry of a banded render of an active area of `w x h`: DefaultCrop (if
+/// `crop`) and orientation (if `orient`) of `meta`. Calls `run(ow, oh, body)`, where
+/// `body(bi, band)` renders output band `bi` by asking `rect` for the active-area
+/// rectangle it shows (the same crop rows for Orientation 1-4, in reverse order for 3 and
+/// 4; crop columns for 5-8) and copying each row to its final place (mirrored or
+/// transposed as the orientation asks).
+pub(crate) fn place<R>(
+    meta: &RawMeta,
+    (w, h): (usize, usize),
+    crop: bool,
+    orient: bool,
+    rect: &RectFn,
+    run: impl FnOnce(usize, usize, &BandBody) -> Result<R>,
+) -> Result<R> {
     let (x0, y0, cw, ch) = if crop {
-        default_crop(&img.meta, w, h)
+        default_crop(meta, w, h)
     } else {
         (0, 0, w, h)
     };
-    let o = if orient && (2..=8).contains(&img.meta.orientation) {
-        img.meta.orientation
+    let o = if orient && (2..=8).contains(&meta.orientation) {
+        meta.orientation
     } else {
         1
     };
     let swap = o >= 5;
     let (ow, oh) = if swap { (ch, cw) } else { (cw, ch) };
-    let body = |bi: usize, band: &mut [f32]| {
+    let body = |bi: usize, band: &mut [f32]| -> Result<()> {
         let a0 = bi * BAND;
-        let b0 = a0 + band.len() / (3 * ow);
-        let mut blacks = Vec::new();
-        let fill = |r: usize, cs: &[usize], out: &mut [f32]| fill(&mut blacks, r, cs, out);
+        let b0 = a0 + band.len() / (3 * ow).max(1);
         if !swap {
             // Output rows [a0, b0) are crop rows [s0, s1), in reverse order for 3 and 4,
             // mirrored left-right for 2 and 3.
             let (s0, s1) = if o <= 2 { (a0, b0) } else { (ch - b0, ch - a0) };
             let flip = o == 2 || o == 3;
-            let rows = y0 + s0..y0 + s1;
-            demosaic_rect(
-                w,
-                h,
-                bayer,
-                kernel,
-                rows,
-                x0..x0 + cw,
-                fill,
-                post,
-                |i, rgb| {
-                    let yc = s0 + i;
-                    let yo = if o <= 2 { yc } else { ch - 1 - yc };
-                    let dst = &mut band[3 * ow * (yo - a0)..][..3 * ow];
-                    if flip {
-                        for (d, p) in dst.chunks_exact_mut(3).zip(rgb.chunks_exact(3).rev()) {
-                            d.copy_from_slice(p);
-                        }
-                    } else {
-                        dst.copy_from_slice(rgb);
+            rect(y0 + s0..y0 + s1, x0..x0 + cw, &mut |i, rgb| {
+                let yc = s0 + i;
+                let yo = if o <= 2 { yc } else { ch - 1 - yc };
+                let dst = &mut band[3 * ow * (yo - a0)..][..3 * ow];
+                if flip {
+                    for (d, p) in dst.chunks_exact_mut(3).zip(rgb.chunks_exact(3).rev()) {
+                        d.copy_from_slice(p);
                     }
-                },
-            );
+                } else {
+                    dst.copy_from_slice(rgb);
+                }
+            })
         } else {
             // Output rows [a0, b0) are crop columns [s0, s1) (reversed for 7 and 8);
             // crop row y becomes output column y (5, 8) or ch - 1 - y (6, 7).
             let (s0, s1) = if o <= 6 { (a0, b0) } else { (cw - b0, cw - a0) };
-            let cols = x0 + s0..x0 + s1;
-            demosaic_rect(
-                w,
-                h,
-                bayer,
-                kernel,
-                y0..y0 + ch,
-                cols,
-                fill,
-                post,
-                |y, rgb| {
-                    let xo = if o == 5 || o == 8 { y } else { ch - 1 - y };
-                    for (k, p) in rgb.chunks_exact(3).enumerate() {
-                        let x = s0 + k;
-                        let yo = if o <= 6 { x } else { cw - 1 - x };
-                        let d = 3 * ((yo - a0) * ow + xo);
-                        band[d..d + 3].copy_from_slice(p);
-                    }
-                },
-            );
+            rect(y0..y0 + ch, x0 + s0..x0 + s1, &mut |y, rgb| {
+                let xo = if o == 5 || o == 8 { y } else { ch - 1 - y };
+                for (k, p) in rgb.chunks_exact(3).enumerate() {
+                    let x = s0 + k;
+                    let yo = if o <= 6 { x } else { cw - 1 - x };
+                    let d = 3 * ((yo - a0) * ow + xo);
+                    band[d..d + 3].copy_from_slice(p);
+                }
+            })
         }
     };
     run(ow, oh, &body)
@@ -361,41 +373,85 @@ where
     if img.meta.linear_raw.is_some() {
         return super::render_linear_raw::render_linear_bands(img, opts, start, f);
     }
+    bands_with(img, opts, false, start, f)
+}
+
+/// [`render_linear_bands_sized`] of the network input ([`render_input_opts`]: camera RGB
+/// clipped to [0, 1], no colour matrix); `None` also for a LinearRaw image (render it
+/// whole).
+pub fn render_input_bands_sized<T, S, F>(
+    img: &RawImage,
+    opts: &RenderOptions,
+    start: S,
+    f: F,
+) -> Result<Option<Bands<T>>>
+where
+    T: Send,
+    S: FnOnce(usize, usize) -> Result<()>,
+    F: Fn(usize, usize, &[f32]) -> Result<T> + Sync,
+{
+    if img.meta.linear_raw.is_some() {
+        return Ok(None);
+    }
+    bands_with(img, opts, true, start, f)
+}
+
+fn bands_with<T, S, F>(
+    img: &RawImage,
+    opts: &RenderOptions,
+    camera: bool,
+    start: S,
+    f: F,
+) -> Result<Option<Bands<T>>>
+where
+    T: Send,
+    S: FnOnce(usize, usize) -> Result<()>,
+    F: Fn(usize, usize, &[f32]) -> Result<T> + Sync,
+{
     let Some(kernel) = row_kernel(opts.demosaic) else {
         return Ok(None);
     };
-    if opcodes::active(&img.meta, opts.opcodes)?.is_some() {
-        // The opcode path is not banded: render_linear makes the whole image.
-        return Ok(None);
-    }
+    let p = opcodes::active_image(img, opts.opcodes)?;
     let n = resolve_neutral(&img.meta, opts.neutral)?;
     let m = color_matrix(&img.meta, n)?;
     let mf = m.map(|r| r.map(|v| v as f32));
-    let post = move |row: &mut [f32]| matrix_row(row, &mf);
-    banded(
-        img,
-        n,
-        kernel,
-        &post,
-        opts.crop,
-        opts.orient,
-        |ow, oh, body| {
-            start(ow, oh)?;
-            let nb = oh.div_ceil(BAND);
-            let bands = super::bands::in_order(nb, |bi, scratch: &mut Vec<f32>| {
-                let rows = BAND.min(oh - bi * BAND);
-                scratch.clear();
-                scratch.resize(3 * ow * rows, 0.0);
-                body(bi, scratch);
-                f(bi * BAND, ow, scratch)
-            })?;
-            Ok(Some(Bands {
-                width: ow,
-                height: oh,
-                bands,
-            }))
-        },
-    )
+    let matrix = move |row: &mut [f32]| matrix_row(row, &mf);
+    let post: &Post = if camera { &clip_row } else { &matrix };
+    let run = |ow: usize, oh: usize, body: &BandBody| {
+        start(ow, oh)?;
+        let nb = oh.div_ceil(BAND);
+        let bands = super::bands::in_order(nb, |bi, scratch: &mut Vec<f32>| {
+            let rows = BAND.min(oh - bi * BAND);
+            scratch.clear();
+            scratch.resize(3 * ow * rows, 0.0);
+            body(bi, scratch)?;
+            f(bi * BAND, ow, scratch)
+        })?;
+        Ok(Bands {
+            width: ow,
+            height: oh,
+            bands,
+        })
+    };
+    banded_any(img, p.as_ref(), n, kernel, post, (opts.crop, opts.orient), run)
+}
+
+/// The banded render of `img` with `post`: the opcode path ([`opcodes::banded`]) when `p`
+/// is some (`None` when its opcodes cannot be banded: several warps, a TrimBounds), else
+/// the plain one.
+fn banded_any<R>(
+    img: &RawImage,
+    p: Option<&opcodes::Prepared>,
+    n: [f64; 3],
+    kernel: RowKernel,
+    post: &Post,
+    (crop, orient): (bool, bool),
+    run: impl FnOnce(usize, usize, &BandBody) -> Result<R>,
+) -> Result<Option<R>> {
+    match p {
+        Some(p) => opcodes::banded::render(img, p, n, kernel, post, (crop, orient), run),
+        None => banded(img, n, kernel, post, crop, orient, run).map(Some),
+    }
 }
 
 /// What [`render_linear_bands`] returns: the output size and one result per band, in order.
@@ -453,7 +509,14 @@ pub fn render_input_opts(img: &RawImage, opts: &RenderOptions) -> Result<RgbImag
             opts.opcodes,
         );
     }
-    if let Some(p) = opcodes::active(&img.meta, opts.opcodes)? {
+    if let Some(p) = opcodes::active_image(img, opts.opcodes)? {
+        if let Some(kernel) = row_kernel(opts.demosaic) {
+            let ends = (opts.crop, opts.orient);
+            let got = banded_any(img, Some(&p), n, kernel, &clip_row, ends, collect_bands)?;
+            if let Some(rgb) = got {
+                return Ok(rgb);
+            }
+        }
         return pipeline::render_frame(
             img,
             &p,
@@ -483,10 +546,32 @@ pub fn render_linear(img: &RawImage, opts: &RenderOptions) -> Result<RgbImage> {
     let m = color_matrix(&img.meta, n)?;
     let mf = m.map(|r| r.map(|v| v as f32));
     let post = move |row: &mut [f32]| matrix_row(row, &mf);
-    if let Some(p) = opcodes::active(&img.meta, opts.opcodes)? {
+    if let Some(p) = opcodes::active_image(img, opts.opcodes)? {
+        if let Some(kernel) = row_kernel(opts.demosaic) {
+            let ends = (opts.crop, opts.orient);
+            let got = banded_any(img, Some(&p), n, kernel, &post, ends, collect_bands)?;
+            if let Some(rgb) = got {
+                return Ok(rgb);
+            }
+        }
         return pipeline::render_frame(img, &p, n, opts.demosaic, &post, opts.crop, opts.orient);
     }
     render_with(img, n, opts.demosaic, &post, opts.crop, opts.orient)
+}
+
+/// The whole-frame opcode render ([`pipeline::render_frame`]: every stage on whole
+/// images), the reference the banded opcode render must equal bit for bit. Kept for tests
+/// and benchmarks; files without applicable opcodes take [`render_linear`].
+#[doc(hidden)]
+pub fn render_linear_whole_frame(img: &RawImage, opts: &RenderOptions) -> Result<RgbImage> {
+    let Some(p) = opcodes::active_image(img, opts.opcodes)? else {
+        return render_linear(img, opts);
+    };
+    let n = resolve_neutral(&img.meta, opts.neutral)?;
+    let m = color_matrix(&img.meta, n)?;
+    let mf = m.map(|r| r.map(|v| v as f32));
+    let post = move |row: &mut [f32]| matrix_row(row, &mf);
+    pipeline::render_frame(img, &p, n, opts.demosaic, &post, opts.crop, opts.orient)
 }
 
 /// The unfused reference of [`render_linear`]: whole-image demosaic (colour matrix per

@@ -53,7 +53,7 @@ use super::night::Night;
 use super::night::{synthesize_into, NightSink, Request, TargetOut};
 use super::relight::RunReport;
 use super::sidecar::{sha256_hex, CalibrationInfo, InputInfo, OutputInfo, Sidecar, SIDECAR_FORMAT};
-use super::target_files::TargetFiles;
+use crate::encode::target_files::TargetFiles;
 use super::{Calibration, Plan, SynthOptions};
 use crate::dng::write::{write_dng, write_dng_rows, Compression, WriteOptions};
 use crate::encode::exr::{encodes_rows, standard_attributes, write_exr, ExrOptions};
@@ -446,7 +446,7 @@ impl NightSink for FileSink<'_> {
 
     /// Band by band when every requested target can be encoded from bands (the default
     /// ZIP/none EXRs, 8-bit PNG): same bytes, no whole f32 image, each band is encoded
-    /// while it is in cache and written at once (`synth::target_files`), so the encoded
+    /// while it is in cache and written at once (`encode::target_files`), so the encoded
     /// target is never held whole either.
     fn banded(&self) -> bool {
         !self.job.target.exr() || encodes_rows(&self.job.exr)
@@ -465,7 +465,8 @@ impl NightSink for FileSink<'_> {
             (w, h),
             exr.as_deref(),
             (&self.job.exr, &self.attrs),
-            png.as_deref(),
+            png.as_deref()
+                .map(|p| (p, crate::encode::png::PngOptions::default().tone)),
             self.policy,
         )?;
         self.target_files
