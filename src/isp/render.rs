@@ -166,14 +166,21 @@ fn render_banded(
 /// The `run` of [`place`] that keeps the whole image: every band rendered in parallel into
 /// its place in the output.
 pub(crate) fn collect_bands(ow: usize, oh: usize, body: &BandBody) -> Result<RgbImage> {
-    let mut out = RgbImage::try_new(ow, oh)?;
-    if ow > 0 {
-        out.data
-            .par_chunks_mut(3 * ow * BAND)
-            .enumerate()
-            .try_for_each(|(bi, band)| body(bi, band))?;
+    collect_bands_of(BAND)(ow, oh, body)
+}
+
+/// [`collect_bands`] for bands of `band` rows (the `band` given to [`place`]).
+fn collect_bands_of(band: usize) -> impl Fn(usize, usize, &BandBody) -> Result<RgbImage> {
+    move |ow, oh, body| {
+        let mut out = RgbImage::try_new(ow, oh)?;
+        if ow > 0 {
+            out.data
+                .par_chunks_mut(3 * ow * band)
+                .enumerate()
+                .try_for_each(|(bi, rows)| body(bi, rows))?;
+        }
+        Ok(out)
     }
-    Ok(out)
 }
 
 /// Renders the active-area rectangle `rows x cols` of a render, calling `emit(i, rgb)` for
@@ -187,8 +194,9 @@ pub(crate) type RectFn<'a> = dyn Fn(
     + Sync
     + 'a;
 
-/// `body(bi, band)`: renders output rows `[bi * BAND, bi * BAND + band.len() / (3 * ow))`
-/// into `band` (interleaved RGB, `ow` pixels per row).
+/// `body(bi, band)`: renders output rows `[bi * B, bi * B + band.len() / (3 * ow))` into
+/// `band` (interleaved RGB, `ow` pixels per row), `B` the band height given to [`place`]
+/// ([`BAND`] but in tests).
 pub(crate) type BandBody<'a> = dyn Fn(usize, &mut [f32]) -> Result<()> + Sync + 'a;
 
 /// The set-up of [`render_banded`]: the plain path's rectangle renderer (normalize, white
@@ -262,7 +270,7 @@ fn banded<R>(
         demosaic_rect(w, h, bayer, kernel, rows, cols, fill, post, emit);
         Ok(())
     };
-    place(&img.meta, (w, h), crop, orient, &rect, run)
+    place(&img.meta, (w, h), crop, orient, BAND, &rect, run)
 }
 
 /// The output geometry of a banded render of an active area of `w x h`: DefaultCrop (if
@@ -276,6 +284,7 @@ pub(crate) fn place<R>(
     (w, h): (usize, usize),
     crop: bool,
     orient: bool,
+    band_rows: usize,
     rect: &RectFn,
     run: impl FnOnce(usize, usize, &BandBody) -> Result<R>,
 ) -> Result<R> {
@@ -292,7 +301,7 @@ pub(crate) fn place<R>(
     let swap = o >= 5;
     let (ow, oh) = if swap { (ch, cw) } else { (cw, ch) };
     let body = |bi: usize, band: &mut [f32]| -> Result<()> {
-        let a0 = bi * BAND;
+        let a0 = bi * band_rows;
         let b0 = a0 + band.len() / (3 * ow).max(1);
         if !swap {
             // Output rows [a0, b0) are crop rows [s0, s1), in reverse order for 3 and 4,
@@ -449,7 +458,7 @@ fn banded_any<R>(
     run: impl FnOnce(usize, usize, &BandBody) -> Result<R>,
 ) -> Result<Option<R>> {
     match p {
-        Some(p) => opcodes::banded::render(img, p, n, kernel, post, (crop, orient), run),
+        Some(p) => opcodes::banded::render(img, p, n, kernel, post, (crop, orient), BAND, run),
         None => banded(img, n, kernel, post, crop, orient, run).map(Some),
     }
 }
@@ -557,6 +566,30 @@ pub fn render_linear(img: &RawImage, opts: &RenderOptions) -> Result<RgbImage> {
         return pipeline::render_frame(img, &p, n, opts.demosaic, &post, opts.crop, opts.orient);
     }
     render_with(img, n, opts.demosaic, &post, opts.crop, opts.orient)
+}
+
+/// [`render_linear`] of a file with opcodes made in bands of `band` output rows (any
+/// height; the renders use [`BAND`]), `None` when its opcodes are not banded. For tests:
+/// it must equal [`render_linear_whole_frame`] bit for bit.
+#[doc(hidden)]
+pub fn render_linear_banded_by(
+    img: &RawImage,
+    opts: &RenderOptions,
+    band: usize,
+) -> Result<Option<RgbImage>> {
+    let (Some(kernel), Some(p)) = (
+        row_kernel(opts.demosaic),
+        opcodes::active_image(img, opts.opcodes)?,
+    ) else {
+        return Ok(None);
+    };
+    let n = resolve_neutral(&img.meta, opts.neutral)?;
+    let m = color_matrix(&img.meta, n)?;
+    let mf = m.map(|r| r.map(|v| v as f32));
+    let post = move |row: &mut [f32]| matrix_row(row, &mf);
+    let ends = (opts.crop, opts.orient);
+    let band = band.max(1);
+    opcodes::banded::render(img, &p, n, kernel, &post, ends, band, collect_bands_of(band))
 }
 
 /// The whole-frame opcode render ([`pipeline::render_frame`]: every stage on whole

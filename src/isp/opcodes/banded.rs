@@ -329,7 +329,9 @@ impl<'a> Frame<'a> {
 /// The banded render of `img` with the opcodes `p` (white balance by `neutral`, the row
 /// demosaicer `kernel`, `post` on every row, DefaultCrop and orientation if asked), handed
 /// to `run` as [`place`] does; `None` (and `run` not called) when OpcodeList3 has more than
-/// one warp or a TrimBounds.
+/// one warp or a TrimBounds. `band`: output rows per band ([`crate::isp::render::BAND`] but
+/// in tests).
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn render<R>(
     img: &RawImage,
     p: &Prepared,
@@ -337,6 +339,7 @@ pub(crate) fn render<R>(
     kernel: RowKernel,
     post: &Post,
     (crop, orient): (bool, bool),
+    band: usize,
     run: impl FnOnce(usize, usize, &BandBody) -> Result<R>,
 ) -> Result<Option<R>> {
     let l3 = p.list(ListId::List3);
@@ -356,7 +359,7 @@ pub(crate) fn render<R>(
             f.finish(rgb, w, post, emit);
             Ok(())
         };
-        return place(&img.meta, dims, crop, orient, &rect, run).map(Some);
+        return place(&img.meta, dims, crop, orient, band, &rect, run).map(Some);
     };
     let (pre, after) = (&l3[..wi], &l3[wi + 1..]);
     let (aw, ah) = dims;
@@ -405,5 +408,5 @@ pub(crate) fn render<R>(
         Ok(())
     };
     let rect: &RectFn = &rect;
-    place(&img.meta, dims, crop, orient, rect, run).map(Some)
+    place(&img.meta, dims, crop, orient, band, rect, run).map(Some)
 }
