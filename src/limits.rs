@@ -286,13 +286,26 @@ mod tests {
             what: what.into(),
             cost,
         };
-        let costs = [c("OpcodeList2", "GainMap (opcode 1 of 1)", 40), c("OpcodeList3", "WarpRectilinear (opcode 1 of 2)", 50), c("OpcodeList3", "WarpRectilinear (opcode 2 of 2)", 50)];
+        let costs = [
+            c("OpcodeList2", "GainMap (opcode 1 of 1)", 40),
+            c("OpcodeList3", "WarpRectilinear (opcode 1 of 2)", 50),
+            c("OpcodeList3", "WarpRectilinear (opcode 2 of 2)", 50),
+        ];
         assert!(check_opcode_work(&costs, 140).is_ok());
         let e = check_opcode_work(&costs, 100).unwrap_err().to_string();
-        assert!(e.starts_with("limit exceeded: OpcodeList3: its 2 opcodes bring"), "{e}");
-        assert!(e.contains("140 pixel-passes") && e.contains(OPCODE_BUDGET_ENV), "{e}");
+        assert!(
+            e.starts_with("limit exceeded: OpcodeList3: its 2 opcodes bring"),
+            "{e}"
+        );
+        assert!(
+            e.contains("140 pixel-passes") && e.contains(OPCODE_BUDGET_ENV),
+            "{e}"
+        );
         let e = check_opcode_work(&costs, 45).unwrap_err().to_string();
-        assert!(e.contains("OpcodeList3: WarpRectilinear (opcode 1 of 2) alone costs 50"), "{e}");
+        assert!(
+            e.contains("OpcodeList3: WarpRectilinear (opcode 1 of 2) alone costs 50"),
+            "{e}"
+        );
         assert!(check_opcode_work(&[], 1).is_ok());
     }
 

@@ -192,7 +192,13 @@ pub fn run(args: RenderArgs) -> CmdResult {
             .map_err(in_file)?
         }
         Format::Png if !sixteen => stream(&img, &opts, args.camera_rgb, &policy, |dims, policy| {
-            TargetFiles::create(dims, None, (&exr_opts, &[]), Some((&args.output, tone)), policy)
+            TargetFiles::create(
+                dims,
+                None,
+                (&exr_opts, &[]),
+                Some((&args.output, tone)),
+                policy,
+            )
         })
         .map_err(in_file)?,
         _ => false,
@@ -253,7 +259,9 @@ fn stream<'p>(
     };
     let band = |y0: usize, w: usize, rows: &[f32]| match files.get() {
         Some(f) => f.band(y0, w, rows),
-        None => Err(day2night::Error::invalid("a band came before the render started")),
+        None => Err(day2night::Error::invalid(
+            "a band came before the render started",
+        )),
     };
     let made = if camera_rgb {
         render_input_bands_sized(img, opts, start, band)?

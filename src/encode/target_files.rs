@@ -249,9 +249,14 @@ mod tests {
                 ];
                 for order in orders {
                     let (c, d) = (dir.path().join("c.exr"), dir.path().join("c.png"));
-                    let t =
-                        TargetFiles::create((w, h), Some(&c), (&opts, &attrs), Some((&d, PngOptions::default().tone)), &policy)
-                            .unwrap();
+                    let t = TargetFiles::create(
+                        (w, h),
+                        Some(&c),
+                        (&opts, &attrs),
+                        Some((&d, PngOptions::default().tone)),
+                        &policy,
+                    )
+                    .unwrap();
                     for &bi in &order {
                         let rows = &img.data
                             [3 * w * BAND * bi..(3 * w * BAND * (bi + 1)).min(img.data.len())];

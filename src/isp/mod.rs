@@ -12,6 +12,7 @@ pub mod demosaic;
 pub mod geometry;
 pub mod opcodes;
 pub mod render;
+pub mod render_bands;
 pub mod render_crop;
 pub mod render_linear_raw;
 pub mod tone;

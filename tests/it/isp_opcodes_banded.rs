@@ -95,7 +95,11 @@ fn gain_map(planes: u32) -> GainMap {
 }
 
 fn bits(img: &RgbImage) -> (usize, usize, Vec<u32>) {
-    (img.width, img.height, img.data.iter().map(|v| v.to_bits()).collect())
+    (
+        img.width,
+        img.height,
+        img.data.iter().map(|v| v.to_bits()).collect(),
+    )
 }
 
 /// The lists of every case: local opcodes in lists 1-2, in-place list 3, and each warp.
@@ -133,7 +137,11 @@ fn cases(w: u32, h: u32) -> Vec<(&'static str, [Vec<Opcode>; 3])> {
         center: [0.45, 0.6],
     };
     let fish = OpcodeKind::WarpFisheye {
-        planes: vec![[1.0, 0.05, 0.0, 0.0], [1.02, 0.05, 0.0, 0.0], [0.98, 0.05, 0.0, 0.0]],
+        planes: vec![
+            [1.0, 0.05, 0.0, 0.0],
+            [1.02, 0.05, 0.0, 0.0],
+            [0.98, 0.05, 0.0, 0.0],
+        ],
         center: [0.5, 0.5],
     };
     let mut kr = [0.0; 15];
@@ -163,17 +171,28 @@ fn cases(w: u32, h: u32) -> Vec<(&'static str, [Vec<Opcode>; 3])> {
         (
             "repeated constant fixes (whole-stage lists)",
             [
-                vec![op(constant.clone()), op(constant.clone()), op(constant.clone())],
+                vec![
+                    op(constant.clone()),
+                    op(constant.clone()),
+                    op(constant.clone()),
+                ],
                 vec![op(constant.clone()), op(constant)],
                 vec![],
             ],
         ),
         (
             "WarpRectilinear between in-place opcodes",
-            [vec![], vec![op(vignette)], vec![op(poly.clone()), op(rect), op(delta)]],
+            [
+                vec![],
+                vec![op(vignette)],
+                vec![op(poly.clone()), op(rect), op(delta)],
+            ],
         ),
         ("WarpFisheye per plane", [vec![], vec![], vec![op(fish)]]),
-        ("WarpRectilinear2, reciprocal", [vec![], vec![], vec![op(poly), op(rect2)]]),
+        (
+            "WarpRectilinear2, reciprocal",
+            [vec![], vec![], vec![op(poly), op(rect2)]],
+        ),
     ]
 }
 
@@ -206,7 +225,9 @@ fn banded_opcode_render_equals_the_whole_frame_render() {
                     assert_eq!(bits(&got), bits(&whole), "{what}, {threads} threads");
                     // the band-wise consumer (synth's targets, `render`) sees the same rows
                     let bands = pool
-                        .install(|| render_linear_bands(&img, &opts, |_, _, rows| Ok(rows.to_vec())))
+                        .install(|| {
+                            render_linear_bands(&img, &opts, |_, _, rows| Ok(rows.to_vec()))
+                        })
                         .unwrap()
                         .unwrap();
                     let rows: Vec<f32> = bands.bands.into_iter().flatten().collect();
@@ -238,7 +259,11 @@ fn no_op_opcodes_are_dropped_and_cost_nothing() {
     assert!(p.is_noop(), "nothing left to apply");
     assert!(p.report.applied.is_empty());
     assert_eq!(p.report.dropped.len(), 4097);
-    assert!(p.report.dropped[1].reason.as_deref().unwrap().contains("identity warp"));
+    assert!(p.report.dropped[1]
+        .reason
+        .as_deref()
+        .unwrap()
+        .contains("identity warp"));
     assert!(p.costs((40, 30), (36, 28)).is_empty());
     // the render is the plain one, byte for byte
     let ignore = RenderOptions {
@@ -254,9 +279,18 @@ fn no_op_opcodes_are_dropped_and_cost_nothing() {
         points: vec![[3, 3]],
         rects: vec![],
     };
-    let img2 = with_lists(frame(40, 30), [vec![op(list.clone()), op(list)], vec![], vec![]]);
+    let img2 = with_lists(
+        frame(40, 30),
+        [vec![op(list.clone()), op(list)], vec![], vec![]],
+    );
     let p = prepare(&img2.meta, OpcodeMode::Apply).unwrap().unwrap();
-    assert_eq!((p.list(day2night::dng::opcodes::ListId::List1).len(), p.report.dropped.len()), (1, 1));
+    assert_eq!(
+        (
+            p.list(day2night::dng::opcodes::ListId::List1).len(),
+            p.report.dropped.len()
+        ),
+        (1, 1)
+    );
 }
 
 fn write(dir: &Path, name: &str, b: &Builder) -> std::path::PathBuf {
@@ -297,19 +331,35 @@ fn opcode_work_over_the_budget_is_refused_naming_the_list() {
         let o = common::cli(cmd, &real, &out, &[]);
         let err = String::from_utf8_lossy(&o.stderr);
         assert_eq!(o.status.code(), Some(1), "{cmd}: {err}");
-        assert!(err.contains("real.dng") && err.contains("limit exceeded: OpcodeList3: its 4096 opcodes"), "{cmd}: {err}");
+        assert!(
+            err.contains("real.dng")
+                && err.contains("limit exceeded: OpcodeList3: its 4096 opcodes"),
+            "{cmd}: {err}"
+        );
         assert!(!out.exists());
     }
     // One opcode alone over a (lowered) budget is named with its position.
-    let one = write(t.path(), "one.dng", &Builder::new(64, 48, 12).opcode_list(3, warps(1, 0.01)));
+    let one = write(
+        t.path(),
+        "one.dng",
+        &Builder::new(64, 48, 12).opcode_list(3, warps(1, 0.01)),
+    );
     let o = common::bin()
-        .args(["render".as_ref(), one.as_os_str(), "-o".as_ref(), out.as_os_str()])
+        .args([
+            "render".as_ref(),
+            one.as_os_str(),
+            "-o".as_ref(),
+            out.as_os_str(),
+        ])
         .env("D2N_OPCODE_BUDGET", "1000")
         .output()
         .unwrap();
     let err = String::from_utf8_lossy(&o.stderr);
     assert_eq!(o.status.code(), Some(1), "{err}");
-    assert!(err.contains("OpcodeList3: WarpRectilinear (opcode 1 of 1) alone costs"), "{err}");
+    assert!(
+        err.contains("OpcodeList3: WarpRectilinear (opcode 1 of 1) alone costs"),
+        "{err}"
+    );
     // 4096 FixBadPixelsConstant on 512 x 384: within the budget, merged into one pass
     let fix = OpcodeKind::FixBadPixelsConstant {
         constant: 0,
@@ -318,7 +368,11 @@ fn opcode_work_over_the_budget_is_refused_naming_the_list() {
     let many = encode_list(&OpcodeList {
         opcodes: vec![op(fix); 4096],
     });
-    let f = write(t.path(), "fix.dng", &Builder::new(512, 384, 12).opcode_list(1, many));
+    let f = write(
+        t.path(),
+        "fix.dng",
+        &Builder::new(512, 384, 12).opcode_list(1, many),
+    );
     let o = common::cli("render", &f, &t.path().join("fix.exr"), &[]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
 }
@@ -328,7 +382,12 @@ fn render_streams_the_bytes_of_the_whole_image_writers() {
     let t = tempfile::tempdir().unwrap();
     let gm = OpcodeKind::GainMap(gain_map(1));
     let plain = Builder::new(70, 45, 12);
-    let with_op = Builder::new(70, 45, 12).opcode_list(2, encode_list(&OpcodeList { opcodes: vec![op(gm)] }));
+    let with_op = Builder::new(70, 45, 12).opcode_list(
+        2,
+        encode_list(&OpcodeList {
+            opcodes: vec![op(gm)],
+        }),
+    );
     let policy = OutputPolicy::default();
     for (name, b) in [("plain", plain), ("gainmap", with_op)] {
         let src = write(t.path(), &format!("{name}.dng"), &b);
@@ -359,7 +418,11 @@ fn render_streams_the_bytes_of_the_whole_image_writers() {
             attrs.push(("day2night:content".into(), content.into()));
             let want = t.path().join(format!("{name}{camera}-want.exr"));
             write_exr(&rgb, &want, &ExrOptions::default(), &attrs, &policy).unwrap();
-            assert_eq!(std::fs::read(&got).unwrap(), std::fs::read(&want).unwrap(), "{name} {camera}");
+            assert_eq!(
+                std::fs::read(&got).unwrap(),
+                std::fs::read(&want).unwrap(),
+                "{name} {camera}"
+            );
             // 8-bit PNG with a tone
             let got = t.path().join(format!("{name}{camera}.png"));
             let mut args = extra.to_vec();
@@ -372,7 +435,11 @@ fn render_streams_the_bytes_of_the_whole_image_writers() {
                 tone: "gamma22".parse().unwrap(),
             };
             write_png(&rgb, &want, &png, &policy).unwrap();
-            assert_eq!(std::fs::read(&got).unwrap(), std::fs::read(&want).unwrap(), "{name} {camera} png");
+            assert_eq!(
+                std::fs::read(&got).unwrap(),
+                std::fs::read(&want).unwrap(),
+                "{name} {camera} png"
+            );
         }
     }
 }
@@ -398,22 +465,39 @@ fn warp_rectilinear2_is_parsed_as_the_adobe_sdk_parses_it() {
             })],
         })
     };
-    let good = write(t.path(), "good.dng", &Builder::new(64, 48, 12).opcode_list(3, w2([0.0, 1.0])));
-    let bad = write(t.path(), "bad.dng", &Builder::new(64, 48, 12).opcode_list(3, w2([0.5, 0.4])));
+    let good = write(
+        t.path(),
+        "good.dng",
+        &Builder::new(64, 48, 12).opcode_list(3, w2([0.0, 1.0])),
+    );
+    let bad = write(
+        t.path(),
+        "bad.dng",
+        &Builder::new(64, 48, 12).opcode_list(3, w2([0.5, 0.4])),
+    );
     let img = read_dng(&good).unwrap();
     let p = prepare(&img.meta, OpcodeMode::Apply).unwrap().unwrap();
     assert_eq!(p.report.applied[0].name, "WarpRectilinear2");
     let out = t.path().join("good.exr");
     let o = common::cli("render", &good, &out, &[]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let o = common::bin().args(["info".as_ref(), good.as_os_str()]).output().unwrap();
+    let o = common::bin()
+        .args(["info".as_ref(), good.as_os_str()])
+        .output()
+        .unwrap();
     let text = String::from_utf8_lossy(&o.stdout);
-    assert!(text.contains("WarpRectilinear2 (id 14") && text.contains("valid r 0..1"), "{text}");
+    assert!(
+        text.contains("WarpRectilinear2 (id 14") && text.contains("valid r 0..1"),
+        "{text}"
+    );
     let e = read_dng(&bad)
         .and_then(|i| prepare(&i.meta, OpcodeMode::Apply))
         .unwrap_err()
         .to_string();
-    assert!(e.contains("OpcodeList3: WarpRectilinear2 (opcode 1 of 1)") && e.contains("valid radius"), "{e}");
+    assert!(
+        e.contains("OpcodeList3: WarpRectilinear2 (opcode 1 of 1)") && e.contains("valid radius"),
+        "{e}"
+    );
     let Some(py) = common::python() else { return };
     let o = common::run_validator(&py, "sdk_accepts.py", &[good.as_os_str(), bad.as_os_str()]);
     let lines: Vec<serde_json::Value> = String::from_utf8_lossy(&o.stdout)
@@ -431,6 +515,14 @@ fn warp_rectilinear2_is_parsed_as_the_adobe_sdk_parses_it() {
             .filter(|m| !m.contains("Too little padding"))
             .collect()
     };
-    assert!(complaints(&lines[0]).is_empty(), "the SDK refused our WarpRectilinear2: {}", lines[0]);
-    assert!(!complaints(&lines[1]).is_empty(), "the SDK accepted a bad valid range: {}", lines[1]);
+    assert!(
+        complaints(&lines[0]).is_empty(),
+        "the SDK refused our WarpRectilinear2: {}",
+        lines[0]
+    );
+    assert!(
+        !complaints(&lines[1]).is_empty(),
+        "the SDK accepted a bad valid range: {}",
+        lines[1]
+    );
 }

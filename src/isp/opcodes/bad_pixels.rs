@@ -228,7 +228,11 @@ mod tests {
     fn separate_passes(d: &mut [f32], w: usize, h: usize, constant: u32, times: usize) {
         for _ in 0..times {
             let mut reg = region(d, w, h, 65535.0);
-            let bad: Vec<bool> = reg.data.iter().map(|&v| v.round() as i64 == constant as i64).collect();
+            let bad: Vec<bool> = reg
+                .data
+                .iter()
+                .map(|&v| v.round() as i64 == constant as i64)
+                .collect();
             let list: Vec<usize> = (0..bad.len()).filter(|&i| bad[i]).collect();
             fix(&mut reg, 0, &bad, &list);
         }
@@ -242,7 +246,9 @@ mod tests {
         let mut s = 7u64;
         let base: Vec<f32> = (0..w * h)
             .map(|i| {
-                s = s.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+                s = s
+                    .wrapping_mul(6364136223846793005)
+                    .wrapping_add(1442695040888963407);
                 let (r, c) = (i / w, i % w);
                 if (8..22).contains(&r) && (5..25).contains(&c) {
                     100.0

@@ -195,8 +195,10 @@ impl<'a> Frame<'a> {
                 (_, true) => (&self.img.data, 0, 0, self.img.width),
                 (Some(w), false) => (w, 0, 0, self.img.width),
                 (None, false) => {
-                    window =
-                        self.stage1_window(gr.start + top..gr.end + top, gc.start + left..gc.end + left)?;
+                    window = self.stage1_window(
+                        gr.start + top..gr.end + top,
+                        gc.start + left..gc.end + left,
+                    )?;
                     (&window.data, window.top, window.left, window.width)
                 }
             };
@@ -309,7 +311,13 @@ impl<'a> Frame<'a> {
 
     /// The white balance divided out again (when OpcodeList3 ran), `post`, and the rows
     /// handed to `emit`.
-    fn finish(&self, mut rgb: Vec<f32>, w: usize, post: &Post, emit: &mut dyn FnMut(usize, &mut [f32])) {
+    fn finish(
+        &self,
+        mut rgb: Vec<f32>,
+        w: usize,
+        post: &Post,
+        emit: &mut dyn FnMut(usize, &mut [f32]),
+    ) {
         let list3 = !self.p.list(ListId::List3).is_empty();
         let inv = self.inv_n;
         for (i, row) in rgb.chunks_exact_mut(3 * w.max(1)).enumerate() {
@@ -343,7 +351,9 @@ pub(crate) fn render<R>(
     run: impl FnOnce(usize, usize, &BandBody) -> Result<R>,
 ) -> Result<Option<R>> {
     let l3 = p.list(ListId::List3);
-    let moving: Vec<usize> = (0..l3.len()).filter(|&i| moves_pixels(&l3[i].kind)).collect();
+    let moving: Vec<usize> = (0..l3.len())
+        .filter(|&i| moves_pixels(&l3[i].kind))
+        .collect();
     let warp_at = match moving.as_slice() {
         [] => None,
         [i] if !matches!(l3[*i].kind, OpcodeKind::TrimBounds { .. }) => Some(*i),
@@ -353,12 +363,13 @@ pub(crate) fn render<R>(
     let f = Frame::new(img, p, n, kernel)?;
     let dims = (f.aw, f.ah);
     let Some(wi) = warp_at else {
-        let rect = |rows: Range<usize>, cols: Range<usize>, emit: &mut dyn FnMut(usize, &mut [f32])| {
-            let w = cols.len();
-            let rgb = f.pre3(rows, cols, l3)?;
-            f.finish(rgb, w, post, emit);
-            Ok(())
-        };
+        let rect =
+            |rows: Range<usize>, cols: Range<usize>, emit: &mut dyn FnMut(usize, &mut [f32])| {
+                let w = cols.len();
+                let rgb = f.pre3(rows, cols, l3)?;
+                f.finish(rgb, w, post, emit);
+                Ok(())
+            };
         return place(&img.meta, dims, crop, orient, band, &rect, run).map(Some);
     };
     let (pre, after) = (&l3[..wi], &l3[wi + 1..]);

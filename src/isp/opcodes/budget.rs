@@ -77,7 +77,8 @@ pub fn noop_reason(kind: &OpcodeKind) -> Option<&'static str> {
 /// marks the same samples and reads the same good neighbours, so a second pass writes the
 /// same means again.
 pub fn repeats_idempotently(prev: Option<&Opcode>, op: &Opcode) -> bool {
-    matches!(op.kind, OpcodeKind::FixBadPixelsList { .. }) && prev.is_some_and(|p| p.kind == op.kind)
+    matches!(op.kind, OpcodeKind::FixBadPixelsList { .. })
+        && prev.is_some_and(|p| p.kind == op.kind)
 }
 
 /// Pixels of a `w x h` stage image an area opcode touches.

@@ -221,8 +221,7 @@ pub fn unsupported_reason(list: ListId, kind: &OpcodeKind) -> Option<&'static st
         }
         OpcodeKind::WarpRectilinear { .. }
         | OpcodeKind::WarpFisheye { .. }
-        | OpcodeKind::WarpRectilinear2 { .. } => (list
-            != ListId::List3)
+        | OpcodeKind::WarpRectilinear2 { .. } => (list != ListId::List3)
             .then_some("a warp of the CFA mosaic is not supported (OpcodeList3 only)"),
         OpcodeKind::TrimBounds { .. } => {
             (list != ListId::List3).then_some("TrimBounds is applied in OpcodeList3 only")

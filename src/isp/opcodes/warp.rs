@@ -351,7 +351,11 @@ pub fn apply_rows<'s>(
     }
     let row = |yy: usize| &src[(yy - y0) * w * planes..];
     let dims = (w, h, planes);
-    for (k, orow) in out.chunks_exact_mut(w * planes).take(rows.len()).enumerate() {
+    for (k, orow) in out
+        .chunks_exact_mut(w * planes)
+        .take(rows.len())
+        .enumerate()
+    {
         for x in 0..w {
             let at = (k * w + x) * per;
             for p in 0..planes {
@@ -501,7 +505,9 @@ mod tests {
     #[test]
     fn rows_read_only_their_window_and_equal_the_whole_warp() {
         let (w, h) = (37, 53);
-        let data: Vec<f32> = (0..w * h * 3).map(|i| ((i * 7919) % 1000) as f32 / 999.0).collect();
+        let data: Vec<f32> = (0..w * h * 3)
+            .map(|i| ((i * 7919) % 1000) as f32 / 999.0)
+            .collect();
         let b = Bounds {
             t: 4,
             l: 2,
