@@ -57,7 +57,7 @@ fn frame(w: usize, h: usize) -> RawImage {
             s ^= s >> 7;
             s ^= s << 17;
             let (r, c) = (i / w, i % w);
-            if s % 61 == 0 || ((9..14).contains(&r) && (20..27).contains(&c)) {
+            if s.is_multiple_of(61) || ((9..14).contains(&r) && (20..27).contains(&c)) {
                 4000
             } else {
                 (600 + (r * 97 + c * 31) % 9000 + (s % 3000) as usize) as u16

@@ -358,8 +358,11 @@ pub fn apply_rows<'s>(
     {
         for x in 0..w {
             let at = (k * w + x) * per;
+            let mut t = taps_of(pos[at], bounds);
             for p in 0..planes {
-                let t = taps_of(pos[at + if shared { 0 } else { p }], bounds);
+                if p > 0 && !shared {
+                    t = taps_of(pos[at + p], bounds);
+                }
                 orow[x * planes + p] = resample(t, p, dims, row);
             }
         }
