@@ -9,13 +9,14 @@ mod pairs;
 mod raw_from;
 
 use day2night::isp::render::{render_linear, RenderOptions};
+use day2night::isp::render_crop::target_origin;
 use day2night::isp::{Demosaic, RgbImage};
 use day2night::metrics::{
     mean_delta_e_2000, psnr as m_psnr, ssim as m_ssim, SsimOptions, SsimWindow,
 };
 use day2night::output::OutputPolicy;
+use day2night::raw::crop::Crop;
 use day2night::synth::config::JobConfig;
-use day2night::synth::crop::{target_origin, Crop};
 use day2night::synth::job::{DayInput, DirSink, SynthJob, Target};
 use day2night::synth::night::{synthesize as lib_synthesize, Night, Request};
 use day2night::synth::relight::RunReport;
@@ -724,7 +725,7 @@ fn write_files(
             },
             ..OutputPolicy::default()
         };
-        let sink = DirSink::new(&out_dir, &stem, &job, &plan, &policy);
+        let sink = DirSink::new(&out_dir, job.base_name(&stem, &plan), &policy);
         Ok(job.write_night(&day, &plan, &night, &sink)?.files)
     }
 }

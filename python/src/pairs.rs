@@ -6,8 +6,8 @@
 //! `synthesize(...)["target"].transpose(2, 0, 1)` exactly (python/tests/test_pairs.py).
 
 use crate::{job_config, job_for, on_pool, value_err, Raw};
+use day2night::raw::crop::Crop;
 use day2night::raw::Levels;
-use day2night::synth::crop::Crop;
 use day2night::synth::night::{synthesize as lib_synthesize, Request};
 use day2night::{Error, RawImage};
 use numpy::ndarray::Array3;
