@@ -4,7 +4,9 @@
 //! that, and `write_dng`. Type conversion only: the checks and defaults are the library's
 //! (`day2night::raw::from_parts`).
 
-use crate::{on_pool, py_err, value_err, Raw};
+use crate::errors::{py_err, py_err_noting, value_err};
+use crate::pool::on_pool;
+use crate::raw::Raw;
 use day2night::dng::write::{write_dng as lib_write_dng, Compression, WriteOptions};
 use day2night::output::OutputPolicy;
 use day2night::raw::from_parts::ColorDefault;
@@ -405,7 +407,7 @@ fn parse_meta(
 fn meta_err(e: day2night::Error) -> PyErr {
     let msg = e.to_string();
     match TAG_KEYS.iter().find(|(tag, _)| msg.contains(tag)) {
-        Some((_, key)) => value_err(format!("{msg} (meta[{key:?}])")),
+        Some((_, key)) => py_err_noting(e, &format!("(meta[{key:?}])")),
         None => py_err(e),
     }
 }
