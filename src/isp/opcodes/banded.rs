@@ -1,5 +1,5 @@
 //! The opcode render band by band: each band of the output asks for the active-area
-//! rectangle it shows ([`crate::isp::render::place`]), and that rectangle alone is computed
+//! rectangle it shows ([`crate::isp::place::place`]), and that rectangle alone is computed
 //! through the stages of [`super::pipeline`] with the same expressions, so the result equals
 //! the whole-frame render ([`super::pipeline::render_frame`]) bit for bit, for any band
 //! height and thread count:
@@ -31,7 +31,7 @@ use crate::dng::opcodes::{ListId, Opcode, OpcodeKind};
 use crate::error::{Error, Result};
 use crate::isp::color::normalize_neutral;
 use crate::isp::demosaic::{demosaic_rect, Post, RowKernel, PAD};
-use crate::isp::render::{place, BandBody, RectFn};
+use crate::isp::place::{place, BandBody, RectFn};
 use crate::limits::try_filled;
 use crate::normalize::Normalizer;
 use crate::raw::{Bayer, RawImage};
@@ -337,7 +337,7 @@ impl<'a> Frame<'a> {
 /// The banded render of `img` with the opcodes `p` (white balance by `neutral`, the row
 /// demosaicer `kernel`, `post` on every row, DefaultCrop and orientation if asked), handed
 /// to `run` as [`place`] does; `None` (and `run` not called) when OpcodeList3 has more than
-/// one warp or a TrimBounds. `band`: output rows per band ([`crate::isp::render::BAND`] but
+/// one warp or a TrimBounds. `band`: output rows per band ([`crate::isp::render_parts::BAND`] but
 /// in tests).
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn render<R>(
@@ -380,10 +380,10 @@ pub(crate) fn render<R>(
     // The image before the warp, made band by band.
     let mut before = try_filled(0.0f32, 3 * aw * ah, "the image before the warp")?;
     before
-        .par_chunks_mut(3 * aw * crate::isp::render::BAND)
+        .par_chunks_mut(3 * aw * crate::isp::render_parts::BAND)
         .enumerate()
         .try_for_each(|(bi, band)| -> Result<()> {
-            let r0 = bi * crate::isp::render::BAND;
+            let r0 = bi * crate::isp::render_parts::BAND;
             let rgb = f.pre3(r0..r0 + band.len() / (3 * aw), 0..aw, pre)?;
             band.copy_from_slice(&rgb);
             Ok(())
