@@ -9,7 +9,7 @@
 //! panic; absurd sizes are refused before allocating.
 
 use crate::encode::exr::chunks::damaged_chunk;
-use crate::encode::exr::errors::{exr_err, guarded};
+use crate::encode::exr::error::{exr_err, guarded};
 use crate::error::{Error, Result, ResultExt};
 use crate::isp::RgbImage;
 use std::io::Read;

@@ -12,9 +12,12 @@ pub mod demosaic;
 pub mod flat;
 pub mod geometry;
 pub mod opcodes;
+pub(crate) mod place;
 pub mod render;
+pub mod render_bands;
 pub mod render_crop;
 pub mod render_linear_raw;
+pub mod render_parts;
 pub mod tone;
 
 pub use demosaic::Demosaic;

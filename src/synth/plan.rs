@@ -377,8 +377,8 @@ pub fn plan_for(
     if !noise.is_empty() {
         stages.push("noise".into());
     }
-    // The renders' opcodes: unapplicable optional ones are warnings, mandatory ones errors
-    // (warnings when nothing is rendered). The stage `apply_opcodes` is recorded by the
+    // The renders' opcodes: unapplicable optional ones are warnings, mandatory ones and
+    // work over the budget errors (warnings when nothing is rendered, and no budget). The stage `apply_opcodes` is recorded by the
     // synthesis when a render runs.
     let (opcodes, target_size) = if renders {
         let c = crate::isp::opcodes::check::check_render(img, opts.opcodes, true, true)?;

@@ -76,15 +76,14 @@ fn negative_gain(w: u32, h: u32) -> OpcodeKind {
 #[test]
 fn without_a_render_unusable_lists_warn_and_with_one_they_fail() {
     let t = tempfile::tempdir().unwrap();
-    let warp2 = Opcode {
-        id: 14,
-        dng_version: [1, 6, 0, 0],
-        flags: 0,
-        kind: OpcodeKind::Unknown {
-            params: vec![0; 8],
-            len: 8,
+    // A mandatory opcode OpcodeList3 cannot apply (bad pixels are fixed on the mosaic).
+    let bad_pixels = Opcode::new(
+        OpcodeKind::FixBadPixelsConstant {
+            constant: 0,
+            bayer_phase: 0,
         },
-    };
+        0,
+    );
     let f = dng(
         t.path(),
         "bad.dng",
@@ -94,7 +93,7 @@ fn without_a_render_unusable_lists_warn_and_with_one_they_fail() {
             (
                 3,
                 encode_list(&OpcodeList {
-                    opcodes: vec![warp2],
+                    opcodes: vec![bad_pixels],
                 }),
             ),
         ],
@@ -117,14 +116,14 @@ fn without_a_render_unusable_lists_warn_and_with_one_they_fail() {
         "{err}"
     );
     assert!(
-        err.contains("warning: OpcodeList3: WarpRectilinear2 (id 14) is not optional"),
+        err.contains("warning: OpcodeList3: FixBadPixelsConstant (id 4) is not optional"),
         "{err}"
     );
     let sc = sidecar(&o.join("bad.json"));
     let skipped = &sc["plan"]["opcodes"]["skipped"];
     assert_eq!(skipped[0]["list"], "OpcodeList2");
     assert_eq!(skipped[0]["name"], "(malformed list)");
-    assert_eq!(skipped[1]["name"], "WarpRectilinear2");
+    assert_eq!(skipped[1]["name"], "FixBadPixelsConstant");
     assert!(skipped[1]["reason"]
         .as_str()
         .unwrap()

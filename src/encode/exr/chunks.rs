@@ -4,7 +4,7 @@
 //! single-part scan-line files can be read a band of rows at a time, so memory grows with
 //! the band, not the image.
 
-use super::errors::{chunk_err, compression_name, exr_err, guarded, ChunkPlace};
+use super::error::{chunk_err, compression_name, exr_err, guarded, ChunkPlace};
 use crate::error::{Error, Result};
 use exr::meta::attribute::SampleType;
 use exr::meta::{BlockDescription, MetaData};

@@ -13,7 +13,7 @@
 //! are identical from run to run and whatever the thread count (tested).
 
 pub mod chunks;
-pub(crate) mod errors;
+pub mod error;
 mod scanline;
 
 use crate::error::{Error, Result, ResultExt};

@@ -17,7 +17,9 @@
 
 use super::area::plane_range;
 use super::{prepare, prepare_lists_for, Bounds, OpcodeEntry, OpcodeMode, OpcodeReport, Prepared};
-use crate::dng::opcodes::{list_results, lists, AreaSpec, ListId, Opcode, OpcodeKind, OpcodeList};
+use crate::dng::opcodes::{
+    list_results, lists, AreaSpec, ListId, Opcode, OpcodeKind, OpcodeList, FLAG_OPTIONAL,
+};
 use crate::error::{Error, Result};
 use crate::isp::geometry::default_crop;
 use crate::raw::{RawImage, RawMeta};
@@ -52,6 +54,9 @@ pub fn check_render(img: &RawImage, mode: OpcodeMode, crop: bool, orient: bool) 
     let parsed = lists(meta)?;
     let linear_raw = meta.linear_raw.is_some();
     let prepared = prepare_lists_for(&parsed, mode, linear_raw)?;
+    if let Some(p) = &prepared {
+        p.check_budget(img)?;
+    }
     let mut warnings = prepared
         .as_ref()
         .map(|p| p.report.warnings())
@@ -69,10 +74,11 @@ pub fn check_render(img: &RawImage, mode: OpcodeMode, crop: bool, orient: bool) 
 }
 
 /// The report of a job that renders nothing (no target, no network input): applicable
-/// opcodes are listed as applied (what a render of the night raws would apply), optional
-/// ones that cannot be applied as skipped, as [`super::prepare`] does; a list that cannot be
-/// parsed and a mandatory opcode that cannot be applied are skipped too, with a warning
-/// each, instead of failing the job. `None` for a file without opcode lists.
+/// opcodes are listed as applied (what a render of the night raws would apply) and no-ops
+/// as dropped, optional ones that cannot be applied as skipped, as [`super::prepare`] does;
+/// a list that cannot be parsed and a mandatory opcode that cannot be applied are skipped
+/// too, with a warning each, instead of failing the job. No work budget applies (nothing is
+/// rendered). `None` for a file without opcode lists.
 pub fn report_without_render(
     meta: &RawMeta,
     mode: OpcodeMode,
@@ -81,77 +87,85 @@ pub fn report_without_render(
         // prepare() neither parses nor fails in these cases.
         return (prepare(meta, mode).ok().flatten().map(|p| p.report), vec![]);
     }
-    let reason = if meta.linear_raw.is_some() {
+    let linear_raw = meta.linear_raw.is_some();
+    let reason = if linear_raw {
         super::unsupported_reason_linear_raw
     } else {
         super::unsupported_reason
     };
-    let mut report = OpcodeReport {
+    // Lists as parsed, mandatory opcodes a render cannot apply made optional (so that
+    // prepare skips them, as it skips the optional ones), and which were.
+    let mut parsed: [OpcodeList; 3] = Default::default();
+    let mut malformed: [Option<Error>; 3] = Default::default();
+    let mut forced: [Vec<bool>; 3] = Default::default();
+    for (id, result) in ListId::ALL.into_iter().zip(list_results(meta)) {
+        match result {
+            None => {}
+            Some(Err(e)) => malformed[id.index()] = Some(e),
+            Some(Ok(mut l)) => {
+                for op in &mut l.opcodes {
+                    if reason(id, &op.kind).is_some() {
+                        forced[id.index()].push(!op.optional());
+                        op.flags |= FLAG_OPTIONAL;
+                    }
+                }
+                parsed[id.index()] = l;
+            }
+        }
+    }
+    let prepared = prepare_lists_for(&parsed, mode, linear_raw).ok().flatten();
+    let mut report = prepared.map(|p| p.report).unwrap_or(OpcodeReport {
         mode,
         applied: vec![],
         skipped: vec![],
-    };
+        dropped: vec![],
+    });
+    let mut skipped = std::mem::take(&mut report.skipped).into_iter();
     let mut warnings = vec![];
-    for (id, result) in ListId::ALL.into_iter().zip(list_results(meta)) {
-        let list = match result {
-            None => continue,
-            Some(Ok(l)) => l,
-            Some(Err(e)) => {
-                let (why, what) = match e.root() {
-                    Error::Limits(m) => (m.clone(), "exceeds a limit"),
-                    Error::Malformed(m) => (m.clone(), "is malformed"),
-                    other => (other.to_string(), "cannot be read"),
-                };
-                warnings.push(format!(
-                    "{why}: the list {what}; no render was requested, so it is not used (the \
-                     night raws carry it as stored; a render of them fails the same way \
-                     unless it ignores the opcode lists)"
-                ));
-                report.skipped.push(OpcodeEntry {
-                    list: id.tag_name().into(),
-                    name: MALFORMED_LIST.into(),
-                    id: 0,
-                    reason: Some(why),
-                });
-                continue;
-            }
-        };
-        for op in &list.opcodes {
-            let entry = |why: Option<String>| OpcodeEntry {
-                list: id.tag_name().into(),
-                name: op.name().into(),
-                id: op.id,
-                reason: why,
+    for id in ListId::ALL {
+        if let Some(e) = &malformed[id.index()] {
+            let (why, what) = match e.root() {
+                Error::Limits(m) => (m.clone(), "exceeds a limit"),
+                Error::Malformed(m) => (m.clone(), "is malformed"),
+                other => (other.to_string(), "cannot be read"),
             };
-            match reason(id, &op.kind) {
-                None => report.applied.push(entry(None)),
-                Some(why) if op.optional() => {
-                    let e = entry(Some(why.into()));
-                    // The same words as a render's warning.
-                    warnings.extend(
-                        OpcodeReport {
-                            mode,
-                            applied: vec![],
-                            skipped: vec![e.clone()],
-                        }
-                        .warnings(),
-                    );
-                    report.skipped.push(e);
-                }
-                Some(why) => {
-                    warnings.push(format!(
-                        "{}: {} (id {}) is not optional and cannot be applied: {why}; no render \
-                         was requested, so nothing fails (a render of this file or of its \
-                         night raws would, unless it ignores the opcode lists)",
-                        id.tag_name(),
-                        op.name(),
-                        op.id
-                    ));
-                    report.skipped.push(entry(Some(format!(
-                        "{why}; not optional (no render was requested)"
-                    ))));
-                }
+            warnings.push(format!(
+                "{why}: the list {what}; no render was requested, so it is not used (the \
+                 night raws carry it as stored; a render of them fails the same way unless \
+                 it ignores the opcode lists)"
+            ));
+            report.skipped.push(OpcodeEntry {
+                list: id.tag_name().into(),
+                name: MALFORMED_LIST.into(),
+                id: 0,
+                reason: Some(why),
+            });
+            continue;
+        }
+        for &was_mandatory in &forced[id.index()] {
+            let Some(mut e) = skipped.next() else { break };
+            if was_mandatory {
+                let why = e.reason.take().unwrap_or_default();
+                warnings.push(format!(
+                    "{}: {} (id {}) is not optional and cannot be applied: {why}; no render \
+                     was requested, so nothing fails (a render of this file or of its night \
+                     raws would, unless it ignores the opcode lists)",
+                    e.list, e.name, e.id
+                ));
+                e.reason = Some(format!("{why}; not optional (no render was requested)"));
+            } else {
+                // The same words as a render's warning.
+                warnings.extend(
+                    OpcodeReport {
+                        mode,
+                        applied: vec![],
+                        skipped: vec![e.clone()],
+                        dropped: vec![],
+                    }
+                    .warnings(),
+                );
             }
+            report.skipped.push(e);
         }
     }
     (Some(report), warnings)

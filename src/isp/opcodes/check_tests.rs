@@ -368,6 +368,17 @@ fn unknown(id: u32, flags: u32) -> Opcode {
     }
 }
 
+/// A mandatory opcode OpcodeList3 cannot apply (bad pixels are fixed on the mosaic).
+fn bad_pixels_in_list3() -> Opcode {
+    Opcode::new(
+        OpcodeKind::FixBadPixelsConstant {
+            constant: 0,
+            bayer_phase: 0,
+        },
+        0,
+    )
+}
+
 #[test]
 fn without_a_render_nothing_fails_and_the_report_says_why() {
     let mut img = frame(
@@ -381,7 +392,7 @@ fn without_a_render_nothing_fails_and_the_report_says_why() {
     );
     img.meta.opcode_lists[0] = Some(vec![0, 0, 0, 1, 0, 0]); // malformed: truncated
     img.meta.opcode_lists[2] = Some(encode_list(&OpcodeList {
-        opcodes: vec![unknown(14, 0), unknown(99, FLAG_OPTIONAL)],
+        opcodes: vec![bad_pixels_in_list3(), unknown(99, FLAG_OPTIONAL)],
     }));
     // A render refuses it.
     assert!(check_render(&img, OpcodeMode::Apply, true, true).is_err());
@@ -398,7 +409,7 @@ fn without_a_render_nothing_fails_and_the_report_says_why() {
         skipped,
         [
             ("OpcodeList1", MALFORMED_LIST, 0),
-            ("OpcodeList3", "WarpRectilinear2", 14),
+            ("OpcodeList3", "FixBadPixelsConstant", 4),
             ("OpcodeList3", "unknown", 99)
         ]
     );
@@ -415,7 +426,7 @@ fn without_a_render_nothing_fails_and_the_report_says_why() {
         warnings[0]
     );
     assert!(
-        warnings[1].starts_with("OpcodeList3: WarpRectilinear2 (id 14) is not optional"),
+        warnings[1].starts_with("OpcodeList3: FixBadPixelsConstant (id 4) is not optional"),
         "{}",
         warnings[1]
     );
@@ -464,7 +475,7 @@ fn unrenderable_lists_are_named_one_by_one() {
     );
     img.meta.opcode_lists[1] = Some(vec![0, 0, 0, 2]);
     img.meta.opcode_lists[2] = Some(encode_list(&OpcodeList {
-        opcodes: vec![unknown(14, 0)],
+        opcodes: vec![bad_pixels_in_list3()],
     }));
     let bad: Vec<(ListId, String)> = unrenderable_lists(&img)
         .into_iter()
@@ -477,7 +488,7 @@ fn unrenderable_lists_are_named_one_by_one() {
     assert!(
         bad[1]
             .1
-            .contains("WarpRectilinear2 (id 14) is not optional"),
+            .contains("FixBadPixelsConstant (id 4) is not optional"),
         "{}",
         bad[1].1
     );
