@@ -9,7 +9,7 @@ use crate::errors::value_err;
 use day2night::bounds::{
     EXR_ZIP_LEVEL_RANGE, ISO_RANGE, JOBS_RANGE, MAX_LIGHTS, SEED_RANGE, VARIANTS_RANGE,
 };
-use day2night::synth::crop::Crop;
+use day2night::raw::crop::Crop;
 use pyo3::exceptions::PyTypeError;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;

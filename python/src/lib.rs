@@ -45,7 +45,7 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(version, m)?)?;
     m.add_function(wrap_pyfunction!(pool::set_threads, m)?)?;
     m.add_function(wrap_pyfunction!(pool::threads, m)?)?;
-    raw_from::register(m)?;
+    m.add_function(wrap_pyfunction!(raw::write_dng, m)?)?;
     m.add("BOUNDS", args::bounds_dict(m.py())?)?;
     m.add_function(wrap_pyfunction!(args::check_int, m)?)?;
     m.add_function(wrap_pyfunction!(pairs::night_pair, m)?)?;

@@ -1,11 +1,13 @@
-//! `Raw` (a raw in memory, read from a DNG or built from an array) and `read_dng`. A
-//! LinearRaw DNG (already demosaiced) is read too, so that it can be rendered; the
-//! synthesis refuses it with the command line's reason ([`Raw::cfa_day`]).
+//! `Raw` (a raw in memory, read from a DNG or built from an array), `read_dng` and
+//! `write_dng`. A LinearRaw DNG (already demosaiced) is read too, so that it can be
+//! rendered; the synthesis refuses it with the command line's reason ([`Raw::cfa_day`]).
 
 use crate::convert::{meta_dict, warn_meta};
 use crate::errors::{py_err, value_err};
 use crate::pool::on_pool;
+use day2night::dng::write::{write_dng as lib_write_dng, Compression, WriteOptions};
 use day2night::error::ResultExt;
+use day2night::output::OutputPolicy;
 use day2night::raw::meta::LINEAR_RAW_NOT_CFA;
 use day2night::synth::job::DayInput;
 use day2night::Error;
@@ -125,7 +127,15 @@ impl Raw {
         meta: &Bound<'_, PyAny>,
         name: &str,
     ) -> PyResult<Raw> {
-        crate::raw_from::from_array(py, data, meta, name)
+        let (day, stem) = crate::raw_from::from_array(py, data, meta, name)?;
+        let file_name = day.source.display().to_string();
+        Ok(Raw {
+            day: Arc::new(day),
+            name: stem,
+            file_name,
+            from_file: false,
+            data: OnceLock::new(),
+        })
     }
 
     /// SHA-256 of the file's bytes (the sidecar's ``input.sha256``).
@@ -192,4 +202,49 @@ pub(crate) fn read_dng(py: Python<'_>, path: PathBuf) -> PyResult<Raw> {
         from_file: true,
         data: OnceLock::new(),
     })
+}
+
+/// Write ``raw`` as a DNG at ``path`` through the library's DNG writer (the one
+/// ``day2night synth`` uses): uncompressed strips (``compression="none"``) or lossless
+/// JPEG tiles (``"ljpeg"``), every modelled tag (levels, CFA, colour matrices, neutral,
+/// ISO, noise profile, crop, orientation, opcode lists; for a read DNG also the tags it
+/// carried). Written to a temporary file, synced and renamed into place; an existing
+/// ``path`` is refused unless ``overwrite=True``.
+///
+/// >>> day2night.write_dng(day2night.from_rawpy(rawpy.imread("a.nef"), "a"), "a.dng")
+#[pyfunction]
+#[pyo3(signature = (raw, path, overwrite=false, compression="none"))]
+pub(crate) fn write_dng(
+    py: Python<'_>,
+    raw: &Bound<'_, Raw>,
+    path: PathBuf,
+    overwrite: bool,
+    compression: &str,
+) -> PyResult<()> {
+    let compression = match compression {
+        "none" => Compression::None,
+        "ljpeg" => Compression::Ljpeg,
+        c => {
+            return Err(value_err(format!(
+                "compression {c:?}: use \"none\" or \"ljpeg\""
+            )))
+        }
+    };
+    let r = raw.get();
+    let day = r.day.clone();
+    let policy = OutputPolicy {
+        overwrite,
+        inputs: if r.from_file {
+            vec![day.source.clone()]
+        } else {
+            Vec::new()
+        },
+        ..OutputPolicy::default()
+    };
+    let opts = WriteOptions {
+        compression,
+        ..WriteOptions::default()
+    };
+    py.detach(move || on_pool(move || lib_write_dng(&day.raw, &path, &opts, &policy)))
+        .map_err(py_err)
 }

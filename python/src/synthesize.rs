@@ -7,9 +7,10 @@ use crate::errors::{py_err, value_err};
 use crate::pool::on_pool;
 use crate::raw::Raw;
 use crate::synth_options::{job_config, job_for};
+use day2night::isp::render_crop::target_origin;
 use day2night::isp::RgbImage;
 use day2night::output::OutputPolicy;
-use day2night::synth::crop::{target_origin, Crop};
+use day2night::raw::crop::Crop;
 use day2night::synth::job::{DayInput, DirSink, SynthJob, Target};
 use day2night::synth::night::{synthesize as lib_synthesize, Night, Request};
 use day2night::synth::relight::RunReport;
@@ -288,7 +289,7 @@ fn write_files(
             },
             ..OutputPolicy::default()
         };
-        let sink = DirSink::new(&out_dir, &stem, &job, &plan, &policy);
+        let sink = DirSink::new(&out_dir, job.base_name(&stem, &plan), &policy);
         Ok(job.write_night(&day, &plan, &night, &sink)?.files)
     }
 }
