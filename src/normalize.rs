@@ -388,7 +388,10 @@ mod tests {
             assert_eq!(own.normalize(4095, r, c), 1.0);
             assert_eq!(own.denormalize(1.0, r, c, true), 4095);
             // white - black_max as the unit: 1 falls short of white by black_max - black
-            assert_eq!(max.denormalize(1.0, r, c, true) as f64, 4095.0 - (260.0 - b));
+            assert_eq!(
+                max.denormalize(1.0, r, c, true) as f64,
+                4095.0 - (260.0 - b)
+            );
             for x in [250u16, 700, 3000] {
                 let y = own.normalize(x, r, c);
                 assert_eq!(y, (x as f64 - b) / (4095.0 - b));

@@ -686,7 +686,11 @@ mod tests {
                     assert_eq!(on.get(r, c), 1023, "{b} ({r},{c})");
                     // white - black_max as the unit: 1 is white - (black_max - black)
                     let short = 70.0 - norm.black_at(r, c);
-                    assert_eq!(off.get(r, c) as f64, (1023.0 - short).trunc(), "{b} ({r},{c})");
+                    assert_eq!(
+                        off.get(r, c) as f64,
+                        (1023.0 - short).trunc(),
+                        "{b} ({r},{c})"
+                    );
                     moved += (short > 0.0) as u32;
                 }
             }
