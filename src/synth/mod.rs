@@ -14,14 +14,16 @@
 //! ```
 
 pub mod config;
-pub mod crop;
+pub mod day_input;
 pub mod dictionaries;
 pub mod dim;
+pub mod file_sink;
 pub mod illuminant;
 pub mod job;
 pub mod masks;
 pub mod neutral;
 pub mod night;
+pub mod outputs;
 pub mod plan;
 pub mod plan_bounds;
 pub mod relight;
