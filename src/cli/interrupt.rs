@@ -32,6 +32,15 @@ pub fn message(resumable: bool) -> &'static str {
     }
 }
 
+/// Print `day2night: <message>` once per process (the main thread's graceful end and the
+/// signal thread's exit may both get there).
+pub fn print_once(resumable: bool) {
+    static SAID: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
+    if !SAID.swap(true, std::sync::atomic::Ordering::SeqCst) {
+        eprintln!("day2night: {}", message(resumable));
+    }
+}
+
 /// The exit code after `signal`: 128 + signal (130 for SIGINT, 143 for SIGTERM).
 pub fn exit_code(signal: i32) -> u8 {
     u8::try_from(128 + signal.clamp(1, 127)).unwrap_or(130)
@@ -76,7 +85,7 @@ fn exit_now(sig: i32, resumable: bool) -> ! {
     let code = day2night::output::stop_requested().unwrap_or(sig);
     let (tx, rx) = std::sync::mpsc::channel();
     let printer = std::thread::Builder::new().spawn(move || {
-        eprintln!("day2night: {}", message(resumable));
+        print_once(resumable);
         let _ = tx.send(());
     });
     if printer.is_ok() {
