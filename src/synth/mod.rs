@@ -206,7 +206,7 @@ impl SynthOptions {
 }
 
 /// Upper bound on lights and bulbs (each costs a pass over its window).
-pub const MAX_LIGHTS: u32 = 256;
+pub use crate::bounds::MAX_LIGHTS;
 
 impl SynthOptions {
     /// Error on out-of-range options.
