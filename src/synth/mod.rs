@@ -80,6 +80,11 @@ pub struct Compat {
     pub neutral_as_stored: bool,
     /// Truncate the noisy raws too when `truncate` is set (the release's `astype(uint16)`).
     pub truncate_noise: bool,
+    /// Normalize and denormalize each site with its own range `white - black(site)`, not
+    /// `white - black_max` (the release's `normalize`/`denormalize` with a 2x2 BlackLevel;
+    /// see [`crate::normalize::Normalizer::with_range_per_site`]). Changes nothing when the
+    /// black level is one value.
+    pub range_per_site: bool,
 }
 
 impl Compat {
@@ -87,6 +92,7 @@ impl Compat {
     pub const RELEASE: Compat = Compat {
         neutral_as_stored: true,
         truncate_noise: true,
+        range_per_site: true,
     };
     /// True when no switch is on.
     pub fn is_off(&self) -> bool {
@@ -200,7 +206,7 @@ impl SynthOptions {
 }
 
 /// Upper bound on lights and bulbs (each costs a pass over its window).
-pub const MAX_LIGHTS: u32 = 256;
+pub use crate::bounds::MAX_LIGHTS;
 
 impl SynthOptions {
     /// Error on out-of-range options.
