@@ -171,3 +171,19 @@ pub(crate) fn warn_meta(py: Python<'_>, path: &std::path::Path, meta: &RawMeta) 
     }
     Ok(())
 }
+
+/// Raise each of `warnings` about the raw `name` as a `UserWarning` (`<name>: <message>`),
+/// as the command line prints `day2night: <file>: warning: <message>`.
+pub(crate) fn warn_lines(py: Python<'_>, name: &str, warnings: &[String]) -> PyResult<()> {
+    for w in warnings {
+        let msg = std::ffi::CString::new(format!("{name}: {w}"))
+            .unwrap_or_else(|_| c"day2night warning".into());
+        PyErr::warn(
+            py,
+            &py.get_type::<pyo3::exceptions::PyUserWarning>(),
+            &msg,
+            1,
+        )?;
+    }
+    Ok(())
+}

@@ -120,6 +120,11 @@ pub(crate) fn synthesize<'py>(
         crop,
         ..
     } = night;
+    // The plan's warnings after the reader's (raised by read_dng already), then the run's.
+    let skip = r.day.raw.meta.warnings.len().min(plan.warnings.len());
+    let mut new = plan.warnings[skip..].to_vec();
+    new.extend(report.warnings.iter().cloned());
+    crate::convert::warn_lines(py, &r.file_name, &new)?;
     let d = PyDict::new(py);
     let bayer = plan.bayer;
     let profile = |p: &day2night::noise::NoiseParams| -> Vec<Vec<f64>> {

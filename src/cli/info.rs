@@ -19,9 +19,10 @@ pub struct InfoArgs {
 }
 
 /// What synthesis would make of the file's opcode lists (the ISP decides which opcodes it
-/// can apply; the DNG layer's `inspect` cannot ask it): an optional opcode the renders skip
-/// is a warning, a mandatory one they cannot apply makes the file unusable, so "ready" is
-/// said only when `synth` would run without a word.
+/// can apply; the DNG layer's `inspect` cannot ask it): an optional opcode the renders skip,
+/// an opcode that makes its samples constant and a TrimBounds that changes the target's
+/// size are warnings, a mandatory one they cannot apply makes the file unusable, so
+/// "ready" is said only when `synth` would run without a word.
 fn opcode_verdict(info: &mut DngInfo, path: &std::path::Path) {
     let has_lists = info
         .raw
@@ -31,11 +32,11 @@ fn opcode_verdict(info: &mut DngInfo, path: &std::path::Path) {
         return;
     }
     let verdict = day2night::dng::read_dng(path).and_then(|img| {
-        day2night::isp::opcodes::prepare_image(&img, day2night::isp::opcodes::OpcodeMode::Apply)
+        use day2night::isp::opcodes::{check::check_render, OpcodeMode};
+        check_render(&img, OpcodeMode::Apply, true, true)
     });
     match verdict {
-        Ok(Some(p)) => info.warnings.extend(p.report.warnings()),
-        Ok(None) => {}
+        Ok(c) => info.warnings.extend(c.warnings),
         Err(e) => {
             info.synth_ready = false;
             info.reason = Some(e.root().to_string());

@@ -461,6 +461,9 @@ impl Run<'_> {
         let _set = OutputSetLock::acquire(self.out, &base, self.wait)?;
         let sink = DirSink::new(self.out, base, self.policy);
         let written = self.job.run_variant(day, plan, &sink)?;
+        for w in &written.warnings {
+            self.say(format!("day2night: {}: warning: {}", input.display(), w));
+        }
         if let Some(b) = self.bar {
             b.inc(1);
         }

@@ -9,6 +9,7 @@
 pub(crate) mod bands;
 pub mod color;
 pub mod demosaic;
+pub mod flat;
 pub mod geometry;
 pub mod opcodes;
 pub(crate) mod place;

@@ -134,14 +134,18 @@ impl SynthJob {
 
     /// Sample the plan of variant `variant` (0-based) of `day`; the random stream is keyed
     /// by (`seed`, `name`, `variant`), and `name` is recorded as the sidecar's input name.
+    /// A job that renders nothing (no target, no input EXR) does not fail on opcode lists
+    /// a render could not apply ([`super::plan_for`]).
     pub fn plan(&self, day: &DayInput, name: &str, seed: u64, variant: u32) -> Result<Plan> {
-        super::plan(
+        let req = self.request();
+        super::plan_for(
             &day.raw,
             name,
             seed,
             variant,
             &self.options,
             &self.calibration,
+            req.target || req.input,
         )
     }
 
@@ -254,6 +258,7 @@ impl SynthJob {
             plan,
         );
         let report = compute(&files)?;
+        let warnings = report.warnings.clone();
         let isos: Vec<u32> = plan.noise.iter().map(|np| np.iso).collect();
         let (want_exr, want_png) = (self.target.exr(), self.target.png());
         let mut stages = plan.stages.clone();
@@ -328,6 +333,7 @@ impl SynthJob {
             files,
             stages,
             isos,
+            warnings,
         })
     }
 }

@@ -32,7 +32,7 @@ pub mod sidecar;
 
 pub use illuminant::{Covariance, Gaussian2, SamplerRules};
 pub use masks::{Light, LightKind, MaskEval};
-pub use plan::{plan, NoisePlan, Plan};
+pub use plan::{plan, plan_for, NoisePlan, Plan};
 pub use relight::{run, run_clean, RunReport};
 
 use crate::error::{Error, Result};

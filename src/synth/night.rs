@@ -38,6 +38,7 @@
 use super::relight::{run_clean, run_clean_crop, RunReport};
 use super::{night_meta, run_noise, with_noisy_rows, Plan};
 use crate::error::{Error, Result};
+use crate::isp::flat::{self, FlatCheck};
 use crate::isp::opcodes::{self, pipeline};
 use crate::isp::render::{
     color_matrix, matrix_row, render_input_with, render_linear_bands_sized, Bands,
@@ -173,15 +174,21 @@ pub fn synthesize_into<S: NightSink>(
     })
 }
 
+/// What the warnings about a constant render call the target and the network input.
+const TARGET: &str = "the target render";
+const INPUT: &str = "the network input render";
+
 fn whole_frame<S: NightSink>(
     day: &RawImage,
     plan: &Plan,
     req: &Request,
     sink: &S,
 ) -> Result<(RawImage, RunReport)> {
-    let (mut clean, report) = run_clean(day, plan)?;
+    let (mut clean, mut report) = run_clean(day, plan)?;
     clean.meta = night_meta(&day.meta, plan, plan.clean_iso, &plan.clean_noise);
     let clean = clean;
+    // Watches the target's bands as they are made: a constant render is said (sidecar).
+    let target_flat = FlatCheck::new();
     let neutral = plan.night_neutral;
     // The clean hand-over, the noisy raws (made and handed over one ISO after the other)
     // and the target render run as concurrent rayon tasks: each product is computed the
@@ -230,13 +237,17 @@ fn whole_frame<S: NightSink>(
                 };
                 if sink.banded() {
                     let start = |w: usize, h: usize| sink.target_start(w, h);
-                    let f = |y0: usize, w: usize, rows: &[f32]| sink.target_band(y0, w, rows);
+                    let f = |y0: usize, w: usize, rows: &[f32]| {
+                        target_flat.rows(rows);
+                        sink.target_band(y0, w, rows)
+                    };
                     if let Some(bands) = render_linear_bands_sized(clean, &ropts, start, f)? {
                         start_noise();
                         return sink.target(TargetOut::Bands(bands));
                     }
                 }
                 let rgb = render_linear(clean, &ropts)?;
+                target_flat.image(&rgb);
                 start_noise();
                 sink.target(TargetOut::Image(rgb))
             })());
@@ -247,9 +258,11 @@ fn whole_frame<S: NightSink>(
     clean_res.unwrap_or(Ok(()))?;
     let first_noisy = noisy_res.unwrap_or(Ok(None))?;
     target_res.unwrap_or(Ok(()))?;
+    report.warnings.extend(target_flat.warning(TARGET));
     if req.input {
         let src = first_noisy.as_ref().unwrap_or(&clean);
         let rgb = render_input_with(src, Some(neutral), Default::default(), plan.opcode_mode())?;
+        report.warnings.extend(flat::warning(&rgb, INPUT));
         sink.input(&rgb)?;
     }
     Ok((clean, report))
@@ -271,7 +284,8 @@ fn cropped<S: NightSink>(
     } else {
         *crop
     };
-    let (plane, report) = run_clean_crop(day, plan, outer)?;
+    let (plane, mut report) = run_clean_crop(day, plan, outer)?;
+    let target_flat = FlatCheck::new();
     let data = if outer == *crop {
         plane.clone()
     } else {
@@ -352,6 +366,7 @@ fn cropped<S: NightSink>(
                             mode,
                         )?,
                     };
+                    target_flat.image(&rgb);
                     sink.target(TargetOut::Image(rgb))
                 },
             )
@@ -360,6 +375,7 @@ fn cropped<S: NightSink>(
     c?;
     n?;
     t?;
+    report.warnings.extend(target_flat.warning(TARGET));
     Ok((clean, report))
 }
 

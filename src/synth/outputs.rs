@@ -145,6 +145,9 @@ pub struct VariantOutputs {
     pub stages: Vec<String>,
     /// ISO of each noisy raw, in order.
     pub isos: Vec<u32>,
+    /// Warnings about what the renders made (the sidecar's `run.warnings`: a constant
+    /// target or input); the plan's warnings are in [`super::Plan::warnings`].
+    pub warnings: Vec<String>,
 }
 
 #[cfg(test)]

@@ -50,6 +50,11 @@ pub struct Plan {
     pub active_width: usize,
     /// Active-area height.
     pub active_height: usize,
+    /// Size `[width, height]` of the rendered target (and network input) when an
+    /// OpcodeList3 TrimBounds changes it; absent otherwise (the target is then the raw's
+    /// DefaultCrop, oriented), so other sidecars are unchanged.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub target_size: Option<[usize; 2]>,
     /// Bayer pattern of the active area.
     pub bayer: Bayer,
     /// Relighting mode.
@@ -138,7 +143,8 @@ pub fn choose_noise_model(img: &RawImage, cal: &Calibration, bayer: Bayer) -> Re
     Ok(super::dictionaries::embedded::noise_model())
 }
 
-/// Sample a plan for `img` (metadata and geometry only; pixels are not read).
+/// Sample a plan for `img` (metadata and geometry only; pixels are not read), for a job
+/// that renders (a target or the network input): [`plan_for`] with `renders` true.
 pub fn plan(
     img: &RawImage,
     input_name: &str,
@@ -146,6 +152,24 @@ pub fn plan(
     variant: u32,
     opts: &SynthOptions,
     cal: &Calibration,
+) -> Result<Plan> {
+    plan_for(img, input_name, seed, variant, opts, cal, true)
+}
+
+/// [`plan`] for a job that renders (`renders`: a target or the network input) or not. The
+/// opcode lists are checked for the renders ([`crate::isp::opcodes::check::check_render`]:
+/// an opcode that cannot be applied and is not optional is an error, opcodes that make
+/// their samples constant and a TrimBounds that changes the target's size are warnings);
+/// without a render nothing about them fails: lists that cannot be parsed or applied are
+/// warnings ([`crate::isp::opcodes::check::report_without_render`]).
+pub fn plan_for(
+    img: &RawImage,
+    input_name: &str,
+    seed: u64,
+    variant: u32,
+    opts: &SynthOptions,
+    cal: &Calibration,
+    renders: bool,
 ) -> Result<Plan> {
     opts.validate()?;
     img.validate()?;
@@ -357,12 +381,21 @@ pub fn plan(
     if !noise.is_empty() {
         stages.push("noise".into());
     }
-    // The renders' opcodes: unapplicable optional ones are warnings, mandatory ones errors.
-    // The stage `apply_opcodes` is recorded by the synthesis when a render runs.
-    let opcodes = crate::isp::opcodes::prepare_image(img, opts.opcodes)?.map(|p| p.report);
-    if let Some(r) = &opcodes {
-        warnings.extend(r.warnings());
-    }
+    // The renders' opcodes: unapplicable optional ones are warnings, mandatory ones and
+    // work over the budget errors (warnings when nothing is rendered, and no budget). The stage `apply_opcodes` is recorded by the
+    // synthesis when a render runs.
+    let (opcodes, target_size) = if renders {
+        let c = crate::isp::opcodes::check::check_render(img, opts.opcodes, true, true)?;
+        warnings.extend(c.warnings);
+        (
+            c.prepared.map(|p| p.report),
+            c.trimmed_size.map(|(w, h)| [w, h]),
+        )
+    } else {
+        let (r, w) = crate::isp::opcodes::check::report_without_render(&img.meta, opts.opcodes);
+        warnings.extend(w);
+        (r, None)
+    };
     let plan = Plan {
         format: PLAN_FORMAT.into(),
         input_name: input_name.into(),
@@ -370,6 +403,7 @@ pub fn plan(
         variant,
         active_width: w,
         active_height: h,
+        target_size,
         bayer,
         mode: opts.mode,
         formula: opts.formula,

@@ -56,6 +56,13 @@ impl Plan {
                 return Err(field(name, format!("{v} is outside 1..={max_side}")));
             }
         }
+        if let Some([w, h]) = self.target_size {
+            for (name, v) in [("target_size[0]", w), ("target_size[1]", h)] {
+                if v == 0 || v > max_side {
+                    return Err(field(name, format!("{v} is outside 1..={max_side}")));
+                }
+            }
+        }
         if self.lights.len() > MAX_PLAN_LIGHTS {
             return Err(field(
                 "lights",
