@@ -182,6 +182,7 @@ pub fn fit_gaussian(chroma: &[[f64; 3]], est: Estimator) -> Result<Gaussian2Fit>
         name: "calibrate illuminants".into(),
         source: String::new(),
         chromaticities: chroma.iter().map(|c| [c[0], c[2]]).collect(),
+        weights: Vec::new(),
     };
     let g = Gaussian2::fit(&dict, est.covariance())?;
     Ok(Gaussian2Fit {

@@ -11,6 +11,7 @@ pub mod color;
 pub mod demosaic;
 pub mod geometry;
 pub mod opcodes;
+pub mod planck;
 pub mod render;
 pub mod render_crop;
 pub mod render_linear_raw;

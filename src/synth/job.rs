@@ -52,9 +52,11 @@ use super::night::synthesize;
 use super::night::Night;
 use super::night::{synthesize_into, NightSink, Request, TargetOut};
 use super::relight::RunReport;
-use super::sidecar::{sha256_hex, CalibrationInfo, InputInfo, OutputInfo, Sidecar, SIDECAR_FORMAT};
+use super::sidecar::{
+    sha256_hex, CalibrationInfo, InputInfo, OutputInfo, Provenance, Sidecar, SIDECAR_FORMAT,
+};
 use super::target_files::TargetFiles;
-use super::{Calibration, Plan, SynthOptions};
+use super::{Calibration, IlluminantChoice, Plan, ResolvedIlluminants, SynthOptions};
 use crate::dng::write::{write_dng, write_dng_rows, Compression, WriteOptions};
 use crate::encode::exr::{encodes_rows, standard_attributes, write_exr, ExrOptions};
 use crate::encode::png::{write_png, PngOptions};
@@ -172,7 +174,13 @@ impl SynthJob {
         Ok(SynthJob {
             options: sc.options.clone(),
             calibration: Calibration {
-                illuminants: sc.calibration.illuminants.clone(),
+                illuminants: IlluminantChoice::Gaussian(
+                    sc.calibration.illuminants.clone(),
+                    sc.calibration
+                        .provenance
+                        .as_ref()
+                        .and_then(|p| p.illuminants.clone()),
+                ),
                 brightness: sc.calibration.brightness.clone(),
                 noise: None,
             },
@@ -199,6 +207,14 @@ impl SynthJob {
             &self.options,
             &self.calibration,
         )
+    }
+
+    /// The night illuminant dictionary of `day` as the sidecar records it: the one the plan
+    /// samples from, its provenance and the warnings it gives
+    /// ([`Calibration::illuminants_recorded`]).
+    pub fn illuminants(&self, day: &DayInput) -> Result<ResolvedIlluminants> {
+        self.calibration
+            .illuminants_recorded(&day.raw.meta, &self.options)
     }
 
     /// What [`super::night::synthesize_into`] must compute for this job's outputs.
@@ -343,6 +359,14 @@ impl SynthJob {
             sink.written(kind)?;
         }
         files.push(sink.name(OutputKind::Sidecar));
+        let ill = self.illuminants(day)?;
+        // A replayed sidecar without provenance (written before it existed) records none.
+        let provenance = match &self.calibration.illuminants {
+            IlluminantChoice::Gaussian(_, None) => None,
+            _ => Some(Provenance {
+                illuminants: Some(ill.provenance),
+            }),
+        };
         let sc = Sidecar {
             format: SIDECAR_FORMAT.into(),
             tool: "day2night".into(),
@@ -353,9 +377,10 @@ impl SynthJob {
             },
             options: self.options.clone(),
             calibration: CalibrationInfo {
-                illuminants: self.calibration.illuminants.clone(),
+                illuminants: ill.gaussian,
                 brightness: self.calibration.brightness.clone(),
                 noise_model: plan.noise_model_source.clone(),
+                provenance,
             },
             plan: plan.clone(),
             run: report,
