@@ -80,6 +80,30 @@ pub struct IlluminantProvenance {
     pub note: String,
 }
 
+impl IlluminantProvenance {
+    /// One line for `synth` and `info`: what the dictionary is and whose colours.
+    pub fn summary(&self) -> String {
+        let camera = self
+            .camera
+            .as_ref()
+            .map_or("an unnamed camera".to_string(), |c| c.label());
+        let file = self.file.as_deref().unwrap_or("?");
+        match self.source {
+            IlluminantOrigin::EmbeddedS20fe => {
+                "embedded paper phone gray cards (Samsung Galaxy S20 FE camera RGB)".to_string()
+            }
+            IlluminantOrigin::CieLamps => {
+                format!("CIE 015:2018 night lamps through this file's colour matrices ({camera})")
+            }
+            IlluminantOrigin::FileCameraRgb => format!("{file}, camera RGB of {camera}"),
+            IlluminantOrigin::FileXy => {
+                format!("{file}, xy lamps through this file's colour matrices ({camera})")
+            }
+            IlluminantOrigin::Given => "a given Gaussian".to_string(),
+        }
+    }
+}
+
 /// An input's dictionary: the Gaussian to sample, its provenance and the warnings to give.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ResolvedIlluminants {
