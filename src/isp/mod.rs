@@ -11,10 +11,13 @@ pub mod color;
 pub mod demosaic;
 pub mod geometry;
 pub mod opcodes;
+pub(crate) mod place;
 pub mod planck;
 pub mod render;
+pub mod render_bands;
 pub mod render_crop;
 pub mod render_linear_raw;
+pub mod render_parts;
 pub mod tone;
 
 pub use demosaic::Demosaic;

@@ -15,7 +15,7 @@
 use super::color::normalize_neutral;
 use super::opcodes::pipeline::{apply_list3, finish_geometry, stage1_planes, Stage3};
 use super::opcodes::{self, apply_region, Bounds, OpcodeMode, Prepared, Region};
-use super::render::{color_matrix, matrix_row, resolve_neutral, Bands, RenderOptions, BAND};
+use super::render_parts::{color_matrix, matrix_row, resolve_neutral, Bands, RenderOptions, BAND};
 use super::RgbImage;
 use crate::dng::opcodes::ListId;
 use crate::error::{Error, Result};
@@ -159,7 +159,7 @@ fn balanced(
     mode: OpcodeMode,
 ) -> Result<(RgbImage, Bounds, (usize, usize))> {
     let n = normalize_neutral(neutral)?;
-    let p = opcodes::active(&img.meta, mode)?;
+    let p = opcodes::active_image(img, mode)?;
     let (mut rgb, b) = stage_rgb(img, p.as_ref())?;
     white_balance(&mut rgb, n);
     let a = img.active_area();

@@ -6,6 +6,7 @@
 
 pub mod apply;
 pub mod model;
+pub mod params;
 pub mod physics;
 pub mod physics_apply;
 pub mod poisson_table;

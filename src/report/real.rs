@@ -220,7 +220,7 @@ mod tests {
         job.target = Target::None;
         let plan = job.plan(&day, "day.dng", 1, 0).unwrap();
         let policy = OutputPolicy::default();
-        let sink = DirSink::new(dir.path(), "day", &job, &plan, &policy);
+        let sink = DirSink::new(dir.path(), job.base_name("day", &plan), &policy);
         job.run_variant(&day, &plan, &sink).unwrap();
         let sc: serde_json::Value =
             serde_json::from_slice(&std::fs::read(dir.path().join("day.json")).unwrap()).unwrap();
@@ -266,7 +266,7 @@ mod tests {
             let out = dir.path().join(format!("o{orientation}"));
             std::fs::create_dir_all(&out).unwrap();
             let policy = OutputPolicy::default();
-            let sink = DirSink::new(&out, "day", &job, &plan, &policy);
+            let sink = DirSink::new(&out, job.base_name("day", &plan), &policy);
             job.run_variant(&day, &plan, &sink).unwrap();
             let sc: serde_json::Value =
                 serde_json::from_slice(&std::fs::read(out.join("day.json")).unwrap()).unwrap();

@@ -14,21 +14,22 @@
 //! ```
 
 pub mod config;
-pub mod crop;
+pub mod day_input;
 pub mod dictionaries;
 pub mod dim;
+pub mod file_sink;
 pub mod illuminant;
 pub mod illuminant_choice;
 pub mod job;
 pub mod masks;
 pub mod neutral;
 pub mod night;
+pub mod outputs;
 pub mod plan;
 pub mod plan_bounds;
 pub mod relight;
 pub mod rng;
 pub mod sidecar;
-mod target_files;
 
 pub use illuminant::{Covariance, Gaussian2, SamplerRules};
 pub use illuminant_choice::{IlluminantChoice, IlluminantProvenance, ResolvedIlluminants};
