@@ -158,6 +158,7 @@ fn one_cameras_gray_cards_serve_another_through_xy() {
         err.contains("camera: day2night Synthetic: synth uses the camera neutrals"),
         "{err}"
     );
+    eprintln!("{err}");
     let d = read_json(&out);
     assert_eq!(d["camera"]["model"], "Synthetic");
     assert_eq!(d["observer"], "CIE 1931 2 degree");
