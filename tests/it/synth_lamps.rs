@@ -258,8 +258,8 @@ fn written_neutral_maps_back_to_the_mean_lights_xy() {
     let n = sc.plan.lights.len() as f64;
     let mut mean = [0.0; 3];
     for l in &sc.plan.lights {
-        for i in 0..3 {
-            mean[i] += l.illuminant[i] / n;
+        for (m, v) in mean.iter_mut().zip(l.illuminant) {
+            *m += v / n;
         }
     }
     let want = cc.neutral_to_xy(mean).unwrap();
