@@ -79,6 +79,37 @@ pub const MAX_EXTENT_FACTOR: f64 = 100.0;
 pub const MAX_LIST: usize = 1000;
 
 // ---------------------------------------------------------------------------------------
+// Integer arguments (the command line's flags and the Python package's arguments).
+
+/// Master seed (`--seed`, Python `seed`): any 64-bit unsigned value (the random streams are
+/// keyed by all of its bits).
+pub const SEED_RANGE: (u64, u64) = (0, u64::MAX);
+/// Variants per input (`--variants`): at least one. Python's 0-based `variant` is variant
+/// `variant + 1` of `--variants variant + 1`, so it is at most `VARIANTS_RANGE.1 - 1`.
+pub const VARIANTS_RANGE: (u32, u32) = (1, u32::MAX);
+/// Most local lights and most bulbs (`--lights`, `--bulbs`): each costs a pass over its
+/// window (the paper draws 4 to 6 lights, the release adds 5 bulbs).
+pub const MAX_LIGHTS: u32 = 256;
+/// EXR zip levels (`--exr-zip-level`): 1 (day2night's encoder) to 9 (zlib's largest).
+pub const EXR_ZIP_LEVEL_RANGE: (u8, u8) = (1, 9);
+/// Worker threads or inputs in parallel (`--jobs`; Python `set_threads`, where 0 means one
+/// per core): each is an OS thread with its own stack and, for `dataset`, an image in
+/// memory, and more of them than cores do not help (docs/dataset.md); 4096 is above the
+/// hardware threads of any one machine day2night runs on.
+pub const JOBS_RANGE: (usize, usize) = (1, 4096);
+
+/// Error unless `n` is in [`JOBS_RANGE`]; the message names `field`.
+pub fn jobs(field: &str, n: usize) -> Result<()> {
+    let (lo, hi) = JOBS_RANGE;
+    if (lo..=hi).contains(&n) {
+        return Ok(());
+    }
+    Err(Error::invalid(format!(
+        "{field}: {n} is outside {lo}..={hi}"
+    )))
+}
+
+// ---------------------------------------------------------------------------------------
 // Calibration files.
 
 /// Largest calibration JSON file read (calibration files are kilobytes).
@@ -362,6 +393,14 @@ mod tests {
         let e = iso("--iso", ISO_RANGE.1 + 1).unwrap_err().to_string();
         assert!(e.contains("--iso") && e.contains("4000001"), "{e}");
         assert!(iso("x", 0).is_err());
+    }
+
+    #[test]
+    fn jobs_at_and_past_the_edges() {
+        assert!(jobs("--jobs", JOBS_RANGE.0).is_ok() && jobs("--jobs", JOBS_RANGE.1).is_ok());
+        let e = jobs("--jobs", JOBS_RANGE.1 + 1).unwrap_err().to_string();
+        assert!(e.contains("--jobs: 4097 is outside 1..=4096"), "{e}");
+        assert!(jobs("--jobs", 0).is_err());
     }
 
     #[test]

@@ -5,6 +5,7 @@
 //! `pack_bayer(synthesize(...)["noisy"][iso], raw.meta, top, left)` and
 //! `synthesize(...)["target"].transpose(2, 0, 1)` exactly (python/tests/test_pairs.py).
 
+use crate::args::{self, Iso, Seed, Variant};
 use crate::errors::{py_err, value_err};
 use crate::pool::on_pool;
 use crate::raw::Raw;
@@ -107,22 +108,29 @@ fn planar(rgb: &[f32], n: usize) -> Vec<f32> {
 pub fn night_pair<'py>(
     py: Python<'py>,
     raw: &Bound<'py, Raw>,
-    seed: u64,
-    variant: u32,
-    iso: u32,
-    crop: (usize, usize, usize, usize),
+    seed: Seed,
+    variant: Variant,
+    iso: Iso,
+    crop: &Bound<'py, PyAny>,
     mode: &str,
     options: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let (top, left, height, width) = crop;
-    if height == 0 || width == 0 || height % 2 != 0 || width % 2 != 0 {
+    let (seed, variant, iso) = (seed.0, variant.0, iso.0);
+    let a = raw.get().day.raw.active_area();
+    let Crop {
+        top,
+        left,
+        height,
+        width,
+    } = args::crop(crop, a.width(), a.height())?;
+    if height % 2 != 0 || width % 2 != 0 {
         return Err(value_err(format!(
-            "crop {height}x{width}: the packed Bayer layout needs an even, non-empty size"
+            "crop {height}x{width}: the packed Bayer layout needs an even size"
         )));
     }
     let cfg = job_config(mode, vec![iso], true, options)?;
     let r = raw.get();
-    let day = r.day.clone();
+    let day = r.cfa_day()?;
     let file_name = r.file_name.clone();
     let (noisy, clean, target) = py
         .detach(move || {

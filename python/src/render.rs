@@ -8,11 +8,12 @@ use day2night::isp::render::{render_linear, RenderOptions};
 use day2night::isp::Demosaic;
 use pyo3::prelude::*;
 
-/// Linear sRGB (Rec.709, D65) render of a raw, float32 HxWx3 in [0, 1], as ``day2night
-/// render --format exr`` computes it: white balance by ``neutral`` (default: the file's
-/// AsShotNeutral), demosaic (``"mhc"``, ``"bilinear"`` or ``"menon"``), colour matrices,
-/// DefaultCrop (``crop``) and orientation (``orient``); the DNG opcode lists (lens shading,
-/// distortion) are applied unless ``opcodes="ignore"``.
+/// Linear sRGB (Rec.709, D65) render of a raw, float32 HxWx3 in [0, 1], the values of
+/// ``day2night render IN.dng -o OUT.exr --float``: white balance by ``neutral`` (default:
+/// the file's AsShotNeutral), demosaic (``"mhc"``, ``"bilinear"`` or ``"menon"``), colour
+/// matrices, DefaultCrop (``crop``) and orientation (``orient``); the DNG opcode lists (lens
+/// shading, distortion) are applied unless ``opcodes="ignore"``. A LinearRaw raw (already
+/// demosaiced) is rendered without demosaicing (``demosaic`` is not used).
 ///
 /// >>> rgb = day2night.render(raw)
 #[pyfunction]

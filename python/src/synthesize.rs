@@ -1,6 +1,7 @@
 //! `synthesize` (one night variant in memory, whole frame or crop) and `write_outputs` (its
 //! files, as `day2night synth` writes them).
 
+use crate::args::{self, Isos, Seed, Variant};
 use crate::convert::{json_obj, raw_image_from, rgb_array, u16_array};
 use crate::errors::{py_err, value_err};
 use crate::pool::on_pool;
@@ -67,17 +68,17 @@ pub(crate) struct Synthesis {
 /// >>> out["noisy"][1600].shape, out["target"].shape
 /// ((512, 512), (512, 512, 3))
 #[pyfunction]
-#[pyo3(signature = (raw, seed=0, variant=0, mode="local", isos=vec![1600, 3200], target=Some("linear"), crop=None, **options))]
+#[pyo3(signature = (raw, seed=Seed(0), variant=Variant(0), mode="local", isos=Isos(vec![1600, 3200]), target=Some("linear"), crop=None, **options))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn synthesize<'py>(
     py: Python<'py>,
     raw: &Bound<'py, Raw>,
-    seed: u64,
-    variant: u32,
+    seed: Seed,
+    variant: Variant,
     mode: &str,
-    isos: Vec<u32>,
+    isos: Isos,
     target: Option<&str>,
-    crop: Option<(usize, usize, usize, usize)>,
+    crop: Option<&Bound<'py, PyAny>>,
     options: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let want_target = match target {
@@ -85,15 +86,17 @@ pub(crate) fn synthesize<'py>(
         Some("linear") => true,
         Some(t) => return Err(value_err(format!("target {t:?}: use \"linear\" or None"))),
     };
-    let cfg = job_config(mode, isos, want_target, options)?;
-    let crop = crop.map(|(top, left, height, width)| Crop {
-        top,
-        left,
-        height,
-        width,
-    });
+    let cfg = job_config(mode, isos.0, want_target, options)?;
+    let (seed, variant) = (seed.0, variant.0);
     let r = raw.get();
-    let day = r.day.clone();
+    let crop = match crop.filter(|c| !c.is_none()) {
+        None => None,
+        Some(c) => {
+            let a = r.day.raw.active_area();
+            Some(args::crop(c, a.width(), a.height())?)
+        }
+    };
+    let day = r.cfa_day()?;
     let file_name = r.file_name.clone();
     let (job, plan, night) = py
         .detach(move || {

@@ -290,8 +290,8 @@ pub fn run(args: SynthArgs) -> CmdResult {
     if args.variants == 0 {
         return Err(usage("--variants must be at least 1"));
     }
-    if args.jobs == Some(0) {
-        return Err(usage("--jobs must be at least 1"));
+    if let Some(n) = args.jobs {
+        day2night::bounds::jobs("--jobs", n).map_err(usage)?;
     }
     let (job, seed, replay) = match &args.synth.extra.replay {
         Some(p) => {

@@ -82,6 +82,11 @@ pub struct Compat {
     pub neutral_as_stored: bool,
     /// Truncate the noisy raws too when `truncate` is set (the release's `astype(uint16)`).
     pub truncate_noise: bool,
+    /// Normalize and denormalize each site with its own range `white - black(site)`, not
+    /// `white - black_max` (the release's `normalize`/`denormalize` with a 2x2 BlackLevel;
+    /// see [`crate::normalize::Normalizer::with_range_per_site`]). Changes nothing when the
+    /// black level is one value.
+    pub range_per_site: bool,
     /// Sample every input's night illuminants from the paper phone's dictionary (its camera
     /// RGB), as the release does, unless `--illuminants` says otherwise; off: the CIE lamps
     /// through each file's colour matrices for cameras other than the phone (absent from
@@ -95,6 +100,7 @@ impl Compat {
     pub const RELEASE: Compat = Compat {
         neutral_as_stored: true,
         truncate_noise: true,
+        range_per_site: true,
         paper_illuminants: true,
     };
     /// True when no switch is on.
@@ -209,7 +215,7 @@ impl SynthOptions {
 }
 
 /// Upper bound on lights and bulbs (each costs a pass over its window).
-pub const MAX_LIGHTS: u32 = 256;
+pub use crate::bounds::MAX_LIGHTS;
 
 impl SynthOptions {
     /// Error on out-of-range options.

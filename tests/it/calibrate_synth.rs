@@ -110,13 +110,25 @@ fn synth_accepts_calibrated_files() {
     std::fs::write(&own_path, own.to_string()).unwrap();
     let out2 = d.join("out2");
     let (code, _, err) = run_os(&args![
-        "synth", &day, "-o", &out2, "--illuminants", &own_path, "--iso", "none", "--target", "none"
+        "synth",
+        &day,
+        "-o",
+        &out2,
+        "--illuminants",
+        &own_path,
+        "--iso",
+        "none",
+        "--target",
+        "none"
     ]);
     assert_eq!(code, 0, "{err}");
     let side2: Value =
         serde_json::from_slice(&std::fs::read(out2.join("day.json")).unwrap()).unwrap();
     let cal2 = &side2["calibration"];
-    assert_eq!(cal2["provenance"]["illuminants"]["source"], "file_camera_rgb");
+    assert_eq!(
+        cal2["provenance"]["illuminants"]["source"],
+        "file_camera_rgb"
+    );
     assert_eq!(cal2["illuminants"]["mean"], ill_doc["fit"]["mean"]);
     assert_eq!(cal2["illuminants"]["cov"], ill_doc["fit"]["covariance"]);
     assert_eq!(cal["brightness"]["mean"], br_doc["fit"]["mean"]);
