@@ -61,6 +61,12 @@ pub const MAX_MATRIX_CONDITION: f64 = 1e4;
 pub const SDK_MIN_DETERMINANT: f64 = 1e-10;
 /// Decimal places the DNG SDK rounds a normalized ColorMatrix to.
 pub const SDK_MATRIX_ROUNDING: f64 = 1e4;
+/// Each of x, y and z = 1 - x - y of a lamp in an xy illuminant dictionary is at least
+/// this: a light with no X, Y or Z at all is not a lamp, and xy -> XYZ divides by y.
+pub const MIN_XYZ_CHROMATICITY: f64 = 1e-3;
+/// Largest weight of a lamp in an xy illuminant dictionary (a count of gray cards, like
+/// [`MAX_DICT_ENTRIES`]).
+pub const MAX_LAMP_WEIGHT: f64 = 1e6;
 
 // ---------------------------------------------------------------------------------------
 // Lights and plans.
@@ -193,6 +199,23 @@ pub fn iso(field: &str, iso: u32) -> Result<()> {
 pub fn ratios(field: &str, v: &[f64], max: f64) -> Result<()> {
     for (i, &x) in v.iter().enumerate() {
         in_range(&format!("{field}[{i}]"), x, 1.0 / max, max)?;
+    }
+    Ok(())
+}
+
+/// Error unless `xy` is a chromaticity of a light: finite, with x, y and z = 1 - x - y each
+/// at least [`MIN_XYZ_CHROMATICITY`].
+pub fn chromaticity_xy(field: &str, xy: [f64; 2]) -> Result<()> {
+    let z = 1.0 - xy[0] - xy[1];
+    let hi = 1.0 - 2.0 * MIN_XYZ_CHROMATICITY;
+    in_range(&format!("{field} x"), xy[0], MIN_XYZ_CHROMATICITY, hi)?;
+    in_range(&format!("{field} y"), xy[1], MIN_XYZ_CHROMATICITY, hi)?;
+    if z < MIN_XYZ_CHROMATICITY {
+        return Err(Error::invalid(format!(
+            "{field}: x + y = {} leaves z = 1 - x - y below {} (not a light's chromaticity)",
+            short(xy[0] + xy[1]),
+            short(MIN_XYZ_CHROMATICITY)
+        )));
     }
     Ok(())
 }

@@ -51,7 +51,9 @@ pub(crate) struct Synthesis {
 /// Options (as the command line's flags): relight_formula ("release" | "paper"), bulbs,
 /// lights, truncate, covariance ("unbiased" | "ml"), day_neutral ((r, g, b)), mask_eval
 /// ("separable" | "exact" | "truncated:K" | "release"), compat ("release": the authors'
-/// release semantics, docs/synthesis.md), illuminants, brightness, noise_model (paths; a
+/// release semantics, docs/synthesis.md), illuminants ("paper" | "cie" | a path; default:
+/// the paper phone's dictionary for the S20 FE and under compat "release", the CIE lamps
+/// through each file's colour matrices otherwise), brightness, noise_model (paths; a
 /// physics noise model file is recognized).
 ///
 /// Returns a dict: ``clean`` (uint16, the whole stored plane, or the crop), ``noisy``

@@ -14,9 +14,12 @@ pub enum CalibrateCommand {
     #[command(after_help = "\
 Per gray card: black-subtracted 10%-trimmed means of R, G, B over the ROI (default: the
 central quarter x quarter of the active area), saturated sites excluded, chromaticity
-[r/g, 1, b/g]. Then a 2-D Gaussian over [r/g, b/g] (unbiased covariance by default).
-A .json input is a list of chromaticities to include (a day2night dictionary, the shared
-s20fe file, or a bare [[r/g, 1, b/g], ...] list).
+[r/g, 1, b/g], and its CIE 1931 xy through the capture's own colour matrices (DNG
+chapter 6). Then a 2-D Gaussian over [r/g, b/g] (unbiased covariance by default). The file
+records the camera (Make, Model, UniqueCameraModel): synth uses the camera neutrals for that
+camera and the xy, through its own matrices, for any other camera.
+A .json input is a list of chromaticities to include (a day2night dictionary, with its xy
+and camera, the shared s20fe file, or a bare [[r/g, 1, b/g], ...] list).
 
 Example:
   day2night calibrate illuminants card_*.dng -o illuminants.json
@@ -288,15 +291,25 @@ fn run_illuminants(a: IlluminantsArgs) -> CmdResult {
             .is_some_and(|e| e.eq_ignore_ascii_case("json"));
         if is_json {
             let text = day2night::synth::dictionaries::read_calibration_text(p)?;
-            let list = illuminants::parse_chromaticity_list(&text).in_file(p)?;
-            eprintln!("{}: {} chromaticities", p.display(), list.len());
-            extra.extend(list);
+            let list = illuminants::parse_listed(&text).in_file(p)?;
+            eprintln!(
+                "{}: {} chromaticities{}",
+                p.display(),
+                list.chromaticities.len(),
+                if list.xy.is_empty() { "" } else { " with xy" }
+            );
+            extra.push(list);
         } else {
             let img = read(p)?;
             let m =
                 illuminants::measure_gray_card(&img, roi, &p.display().to_string()).in_file(p)?;
+            let xy = m.xy.map_or(String::new(), |xy| {
+                let cct = day2night::isp::planck::cct_duv(xy)
+                    .map_or(String::new(), |(t, d)| format!(", {t:.0} K, Duv {d:+.4}"));
+                format!("  xy {:.4} {:.4}{cct}", xy[0], xy[1])
+            });
             eprintln!(
-                "{}: r/g {:.5}  b/g {:.5}  (R/G/B means {:.5} {:.5} {:.5}, {}/{}/{} px, {} saturated)",
+                "{}: r/g {:.5}  b/g {:.5}{xy}  (R/G/B means {:.5} {:.5} {:.5}, {}/{}/{} px, {} saturated)",
                 p.display(),
                 m.chromaticity[0],
                 m.chromaticity[2],
@@ -314,7 +327,20 @@ fn run_illuminants(a: IlluminantsArgs) -> CmdResult {
             files.push(m);
         }
     }
-    let dict = illuminants::build_dictionary(files, extra, est)?;
+    let (dict, notes) = illuminants::build_dictionary(files, extra, est)?;
+    for n in &notes {
+        eprintln!("day2night: warning: {n}");
+    }
+    if let Some(c) = &dict.camera {
+        eprintln!(
+            "camera: {c}: synth uses the camera neutrals for it{}",
+            if dict.xy.is_empty() {
+                ""
+            } else {
+                ", the xy through their own colour matrices for other cameras"
+            }
+        );
+    }
     let f = &dict.fit;
     eprintln!(
         "fit over {} illuminants ({} covariance): mean [{:.6}, {:.6}]  covariance [[{:.6e}, {:.6e}], [{:.6e}, {:.6e}]]",

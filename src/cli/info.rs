@@ -1,6 +1,8 @@
 //! `day2night info FILE... [--json]`: describe DNG files, including ones synthesis cannot use.
 use super::CmdResult;
 use day2night::dng::read::{inspect, DngInfo};
+use day2night::raw::camera::CameraId;
+use day2night::synth::{Covariance, IlluminantChoice, IlluminantProvenance};
 use std::fmt::Write as _;
 use std::path::PathBuf;
 
@@ -44,6 +46,30 @@ fn opcode_verdict(info: &mut DngInfo, path: &std::path::Path) {
     }
 }
 
+/// The night illuminant dictionary a default `synth` run samples for this file (its
+/// provenance), or why it cannot: then synthesis is not ready (docs/synthesis.md, "Night
+/// lamps in CIE xy").
+fn illuminant_verdict(info: &mut DngInfo) -> Option<Result<IlluminantProvenance, String>> {
+    let raw = info.raw.as_ref()?;
+    let camera = CameraId::new(
+        info.make.clone(),
+        info.model.clone(),
+        info.unique_camera_model.clone(),
+    );
+    let r = IlluminantChoice::Auto.resolve(&camera, &raw.meta.color, Covariance::Unbiased);
+    Some(match r {
+        Ok(r) => Ok(r.provenance),
+        Err(e) => {
+            let why = e.root().to_string();
+            if info.synth_ready {
+                info.synth_ready = false;
+                info.reason = Some(why.clone());
+            }
+            Err(why)
+        }
+    })
+}
+
 /// Run `day2night info`.
 pub fn run(args: InfoArgs) -> CmdResult {
     let mut failed = 0usize;
@@ -53,6 +79,7 @@ pub fn run(args: InfoArgs) -> CmdResult {
         match inspect(f) {
             Ok(mut info) => {
                 opcode_verdict(&mut info, f);
+                let ill = illuminant_verdict(&mut info);
                 for w in &info.warnings {
                     eprintln!("day2night: {}: warning: {w}", f.display());
                 }
@@ -64,10 +91,17 @@ pub fn run(args: InfoArgs) -> CmdResult {
                     let mut v = serde_json::to_value(&info)?;
                     if let Some(o) = v.as_object_mut() {
                         o.insert("file".into(), f.display().to_string().into());
+                        if let Some(ill) = &ill {
+                            let j = match ill {
+                                Ok(p) => serde_json::to_value(p)?,
+                                Err(e) => serde_json::json!({ "error": e }),
+                            };
+                            o.insert("night_illuminants".into(), j);
+                        }
                     }
                     objects.push(v);
                 } else {
-                    describe(&mut text, f, &info);
+                    describe(&mut text, f, &info, &ill);
                 }
             }
             Err(e) => {
@@ -177,7 +211,12 @@ fn describe_opcodes(out: &mut String, lists: &[day2night::dng::opcodes::describe
     }
 }
 
-fn describe(out: &mut String, file: &std::path::Path, i: &DngInfo) {
+fn describe(
+    out: &mut String,
+    file: &std::path::Path,
+    i: &DngInfo,
+    ill: &Option<Result<IlluminantProvenance, String>>,
+) {
     let _ = writeln!(out, "{}", file.display());
     let _ = writeln!(
         out,
@@ -351,6 +390,15 @@ fn describe(out: &mut String, file: &std::path::Path, i: &DngInfo) {
             }
         );
         describe_opcodes(out, &m.opcodes);
+    }
+    match ill {
+        Some(Ok(p)) => {
+            let _ = writeln!(out, "  night illuminants: {}", p.summary());
+        }
+        Some(Err(e)) => {
+            let _ = writeln!(out, "  night illuminants: not available: {e}");
+        }
+        None => {}
     }
     let _ = writeln!(
         out,

@@ -156,8 +156,9 @@ pub struct SynthOpts {
     pub truncate: bool,
     /// Reproduce the authors' released code where it is deterministic: implies --truncate
     /// and --mask-eval release, truncates the noisy raws too, divides by the day neutral as
-    /// stored (not normalized to green = 1) and does not cut illuminant draws at
-    /// Mahalanobis 3. See docs/synthesis.md, "Release compatibility".
+    /// stored (not normalized to green = 1), does not cut illuminant draws at Mahalanobis 3
+    /// and samples every camera's lights from the paper phone's dictionary (unless
+    /// --illuminants says otherwise). See docs/synthesis.md, "Release compatibility".
     #[arg(long, value_enum, value_name = "PRESET")]
     pub compat: Option<CompatArg>,
 }
@@ -168,8 +169,12 @@ pub struct ExtraArgs {
     /// Local lights besides the ambient (default 4 release; paper: 4 to 6 drawn).
     #[arg(long)]
     pub lights: Option<u32>,
-    /// Night illuminant dictionary (JSON); default: the embedded paper phone's.
-    #[arg(long, value_name = "FILE.json")]
+    /// Night illuminant dictionary: `paper` (the paper phone's gray cards, its camera RGB),
+    /// `cie` (CIE 015:2018 night lamps through each file's colour matrices) or a JSON file
+    /// (camera neutrals, a Gaussian, xy lamps; `./paper` for a file named paper). Default:
+    /// `paper` for the paper's phone (Samsung SM-G780*/SM-G781*) and under --compat release,
+    /// `cie` for every other camera.
+    #[arg(long, value_name = "paper|cie|FILE.json")]
     pub illuminants: Option<PathBuf>,
     /// Illuminant covariance estimator.
     #[arg(long, value_enum, default_value = "unbiased")]
@@ -413,6 +418,15 @@ impl Run<'_> {
     /// Every variant of one input (the sidecar's one with --replay).
     fn input(&self, input: &Path) -> day2night::Result<()> {
         let day = DayInput::read(input)?;
+        if !self.quiet && matches!(self.job.options.mode, Mode::Global | Mode::Local) {
+            // Where this input's lamp colours come from (its warnings come with the plan).
+            let ill = self.job.illuminants(&day)?;
+            self.say(format!(
+                "day2night: {}: night illuminants: {}",
+                input.display(),
+                ill.provenance.summary()
+            ));
+        }
         let name = input
             .file_name()
             .map(|n| n.to_string_lossy().into_owned())

@@ -13,6 +13,7 @@ pub mod flat;
 pub mod geometry;
 pub mod opcodes;
 pub(crate) mod place;
+pub mod planck;
 pub mod render;
 pub mod render_bands;
 pub mod render_crop;

@@ -52,8 +52,8 @@ use super::night::synthesize;
 use super::night::Night;
 use super::night::{synthesize_into, NightSink, Request};
 use super::relight::RunReport;
-use super::sidecar::{CalibrationInfo, InputInfo, OutputInfo, Sidecar, SIDECAR_FORMAT};
-use super::{Calibration, Plan, SynthOptions};
+use super::sidecar::{CalibrationInfo, InputInfo, OutputInfo, Provenance, Sidecar, SIDECAR_FORMAT};
+use super::{Calibration, IlluminantChoice, Plan, ResolvedIlluminants, SynthOptions};
 use crate::dng::write::Compression;
 use crate::encode::exr::ExrOptions;
 use crate::error::{Error, Result};
@@ -116,7 +116,13 @@ impl SynthJob {
         Ok(SynthJob {
             options: sc.options.clone(),
             calibration: Calibration {
-                illuminants: sc.calibration.illuminants.clone(),
+                illuminants: IlluminantChoice::Gaussian(
+                    sc.calibration.illuminants.clone(),
+                    sc.calibration
+                        .provenance
+                        .as_ref()
+                        .and_then(|p| p.illuminants.clone()),
+                ),
                 brightness: sc.calibration.brightness.clone(),
                 noise: None,
             },
@@ -147,6 +153,14 @@ impl SynthJob {
             &self.calibration,
             req.target || req.input,
         )
+    }
+
+    /// The night illuminant dictionary of `day` as the sidecar records it: the one the plan
+    /// samples from, its provenance and the warnings it gives
+    /// ([`Calibration::illuminants_recorded`]).
+    pub fn illuminants(&self, day: &DayInput) -> Result<ResolvedIlluminants> {
+        self.calibration
+            .illuminants_recorded(&day.raw.meta, &self.options)
     }
 
     /// The base of the output names of `plan`'s variant of the input `stem`: the stem, plus
@@ -299,6 +313,14 @@ impl SynthJob {
             sink.written(kind)?;
         }
         files.push(sink.name(OutputKind::Sidecar));
+        let ill = self.illuminants(day)?;
+        // A replayed sidecar without provenance (written before it existed) records none.
+        let provenance = match &self.calibration.illuminants {
+            IlluminantChoice::Gaussian(_, None) => None,
+            _ => Some(Provenance {
+                illuminants: Some(ill.provenance),
+            }),
+        };
         let sc = Sidecar {
             format: SIDECAR_FORMAT.into(),
             tool: "day2night".into(),
@@ -309,9 +331,10 @@ impl SynthJob {
             },
             options: self.options.clone(),
             calibration: CalibrationInfo {
-                illuminants: self.calibration.illuminants.clone(),
+                illuminants: ill.gaussian,
                 brightness: self.calibration.brightness.clone(),
                 noise_model: plan.noise_model_source.clone(),
+                provenance,
             },
             plan: plan.clone(),
             run: report,

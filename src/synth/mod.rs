@@ -19,6 +19,7 @@ pub mod dictionaries;
 pub mod dim;
 pub mod file_sink;
 pub mod illuminant;
+pub mod illuminant_choice;
 pub mod job;
 pub mod masks;
 pub mod neutral;
@@ -31,6 +32,7 @@ pub mod rng;
 pub mod sidecar;
 
 pub use illuminant::{Covariance, Gaussian2, SamplerRules};
+pub use illuminant_choice::{IlluminantChoice, IlluminantProvenance, ResolvedIlluminants};
 pub use masks::{Light, LightKind, MaskEval};
 pub use plan::{plan, plan_for, NoisePlan, Plan};
 pub use relight::{run, run_clean, RunReport};
@@ -85,6 +87,12 @@ pub struct Compat {
     /// see [`crate::normalize::Normalizer::with_range_per_site`]). Changes nothing when the
     /// black level is one value.
     pub range_per_site: bool,
+    /// Sample every input's night illuminants from the paper phone's dictionary (its camera
+    /// RGB), as the release does, unless `--illuminants` says otherwise; off: the CIE lamps
+    /// through each file's colour matrices for cameras other than the phone (absent from
+    /// serialized options when off, so sidecars written before it replay unchanged).
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub paper_illuminants: bool,
 }
 
 impl Compat {
@@ -93,6 +101,7 @@ impl Compat {
         neutral_as_stored: true,
         truncate_noise: true,
         range_per_site: true,
+        paper_illuminants: true,
     };
     /// True when no switch is on.
     pub fn is_off(&self) -> bool {
@@ -176,8 +185,8 @@ impl SynthOptions {
     /// The `--compat release` preset applied to `self`: the authors' released code where it
     /// is deterministic (docs/synthesis.md, "Release compatibility"): the release formula,
     /// the unbiased covariance, truncation of clean and noisy raws, the day neutral as
-    /// stored, illuminant draws not cut by a Mahalanobis radius, and the release's sampled,
-    /// resized light kernels. Errors when `self` asks for something else on one of these
+    /// stored, illuminant draws not cut by a Mahalanobis radius, the paper phone's illuminant
+    /// dictionary for every camera, and the release's sampled, resized light kernels. Errors when `self` asks for something else on one of these
     /// (the paper formula, the ML covariance, another mask evaluation).
     pub fn release_compat(mut self) -> Result<SynthOptions> {
         if self.formula != RelightFormula::Release {
@@ -265,11 +274,11 @@ impl SynthOptions {
     }
 }
 
-/// Calibration used by planning: illuminant fit, optional brightness and noise model.
+/// Calibration used by planning: illuminant dictionary, optional brightness and noise model.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Calibration {
-    /// The fitted night illuminant Gaussian.
-    pub illuminants: Gaussian2,
+    /// The night illuminant dictionary, resolved per input ([`IlluminantChoice::resolve`]).
+    pub illuminants: IlluminantChoice,
     /// Brightness dictionary (`--brightness`), if any.
     pub brightness: Option<BrightnessDict>,
     /// Noise model file (`--noise-model`), if any; otherwise the input's NoiseProfile or the
@@ -278,13 +287,57 @@ pub struct Calibration {
 }
 
 impl Calibration {
-    /// The embedded default (the paper phone's dictionary and noise table).
+    /// The default calibration for `opts`: night illuminants from the paper phone's
+    /// dictionary for the phone and the CIE lamps through each file's colour matrices for
+    /// other cameras (the phone's dictionary everywhere under the release preset), no
+    /// brightness dictionary, the input's NoiseProfile or the embedded noise table.
     pub fn embedded(opts: &SynthOptions) -> Result<Calibration> {
         Ok(Calibration {
-            illuminants: Gaussian2::fit(&dictionaries::embedded::illuminants(), opts.covariance)?,
+            illuminants: IlluminantChoice::default_for(opts.compat.paper_illuminants),
             brightness: None,
             noise: None,
         })
+    }
+
+    /// The night illuminant dictionary of an input with metadata `meta`
+    /// ([`IlluminantChoice::resolve`]).
+    pub fn illuminants_for(
+        &self,
+        meta: &RawMeta,
+        opts: &SynthOptions,
+    ) -> Result<ResolvedIlluminants> {
+        self.illuminants.resolve(
+            &crate::raw::camera::CameraId::of(meta),
+            &meta.color,
+            opts.covariance,
+        )
+    }
+
+    /// The dictionary a sidecar records for `meta`: [`Calibration::illuminants_for`]; for
+    /// the modes that sample no illuminant (`day`, `dimmed`) an input whose dictionary cannot
+    /// be made (no colour matrices) records the paper phone's, saying it was not used.
+    pub fn illuminants_recorded(
+        &self,
+        meta: &RawMeta,
+        opts: &SynthOptions,
+    ) -> Result<ResolvedIlluminants> {
+        match self.illuminants_for(meta, opts) {
+            Err(e) if matches!(opts.mode, Mode::Day | Mode::Dimmed) => {
+                let mut r = IlluminantChoice::Paper.resolve(
+                    &illuminant_choice::s20_fe(),
+                    &meta.color,
+                    opts.covariance,
+                )?;
+                let mode = if opts.mode == Mode::Day {
+                    "day"
+                } else {
+                    "dimmed"
+                };
+                r.provenance.note = format!("not used (mode {mode}); this input has none: {e}");
+                Ok(r)
+            }
+            r => r,
+        }
     }
 }
 

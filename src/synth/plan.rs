@@ -189,7 +189,21 @@ pub fn plan_for(
         sample_dim(&mut rng, opts.dim_range, cal.brightness.as_ref())?
     };
 
-    let g: &Gaussian2 = &cal.illuminants;
+    // The night illuminant dictionary of this input, only when illuminants are sampled
+    // (docs/synthesis.md, "Night lamps in CIE xy"): another camera's colours are a warning.
+    let resolved = match opts.mode {
+        Mode::Global | Mode::Local => {
+            let r = cal.illuminants_for(&img.meta, opts)?;
+            warnings.extend(r.warnings.iter().cloned());
+            Some(r.gaussian)
+        }
+        Mode::Day | Mode::Dimmed => None,
+    };
+    let sampled = || -> Result<&Gaussian2> {
+        resolved
+            .as_ref()
+            .ok_or_else(|| Error::invalid("no night illuminant dictionary in this mode"))
+    };
     let rules = &opts.sampler;
     let mut lights = Vec::new();
     let (night_neutral, definition) = match opts.mode {
@@ -204,7 +218,7 @@ pub fn plan_for(
         Mode::Global => {
             stages.push("sample_illuminants".into());
             stages.push("relight_global".into());
-            let l = g.sample(&mut rng, rules)?;
+            let l = sampled()?.sample(&mut rng, rules)?;
             lights.push(Light {
                 kind: LightKind::Ambient,
                 illuminant: l,
@@ -230,6 +244,7 @@ pub fn plan_for(
             );
             stages.push("ambient".into());
             stages.push("masks".into());
+            let g = sampled()?;
             // Ambient.
             let l0 = g.sample(&mut rng, rules)?;
             let (gain0, weight0) = if paper {

@@ -595,8 +595,7 @@ mod tests {
                     for truncate in [false, true] {
                         let stored = Compat {
                             neutral_as_stored: true,
-                            truncate_noise: false,
-                            range_per_site: false,
+                            ..Compat::default()
                         };
                         // the whole preset's switches (truncating the noise needs truncate)
                         let release = Compat {

@@ -5,6 +5,7 @@
 //! Its content is deterministic (no timestamps), so a replay rewrites it identically.
 
 use super::illuminant::Gaussian2;
+use super::illuminant_choice::IlluminantProvenance;
 use super::plan::Plan;
 use super::relight::RunReport;
 use super::SynthOptions;
@@ -28,12 +29,25 @@ pub struct InputInfo {
 /// Calibration summary.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct CalibrationInfo {
-    /// The illuminant Gaussian sampled from.
+    /// The illuminant Gaussian sampled from (this input's: in its camera's `[r/g, b/g]`).
     pub illuminants: Gaussian2,
     /// Brightness dictionary (name, mean, std), if used.
     pub brightness: Option<super::dictionaries::BrightnessDict>,
     /// Noise model source.
     pub noise_model: String,
+    /// Where each calibration came from and which camera it belongs to. Absent in sidecars
+    /// written before it existed: a replay then records none, as they did.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub provenance: Option<Provenance>,
+}
+
+/// Provenance of the calibrations of one input, one entry per calibration.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+pub struct Provenance {
+    /// The night illuminant dictionary: embedded S20 FE, CIE lamps through this file's
+    /// matrices, a file's camera RGB or xy; and its camera.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub illuminants: Option<IlluminantProvenance>,
 }
 
 /// Output settings and names (relative to the output directory).

@@ -319,9 +319,10 @@ fn stability_single_illuminant_dictionary() {
         name: "one".into(),
         source: String::new(),
         chromaticities: vec![[0.7, 0.35]],
+        weights: Vec::new(),
     };
     let cal = Calibration {
-        illuminants: Gaussian2::fit(&d, o.covariance).unwrap(),
+        illuminants: IlluminantChoice::Gaussian(Gaussian2::fit(&d, o.covariance).unwrap(), None),
         brightness: None,
         noise: None,
     };

@@ -54,3 +54,4 @@ mod release_compat;
 mod runs_concurrent;
 mod runs_interrupt;
 mod synth_cli;
+mod synth_lamps;
