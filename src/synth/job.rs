@@ -52,7 +52,9 @@ use super::night::synthesize;
 use super::night::Night;
 use super::night::{synthesize_into, NightSink, Request, TargetOut};
 use super::relight::RunReport;
-use super::sidecar::{sha256_hex, CalibrationInfo, InputInfo, OutputInfo, Sidecar, SIDECAR_FORMAT};
+use super::sidecar::{
+    sha256_hex, CalibrationInfo, InputInfo, OutputInfo, Provenance, Sidecar, SIDECAR_FORMAT,
+};
 use super::target_files::TargetFiles;
 use super::{Calibration, Plan, SynthOptions};
 use crate::dng::write::{write_dng, write_dng_rows, Compression, WriteOptions};
@@ -60,6 +62,7 @@ use crate::encode::exr::{encodes_rows, standard_attributes, write_exr, ExrOption
 use crate::encode::png::{write_png, PngOptions};
 use crate::error::{Error, Result, ResultExt};
 use crate::isp::RgbImage;
+use crate::noise::NoiseEstimate;
 use crate::output::{write_bytes_atomic, DeferredSyncs, OutputPolicy};
 use crate::raw::rows::RowSource;
 use crate::raw::{RawImage, RawMeta};
@@ -191,13 +194,14 @@ impl SynthJob {
     /// Sample the plan of variant `variant` (0-based) of `day`; the random stream is keyed
     /// by (`seed`, `name`, `variant`), and `name` is recorded as the sidecar's input name.
     pub fn plan(&self, day: &DayInput, name: &str, seed: u64, variant: u32) -> Result<Plan> {
-        super::plan(
+        super::plan_with_estimate(
             &day.raw,
             name,
             seed,
             variant,
             &self.options,
             &self.calibration,
+            &|| day.noise_estimate(),
         )
     }
 
@@ -356,6 +360,10 @@ impl SynthJob {
                 illuminants: self.calibration.illuminants.clone(),
                 brightness: self.calibration.brightness.clone(),
                 noise_model: plan.noise_model_source.clone(),
+                provenance: plan
+                    .noise_provenance
+                    .clone()
+                    .map(|n| Provenance { noise: Some(n) }),
             },
             plan: plan.clone(),
             run: report,
@@ -515,6 +523,8 @@ pub struct DayInput {
     pub sha256: String,
     /// The file; its name goes into the EXR renders' attributes.
     pub source: PathBuf,
+    /// The image's noise estimate, made on first use ([`DayInput::noise_estimate`]).
+    estimate: OnceLock<std::result::Result<NoiseEstimate, String>>,
 }
 
 impl DayInput {
@@ -529,11 +539,28 @@ impl DayInput {
             // A day input is a CFA mosaic: refused here, before anything is planned.
             return Err(Error::unsupported(crate::raw::meta::LINEAR_RAW_NOT_CFA).in_file(source));
         }
-        Ok(DayInput {
+        Ok(DayInput::new(raw, sha256, source.to_path_buf()))
+    }
+
+    /// A decoded raw with the SHA-256 of its file and the file's path.
+    pub fn new(raw: RawImage, sha256: String, source: PathBuf) -> DayInput {
+        DayInput {
             raw,
             sha256,
-            source: source.to_path_buf(),
-        })
+            source,
+            estimate: OnceLock::new(),
+        }
+    }
+
+    /// The single-image noise estimate of the raw (default options), computed once: every
+    /// variant planned from this input reuses it.
+    pub fn noise_estimate(&self) -> Result<NoiseEstimate> {
+        self.estimate
+            .get_or_init(|| {
+                crate::noise::estimate(&self.raw, &Default::default()).map_err(|e| e.to_string())
+            })
+            .clone()
+            .map_err(Error::invalid)
     }
 
     /// Read and decode the DNG at `path`.
@@ -559,11 +586,11 @@ impl DayInput {
         if let Ok(json) = serde_json::to_vec(&raw.meta) {
             h.update(&json);
         }
-        DayInput {
+        DayInput::new(
             raw,
-            sha256: h.finalize().iter().map(|b| format!("{b:02x}")).collect(),
-            source: PathBuf::from(file_name),
-        }
+            h.finalize().iter().map(|b| format!("{b:02x}")).collect(),
+            PathBuf::from(file_name),
+        )
     }
 }
 

@@ -22,6 +22,7 @@ pub mod job;
 pub mod masks;
 pub mod neutral;
 pub mod night;
+pub mod noise_source;
 pub mod plan;
 pub mod plan_bounds;
 pub mod relight;
@@ -31,7 +32,7 @@ mod target_files;
 
 pub use illuminant::{Covariance, Gaussian2, SamplerRules};
 pub use masks::{Light, LightKind, MaskEval};
-pub use plan::{plan, NoisePlan, Plan};
+pub use plan::{plan, plan_with_estimate, NoisePlan, Plan};
 pub use relight::{run, run_clean, RunReport};
 
 use crate::error::{Error, Result};
@@ -79,6 +80,11 @@ pub struct Compat {
     pub neutral_as_stored: bool,
     /// Truncate the noisy raws too when `truncate` is set (the release's `astype(uint16)`).
     pub truncate_noise: bool,
+    /// Use the embedded noise table (the paper's phone's) for inputs without a NoiseProfile
+    /// instead of an estimate from the image (the release applies its table to every
+    /// input). Absent from serialized options when off, so older sidecars are unchanged.
+    #[serde(skip_serializing_if = "std::ops::Not::not")]
+    pub embedded_noise: bool,
 }
 
 impl Compat {
@@ -86,6 +92,7 @@ impl Compat {
     pub const RELEASE: Compat = Compat {
         neutral_as_stored: true,
         truncate_noise: true,
+        embedded_noise: true,
     };
     /// True when no switch is on.
     pub fn is_off(&self) -> bool {
@@ -265,8 +272,8 @@ pub struct Calibration {
     pub illuminants: Gaussian2,
     /// Brightness dictionary (`--brightness`), if any.
     pub brightness: Option<BrightnessDict>,
-    /// Noise model file (`--noise-model`), if any; otherwise the input's NoiseProfile or the
-    /// embedded table is used.
+    /// Noise model file (`--noise-model`), if any; otherwise the input's NoiseProfile, an
+    /// estimate from the image or the embedded table ([`noise_source`]).
     pub noise: Option<NoiseModel>,
 }
 

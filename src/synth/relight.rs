@@ -584,7 +584,7 @@ mod tests {
                     for truncate in [false, true] {
                         let stored = Compat {
                             neutral_as_stored: true,
-                            truncate_noise: false,
+                            ..Compat::default()
                         };
                         for compat in [Compat::default(), stored] {
                             let opts = SynthOptions {

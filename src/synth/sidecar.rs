@@ -34,6 +34,18 @@ pub struct CalibrationInfo {
     pub brightness: Option<super::dictionaries::BrightnessDict>,
     /// Noise model source.
     pub noise_model: String,
+    /// Where each calibration came from and which camera it belongs to (issue 24). Absent
+    /// in sidecars written before it existed (their replays write none, byte for byte).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub provenance: Option<Provenance>,
+}
+
+/// `calibration.provenance`: one entry per calibration.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+pub struct Provenance {
+    /// The noise model's (the plan's `noise_provenance`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub noise: Option<crate::noise::NoiseProvenance>,
 }
 
 /// Output settings and names (relative to the output directory).
