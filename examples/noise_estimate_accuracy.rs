@@ -9,7 +9,8 @@
 //! Content (clean normalized signal per site, times a per-colour factor R 0.55, G 1, B 0.75):
 //! `flat` (a 4x4 grid of flat patches), `ramp` (a horizontal ramp plus a gentle vertical
 //! one), `texture` (the photograph behind fixtures/day.dng, `fixtures/source/astronaut.png`,
-//! as linear grey, bilinearly enlarged to the frame: real edges and texture), `clipped`
+//! as linear grey, enlarged bilinearly so that it spans 2048 sites, centred, mirrored past
+//! its edges: real edges and texture at the same scale in any frame size), `clipped`
 //! (the same texture 1.5x brighter, about a third of the sites at white, and black 0 so that
 //! dark sites clip at 0 too), `grainy` (the photograph not halved first, whose film grain
 //! and 8-bit steps stay pixel-scale detail about as strong as the noise: the limit of any
@@ -107,10 +108,19 @@ impl Grey {
             .collect();
         Grey { w, h, v }
     }
-    /// Bilinear value at (u, v) in [0, 1]^2.
-    pub fn at(&self, u: f64, v: f64) -> f64 {
-        let x = (u * (self.w - 1) as f64).clamp(0.0, (self.w - 1) as f64);
-        let y = (v * (self.h - 1) as f64).clamp(0.0, (self.h - 1) as f64);
+    /// Bilinear value at (x, y) in this image's pixels; outside, the image is mirrored
+    /// (so that any frame size sees texture everywhere).
+    pub fn at(&self, x: f64, y: f64) -> f64 {
+        let mirror = |v: f64, n: usize| {
+            let p = 2.0 * (n - 1) as f64;
+            let m = v.rem_euclid(p);
+            if m > (n - 1) as f64 {
+                p - m
+            } else {
+                m
+            }
+        };
+        let (x, y) = (mirror(x, self.w), mirror(y, self.h));
         let (x0, y0) = (x.floor() as usize, y.floor() as usize);
         let (x1, y1) = ((x0 + 1).min(self.w - 1), (y0 + 1).min(self.h - 1));
         let (fx, fy) = (x - x0 as f64, y - y0 as f64);
@@ -118,6 +128,17 @@ impl Grey {
         (g(x0, y0) * (1.0 - fx) + g(x1, y0) * fx) * (1.0 - fy)
             + (g(x0, y1) * (1.0 - fx) + g(x1, y1) * fx) * fy
     }
+    /// Width in pixels.
+    pub fn width(&self) -> usize {
+        self.w
+    }
+}
+
+/// Frame sites per pixel of the grey image, so that the photograph spans 2048 sites
+/// whatever the frame size: the halved photograph (256 wide) 8 sites per pixel, 4 per
+/// pixel of each CFA position's plane; the whole one (512) 4 sites per pixel.
+pub fn sites_per_pixel(grey: &Grey) -> f64 {
+    2048.0 / grey.width() as f64
 }
 
 /// The clean normalized signal of content `c` at active (row, col) of a w x h frame.
@@ -132,14 +153,23 @@ pub fn clean(
 ) -> f64 {
     let u = col as f64 / w as f64;
     let v = r as f64 / h as f64;
+    // The photograph centred on the frame, at a fixed scale.
+    let k = sites_per_pixel(grey);
+    let photo = || {
+        let gw = grey.width() as f64;
+        grey.at(
+            (col as f64 - w as f64 / 2.0) / k + gw / 2.0,
+            (r as f64 - h as f64 / 2.0) / k + gw / 2.0,
+        )
+    };
     let base = match c {
         Content::Flat => {
             let k = ((v * 4.0) as usize).min(3) * 4 + ((u * 4.0) as usize).min(3);
             0.03 + 0.06 * k as f64
         }
         Content::Ramp => 0.02 + 0.93 * u * (0.9 + 0.1 * v),
-        Content::Texture | Content::Grainy => 0.02 + 0.93 * grey.at(u, v),
-        Content::Clipped => 1.5 * grey.at(u, v),
+        Content::Texture | Content::Grainy => 0.02 + 0.93 * photo(),
+        Content::Clipped => 1.5 * photo(),
     };
     let gain = [0.55, 1.0, 0.75][bayer.color_at(r, col) as usize];
     base * gain

@@ -275,6 +275,35 @@ fn warn_meta(
     Ok(())
 }
 
+/// Raise the warnings of a plan beyond the reader's own (those `read_dng` already raised):
+/// the noise model's source (another camera's table, an untrusted estimate, a model file of
+/// another camera), ISO extrapolation, opcodes; each a `UserWarning` `<file>: <message>`,
+/// as `day2night synth` prints `day2night: <file>: warning: <message>`.
+fn warn_plan(
+    py: Python<'_>,
+    file: &str,
+    meta: &day2night::raw::meta::RawMeta,
+    plan: &Plan,
+) -> PyResult<()> {
+    // The plan's list starts with the reader's corrections (dng::check).
+    let own = if plan.warnings.starts_with(&meta.warnings) {
+        meta.warnings.len()
+    } else {
+        0
+    };
+    for w in &plan.warnings[own..] {
+        let msg = std::ffi::CString::new(format!("{file}: {w}"))
+            .unwrap_or_else(|_| c"synthesis warning".into());
+        PyErr::warn(
+            py,
+            &py.get_type::<pyo3::exceptions::PyUserWarning>(),
+            &msg,
+            1,
+        )?;
+    }
+    Ok(())
+}
+
 /// Read a DNG into memory (the GIL is released while it is read and decoded).
 ///
 /// >>> raw = day2night.read_dng("day.dng")
@@ -478,8 +507,12 @@ fn rgb_array(py: Python<'_>, img: RgbImage) -> PyResult<Bound<'_, PyAny>> {
 /// (the sidecar's plan), ``neutral`` (the night AsShotNeutral), ``noise_profile``
 /// ({iso: [[S, O] per colour plane]}), ``clean_noise_profile``, ``report``, ``stages``,
 /// ``crop``, ``target_origin`` ((row, column) of the crop's target in the whole-frame
-/// target, None outside the DefaultCrop or without a crop) and ``synthesis`` (for
-/// ``write_outputs``).
+/// target, None outside the DefaultCrop or without a crop), ``noise_provenance`` (where
+/// the noise model came from and whose camera it is: ``source``, ``camera``, ``note``; also
+/// in ``plan``) and ``synthesis`` (for ``write_outputs``).
+///
+/// The plan's warnings (e.g. another camera's noise table applied to this input) are
+/// raised as ``UserWarning``, as ``day2night synth`` prints them.
 ///
 /// >>> out = day2night.synthesize(raw, seed=0, isos=(1600,), crop=(0, 0, 512, 512))
 /// >>> out["noisy"][1600].shape, out["target"].shape
@@ -537,6 +570,7 @@ fn synthesize<'py>(
         crop,
         ..
     } = night;
+    warn_plan(py, &r.file_name, &r.day.raw.meta, &plan)?;
     let d = PyDict::new(py);
     let bayer = plan.bayer;
     let profile = |p: &day2night::noise::NoiseParams| -> Vec<Vec<f64>> {
@@ -561,6 +595,7 @@ fn synthesize<'py>(
     d.set_item("noise_profile", np)?;
     d.set_item("neutral", plan.night_neutral.to_vec())?;
     d.set_item("plan", json_obj(py, &plan)?)?;
+    d.set_item("noise_provenance", json_obj(py, &plan.noise_provenance)?)?;
     d.set_item("report", json_obj(py, &report)?)?;
     d.set_item("stages", stages)?;
     d.set_item("crop", crop.map(|c| (c.top, c.left, c.height, c.width)))?;

@@ -84,6 +84,10 @@ pub fn from_image_estimates(images: &[ImageEstimate]) -> Result<(Vec<IsoModel>, 
                 // Inverse-variance weights per parameter (equal weights when an error is 0).
                 let pe: Vec<_> = trusted.iter().map(|e| &e.estimate.positions[p]).collect();
                 let wmean = |v: &dyn Fn(usize) -> (f64, f64)| -> (f64, f64) {
+                    if pe.len() == 1 {
+                        // One image: its own figures, bit for bit (what synth uses).
+                        return v(0);
+                    }
                     let (mut sw, mut s) = (0.0, 0.0);
                     for i in 0..pe.len() {
                         let (x, se) = v(i);

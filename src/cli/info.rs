@@ -43,6 +43,35 @@ fn opcode_verdict(info: &mut DngInfo, path: &std::path::Path) {
     }
 }
 
+/// Where `synth` (no `--noise-model`, default options) would take this file's noise model
+/// from, and which camera's it is (issue 24): the noise chain of
+/// `day2night::synth::noise_source`, its warnings joining the file's. The pixels are read
+/// only when the chain gets to the estimate from the image.
+fn noise_verdict(
+    info: &mut DngInfo,
+    path: &std::path::Path,
+) -> Option<day2night::noise::NoiseProvenance> {
+    use day2night::synth::{noise_source::choose_noise_model, Calibration, SynthOptions};
+    if !info.synth_ready {
+        return None;
+    }
+    let img = day2night::dng::read_dng(path).ok()?;
+    let bayer = img.bayer().ok()?;
+    let opts = SynthOptions::default();
+    let cal = Calibration::embedded(&opts).ok()?;
+    let est = || day2night::noise::estimate(&img, &Default::default());
+    match choose_noise_model(&img, &cal, &opts, bayer, &est) {
+        Ok(c) => {
+            info.warnings.extend(c.warnings);
+            Some(c.provenance)
+        }
+        Err(e) => {
+            info.warnings.push(format!("noise: {}", e.root()));
+            None
+        }
+    }
+}
+
 /// Run `day2night info`.
 pub fn run(args: InfoArgs) -> CmdResult {
     let mut failed = 0usize;
@@ -52,6 +81,7 @@ pub fn run(args: InfoArgs) -> CmdResult {
         match inspect(f) {
             Ok(mut info) => {
                 opcode_verdict(&mut info, f);
+                let noise = noise_verdict(&mut info, f);
                 for w in &info.warnings {
                     eprintln!("day2night: {}: warning: {w}", f.display());
                 }
@@ -63,10 +93,13 @@ pub fn run(args: InfoArgs) -> CmdResult {
                     let mut v = serde_json::to_value(&info)?;
                     if let Some(o) = v.as_object_mut() {
                         o.insert("file".into(), f.display().to_string().into());
+                        if let Some(n) = &noise {
+                            o.insert("noise_model".into(), serde_json::to_value(n)?);
+                        }
                     }
                     objects.push(v);
                 } else {
-                    describe(&mut text, f, &info);
+                    describe(&mut text, f, &info, noise.as_ref());
                 }
             }
             Err(e) => {
@@ -176,7 +209,12 @@ fn describe_opcodes(out: &mut String, lists: &[day2night::dng::opcodes::describe
     }
 }
 
-fn describe(out: &mut String, file: &std::path::Path, i: &DngInfo) {
+fn describe(
+    out: &mut String,
+    file: &std::path::Path,
+    i: &DngInfo,
+    noise: Option<&day2night::noise::NoiseProvenance>,
+) {
     let _ = writeln!(out, "{}", file.display());
     let _ = writeln!(
         out,
@@ -350,6 +388,20 @@ fn describe(out: &mut String, file: &std::path::Path, i: &DngInfo) {
             }
         );
         describe_opcodes(out, &m.opcodes);
+    }
+    if let Some(n) = noise {
+        let _ = writeln!(
+            out,
+            "  noise model:   {} ({}): {}",
+            n.source.name(),
+            n.camera
+                .as_ref()
+                .map_or("camera unknown".to_string(), |c| format!(
+                    "camera {}",
+                    c.label()
+                )),
+            n.note
+        );
     }
     let _ = writeln!(
         out,

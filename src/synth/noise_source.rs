@@ -192,3 +192,246 @@ pub fn choose_noise_model(
         )),
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::noise::estimate::{EstimateOptions, PositionEstimate};
+    use crate::raw::meta::RawMeta;
+    use std::cell::Cell;
+
+    fn img(iso: Option<u32>, profile: bool, make: &str, model: &str) -> RawImage {
+        let mut meta = RawMeta::new_bayer(Bayer::RGGB, 12, 64.0, 4095.0);
+        meta.exif.iso = iso;
+        meta.make = Some(make.into());
+        meta.model = Some(model.into());
+        meta.unique_camera_model = None;
+        if profile {
+            meta.noise_profile = Some(vec![(2e-5, 4e-7)]);
+        }
+        RawImage {
+            width: 8,
+            height: 8,
+            data: vec![500; 64],
+            meta,
+        }
+    }
+
+    fn trusted_estimate() -> NoiseEstimate {
+        let p = |position: usize, s: f64| PositionEstimate {
+            position,
+            color: "G".into(),
+            s,
+            o: 1e-7,
+            intercept: 1e-7,
+            s_stderr: 1e-7,
+            o_stderr: 1e-9,
+            blocks: 5000,
+            smooth_blocks: 4000,
+            clipped_blocks: 0,
+            bins: 40,
+            span: [0.05, 0.8],
+            problem: None,
+            level_sets: vec![],
+        };
+        NoiseEstimate {
+            step: 1,
+            quantization_variance_removed: 0.0,
+            positions: vec![p(0, 1e-4), p(1, 1.1e-4), p(2, 1.2e-4), p(3, 1.3e-4)],
+        }
+    }
+
+    struct Run {
+        choice: NoiseChoice,
+        estimated: bool,
+    }
+
+    fn choose(i: &RawImage, file: Option<NoiseModel>, release: bool, est: NoiseEstimate) -> Run {
+        let opts = if release {
+            SynthOptions::default().release_compat().unwrap()
+        } else {
+            SynthOptions::default()
+        };
+        let mut cal = Calibration::embedded(&opts).unwrap();
+        cal.noise = file;
+        let called = Cell::new(false);
+        let f = || {
+            called.set(true);
+            Ok(est.clone())
+        };
+        let choice = choose_noise_model(i, &cal, &opts, Bayer::RGGB, &f).unwrap();
+        Run {
+            choice,
+            estimated: called.get(),
+        }
+    }
+
+    fn file_model(camera: Option<CameraId>) -> NoiseModel {
+        let mut m = NoiseModel::new(
+            "test calibration",
+            vec![IsoPoint {
+                iso: 800,
+                positions: [[3e-4, 2e-6]; 4],
+            }],
+        )
+        .unwrap();
+        m.camera = camera;
+        m.file = Some("cal.json".into());
+        m
+    }
+
+    #[test]
+    fn a_model_file_comes_first_and_warns_only_for_another_camera() {
+        let i = img(Some(100), true, "Canon", "EOS 5D");
+        let same = CameraId::new(Some("canon".into()), Some("EOS 5D".into()), None);
+        let other = CameraId::new(Some("Nikon".into()), Some("D3".into()), None);
+        let r = choose(
+            &i,
+            Some(file_model(Some(same.clone()))),
+            false,
+            trusted_estimate(),
+        );
+        assert_eq!(r.choice.provenance.source, NoiseSource::File);
+        assert_eq!(r.choice.provenance.camera, Some(same));
+        assert!(r.choice.warnings.is_empty(), "{:?}", r.choice.warnings);
+        assert!(!r.estimated);
+        let r = choose(&i, Some(file_model(Some(other))), false, trusted_estimate());
+        assert_eq!(r.choice.warnings.len(), 1);
+        let w = &r.choice.warnings[0];
+        assert!(
+            w.starts_with(
+                "noise: cal.json was calibrated on Nikon D3, not on this camera (Canon EOS 5D)"
+            ),
+            "{w}"
+        );
+        assert!(w.contains("day2night calibrate noise"), "{w}");
+        // A file that records no camera cannot be compared: no warning, said in the note.
+        let r = choose(&i, Some(file_model(None)), false, trusted_estimate());
+        assert!(r.choice.warnings.is_empty());
+        assert_eq!(r.choice.provenance.camera, None);
+        assert!(
+            r.choice.provenance.note.contains("records no camera"),
+            "{}",
+            r.choice.provenance.note
+        );
+    }
+
+    #[test]
+    fn the_noise_profile_comes_second() {
+        let i = img(Some(200), true, "Canon", "EOS 5D");
+        let r = choose(&i, None, false, trusted_estimate());
+        assert_eq!(r.choice.provenance.source, NoiseSource::NoiseProfile);
+        assert_eq!(r.choice.provenance.camera, Some(CameraId::of(&i.meta)));
+        assert!(r.choice.warnings.is_empty() && !r.estimated);
+        assert_eq!(r.choice.model.iso_range(), (200, 200));
+        // Without an ISO the profile cannot be scaled: the embedded table, said why.
+        let i = img(None, true, "Canon", "EOS 5D");
+        let r = choose(&i, None, false, trusted_estimate());
+        assert_eq!(r.choice.provenance.source, NoiseSource::EmbeddedS20Fe);
+        assert!(r.choice.warnings[0].contains("ISO is unknown"));
+        assert!(!r.estimated);
+    }
+
+    #[test]
+    fn the_paper_phone_keeps_its_own_table_without_a_word() {
+        for model in ["SM-G780F", "SM-G781B"] {
+            let i = img(Some(100), false, "samsung", model);
+            let r = choose(&i, None, false, trusted_estimate());
+            assert_eq!(r.choice.provenance.source, NoiseSource::EmbeddedS20Fe);
+            assert!(r.choice.warnings.is_empty(), "{:?}", r.choice.warnings);
+            assert!(!r.estimated, "no estimate for the table's own camera");
+            assert_eq!(r.choice.model.isos, embedded::noise_model().isos);
+            assert!(r.choice.provenance.camera.as_ref().unwrap().is_s20_fe());
+        }
+    }
+
+    #[test]
+    fn release_compat_keeps_the_release_table_and_says_so() {
+        let i = img(Some(100), false, "Canon", "EOS 5D");
+        let r = choose(&i, None, true, trusted_estimate());
+        assert_eq!(r.choice.provenance.source, NoiseSource::EmbeddedS20Fe);
+        assert!(!r.estimated);
+        let w = &r.choice.warnings[0];
+        assert!(
+            w.contains("--compat release keeps the release's noise table"),
+            "{w}"
+        );
+        assert!(
+            w.contains("another camera's noise, not Canon EOS 5D's"),
+            "{w}"
+        );
+        // The paper's phone under release: its own table, no warning.
+        let i = img(Some(100), false, "samsung", "SM-G781B");
+        assert!(choose(&i, None, true, trusted_estimate())
+            .choice
+            .warnings
+            .is_empty());
+    }
+
+    #[test]
+    fn unknown_iso_gives_the_embedded_table_with_the_reason() {
+        for iso in [None, Some(0)] {
+            let i = img(iso, false, "Canon", "EOS Kiss X4");
+            let r = choose(&i, None, false, trusted_estimate());
+            assert!(!r.estimated);
+            assert_eq!(r.choice.provenance.source, NoiseSource::EmbeddedS20Fe);
+            assert_eq!(r.choice.warnings.len(), 1);
+            let w = &r.choice.warnings[0];
+            assert!(
+                w.starts_with(
+                    "noise: the input has no NoiseProfile and its ISO is unknown (Exif ISO 0 or \
+                     absent), so its noise cannot be estimated from the image; using the \
+                     embedded noise table of the paper's phone (Samsung Galaxy S20 FE): \
+                     another camera's noise, not Canon EOS Kiss X4's; calibrate this camera"
+                ),
+                "{w}"
+            );
+            assert!(w.contains("--assume-iso N"), "{w}");
+        }
+    }
+
+    #[test]
+    fn a_trusted_estimate_is_used_and_scaled_like_a_noise_profile() {
+        let i = img(Some(100), false, "Canon", "EOS 5D");
+        let r = choose(&i, None, false, trusted_estimate());
+        assert!(r.estimated);
+        assert!(r.choice.warnings.is_empty(), "{:?}", r.choice.warnings);
+        assert_eq!(r.choice.provenance.source, NoiseSource::ImageEstimate);
+        assert_eq!(r.choice.provenance.camera, Some(CameraId::of(&i.meta)));
+        assert_eq!(r.choice.model.camera, Some(CameraId::of(&i.meta)));
+        let e = r.choice.model.at(1600).unwrap();
+        assert!(e.extrapolated);
+        for (p, s) in [1e-4, 1.1e-4, 1.2e-4, 1.3e-4].iter().enumerate() {
+            assert!((e.params.positions[p][0] - s * 16.0).abs() < 1e-15);
+            assert!((e.params.positions[p][1] - 1e-7 * 256.0).abs() < 1e-18);
+        }
+    }
+
+    #[test]
+    fn an_untrusted_estimate_gives_the_embedded_table_and_says_why() {
+        let i = img(Some(100), false, "Canon", "EOS 5D");
+        let mut est = trusted_estimate();
+        est.positions[2].problem = Some("negative slope (S = -1e-8): x".into());
+        let r = choose(&i, None, false, est);
+        assert!(r.estimated);
+        assert_eq!(r.choice.provenance.source, NoiseSource::EmbeddedS20Fe);
+        let w = &r.choice.warnings[0];
+        assert!(
+            w.starts_with(
+                "noise: the input has no NoiseProfile and the noise estimated from the image \
+                 (ISO 100) cannot be trusted: position 2 (G): negative slope"
+            ),
+            "{w}"
+        );
+        assert!(w.contains("another camera's noise"), "{w}");
+        // A real degenerate frame: the estimator itself says so.
+        let flat = img(Some(100), false, "Canon", "EOS 5D");
+        let real = crate::noise::estimate(&flat, &EstimateOptions::default()).unwrap();
+        let r = choose(&flat, None, false, real);
+        assert!(
+            r.choice.warnings[0].contains("too few smooth samples"),
+            "{:?}",
+            r.choice.warnings
+        );
+    }
+}

@@ -43,6 +43,8 @@ mod limits_metadata;
 mod metrics_eval;
 mod metrics_nonfinite;
 mod msrv;
+mod noise_chain;
+mod noise_estimate;
 mod noise_physics;
 mod png_rows;
 mod release_compat;
