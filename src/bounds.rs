@@ -299,6 +299,21 @@ pub fn matrix3(field: &str, v: &[f64], sdk_normalized: bool) -> Result<()> {
     Ok(())
 }
 
+/// Read a calibration text file (illuminant, brightness or noise model JSON), refusing files
+/// over [`MAX_CALIBRATION_FILE_BYTES`].
+pub fn read_calibration_text(path: &std::path::Path) -> Result<String> {
+    let len = std::fs::metadata(path)
+        .map_err(|e| Error::from(e).in_file(path))?
+        .len();
+    if len > MAX_CALIBRATION_FILE_BYTES {
+        return Err(Error::limits(format!(
+            "calibration file of {len} bytes (at most {MAX_CALIBRATION_FILE_BYTES})"
+        ))
+        .in_file(path));
+    }
+    std::fs::read_to_string(path).map_err(|e| Error::from(e).in_file(path))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

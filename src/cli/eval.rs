@@ -1,4 +1,5 @@
 //! `day2night eval PRED TARGET [--json]`: PSNR, SSIM and mean Delta E 2000.
+use super::args::lib;
 use super::{usage, CmdResult};
 use day2night::encode::read::open_bands;
 use day2night::metrics::banded::{evaluate, DEFAULT_BAND_ROWS};
@@ -38,15 +39,6 @@ pub struct EvalArgs {
     /// (replace them by 0, with a warning; the JSON says so).
     #[arg(long, default_value = "error", value_name = "MODE")]
     pub nonfinite: String,
-}
-
-/// A library error as a failure with exit code 1 (its Display already names the file and
-/// the whole cause chain).
-fn lib(e: day2night::Error) -> super::Failure {
-    super::Failure {
-        code: 1,
-        error: anyhow::Error::msg(e.to_string()),
-    }
 }
 
 /// Run `day2night eval`.

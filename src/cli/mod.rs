@@ -4,6 +4,7 @@
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
 
+mod args;
 mod calibrate;
 mod convert;
 mod dataset;
@@ -21,14 +22,10 @@ mod synth;
 pub struct Cli {
     /// Largest image accepted, in pixels (e.g. 300M, 1G; default 268M = 2^28; also
     /// D2N_MAX_PIXELS). Larger images are refused before anything is allocated.
-    #[arg(long, global = true, value_name = "N", value_parser = parse_max_pixels)]
+    #[arg(long, global = true, value_name = "N", value_parser = args::parse_max_pixels)]
     max_pixels: Option<u64>,
     #[command(subcommand)]
     command: Command,
-}
-
-fn parse_max_pixels(s: &str) -> Result<u64, String> {
-    day2night::limits::Limits::parse_pixels(s).map_err(|e| e.to_string())
 }
 
 #[derive(Debug, Subcommand)]

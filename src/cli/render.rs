@@ -1,4 +1,5 @@
 //! `day2night render IN.dng -o OUT.exr|png|tif`: the software ISP on one DNG.
+use super::args::{lib, parse_neutral, parse_zip_level};
 use super::{usage, CmdResult};
 use day2night::encode::exr::{standard_attributes, write_exr, ExrCompression, ExrOptions};
 use day2night::encode::png::{write_png, write_tiff, PngOptions};
@@ -68,33 +69,10 @@ pub struct RenderArgs {
     pub overwrite: bool,
 }
 
-fn parse_neutral(s: &str) -> Result<[f64; 3], String> {
-    let v: Vec<f64> = s
-        .split(',')
-        .map(|t| t.trim().parse::<f64>())
-        .collect::<Result<_, _>>()
-        .map_err(|_| format!("--neutral {s:?}: expected three numbers R,G,B"))?;
-    match v.as_slice() {
-        [r, g, b] if [r, g, b].iter().all(|x| x.is_finite() && **x > 0.0) => Ok([*r, *g, *b]),
-        _ => Err(format!(
-            "--neutral {s:?}: expected three positive numbers R,G,B"
-        )),
-    }
-}
-
 enum Format {
     Exr,
     Png,
     Tiff,
-}
-
-/// A library error as a failure with exit code 1 (its Display already names the file and
-/// the whole cause chain).
-fn lib(e: day2night::Error) -> super::Failure {
-    super::Failure {
-        code: 1,
-        error: anyhow::Error::msg(e.to_string()),
-    }
 }
 
 /// Run `day2night render`.
@@ -107,7 +85,7 @@ pub fn run(args: RenderArgs) -> CmdResult {
         .transpose()
         .map_err(usage)?;
     let compression: ExrCompression = args.exr_compression.parse().map_err(usage)?;
-    let zip_level = super::synth::parse_zip_level(args.exr_zip_level)?;
+    let zip_level = parse_zip_level(args.exr_zip_level)?;
     let tone: DisplayTone = args.tone.parse().map_err(usage)?;
     let opcodes: OpcodeMode = args
         .opcodes

@@ -3,6 +3,7 @@
 //! Inputs are processed one after another (each with rayon inside); an input that cannot
 //! be used is reported and skipped, and the exit code is 1 at the end.
 
+use super::args::{flag, parse_zip_level};
 use super::{usage, CmdResult, Failure};
 use day2night::dng::write::Compression;
 use day2night::encode::exr::{ExrCompression, ExrOptions};
@@ -206,24 +207,6 @@ pub struct ExtraArgs {
     /// ignore (implied by --compat release). The night DNGs keep the lists either way.
     #[arg(long, value_name = "MODE")]
     pub opcodes: Option<String>,
-}
-
-pub(super) fn parse_zip_level(level: u8) -> Result<u8, Failure> {
-    ExrOptions {
-        zip_level: level,
-        ..ExrOptions::default()
-    }
-    .validate()
-    .map(|_| level)
-    .map_err(|e| usage(format!("--exr-zip-level: {}", e)))
-}
-
-/// A library parse error as a usage error naming the flag.
-fn flag<T>(name: &str, r: day2night::Result<T>) -> Result<T, Failure> {
-    r.map_err(|e| match e {
-        Error::InvalidParam(m) => usage(format!("{}: {}", name, m)),
-        e => usage(format!("{}: {}", name, e)),
-    })
 }
 
 impl SynthOpts {
@@ -475,14 +458,9 @@ impl Run<'_> {
         }
         std::fs::create_dir_all(self.out).map_err(|e| Error::from(e).in_file(self.out))?;
         // One process at a time checks and writes this output set (docs/concurrency.md).
-        // Its base name as DirSink::new makes it.
-        let base = if self.job.variants > 1 {
-            format!("{}_v{}", stem, plan.variant.saturating_add(1))
-        } else {
-            stem.to_string()
-        };
+        let base = self.job.base_name(stem, plan);
         let _set = OutputSetLock::acquire(self.out, &base, self.wait)?;
-        let sink = DirSink::new(self.out, stem, self.job, plan, self.policy);
+        let sink = DirSink::new(self.out, base, self.policy);
         let written = self.job.run_variant(day, plan, &sink)?;
         if let Some(b) = self.bar {
             b.inc(1);

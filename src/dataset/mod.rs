@@ -20,6 +20,7 @@
 //! when more than one variant is made.
 
 pub mod discover;
+pub mod journal;
 pub mod manifest;
 pub mod resume;
 pub mod run;

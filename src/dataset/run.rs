@@ -229,7 +229,7 @@ pub fn run<P: Processor>(opts: &RunOptions, processor: &P) -> Result<Summary> {
 
     // Safety: only reuse an OUT_DIR that is empty or already a dataset.
     let manifests = manifest::all_manifests(out_dir)?;
-    let journal = out_dir.join(super::units::JOURNAL_DIR);
+    let journal = out_dir.join(super::journal::JOURNAL_DIR);
     check_out_dir(out_dir, &manifests, Some(&journal), opts.overwrite)?;
     std::fs::create_dir_all(out_dir)
         .map_err(Error::Io)
@@ -244,7 +244,7 @@ pub fn run<P: Processor>(opts: &RunOptions, processor: &P) -> Result<Summary> {
     let own_keys: Vec<(String, u32)> = own_loaded.records.iter().map(|r| r.key()).collect();
     previous.extend(own_loaded.records);
     // Units written by `dataset::units` (a Ray run) since the last manifest: newer.
-    previous.extend(super::units::journal_records(out_dir));
+    previous.extend(super::journal::journal_records(out_dir));
     let previous = manifest::latest(previous);
     let appender = Appender::open(&own_manifest)?;
     remove_stale_temp_files(out_dir, &tasks, opts.variants);
@@ -347,7 +347,7 @@ pub fn run<P: Processor>(opts: &RunOptions, processor: &P) -> Result<Summary> {
     summary.outputs_total = final_records.iter().map(|r| r.outputs.len()).sum();
     let keys: Vec<(String, u32)> = final_records.iter().map(|r| r.key()).collect();
     manifest::write_compacted(&own_manifest, final_records)?;
-    super::units::clear_journal(out_dir, &keys);
+    super::journal::clear_journal(out_dir, &keys);
     summary.failures.sort();
     summary.found = found;
     summary.images = tasks.len();

@@ -27,8 +27,8 @@ use crate::error::{Error, Result, ResultExt};
 use crate::output::{write_bytes_atomic, OutputPolicy};
 use std::path::{Path, PathBuf};
 
-/// Folder (inside OUT_DIR) of the records of units computed since the last manifest.
-pub const JOURNAL_DIR: &str = ".day2night-units";
+use super::journal::read_journal;
+pub use super::journal::{clear_journal, journal_path, journal_records, JOURNAL_DIR};
 
 /// What [`units`] needs: `dataset`'s options that decide the units.
 #[derive(Debug, Clone)]
@@ -133,18 +133,6 @@ pub struct WriteOptions {
     pub wait: bool,
 }
 
-/// Path of a unit's record in the journal.
-pub fn journal_path(out_dir: &Path, rel: &str, variant: u32) -> PathBuf {
-    out_dir
-        .join(JOURNAL_DIR)
-        .join(format!("{}.v{variant}.json", sample_stem(rel)))
-}
-
-fn read_journal(path: &Path) -> Option<Record> {
-    let text = std::fs::read(path).ok()?;
-    serde_json::from_slice(&text).ok()
-}
-
 /// Make one unit's outputs in OUT_DIR (every file atomic, under the unit's lock) unless its
 /// latest record (`previous`, or the journal's, which is newer) is up to date. Returns the
 /// unit's manifest record and why it was computed (None: skipped, the record is the
@@ -242,32 +230,6 @@ pub fn write_manifest(
     manifest::write_compacted(&path, records.into_values())?;
     clear_journal(out_dir, &keys);
     Ok(path)
-}
-
-/// Every record in OUT_DIR's journal (units written since the last manifest), unordered;
-/// unreadable files are ignored (the unit is then recomputed).
-pub fn journal_records(out_dir: &Path) -> Vec<Record> {
-    let Ok(rd) = std::fs::read_dir(out_dir.join(JOURNAL_DIR)) else {
-        return Vec::new();
-    };
-    rd.flatten()
-        .filter(|e| e.file_name().to_str().is_some_and(|n| !n.starts_with('.')))
-        .filter_map(|e| read_journal(&e.path()))
-        .collect()
-}
-
-/// Remove the journal files of these units (now in a manifest), and the journal folder
-/// when that empties it.
-pub fn clear_journal(out_dir: &Path, keys: &[(String, u32)]) {
-    let dir = out_dir.join(JOURNAL_DIR);
-    if !dir.is_dir() {
-        return;
-    }
-    for (rel, variant) in keys {
-        let _ = std::fs::remove_file(journal_path(out_dir, rel, *variant));
-    }
-    // Removed only when empty (units of another run may still be listed there).
-    let _ = std::fs::remove_dir(dir);
 }
 
 #[cfg(test)]

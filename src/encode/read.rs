@@ -8,6 +8,7 @@
 //! decide (eval replaces them and says so). Damaged files are refused with an error, never a
 //! panic; absurd sizes are refused before allocating.
 
+use super::exr::error::exr_err;
 use crate::error::{Error, Result, ResultExt};
 use crate::isp::RgbImage;
 use std::io::Read;
@@ -85,18 +86,6 @@ fn read_raster(path: &Path) -> Result<LoadedImage> {
         format,
         non_finite,
     })
-}
-
-pub(crate) fn exr_err(e: exr::error::Error) -> Error {
-    match e {
-        exr::error::Error::Io(io) if io.kind() == std::io::ErrorKind::UnexpectedEof => {
-            Error::malformed("EXR: file is truncated")
-        }
-        exr::error::Error::Io(io) => Error::Io(io),
-        exr::error::Error::NotSupported(m) => Error::unsupported(format!("EXR: {m}")),
-        exr::error::Error::Invalid(m) => Error::malformed(format!("EXR: {m}")),
-        exr::error::Error::Aborted => Error::malformed("EXR: reading aborted"),
-    }
 }
 
 /// Index of the R, G, B channels among `names` (the same index thrice for a grey image):

@@ -14,6 +14,7 @@ pub mod opcodes;
 pub mod render;
 pub mod render_crop;
 pub mod render_linear_raw;
+pub mod render_parts;
 pub mod tone;
 
 pub use demosaic::Demosaic;

@@ -1,65 +1,22 @@
 //! The render pipeline: normalize -> white balance -> demosaic -> camera -> XYZ -> linear
 //! sRGB -> DefaultCrop -> orientation. Every stage is parallel over rows and deterministic.
 
-use super::color::{normalize_neutral, CameraColor, Mat3};
+use super::color::normalize_neutral;
 use super::demosaic::{demosaic_rect, demosaic_rows, row_kernel, Demosaic, Post, RowKernel};
 use super::opcodes::{self, pipeline, OpcodeMode};
 use super::RgbImage;
 use crate::error::{Error, Result};
 use crate::normalize::{Normalizer, SiteTable};
-use crate::raw::meta::RawMeta;
 use crate::raw::RawImage;
 use rayon::prelude::*;
 
 pub use super::geometry::{
     apply_geometry, default_crop, orient_image, oriented_source, DisplayGeometry,
 };
-
-/// Options of [`render_linear`].
-#[derive(Debug, Clone, PartialEq)]
-pub struct RenderOptions {
-    /// Demosaicing method.
-    pub demosaic: Demosaic,
-    /// White balance by this camera neutral instead of the file's AsShotNeutral
-    /// (normalized to green = 1 internally).
-    pub neutral: Option<[f64; 3]>,
-    /// Apply DefaultCropOrigin/DefaultCropSize (relative to the active area).
-    pub crop: bool,
-    /// Apply the EXIF/TIFF Orientation.
-    pub orient: bool,
-    /// Apply the file's DNG opcode lists ([`super::opcodes`]); files without opcodes take
-    /// the plain path either way.
-    pub opcodes: OpcodeMode,
-}
-
-impl Default for RenderOptions {
-    fn default() -> Self {
-        RenderOptions {
-            demosaic: Demosaic::default(),
-            neutral: None,
-            crop: true,
-            orient: true,
-            opcodes: OpcodeMode::Apply,
-        }
-    }
-}
-
-/// The neutral used for white balance: `override_neutral`, else AsShotNeutral, else
-/// AsShotWhiteXY converted through the colour matrices; normalized to green = 1.
-pub fn resolve_neutral(meta: &RawMeta, override_neutral: Option<[f64; 3]>) -> Result<[f64; 3]> {
-    if let Some(n) = override_neutral {
-        return normalize_neutral(n);
-    }
-    if let Some(n) = meta.as_shot_neutral {
-        return normalize_neutral(n);
-    }
-    if let Some(xy) = meta.as_shot_white_xy {
-        return CameraColor::new(&meta.color)?.xy_to_neutral(xy);
-    }
-    Err(Error::invalid(
-        "the DNG has neither AsShotNeutral nor AsShotWhiteXY: pass a neutral (--neutral R,G,B)",
-    ))
-}
+pub(crate) use super::render_parts::matrix_row;
+pub use super::render_parts::{
+    apply_matrix, color_matrix, resolve_neutral, Bands, RenderOptions, BAND,
+};
 
 /// Normalized, white-balanced (clipped to [0, 1]) and demosaiced camera RGB of the whole
 /// active area, not clipped after demosaicing: no colour matrix, no crop, no orientation.
@@ -124,9 +81,6 @@ pub fn render_camera(img: &RawImage, neutral: [f64; 3], method: Demosaic) -> Res
     }
     render_with(img, neutral, method, &clip_row, false, false)
 }
-
-/// Output rows per band of the banded render.
-pub const BAND: usize = 32;
 
 /// The render: demosaic with `post` applied to each finished row, then DefaultCrop (if
 /// `crop`) and orientation (if `orient`). Single-pass demosaicers (bilinear, MHC) run
@@ -398,17 +352,6 @@ where
     )
 }
 
-/// What [`render_linear_bands`] returns: the output size and one result per band, in order.
-#[derive(Debug, Clone, PartialEq)]
-pub struct Bands<T> {
-    /// Output width.
-    pub width: usize,
-    /// Output height.
-    pub height: usize,
-    /// The consumer's result for each band of [`BAND`] rows, top to bottom.
-    pub bands: Vec<T>,
-}
-
 /// The network input of the paper: normalized, white-balanced, demosaiced camera RGB
 /// (no colour matrix), with the same DefaultCrop and orientation as [`render_linear`]'s
 /// defaults so that input and target align. `neutral` None = the file's neutral.
@@ -467,11 +410,6 @@ pub fn render_input_opts(img: &RawImage, opts: &RenderOptions) -> Result<RgbImag
     render_with(img, n, opts.demosaic, &clip_row, opts.crop, opts.orient)
 }
 
-/// The white-balanced camera -> linear sRGB matrix this render uses.
-pub fn color_matrix(meta: &RawMeta, neutral: [f64; 3]) -> Result<Mat3> {
-    CameraColor::new(&meta.color)?.wb_camera_to_srgb(normalize_neutral(neutral)?)
-}
-
 /// Linear sRGB (Rec.709 primaries, D65) render of a raw image, values in [0, 1].
 /// Demosaic, colour matrix, DefaultCrop and orientation are fused per band of output rows
 /// for bilinear and MHC (no whole-image intermediate buffer); see `render_banded`.
@@ -515,32 +453,10 @@ pub fn render_input_reference(
     Ok(apply_geometry(rgb, &img.meta, true, true))
 }
 
-/// Clip every pixel to [0, 1], apply a 3x3 matrix and clip the result to [0, 1].
-pub fn apply_matrix(rgb: &mut RgbImage, m: &Mat3) {
-    let mf = m.map(|r| r.map(|v| v as f32));
-    let w = rgb.width.max(1);
-    rgb.data
-        .par_chunks_mut(3 * w)
-        .for_each(|row| matrix_row(row, &mf));
-}
-
-/// [`apply_matrix`] on one interleaved row.
-#[inline]
-pub(crate) fn matrix_row(row: &mut [f32], mf: &[[f32; 3]; 3]) {
-    for px in row.chunks_exact_mut(3) {
-        let cl = |v: f32| v.clamp(0.0, 1.0);
-        let (r, g, b) = (cl(px[0]), cl(px[1]), cl(px[2]));
-        for (c, out) in px.iter_mut().enumerate() {
-            let v = mf[c][0] * r + mf[c][1] * g + mf[c][2] * b;
-            *out = if v.is_nan() { 0.0 } else { v.clamp(0.0, 1.0) };
-        }
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::raw::{Bayer, Rect};
+    use crate::raw::{Bayer, RawMeta, Rect};
 
     fn numbered(w: usize, h: usize) -> RgbImage {
         let mut img = RgbImage::new(w, h);

@@ -12,12 +12,12 @@
 use super::color::normalize_neutral;
 use super::demosaic::{demosaic_rect, row_kernel, Demosaic, PAD};
 use super::opcodes::{self, pipeline, OpcodeMode};
-use super::render::{color_matrix, matrix_row, resolve_neutral};
+use super::render_parts::{color_matrix, matrix_row, resolve_neutral};
 use super::RgbImage;
 use crate::error::{Error, Result};
 use crate::normalize::{Normalizer, SiteTable};
-use crate::raw::RawImage;
-use crate::synth::crop::Crop;
+use crate::raw::crop::Crop;
+use crate::raw::{RawImage, RawMeta};
 use rayon::prelude::*;
 
 /// Samples of margin a crop render needs around the crop (the demosaicer's reach).
@@ -129,4 +129,16 @@ pub fn render_linear_crop_with(
             );
         });
     Ok(out)
+}
+
+/// Where the target of `crop` sits in the whole-frame target (DefaultCrop applied, before
+/// orientation): `(row, column)` of its top-left pixel, `None` unless the crop lies inside
+/// the DefaultCrop (then the crop's target equals that region of the frame's).
+pub fn target_origin(meta: &RawMeta, aw: usize, ah: usize, crop: &Crop) -> Option<(usize, usize)> {
+    let (x0, y0, cw, ch) = super::geometry::default_crop(meta, aw, ah);
+    let inside = crop.left >= x0
+        && crop.top >= y0
+        && crop.left + crop.width <= x0 + cw
+        && crop.top + crop.height <= y0 + ch;
+    inside.then(|| (crop.top - y0, crop.left - x0))
 }

@@ -15,7 +15,7 @@
 use super::color::normalize_neutral;
 use super::opcodes::pipeline::{apply_list3, finish_geometry, stage1_planes, Stage3};
 use super::opcodes::{self, apply_region, Bounds, OpcodeMode, Prepared, Region};
-use super::render::{color_matrix, matrix_row, resolve_neutral, Bands, RenderOptions, BAND};
+use super::render_parts::{color_matrix, matrix_row, resolve_neutral, Bands, RenderOptions, BAND};
 use super::RgbImage;
 use crate::dng::opcodes::ListId;
 use crate::error::{Error, Result};

@@ -11,9 +11,9 @@
 use super::model::NoiseParams;
 use crate::error::Result;
 use crate::normalize::{round_clamp, Normalizer};
+use crate::raw::crop::Crop;
 use crate::raw::rows::{ActiveRowMap, MappedRows};
 use crate::raw::{Bayer, RawImage};
-use crate::synth::crop::Crop;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, StandardNormal};

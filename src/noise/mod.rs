@@ -9,6 +9,7 @@
 pub mod apply;
 pub mod estimate;
 pub mod model;
+pub mod params;
 pub mod physics;
 pub mod physics_apply;
 pub mod poisson_table;

@@ -26,99 +26,10 @@ pub const NOISE_MODEL_UNITS: &str = "variance of the normalized signal y = (x - 
 (white - black_max), linear (post-LinearizationTable) values: var(y) = S * y + O; positions \
 are the 2x2 CFA tile relative to the ActiveArea origin, row-major (0=(0,0), 1=(0,1), 2=(1,0), 3=(1,1))";
 
-/// `(S, O)` for each 2x2 CFA position (row-major, relative to the ActiveArea origin).
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-pub struct NoiseParams {
-    /// `[[S, O]; 4]` per position.
-    pub positions: [[f64; 2]; 4],
-}
-
-impl NoiseParams {
-    /// The same `(S, O)` at every position.
-    pub fn uniform(s: f64, o: f64) -> NoiseParams {
-        NoiseParams {
-            positions: [[s, o]; 4],
-        }
-    }
-    /// Variance of normalized `y` at 2x2 position `pos`: `max(0, S*y + O)` (0 for NaN).
-    #[inline]
-    pub fn var_norm(&self, pos: usize, y: f64) -> f64 {
-        let [s, o] = self.positions[pos & 3];
-        let v = s * y + o;
-        if v > 0.0 {
-            v
-        } else {
-            0.0
-        }
-    }
-    /// DNG NoiseProfile pairs, one per colour plane R, G, B: the mean `(S, O)` of the
-    /// positions of that colour in `bayer` (the two greens are averaged).
-    pub fn to_dng_profile(&self, bayer: Bayer) -> Vec<(f64, f64)> {
-        (0u8..3)
-            .map(|colour| {
-                let (mut s, mut o, mut n) = (0.0, 0.0, 0.0);
-                for (pos, &c) in bayer.0.iter().enumerate() {
-                    if c == colour {
-                        s += self.positions[pos][0];
-                        o += self.positions[pos][1];
-                        n += 1.0;
-                    }
-                }
-                (s / n, o / n)
-            })
-            .collect()
-    }
-    /// From a DNG NoiseProfile (one pair for all planes, or one per plane R, G, B).
-    pub fn from_dng_profile(profile: &[(f64, f64)], bayer: Bayer) -> Result<NoiseParams> {
-        let mut positions = [[0.0; 2]; 4];
-        for (pos, p) in positions.iter_mut().enumerate() {
-            let (s, o) = match profile.len() {
-                1 => profile[0],
-                3 => profile[bayer.0[pos] as usize],
-                n => {
-                    return Err(Error::unsupported(format!(
-                        "NoiseProfile with {} pairs (expected 1 or 3)",
-                        n
-                    )))
-                }
-            };
-            *p = [s, o];
-        }
-        let np = NoiseParams { positions };
-        np.check("NoiseProfile")?;
-        Ok(np)
-    }
-    fn check(&self, what: &str) -> Result<()> {
-        for p in &self.positions {
-            if !p[0].is_finite() || !p[1].is_finite() || p[0] < 0.0 {
-                return Err(Error::invalid(format!(
-                    "{}: noise parameters S={} O={} are not finite with S >= 0",
-                    what, p[0], p[1]
-                )));
-            }
-        }
-        Ok(())
-    }
-    fn clamped(mut self) -> NoiseParams {
-        for p in &mut self.positions {
-            p[0] = p[0].max(0.0);
-            p[1] = p[1].max(0.0);
-        }
-        self
-    }
-}
+pub use super::params::{IsoPoint, NoiseParams};
 
 /// Most ISO points in a noise model file.
 pub use crate::bounds::MAX_ISO_POINTS;
-
-/// One calibrated ISO.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct IsoPoint {
-    /// ISO.
-    pub iso: u32,
-    /// `[[S, O]; 4]` per 2x2 position.
-    pub positions: [[f64; 2]; 4],
-}
 
 /// A noise model: calibrated `(S, O)` per position at one or more ISOs.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -304,7 +215,7 @@ impl NoiseModel {
 
     /// Read a noise model file (its path is kept in [`NoiseModel::file`]).
     pub fn from_file(path: &std::path::Path) -> Result<NoiseModel> {
-        let text = crate::synth::dictionaries::read_calibration_text(path)?;
+        let text = crate::bounds::read_calibration_text(path)?;
         let mut m = NoiseModel::from_json(&text).map_err(|e| e.in_file(path))?;
         m.file = Some(path.display().to_string());
         Ok(m)

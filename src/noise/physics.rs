@@ -21,7 +21,7 @@
 //! [`crate::noise::NoiseModel::from_json`] recognizes them and carries the model as its
 //! `physics` field (the Gaussian `isos` being the equivalent at the file's levels).
 
-use super::model::{IsoPoint, NoiseParams};
+use super::params::{IsoPoint, NoiseParams};
 use super::tukey;
 use crate::error::{Error, Result};
 use serde::{Deserialize, Serialize};

@@ -243,7 +243,7 @@ fn linear_normalizer(clean: &RawImage) -> Result<Normalizer> {
 /// sites (every site draws at its frame position).
 pub fn apply_physics_noise_crop(
     frame: &RawImage,
-    crop: &crate::synth::crop::Crop,
+    crop: &crate::raw::crop::Crop,
     plane: &[u16],
     params: &PhysicsParams,
     seed: u64,

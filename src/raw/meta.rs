@@ -16,14 +16,7 @@ use serde::Serialize;
 pub const LINEAR_RAW_NOT_CFA: &str =
     "LinearRaw: already demosaiced; the night synthesis works on the CFA mosaic";
 
-/// TIFF byte order.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
-pub enum ByteOrder {
-    /// "II".
-    Little,
-    /// "MM".
-    Big,
-}
+pub use crate::tiff::ByteOrder;
 
 /// Where and how the raw image was (or will be) stored.
 #[derive(Debug, Clone, PartialEq, Serialize)]

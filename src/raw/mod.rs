@@ -2,6 +2,7 @@
 //! geometry/level helpers every stage shares (Bayer phase, ActiveArea, per-site black).
 
 pub mod camera;
+pub mod crop;
 pub mod from_parts;
 pub mod meta;
 pub mod rows;

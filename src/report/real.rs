@@ -206,7 +206,7 @@ mod tests {
             let out = dir.path().join(format!("o{orientation}"));
             std::fs::create_dir_all(&out).unwrap();
             let policy = OutputPolicy::default();
-            let sink = DirSink::new(&out, "day", &job, &plan, &policy);
+            let sink = DirSink::new(&out, job.base_name("day", &plan), &policy);
             job.run_variant(&day, &plan, &sink).unwrap();
             let sc: serde_json::Value =
                 serde_json::from_slice(&std::fs::read(out.join("day.json")).unwrap()).unwrap();

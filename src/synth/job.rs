@@ -40,7 +40,7 @@
 //! let policy = OutputPolicy::default();
 //! for v in 0..job.variants {
 //!     let plan = job.plan(&day, "day.dng", 0, v)?;
-//!     let sink = DirSink::new("night".as_ref(), "day", &job, &plan, &policy);
+//!     let sink = DirSink::new("night".as_ref(), job.base_name("day", &plan), &policy);
 //!     let out = job.run_variant(&day, &plan, &sink)?;
 //!     println!("{:?} ({:?})", out.files, out.stages);
 //! }
@@ -50,80 +50,21 @@
 #[cfg(doc)]
 use super::night::synthesize;
 use super::night::Night;
-use super::night::{synthesize_into, NightSink, Request, TargetOut};
+use super::night::{synthesize_into, NightSink, Request};
 use super::relight::RunReport;
-use super::sidecar::{
-    sha256_hex, CalibrationInfo, InputInfo, OutputInfo, Provenance, Sidecar, SIDECAR_FORMAT,
-};
-use super::target_files::TargetFiles;
+use super::sidecar::{CalibrationInfo, InputInfo, OutputInfo, Provenance, Sidecar, SIDECAR_FORMAT};
 use super::{Calibration, Plan, SynthOptions};
-use crate::dng::write::{write_dng, write_dng_rows, Compression, WriteOptions};
-use crate::encode::exr::{encodes_rows, standard_attributes, write_exr, ExrOptions};
-use crate::encode::png::{write_png, PngOptions};
-use crate::error::{Error, Result, ResultExt};
-use crate::isp::RgbImage;
-use crate::noise::NoiseEstimate;
-use crate::output::{write_bytes_atomic, DeferredSyncs, OutputPolicy};
-use crate::raw::rows::RowSource;
-use crate::raw::{RawImage, RawMeta};
-use std::path::{Path, PathBuf};
-use std::str::FromStr;
-use std::sync::{Arc, OnceLock};
+use crate::dng::write::Compression;
+use crate::encode::exr::ExrOptions;
+use crate::error::{Error, Result};
+use crate::output::{write_bytes_atomic, DeferredSyncs};
+use std::sync::Arc;
 
-/// Which targets to render from the clean night raw.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-pub enum Target {
-    /// Linear EXR (default).
-    #[default]
-    Exr,
-    /// sRGB PNG.
-    Png,
-    /// Both.
-    Both,
-    /// None: the clean raw is not rendered at all.
-    None,
-}
-
-impl Target {
-    /// Command-line and sidecar name: `exr`, `png`, `both` or `none`.
-    pub fn name(self) -> &'static str {
-        match self {
-            Target::Exr => "exr",
-            Target::Png => "png",
-            Target::Both => "both",
-            Target::None => "none",
-        }
-    }
-    /// Whether an EXR target is written.
-    pub fn exr(self) -> bool {
-        matches!(self, Target::Exr | Target::Both)
-    }
-    /// Whether a PNG target is written.
-    pub fn png(self) -> bool {
-        matches!(self, Target::Png | Target::Both)
-    }
-}
-
-impl FromStr for Target {
-    type Err = Error;
-    fn from_str(s: &str) -> Result<Target> {
-        Ok(match s {
-            "exr" => Target::Exr,
-            "png" => Target::Png,
-            "both" => Target::Both,
-            "none" => Target::None,
-            _ => return Err(Error::malformed(format!("sidecar target {:?}", s))),
-        })
-    }
-}
-
-/// Sidecar name of a DNG compression: `none` or `ljpeg`.
-pub fn compression_name(c: Compression) -> &'static str {
-    match c {
-        Compression::None => "none",
-        Compression::Ljpeg => "ljpeg",
-    }
-}
+pub use super::day_input::DayInput;
+pub use super::file_sink::FileSink;
+pub use super::outputs::{
+    compression_name, DirSink, OutputKind, OutputSink, Target, VariantOutputs,
+};
 
 /// Everything decided once per run: what to synthesize and which outputs to write.
 #[derive(Debug, Clone, PartialEq)]
@@ -203,6 +144,16 @@ impl SynthJob {
             &self.calibration,
             &|| day.noise_estimate(),
         )
+    }
+
+    /// The base of the output names of `plan`'s variant of the input `stem`: the stem, plus
+    /// `_vK` (K = variant + 1) when the job makes more than one variant ([`DirSink`]).
+    pub fn base_name(&self, stem: &str, plan: &Plan) -> String {
+        if self.variants > 1 {
+            format!("{}_v{}", stem, plan.variant.saturating_add(1))
+        } else {
+            stem.to_string()
+        }
     }
 
     /// What [`super::night::synthesize_into`] must compute for this job's outputs.
@@ -295,17 +246,14 @@ impl SynthJob {
         // wait for the disk, and on an error no output of the variant appears.
         let syncs = Arc::new(DeferredSyncs::default());
         let policy = sink.policy().deferring(&syncs);
-        let files = FileSink {
-            job: self,
-            sink,
-            policy: &policy,
-            wopts: WriteOptions {
-                compression: self.compression,
-                ..WriteOptions::default()
-            },
-            attrs: exr_attributes(&day.source, plan),
-            target_files: OnceLock::new(),
-        };
+        let files = FileSink::new(
+            self.target,
+            &self.exr,
+            self.compression,
+            (sink, &policy),
+            &day.source,
+            plan,
+        );
         let report = compute(&files)?;
         let isos: Vec<u32> = plan.noise.iter().map(|np| np.iso).collect();
         let (want_exr, want_png) = (self.target.exr(), self.target.png());
@@ -389,310 +337,15 @@ impl SynthJob {
     }
 }
 
-/// The [`NightSink`] of the file outputs: encodes each product of a variant as its file
-/// (DNG, EXR, PNG) and writes it through the [`OutputSink`]'s paths and policy (deferred
-/// renames). It computes nothing but encodings.
-pub struct FileSink<'a> {
-    job: &'a SynthJob,
-    sink: &'a dyn OutputSink,
-    policy: &'a OutputPolicy,
-    wopts: WriteOptions,
-    attrs: Vec<(String, String)>,
-    /// The banded target's files, open while it is rendered.
-    target_files: OnceLock<TargetFiles<'a>>,
-}
-
-impl<'a> FileSink<'a> {
-    /// The target files opened by [`NightSink::target_start`].
-    fn started(&self) -> Result<&TargetFiles<'a>> {
-        self.target_files
-            .get()
-            .ok_or_else(|| Error::invalid("a target band came before the target's size"))
-    }
-
-    /// Write a whole target image (the EXR and/or PNG the job asks for).
-    fn target_image(&self, rgb: &RgbImage) -> Result<()> {
-        let (want_exr, want_png) = (self.job.target.exr(), self.job.target.png());
-        let (e, p) = rayon::join(
-            || {
-                if !want_exr {
-                    return Ok(());
-                }
-                let path = self.sink.path(OutputKind::TargetExr)?;
-                write_exr(rgb, &path, &self.job.exr, &self.attrs, self.policy)
-            },
-            || {
-                if !want_png {
-                    return Ok(());
-                }
-                let path = self.sink.path(OutputKind::TargetPng)?;
-                write_png(rgb, &path, &PngOptions::default(), self.policy)
-            },
-        );
-        e.and(p)
-    }
-}
-
-impl NightSink for FileSink<'_> {
-    type Band = ();
-
-    fn clean(&self, clean: &RawImage) -> Result<()> {
-        let path = self.sink.path(OutputKind::CleanDng)?;
-        write_dng(clean, &path, &self.wopts, self.policy)
-    }
-
-    fn noisy(&self, iso: u32, noisy: &RawImage) -> Result<()> {
-        let path = self.sink.path(OutputKind::NoisyDng { iso })?;
-        write_dng(noisy, &path, &self.wopts, self.policy)
-    }
-
-    /// Packed and written strip by strip: no noisy plane (same bytes as `noisy`).
-    fn noisy_rows(&self, iso: u32, meta: &RawMeta, rows: &dyn RowSource) -> Result<()> {
-        let path = self.sink.path(OutputKind::NoisyDng { iso })?;
-        write_dng_rows(meta, rows, &path, &self.wopts, self.policy)
-    }
-
-    /// Band by band when every requested target can be encoded from bands (the default
-    /// ZIP/none EXRs, 8-bit PNG): same bytes, no whole f32 image, each band is encoded
-    /// while it is in cache and written at once (`synth::target_files`), so the encoded
-    /// target is never held whole either.
-    fn banded(&self) -> bool {
-        !self.job.target.exr() || encodes_rows(&self.job.exr)
-    }
-
-    fn target_start(&self, w: usize, h: usize) -> Result<()> {
-        let exr = match self.job.target.exr() {
-            true => Some(self.sink.path(OutputKind::TargetExr)?),
-            false => None,
-        };
-        let png = match self.job.target.png() {
-            true => Some(self.sink.path(OutputKind::TargetPng)?),
-            false => None,
-        };
-        let files = TargetFiles::create(
-            (w, h),
-            exr.as_deref(),
-            (&self.job.exr, &self.attrs),
-            png.as_deref(),
-            self.policy,
-        )?;
-        self.target_files
-            .set(files)
-            .map_err(|_| Error::invalid("the target was started twice"))
-    }
-
-    fn target_band(&self, y0: usize, w: usize, rows: &[f32]) -> Result<()> {
-        self.started()?.band(y0, w, rows)
-    }
-
-    fn target(&self, target: TargetOut<()>) -> Result<()> {
-        match target {
-            TargetOut::Image(rgb) => self.target_image(&rgb),
-            TargetOut::Bands(_) => self.started()?.finish(),
-        }
-    }
-
-    fn input(&self, rgb: &RgbImage) -> Result<()> {
-        let path = self.sink.path(OutputKind::InputExr)?;
-        write_exr(rgb, &path, &self.job.exr, &self.attrs, self.policy)
-    }
-}
-
-/// The EXR header attribute of a render: one custom attribute only, because the `exr` crate
-/// keeps custom attributes in a HashMap (several would be written in a per-process random
-/// order, hence non-deterministic bytes).
-fn exr_attributes(source: &Path, plan: &Plan) -> Vec<(String, String)> {
-    let summary = standard_attributes(source, plan.night_neutral)
-        .into_iter()
-        .map(|(k, v)| format!("{}={}", k.trim_start_matches("day2night:"), v))
-        .chain([
-            format!("seed={}", plan.seed),
-            format!("variant={}", plan.variant),
-        ])
-        .collect::<Vec<_>>()
-        .join("; ");
-    vec![("day2night:synth".to_string(), summary)]
-}
-
-/// A decoded day DNG with what the outputs record about it.
-#[derive(Debug, Clone)]
-pub struct DayInput {
-    /// The decoded raw.
-    pub raw: RawImage,
-    /// SHA-256 (lower-case hex) of the file's bytes (sidecar `input.sha256`).
-    pub sha256: String,
-    /// The file; its name goes into the EXR renders' attributes.
-    pub source: PathBuf,
-    /// The image's noise estimate, made on first use ([`DayInput::noise_estimate`]).
-    estimate: OnceLock<std::result::Result<NoiseEstimate, String>>,
-}
-
-impl DayInput {
-    /// Decode the bytes of `source` (hashing and decoding run in parallel).
-    pub fn from_bytes(source: &Path, bytes: &[u8]) -> Result<DayInput> {
-        let (sha256, raw) = rayon::join(
-            || sha256_hex(bytes),
-            || crate::dng::read::read_dng_bytes(bytes),
-        );
-        let raw = raw.in_file(source)?;
-        if raw.meta.linear_raw.is_some() {
-            // A day input is a CFA mosaic: refused here, before anything is planned.
-            return Err(Error::unsupported(crate::raw::meta::LINEAR_RAW_NOT_CFA).in_file(source));
-        }
-        Ok(DayInput::new(raw, sha256, source.to_path_buf()))
-    }
-
-    /// A decoded raw with the SHA-256 of its file and the file's path.
-    pub fn new(raw: RawImage, sha256: String, source: PathBuf) -> DayInput {
-        DayInput {
-            raw,
-            sha256,
-            source,
-            estimate: OnceLock::new(),
-        }
-    }
-
-    /// The single-image noise estimate of the raw (default options), computed once: every
-    /// variant planned from this input reuses it.
-    pub fn noise_estimate(&self) -> Result<NoiseEstimate> {
-        self.estimate
-            .get_or_init(|| {
-                crate::noise::estimate(&self.raw, &Default::default()).map_err(|e| e.to_string())
-            })
-            .clone()
-            .map_err(Error::invalid)
-    }
-
-    /// Read and decode the DNG at `path`.
-    pub fn read(path: &Path) -> Result<DayInput> {
-        let bytes = std::fs::read(path).map_err(Error::Io).in_file(path)?;
-        DayInput::from_bytes(path, &bytes)
-    }
-
-    /// A raw that is in memory only (e.g. [`RawImage::from_parts`]), named `file_name` (the
-    /// name the EXR targets record). Its `sha256` (the sidecar's `input.sha256`) is the
-    /// SHA-256 of its contents: "day2night in-memory raw v1", width and height (u64 LE),
-    /// the samples (u16 LE) and the metadata as JSON.
-    pub fn in_memory(raw: RawImage, file_name: &str) -> DayInput {
-        use sha2::{Digest, Sha256};
-        let mut h = Sha256::new();
-        h.update(b"day2night in-memory raw v1\0");
-        h.update((raw.width as u64).to_le_bytes());
-        h.update((raw.height as u64).to_le_bytes());
-        for chunk in raw.data.chunks(1 << 16) {
-            let bytes: Vec<u8> = chunk.iter().flat_map(|v| v.to_le_bytes()).collect();
-            h.update(&bytes);
-        }
-        if let Ok(json) = serde_json::to_vec(&raw.meta) {
-            h.update(&json);
-        }
-        DayInput::new(
-            raw,
-            h.finalize().iter().map(|b| format!("{b:02x}")).collect(),
-            PathBuf::from(file_name),
-        )
-    }
-}
-
-/// One output of a variant.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-pub enum OutputKind {
-    /// The clean night raw DNG.
-    CleanDng,
-    /// The noisy night raw DNG at `iso`.
-    NoisyDng {
-        /// Its ISO.
-        iso: u32,
-    },
-    /// The EXR target.
-    TargetExr,
-    /// The PNG target.
-    TargetPng,
-    /// The network input EXR.
-    InputExr,
-    /// The sidecar JSON.
-    Sidecar,
-}
-
-/// Where the outputs of one variant go. Called from concurrent rayon tasks (hence `Sync`).
-pub trait OutputSink: Sync {
-    /// The path to write `kind` to (a sink may create its folder here).
-    fn path(&self, kind: OutputKind) -> Result<PathBuf>;
-    /// The name the sidecar's `outputs.files` gives `kind`.
-    fn name(&self, kind: OutputKind) -> String;
-    /// The policy every write follows (overwriting, inputs never replaced).
-    fn policy(&self) -> &OutputPolicy;
-    /// Called once `kind` has been completely written at [`OutputSink::path`] (e.g. to hash
-    /// it); an error fails the variant.
-    fn written(&self, _kind: OutputKind) -> Result<()> {
-        Ok(())
-    }
-}
-
-/// `synth`'s layout: every output of a variant in one folder, named `<base>_clean.dng`,
-/// `<base>_iso<ISO>.dng`, `<base>_target.exr|png`, `<base>_input.exr`, `<base>.json`, where
-/// `<base>` is the input's stem plus `_vK` (K = variant + 1) when the job makes more than
-/// one variant.
-#[derive(Debug, Clone)]
-pub struct DirSink<'a> {
-    dir: &'a Path,
-    base: String,
-    policy: &'a OutputPolicy,
-}
-
-impl<'a> DirSink<'a> {
-    /// The sink of `plan`'s variant of the input `stem` in `dir`.
-    pub fn new(
-        dir: &'a Path,
-        stem: &str,
-        job: &SynthJob,
-        plan: &Plan,
-        policy: &'a OutputPolicy,
-    ) -> DirSink<'a> {
-        let base = if job.variants > 1 {
-            format!("{}_v{}", stem, plan.variant.saturating_add(1))
-        } else {
-            stem.to_string()
-        };
-        DirSink { dir, base, policy }
-    }
-}
-
-impl OutputSink for DirSink<'_> {
-    fn path(&self, kind: OutputKind) -> Result<PathBuf> {
-        Ok(self.dir.join(self.name(kind)))
-    }
-    fn name(&self, kind: OutputKind) -> String {
-        let b = &self.base;
-        match kind {
-            OutputKind::CleanDng => format!("{b}_clean.dng"),
-            OutputKind::NoisyDng { iso } => format!("{b}_iso{iso}.dng"),
-            OutputKind::TargetExr => format!("{b}_target.exr"),
-            OutputKind::TargetPng => format!("{b}_target.png"),
-            OutputKind::InputExr => format!("{b}_input.exr"),
-            OutputKind::Sidecar => format!("{b}.json"),
-        }
-    }
-    fn policy(&self) -> &OutputPolicy {
-        self.policy
-    }
-}
-
-/// What [`SynthJob::run_variant`] wrote.
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub struct VariantOutputs {
-    /// Names of the files written, as the sidecar lists them (the sidecar last).
-    pub files: Vec<String>,
-    /// Stages run, in order (the plan's, then the outputs written).
-    pub stages: Vec<String>,
-    /// ISO of each noisy raw, in order.
-    pub isos: Vec<u32>,
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::output::OutputPolicy;
+    use crate::raw::rows::RowSource;
+    use crate::raw::{RawImage, RawMeta};
+    use crate::synth::night::TargetOut;
     use crate::synth::SynthOptions;
+    use std::path::{Path, PathBuf};
 
     fn small_day() -> DayInput {
         let fix = Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/day.dng");
@@ -700,35 +353,13 @@ mod tests {
     }
 
     #[test]
-    fn target_names_round_trip() {
-        for t in [Target::Exr, Target::Png, Target::Both, Target::None] {
-            assert_eq!(t.name().parse::<Target>().unwrap(), t);
-        }
-        assert!("jpeg".parse::<Target>().is_err());
-        assert!(Target::Both.exr() && Target::Both.png());
-        assert!(!Target::None.exr() && !Target::None.png());
-    }
-
-    #[test]
-    fn dir_sink_names() {
+    fn base_names_carry_the_variant_with_several() {
         let day = small_day();
         let mut job = SynthJob::new(SynthOptions::default()).unwrap();
         let plan = job.plan(&day, "day.dng", 0, 1).unwrap();
-        let policy = OutputPolicy::default();
-        let one = DirSink::new(Path::new("o"), "day", &job, &plan, &policy);
-        assert_eq!(one.name(OutputKind::CleanDng), "day_clean.dng");
-        assert_eq!(
-            one.path(OutputKind::Sidecar).unwrap(),
-            Path::new("o/day.json")
-        );
+        assert_eq!(job.base_name("day", &plan), "day");
         job.variants = 3;
-        let v = DirSink::new(Path::new("o"), "day", &job, &plan, &policy);
-        assert_eq!(
-            v.name(OutputKind::NoisyDng { iso: 800 }),
-            "day_v2_iso800.dng"
-        );
-        assert_eq!(v.name(OutputKind::TargetPng), "day_v2_target.png");
-        assert_eq!(v.name(OutputKind::InputExr), "day_v2_input.exr");
+        assert_eq!(job.base_name("day", &plan), "day_v2");
     }
 
     /// Records every `written` call (and refuses one kind, to test error propagation).
@@ -772,7 +403,7 @@ mod tests {
         let plan = job.plan(&day, "day.dng", 1, 0).unwrap();
         let policy = OutputPolicy::default();
         let sink = Recorder {
-            inner: DirSink::new(dir.path(), "day", &job, &plan, &policy),
+            inner: DirSink::new(dir.path(), job.base_name("day", &plan), &policy),
             seen: Default::default(),
             fail: None,
         };
@@ -865,13 +496,13 @@ mod tests {
                 want_h,
                 "case {k}"
             );
-            let sink = DirSink::new(&whole, "day", &job, &plan, &policy);
+            let sink = DirSink::new(&whole, job.base_name("day", &plan), &policy);
             job.write_night(&day, &plan, &night, &sink).unwrap();
             let want = dir_files(&whole);
             for threads in [1, 2, 3] {
                 let d = t.path().join(format!("j{threads}"));
                 std::fs::create_dir(&d).unwrap();
-                let sink = DirSink::new(&d, "day", &job, &plan, &policy);
+                let sink = DirSink::new(&d, job.base_name("day", &plan), &policy);
                 pool(threads)
                     .install(|| job.run_variant(&day, &plan, &sink))
                     .unwrap();
@@ -941,7 +572,7 @@ mod tests {
         let policy = OutputPolicy::default();
         for (threads, fail_at) in [(1, 0), (1, 3), (2, 3), (3, 1)] {
             let dir = tempfile::tempdir().unwrap();
-            let sink = DirSink::new(dir.path(), "day", &job, &plan, &policy);
+            let sink = DirSink::new(dir.path(), job.base_name("day", &plan), &policy);
             let e = pool(threads)
                 .install(|| {
                     job.write_with(&day, &plan, &sink, |files| {
@@ -977,7 +608,7 @@ mod tests {
         let plan = job.plan(&day, "day.dng", 1, 0).unwrap();
         let policy = OutputPolicy::default();
         let sink = Recorder {
-            inner: DirSink::new(dir.path(), "day", &job, &plan, &policy),
+            inner: DirSink::new(dir.path(), job.base_name("day", &plan), &policy),
             seen: Default::default(),
             fail: Some(OutputKind::TargetPng),
         };

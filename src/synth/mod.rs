@@ -14,15 +14,17 @@
 //! ```
 
 pub mod config;
-pub mod crop;
+pub mod day_input;
 pub mod dictionaries;
 pub mod dim;
+pub mod file_sink;
 pub mod illuminant;
 pub mod job;
 pub mod masks;
 pub mod neutral;
 pub mod night;
 pub mod noise_source;
+pub mod outputs;
 pub mod plan;
 pub mod plan_bounds;
 pub mod relight;

@@ -34,7 +34,6 @@
 //! # Ok(()) }
 //! ```
 
-use super::crop::{crop_meta, Crop};
 use super::relight::{run_clean, run_clean_crop, RunReport};
 use super::{night_meta, run_noise, with_noisy_rows, Plan};
 use crate::error::{Error, Result};
@@ -46,6 +45,7 @@ use crate::isp::render_crop::{render_linear_crop_with, CROP_MARGIN};
 use crate::isp::{render_linear, Demosaic, RenderOptions, RgbImage};
 use crate::noise::apply::apply_noise_crop_with;
 use crate::noise::apply_physics_noise_crop;
+use crate::raw::crop::{crop_meta, Crop};
 use crate::raw::rows::RowSource;
 use crate::raw::{RawImage, RawMeta};
 use std::sync::Mutex;
@@ -436,7 +436,7 @@ pub fn synthesize(day: &RawImage, plan: &Plan, req: &Request) -> Result<Night> {
 mod tests {
     use super::*;
     use crate::isp::render::default_crop;
-    use crate::synth::crop::target_origin;
+    use crate::isp::render_crop::target_origin;
     use crate::synth::{plan, Calibration, Mode, SynthOptions};
     use std::path::Path;
 

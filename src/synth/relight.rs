@@ -14,13 +14,13 @@
 //! value itself, whatever `truncate` says, not its f32 round trip (truncating that put
 //! 33-39 % of samples 1 DN low).
 
-use super::crop::Crop;
 use super::dim::dim_factor;
 use super::masks::{LightKind, PreparedMask};
 use super::plan::Plan;
 use super::{Mode, SynthOutput};
 use crate::error::Result;
 use crate::normalize::{Normalizer, SiteTable};
+use crate::raw::crop::Crop;
 use crate::raw::RawImage;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};

@@ -6,3 +6,12 @@ pub mod read;
 pub mod tags;
 pub mod value;
 pub mod write;
+
+/// TIFF byte order (also the byte order a raw image was stored in, `raw::meta::Storage`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+pub enum ByteOrder {
+    /// "II".
+    Little,
+    /// "MM".
+    Big,
+}

@@ -6,8 +6,8 @@
 //! decoded values are limited ([`Limits`]), and IFD offsets already visited are refused, so a
 //! cyclic chain ends with an error instead of a loop.
 
+use super::ByteOrder;
 use crate::error::{Error, Result};
-use crate::raw::meta::ByteOrder;
 use crate::tiff::tags;
 use crate::tiff::value::{Entry, FieldType, Value};
 use std::collections::HashSet;

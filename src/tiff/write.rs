@@ -14,8 +14,8 @@
 //! filled in by the writer, so a caller can never write stale offsets. Strips of even length
 //! are contiguous (no padding between them), which old dcraw-style readers rely on.
 
+use super::ByteOrder;
 use crate::error::{Error, Result};
-use crate::raw::meta::ByteOrder;
 use crate::tiff::tags;
 use crate::tiff::value::Value;
 use std::collections::BTreeMap;

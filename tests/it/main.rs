@@ -37,6 +37,7 @@ mod isp_demosaic_accuracy;
 mod isp_exr;
 mod isp_opcodes;
 mod isp_render;
+mod layers;
 mod limits_bombs;
 mod limits_files;
 mod limits_metadata;

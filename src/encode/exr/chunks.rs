@@ -201,7 +201,7 @@ impl ExrBands {
         let n = (y1 - y0) * w * 3;
         let mut out = crate::limits::try_filled(0f32, n, "an EXR band")?;
         let file = BufReader::new(File::open(&self.path)?);
-        let reader = exr::block::read(file, false).map_err(crate::encode::read::exr_err)?;
+        let reader = exr::block::read(file, false).map_err(super::error::exr_err)?;
         let chunks = reader
             .filter_chunks(false, |_, _, b| {
                 b.layer == 0
@@ -209,7 +209,7 @@ impl ExrBands {
                     && b.pixel_position.1 < y1
                     && b.pixel_position.1 + b.pixel_size.1 > y0
             })
-            .map_err(crate::encode::read::exr_err)?;
+            .map_err(super::error::exr_err)?;
         let mut dec = chunks.sequential_decompressor(false);
         let row_bytes: usize = self.channels.iter().map(|c| c.0 * w).sum();
         let mut starts = Vec::with_capacity(self.channels.len());
@@ -220,7 +220,7 @@ impl ExrBands {
         }
         let mut seen = 0usize;
         while let Some(block) = dec.decompress_next_block() {
-            let block = block.map_err(crate::encode::read::exr_err)?;
+            let block = block.map_err(super::error::exr_err)?;
             let (bx, by) = (block.index.pixel_position.0, block.index.pixel_position.1);
             let (bw, bh) = (block.index.pixel_size.0, block.index.pixel_size.1);
             if bx != 0 || bw != w || block.data.len() != row_bytes * bh {

@@ -13,6 +13,7 @@
 //! are identical from run to run and whatever the thread count (tested).
 
 pub mod chunks;
+pub mod error;
 mod scanline;
 
 use crate::error::{Error, Result, ResultExt};

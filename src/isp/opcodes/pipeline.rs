@@ -24,8 +24,8 @@ use crate::isp::demosaic::{demosaic_rect, demosaic_rows, row_kernel, Demosaic, P
 use crate::isp::geometry::{apply_geometry, default_crop, orient_image};
 use crate::isp::RgbImage;
 use crate::normalize::Normalizer;
+use crate::raw::crop::Crop;
 use crate::raw::{Bayer, RawImage};
-use crate::synth::crop::Crop;
 use rayon::prelude::*;
 
 /// Rows per parallel band.

@@ -39,22 +39,9 @@ pub enum IlluminantSource {
 // File size, entry counts, illuminant ratios (r/g, b/g within [1/MAX_NEUTRAL_RATIO,
 // MAX_NEUTRAL_RATIO]) and Gaussian parameters (within +-MAX_CHROMA): the one table.
 pub use crate::bounds::{
-    MAX_CALIBRATION_FILE_BYTES, MAX_CHROMA, MAX_DICT_ENTRIES, MAX_NEUTRAL_RATIO,
+    read_calibration_text, MAX_CALIBRATION_FILE_BYTES, MAX_CHROMA, MAX_DICT_ENTRIES,
+    MAX_NEUTRAL_RATIO,
 };
-
-/// Read a calibration text file, refusing files over [`MAX_CALIBRATION_FILE_BYTES`].
-pub fn read_calibration_text(path: &Path) -> Result<String> {
-    let len = std::fs::metadata(path)
-        .map_err(|e| Error::from(e).in_file(path))?
-        .len();
-    if len > MAX_CALIBRATION_FILE_BYTES {
-        return Err(Error::limits(format!(
-            "calibration file of {len} bytes (at most {MAX_CALIBRATION_FILE_BYTES})"
-        ))
-        .in_file(path));
-    }
-    std::fs::read_to_string(path).map_err(|e| Error::from(e).in_file(path))
-}
 
 fn check_count(key: &str, n: usize) -> Result<()> {
     crate::bounds::count(key, n, MAX_DICT_ENTRIES)

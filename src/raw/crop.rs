@@ -126,18 +126,6 @@ pub fn crop_meta(meta: &RawMeta, crop: &Crop) -> RawMeta {
     m
 }
 
-/// Where the target of `crop` sits in the whole-frame target (DefaultCrop applied, before
-/// orientation): `(row, column)` of its top-left pixel, `None` unless the crop lies inside
-/// the DefaultCrop (then the crop's target equals that region of the frame's).
-pub fn target_origin(meta: &RawMeta, aw: usize, ah: usize, crop: &Crop) -> Option<(usize, usize)> {
-    let (x0, y0, cw, ch) = crate::isp::render::default_crop(meta, aw, ah);
-    let inside = crop.left >= x0
-        && crop.top >= y0
-        && crop.left + crop.width <= x0 + cw
-        && crop.top + crop.height <= y0 + ch;
-    inside.then(|| (crop.top - y0, crop.left - x0))
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
