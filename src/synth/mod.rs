@@ -30,7 +30,6 @@ pub mod plan_bounds;
 pub mod relight;
 pub mod rng;
 pub mod sidecar;
-mod target_files;
 
 pub use illuminant::{Covariance, Gaussian2, SamplerRules};
 pub use masks::{Light, LightKind, MaskEval};

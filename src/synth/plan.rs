@@ -364,7 +364,7 @@ pub fn plan_with_estimate(
     }
     // The renders' opcodes: unapplicable optional ones are warnings, mandatory ones errors.
     // The stage `apply_opcodes` is recorded by the synthesis when a render runs.
-    let opcodes = crate::isp::opcodes::prepare(&img.meta, opts.opcodes)?.map(|p| p.report);
+    let opcodes = crate::isp::opcodes::prepare_image(img, opts.opcodes)?.map(|p| p.report);
     if let Some(r) = &opcodes {
         warnings.extend(r.warnings());
     }
