@@ -260,45 +260,51 @@ fn main() {
     let grid_a = [2e-5, 1e-4, 5e-4];
     let grid_b = [1e-7, 1e-6, 1e-5];
     println!("frame {w}x{h}; per cell: worst of 4 CFA phases x 4 positions; bits cycle 10,12,14,16 with the phase");
-    for step in steps {
+    // Per (content, a, b) and step: worst S error, O error, relative O error, untrusted.
+    let mut rows: Vec<(Content, f64, f64, Vec<(f64, f64, f64, usize, String)>)> = vec![];
+    for c in Content::ALL {
+        for &a in &grid_a {
+            for &b in &grid_b {
+                let mut per_step = vec![(0.0f64, 0.0f64, 0.0f64, 0usize, String::new()); steps.len()];
+                for (i, bayer) in Bayer::ALL.into_iter().enumerate() {
+                    let bits = [10u16, 12, 14, 16][i];
+                    let grey = if c == Content::Grainy { &full } else { &halved };
+                    let img = synthetic_frame(c, grey, bayer, bits, w, h, a, b, 7 + i as u64);
+                    for (k, &step) in steps.iter().enumerate() {
+                        let e = estimate(&img, &EstimateOptions { step: Some(step) })
+                            .expect("estimate");
+                        let er = errors(&e, a, b);
+                        let r = &mut per_step[k];
+                        r.0 = r.0.max(er.s_rel);
+                        r.1 = r.1.max(er.o_abs);
+                        r.2 = r.2.max(er.o_rel);
+                        if let Some(u) = er.untrusted {
+                            r.3 += 1;
+                            r.4 = u;
+                        }
+                    }
+                }
+                rows.push((c, a, b, per_step));
+            }
+        }
+    }
+    for (k, step) in steps.iter().enumerate() {
         println!("\nstep {step} (one band of 4 rows in {step})");
         println!(
             "| content | a | b | max abs(S/a - 1) | max abs(O - b) | max abs(O/b - 1) | trusted |"
         );
         println!("|---|---:|---:|---:|---:|---:|---|");
-        for c in Content::ALL {
-            for &a in &grid_a {
-                for &b in &grid_b {
-                    let (mut s_rel, mut o_abs, mut o_rel, mut bad) = (0.0f64, 0.0f64, 0.0f64, 0);
-                    let mut why = String::new();
-                    for (i, bayer) in Bayer::ALL.into_iter().enumerate() {
-                        let bits = [10u16, 12, 14, 16][i];
-                        let grey = if c == Content::Grainy { &full } else { &halved };
-                        let img = synthetic_frame(c, grey, bayer, bits, w, h, a, b, 7 + i as u64);
-                        let e = estimate(&img, &EstimateOptions { step: Some(step) })
-                            .expect("estimate");
-                        let er = errors(&e, a, b);
-                        s_rel = s_rel.max(er.s_rel);
-                        o_abs = o_abs.max(er.o_abs);
-                        o_rel = o_rel.max(er.o_rel);
-                        if let Some(u) = er.untrusted {
-                            bad += 1;
-                            why = u;
-                        }
-                    }
-                    println!(
-                        "| {} | {a:.0e} | {b:.0e} | {:.3} | {o_abs:.2e} | {:.2} | {} |",
-                        c.name(),
-                        s_rel,
-                        o_rel,
-                        if bad == 0 {
-                            "4/4".to_string()
-                        } else {
-                            format!("{}/4 ({why})", 4 - bad)
-                        }
-                    );
+        for (c, a, b, per_step) in &rows {
+            let (s_rel, o_abs, o_rel, bad, why) = &per_step[k];
+            println!(
+                "| {} | {a:.0e} | {b:.0e} | {s_rel:.3} | {o_abs:.2e} | {o_rel:.2} | {} |",
+                c.name(),
+                if *bad == 0 {
+                    "4/4".to_string()
+                } else {
+                    format!("{}/4 ({why})", 4 - bad)
                 }
-            }
+            );
         }
     }
 }

@@ -52,7 +52,7 @@
 
 use super::model::NoiseParams;
 use crate::error::Result;
-use crate::normalize::Normalizer;
+use crate::normalize::{Normalizer, SiteTable};
 use crate::raw::{Bayer, RawImage};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
@@ -279,6 +279,9 @@ const NEIGHBOURS: usize = 4;
 struct Frame<'a> {
     img: &'a RawImage,
     norm: Normalizer,
+    /// The normalized value (NaN when clipped) of every stored value up to white per 2x2
+    /// position, when the black level depends on the position only.
+    table: Option<SiteTable<f64>>,
     top: usize,
     left: usize,
     /// Bands of 4 active rows and groups of 4 active columns.
@@ -294,25 +297,45 @@ struct BandBuf {
     blocks: [Vec<Block>; 4],
 }
 
+/// The normalized value of stored value `x` on a site of black level `black`
+/// ([`Normalizer::normalize_with_black`]), NaN when the site is clipped (stored 0 or
+/// linearized at or above white).
+#[inline]
+fn site(norm: &Normalizer, x: u16, black: f64) -> f64 {
+    if x == 0 || norm.linearize(x) >= norm.white {
+        f64::NAN
+    } else {
+        norm.normalize_with_black(x, black)
+    }
+}
+
 impl Frame<'_> {
     /// The blocks of band `k` (4 active rows), per position, into `buf.blocks`.
     fn band(&self, k: usize, buf: &mut BandBuf) {
         let w = self.groups * 4;
-        let white = self.norm.white;
         for (i, row) in buf.rows.iter_mut().enumerate() {
             let r = 4 * k + i;
             row.resize(w, 0.0);
-            buf.black.resize(w, 0.0);
-            self.norm.black_row(r, &mut buf.black);
             let start = (r + self.top) * self.img.width + self.left;
             let src = &self.img.data[start..start + w];
-            for ((o, &x), &b) in row.iter_mut().zip(src).zip(buf.black.iter()) {
-                let l = self.norm.linearize(x);
-                *o = if x == 0 || l >= white {
-                    f64::NAN
-                } else {
-                    (l - b) / self.norm.scale
-                };
+            match &self.table {
+                Some(t) => {
+                    let (even, odd) = t.row(r);
+                    for (c, (o, &x)) in row.iter_mut().zip(src).enumerate() {
+                        let tab = if c & 1 == 0 { even } else { odd };
+                        *o = match tab.get(x as usize) {
+                            Some(&v) => v,
+                            None => site(&self.norm, x, self.norm.black_at(r, c)),
+                        };
+                    }
+                }
+                None => {
+                    buf.black.resize(w, 0.0);
+                    self.norm.black_row(r, &mut buf.black);
+                    for ((o, &x), &b) in row.iter_mut().zip(src).zip(buf.black.iter()) {
+                        *o = site(&self.norm, x, b);
+                    }
+                }
             }
         }
         let rows = &buf.rows;
@@ -338,21 +361,34 @@ impl Frame<'_> {
     }
 }
 
-/// The local variance around block `g` of a band: the mean square of its own `h`, `v` and
-/// of the `h`, `v`, `d` of up to [`NEIGHBOURS`] unclipped blocks on each side (never its
-/// own `d`, so that selecting on it does not bias `d`), with its number of terms.
+/// Prefix sums over a band's blocks of `h^2 + v^2 + d^2` and of the unclipped blocks, for
+/// [`local_variance`] in constant time.
+fn prefix(blocks: &[Block], sums: &mut Vec<f64>, counts: &mut Vec<u32>) {
+    sums.clear();
+    counts.clear();
+    let (mut s, mut c) = (0.0, 0u32);
+    sums.push(s);
+    counts.push(c);
+    for b in blocks {
+        if !b.m.is_nan() {
+            s += b.hv2 + b.d2;
+            c += 1;
+        }
+        sums.push(s);
+        counts.push(c);
+    }
+}
+
+/// The local variance around unclipped block `g` of a band: the mean square of its own `h`,
+/// `v` and of the `h`, `v`, `d` of the unclipped blocks among the [`NEIGHBOURS`] on each
+/// side (never its own `d`, so that selecting on it does not bias `d`), with its number of
+/// terms. `sums`, `counts`: [`prefix`] of the band.
 #[inline]
-fn local_variance(blocks: &[Block], g: usize) -> (f64, usize) {
+fn local_variance(blocks: &[Block], sums: &[f64], counts: &[u32], g: usize) -> (f64, usize) {
     let lo = g.saturating_sub(NEIGHBOURS);
     let hi = (g + NEIGHBOURS + 1).min(blocks.len());
-    let mut sum = blocks[g].hv2;
-    let mut k = 2;
-    for (j, b) in blocks[lo..hi].iter().enumerate() {
-        if lo + j != g && !b.m.is_nan() {
-            sum += b.hv2 + b.d2;
-            k += 3;
-        }
-    }
+    let sum = (sums[hi] - sums[lo] - blocks[g].d2).max(0.0);
+    let k = 3 * (counts[hi] - counts[lo]) as usize - 1;
     (sum / k as f64, k)
 }
 
@@ -506,8 +542,10 @@ pub fn estimate(img: &RawImage, opts: &EstimateOptions) -> Result<NoiseEstimate>
     let bayer = img.bayer()?;
     let norm = Normalizer::new(img)?;
     let a = img.active_area();
+    let table = SiteTable::new(&norm, |r, c, x| site(&norm, x, norm.black_at(r, c)));
     let frame = Frame {
         img,
+        table,
         top: a.top as usize,
         left: a.left as usize,
         bands: a.height() / 4,
@@ -556,9 +594,11 @@ pub fn estimate(img: &RawImage, opts: &EstimateOptions) -> Result<NoiseEstimate>
         .map(|ch| {
             let mut s = Sums::new();
             let mut buf = BandBuf::default();
+            let (mut sums, mut counts) = (Vec::new(), Vec::new());
             for &k in ch {
                 frame.band(k, &mut buf);
                 for (pos, blocks) in buf.blocks.iter().enumerate() {
+                    prefix(blocks, &mut sums, &mut counts);
                     for (g, b) in blocks.iter().enumerate() {
                         if b.m.is_nan() {
                             s.clipped[pos] += 1;
@@ -569,7 +609,7 @@ pub fn estimate(img: &RawImage, opts: &EstimateOptions) -> Result<NoiseEstimate>
                         let Some(p) = pilots[pos].at(b.m, i) else {
                             continue;
                         };
-                        let (local, terms) = local_variance(blocks, g);
+                        let (local, terms) = local_variance(blocks, &sums, &counts, g);
                         if local <= Q95[terms] * p {
                             let acc = &mut s.bins[pos][i];
                             acc.n += 1;
