@@ -261,11 +261,13 @@ fn main() {
     let grid_b = [1e-7, 1e-6, 1e-5];
     println!("frame {w}x{h}; per cell: worst of 4 CFA phases x 4 positions; bits cycle 10,12,14,16 with the phase");
     // Per (content, a, b) and step: worst S error, O error, relative O error, untrusted.
-    let mut rows: Vec<(Content, f64, f64, Vec<(f64, f64, f64, usize, String)>)> = vec![];
+    type Cell = (f64, f64, f64, usize, String);
+    let mut rows: Vec<(Content, f64, f64, Vec<Cell>)> = vec![];
     for c in Content::ALL {
         for &a in &grid_a {
             for &b in &grid_b {
-                let mut per_step = vec![(0.0f64, 0.0f64, 0.0f64, 0usize, String::new()); steps.len()];
+                let mut per_step =
+                    vec![(0.0f64, 0.0f64, 0.0f64, 0usize, String::new()); steps.len()];
                 for (i, bayer) in Bayer::ALL.into_iter().enumerate() {
                     let bits = [10u16, 12, 14, 16][i];
                     let grey = if c == Content::Grainy { &full } else { &halved };

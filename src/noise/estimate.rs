@@ -697,8 +697,7 @@ fn fit_position(
     // Clip margins, then outliers one at a time (at most a quarter of the bins).
     let max_drops = use_bin.iter().filter(|u| **u).count() / 4;
     let mut drops = 0;
-    loop {
-        let Some(l) = line else { break };
+    while let Some(l) = line {
         let mut changed = false;
         for (b, u) in all.iter().zip(use_bin.iter_mut()) {
             let pred = l.slope * b.mean + l.intercept;

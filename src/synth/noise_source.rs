@@ -35,9 +35,8 @@ pub struct NoiseChoice {
 
 /// How to calibrate a camera, for the warnings.
 pub const HOW_TO_CALIBRATE: &str = "calibrate this camera: `day2night calibrate noise \
---from-image DAY.dng [--assume-iso N] -o noise.json` (from day images; or --burst FRAMES... / \
---pair CLEAN NOISY for a full calibration), then `synth --noise-model noise.json` \
-(docs/calibration.md)";
+--from-image DAY.dng [--assume-iso N] -o noise.json` (or --burst/--pair), then `synth \
+--noise-model noise.json` (docs/calibration.md)";
 
 /// The embedded table as another camera's noise: model, provenance and the warning.
 fn embedded_elsewhere(cam: &CameraId, why: &str, note: &str) -> NoiseChoice {

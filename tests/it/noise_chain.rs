@@ -15,9 +15,7 @@ use serde_json::Value;
 use std::path::{Path, PathBuf};
 use std::process::Output;
 
-#[path = "../../examples/noise_estimate_accuracy.rs"]
-mod accuracy;
-use accuracy::{synthetic_frame, Content, Grey};
+use crate::noise_estimate::accuracy::{synthetic_frame, Content, Grey};
 
 const A: f64 = 1e-4;
 const B: f64 = 1e-6;

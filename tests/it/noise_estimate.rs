@@ -12,7 +12,7 @@ use day2night::raw::{Bayer, RawImage};
 use proptest::prelude::*;
 
 #[path = "../../examples/noise_estimate_accuracy.rs"]
-mod accuracy;
+pub mod accuracy;
 use accuracy::{errors, synthetic_frame, Content, Grey};
 
 /// The documented tolerance at 0.8 MP (docs/noise.md, "Estimated from the day image"): S
