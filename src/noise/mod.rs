@@ -8,6 +8,7 @@
 
 pub mod apply;
 pub mod estimate;
+pub mod estimate_fit;
 pub mod model;
 pub mod params;
 pub mod physics;
