@@ -187,3 +187,26 @@ pub(crate) fn warn_lines(py: Python<'_>, name: &str, warnings: &[String]) -> PyR
     }
     Ok(())
 }
+
+/// Raise the warnings of a plan beyond the reader's own (those `read_dng` already raised):
+/// the noise model's source (another camera's table, an untrusted estimate, a model file of
+/// another camera), another camera's illuminants, ISO extrapolation, opcodes; then
+/// `extra` (the run's); each a `UserWarning` `<file>: <message>`, as `day2night synth`
+/// prints `day2night: <file>: warning: <message>`.
+pub(crate) fn warn_plan(
+    py: Python<'_>,
+    file: &str,
+    meta: &RawMeta,
+    plan: &day2night::synth::Plan,
+    extra: &[String],
+) -> PyResult<()> {
+    // The plan's list starts with the reader's corrections (dng::check).
+    let own = if plan.warnings.starts_with(&meta.warnings) {
+        meta.warnings.len()
+    } else {
+        0
+    };
+    let mut new = plan.warnings[own..].to_vec();
+    new.extend(extra.iter().cloned());
+    warn_lines(py, file, &new)
+}

@@ -2,7 +2,7 @@
 //! files, as `day2night synth` writes them).
 
 use crate::args::{self, Isos, Seed, Variant};
-use crate::convert::{json_obj, raw_image_from, rgb_array, u16_array};
+use crate::convert::{json_obj, raw_image_from, rgb_array, u16_array, warn_plan};
 use crate::errors::{py_err, value_err};
 use crate::pool::on_pool;
 use crate::raw::Raw;
@@ -61,8 +61,12 @@ pub(crate) struct Synthesis {
 /// (the sidecar's plan), ``neutral`` (the night AsShotNeutral), ``noise_profile``
 /// ({iso: [[S, O] per colour plane]}), ``clean_noise_profile``, ``report``, ``stages``,
 /// ``crop``, ``target_origin`` ((row, column) of the crop's target in the whole-frame
-/// target, None outside the DefaultCrop or without a crop) and ``synthesis`` (for
-/// ``write_outputs``).
+/// target, None outside the DefaultCrop or without a crop), ``noise_provenance`` (where
+/// the noise model came from and whose camera it is: ``source``, ``camera``, ``note``; also
+/// in ``plan``) and ``synthesis`` (for ``write_outputs``).
+///
+/// The plan's warnings (e.g. another camera's noise table applied to this input) are
+/// raised as ``UserWarning``, as ``day2night synth`` prints them.
 ///
 /// >>> out = day2night.synthesize(raw, seed=0, isos=(1600,), crop=(0, 0, 512, 512))
 /// >>> out["noisy"][1600].shape, out["target"].shape
@@ -123,10 +127,7 @@ pub(crate) fn synthesize<'py>(
         ..
     } = night;
     // The plan's warnings after the reader's (raised by read_dng already), then the run's.
-    let skip = r.day.raw.meta.warnings.len().min(plan.warnings.len());
-    let mut new = plan.warnings[skip..].to_vec();
-    new.extend(report.warnings.iter().cloned());
-    crate::convert::warn_lines(py, &r.file_name, &new)?;
+    warn_plan(py, &r.file_name, &r.day.raw.meta, &plan, &report.warnings)?;
     let d = PyDict::new(py);
     let bayer = plan.bayer;
     let profile = |p: &day2night::noise::NoiseParams| -> Vec<Vec<f64>> {
@@ -151,6 +152,7 @@ pub(crate) fn synthesize<'py>(
     d.set_item("noise_profile", np)?;
     d.set_item("neutral", plan.night_neutral.to_vec())?;
     d.set_item("plan", json_obj(py, &plan)?)?;
+    d.set_item("noise_provenance", json_obj(py, &plan.noise_provenance)?)?;
     d.set_item("report", json_obj(py, &report)?)?;
     d.set_item("stages", stages)?;
     d.set_item("crop", crop.map(|c| (c.top, c.left, c.height, c.width)))?;

@@ -171,7 +171,7 @@ pub struct IsoModel {
     pub iso: u32,
     /// `[[S, O]; 4]` per 2x2 position (normalized units): what synth reads.
     pub positions: [[f64; 2]; 4],
-    /// "burst", "pair", "burst+pair" or "noise_profile".
+    /// "burst", "pair", "burst+pair", "noise_profile" or "image_estimate".
     pub source: String,
     /// Black level (max over the plane, DN) used for the DN conversion.
     pub black: f64,
@@ -209,8 +209,10 @@ pub struct NoiseModelFile {
     pub units: String,
     /// Provenance.
     pub source: String,
-    /// Camera make/model of the first input.
-    pub camera: Option<String>,
+    /// The camera of the first input (Make, Model, UniqueCameraModel): synth warns when the
+    /// model is applied to another camera. (Files written before this held a string; synth
+    /// still reads them.)
+    pub camera: Option<crate::raw::camera::CameraId>,
     /// One entry per ISO, ascending.
     pub isos: Vec<IsoModel>,
     /// Laws across ISOs (None with fewer than two ISOs).

@@ -70,6 +70,35 @@ fn illuminant_verdict(info: &mut DngInfo) -> Option<Result<IlluminantProvenance,
     })
 }
 
+/// Where `synth` (no `--noise-model`, default options) would take this file's noise model
+/// from, and which camera's it is (issue 24): the noise chain of
+/// `day2night::synth::noise_source`, its warnings joining the file's. The pixels are read
+/// only when the chain gets to the estimate from the image.
+fn noise_verdict(
+    info: &mut DngInfo,
+    path: &std::path::Path,
+) -> Option<day2night::noise::NoiseProvenance> {
+    use day2night::synth::{noise_source::choose_noise_model, Calibration, SynthOptions};
+    if !info.synth_ready {
+        return None;
+    }
+    let img = day2night::dng::read_dng(path).ok()?;
+    let bayer = img.bayer().ok()?;
+    let opts = SynthOptions::default();
+    let cal = Calibration::embedded(&opts).ok()?;
+    let est = || day2night::noise::estimate(&img, &Default::default());
+    match choose_noise_model(&img, &cal, &opts, bayer, &est) {
+        Ok(c) => {
+            info.warnings.extend(c.warnings);
+            Some(c.provenance)
+        }
+        Err(e) => {
+            info.warnings.push(format!("noise: {}", e.root()));
+            None
+        }
+    }
+}
+
 /// Run `day2night info`.
 pub fn run(args: InfoArgs) -> CmdResult {
     let mut failed = 0usize;
@@ -80,6 +109,7 @@ pub fn run(args: InfoArgs) -> CmdResult {
             Ok(mut info) => {
                 opcode_verdict(&mut info, f);
                 let ill = illuminant_verdict(&mut info);
+                let noise = noise_verdict(&mut info, f);
                 for w in &info.warnings {
                     eprintln!("day2night: {}: warning: {w}", f.display());
                 }
@@ -98,10 +128,13 @@ pub fn run(args: InfoArgs) -> CmdResult {
                             };
                             o.insert("night_illuminants".into(), j);
                         }
+                        if let Some(n) = &noise {
+                            o.insert("noise_model".into(), serde_json::to_value(n)?);
+                        }
                     }
                     objects.push(v);
                 } else {
-                    describe(&mut text, f, &info, &ill);
+                    describe(&mut text, f, &info, &ill, noise.as_ref());
                 }
             }
             Err(e) => {
@@ -216,6 +249,7 @@ fn describe(
     file: &std::path::Path,
     i: &DngInfo,
     ill: &Option<Result<IlluminantProvenance, String>>,
+    noise: Option<&day2night::noise::NoiseProvenance>,
 ) {
     let _ = writeln!(out, "{}", file.display());
     let _ = writeln!(
@@ -399,6 +433,20 @@ fn describe(
             let _ = writeln!(out, "  night illuminants: not available: {e}");
         }
         None => {}
+    }
+    if let Some(n) = noise {
+        let _ = writeln!(
+            out,
+            "  noise model:   {} ({}): {}",
+            n.source.name(),
+            n.camera
+                .as_ref()
+                .map_or("camera unknown".to_string(), |c| format!(
+                    "camera {}",
+                    c.label()
+                )),
+            n.note
+        );
     }
     let _ = writeln!(
         out,

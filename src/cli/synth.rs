@@ -183,7 +183,8 @@ pub struct ExtraArgs {
     #[arg(long, value_name = "FILE.json")]
     pub brightness: Option<PathBuf>,
     /// Noise model (day2night-noise-model/1 JSON); default: the input's NoiseProfile, else
-    /// the embedded paper phone table.
+    /// (the paper's phone: its embedded table) an estimate from the image at its ISO, else
+    /// the embedded paper phone table with a warning. See docs/noise.md.
     #[arg(long = "noise-model", value_name = "FILE.json")]
     pub noise_model: Option<PathBuf>,
     /// Re-run a sidecar's plan on its input (one input): byte-identical outputs.

@@ -144,7 +144,7 @@ impl SynthJob {
     /// a render could not apply ([`super::plan_for`]).
     pub fn plan(&self, day: &DayInput, name: &str, seed: u64, variant: u32) -> Result<Plan> {
         let req = self.request();
-        super::plan_for(
+        super::plan_with_estimate(
             &day.raw,
             name,
             seed,
@@ -152,6 +152,7 @@ impl SynthJob {
             &self.options,
             &self.calibration,
             req.target || req.input,
+            &|| day.noise_estimate(),
         )
     }
 
@@ -315,12 +316,13 @@ impl SynthJob {
         files.push(sink.name(OutputKind::Sidecar));
         let ill = self.illuminants(day)?;
         // A replayed sidecar without provenance (written before it existed) records none.
-        let provenance = match &self.calibration.illuminants {
+        let illuminants = match &self.calibration.illuminants {
             IlluminantChoice::Gaussian(_, None) => None,
-            _ => Some(Provenance {
-                illuminants: Some(ill.provenance),
-            }),
+            _ => Some(ill.provenance),
         };
+        let noise = plan.noise_provenance.clone();
+        let provenance =
+            (illuminants.is_some() || noise.is_some()).then_some(Provenance { illuminants, noise });
         let sc = Sidecar {
             format: SIDECAR_FORMAT.into(),
             tool: "day2night".into(),

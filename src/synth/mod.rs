@@ -24,6 +24,7 @@ pub mod job;
 pub mod masks;
 pub mod neutral;
 pub mod night;
+pub mod noise_source;
 pub mod outputs;
 pub mod plan;
 pub mod plan_bounds;
@@ -34,7 +35,7 @@ pub mod sidecar;
 pub use illuminant::{Covariance, Gaussian2, SamplerRules};
 pub use illuminant_choice::{IlluminantChoice, IlluminantProvenance, ResolvedIlluminants};
 pub use masks::{Light, LightKind, MaskEval};
-pub use plan::{plan, plan_for, NoisePlan, Plan};
+pub use plan::{plan, plan_for, plan_with_estimate, NoisePlan, Plan};
 pub use relight::{run, run_clean, RunReport};
 
 use crate::error::{Error, Result};
@@ -93,6 +94,11 @@ pub struct Compat {
     /// serialized options when off, so sidecars written before it replay unchanged).
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub paper_illuminants: bool,
+    /// Use the embedded noise table (the paper's phone's) for inputs without a NoiseProfile
+    /// instead of an estimate from the image (the release applies its table to every
+    /// input). Absent from serialized options when off, so older sidecars are unchanged.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub embedded_noise: bool,
 }
 
 impl Compat {
@@ -102,6 +108,7 @@ impl Compat {
         truncate_noise: true,
         range_per_site: true,
         paper_illuminants: true,
+        embedded_noise: true,
     };
     /// True when no switch is on.
     pub fn is_off(&self) -> bool {
@@ -281,8 +288,8 @@ pub struct Calibration {
     pub illuminants: IlluminantChoice,
     /// Brightness dictionary (`--brightness`), if any.
     pub brightness: Option<BrightnessDict>,
-    /// Noise model file (`--noise-model`), if any; otherwise the input's NoiseProfile or the
-    /// embedded table is used.
+    /// Noise model file (`--noise-model`), if any; otherwise the input's NoiseProfile, an
+    /// estimate from the image or the embedded table ([`noise_source`]).
     pub noise: Option<NoiseModel>,
 }
 

@@ -6,11 +6,12 @@ use super::dim::{sample_dim, DimPlan};
 use super::illuminant::Gaussian2;
 use super::masks::{opencv_sigma, release_sigma, Light, LightKind, MaskEval, MASK_FLOOR};
 use super::neutral::day_neutral_for;
+use super::noise_source::choose_noise_model;
 use super::rng::SynthRng;
 use super::{Calibration, Mode, RelightFormula, SynthOptions};
 use crate::error::{Error, Result};
 use crate::isp::opcodes::{OpcodeMode, OpcodeReport};
-use crate::noise::{Evaluated, NoiseModel, NoiseParams, PhysicsParams};
+use crate::noise::{Evaluated, NoiseEstimate, NoiseParams, NoiseProvenance, PhysicsParams};
 use crate::raw::{Bayer, RawImage};
 use serde::{Deserialize, Serialize};
 
@@ -95,6 +96,11 @@ pub struct Plan {
     pub clean_noise: NoiseParams,
     /// Where the noise model came from.
     pub noise_model_source: String,
+    /// Where the noise model came from and which camera it belongs to (also the sidecar's
+    /// `calibration.provenance.noise`). Absent in plans written before it existed, so their
+    /// sidecars replay byte for byte.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub noise_provenance: Option<NoiseProvenance>,
     /// One entry per noisy output.
     pub noise: Vec<NoisePlan>,
     /// The stages that run, in order.
@@ -126,25 +132,9 @@ fn center(rng: &mut SynthRng, n: usize) -> f64 {
     rng.range(0.1, 0.9) * n as f64
 }
 
-/// The noise model a plan uses: `--noise-model`, else the input's own NoiseProfile (when
-/// its ISO is known), else the embedded default.
-pub fn choose_noise_model(img: &RawImage, cal: &Calibration, bayer: Bayer) -> Result<NoiseModel> {
-    if let Some(m) = &cal.noise {
-        return Ok(m.clone());
-    }
-    if let (Some(p), Some(iso)) = (
-        &img.meta.noise_profile,
-        img.meta.exif.iso.filter(|&i| i > 0),
-    ) {
-        if let Ok(m) = NoiseModel::from_dng_profile(p, bayer, iso) {
-            return Ok(m);
-        }
-    }
-    Ok(super::dictionaries::embedded::noise_model())
-}
-
-/// Sample a plan for `img` (metadata and geometry only; pixels are not read), for a job
-/// that renders (a target or the network input): [`plan_for`] with `renders` true.
+/// Sample a plan for `img` (metadata and geometry; the pixels are read only when the noise
+/// model is estimated from the image, [`super::noise_source`]), for a job that renders (a
+/// target or the network input): [`plan_for`] with `renders` true.
 pub fn plan(
     img: &RawImage,
     input_name: &str,
@@ -170,6 +160,24 @@ pub fn plan_for(
     opts: &SynthOptions,
     cal: &Calibration,
     renders: bool,
+) -> Result<Plan> {
+    plan_with_estimate(img, input_name, seed, variant, opts, cal, renders, &|| {
+        crate::noise::estimate(img, &Default::default())
+    })
+}
+
+/// [`plan_for`] with the image's noise estimate given by `estimate` (called only when the
+/// noise chain gets to it; e.g. a cached one, [`super::job::DayInput::noise_estimate`]).
+#[allow(clippy::too_many_arguments)]
+pub fn plan_with_estimate(
+    img: &RawImage,
+    input_name: &str,
+    seed: u64,
+    variant: u32,
+    opts: &SynthOptions,
+    cal: &Calibration,
+    renders: bool,
+    estimate: &dyn Fn() -> Result<NoiseEstimate>,
 ) -> Result<Plan> {
     opts.validate()?;
     img.validate()?;
@@ -345,7 +353,9 @@ pub fn plan_for(
     let night_neutral = super::neutral::check_neutral(night_neutral, "night neutral")?;
     stages.push("denormalize".into());
 
-    let model = choose_noise_model(img, cal, bayer)?;
+    let choice = choose_noise_model(img, cal, opts, bayer, estimate)?;
+    warnings.extend(choice.warnings);
+    let model = choice.model;
     let clean_iso = img.meta.iso_or_default();
     // Physics model: its equivalent Gaussian at this image's levels (the NoiseProfile).
     let scale = img.meta.levels.white - img.meta.levels.black_max();
@@ -437,6 +447,7 @@ pub fn plan_for(
         clean_iso,
         clean_noise,
         noise_model_source: model.source.clone(),
+        noise_provenance: Some(choice.provenance),
         noise,
         stages,
         warnings,

@@ -35,19 +35,23 @@ pub struct CalibrationInfo {
     pub brightness: Option<super::dictionaries::BrightnessDict>,
     /// Noise model source.
     pub noise_model: String,
-    /// Where each calibration came from and which camera it belongs to. Absent in sidecars
-    /// written before it existed: a replay then records none, as they did.
+    /// Where each calibration came from and which camera it belongs to (issue 24). Absent
+    /// in sidecars written before it existed (their replays write none, byte for byte).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub provenance: Option<Provenance>,
 }
 
-/// Provenance of the calibrations of one input, one entry per calibration.
+/// `calibration.provenance`: where each calibration of one input came from and which
+/// camera it belongs to, one entry per calibration.
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
 pub struct Provenance {
     /// The night illuminant dictionary: embedded S20 FE, CIE lamps through this file's
     /// matrices, a file's camera RGB or xy; and its camera.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub illuminants: Option<IlluminantProvenance>,
+    /// The noise model's (the plan's `noise_provenance`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub noise: Option<crate::noise::NoiseProvenance>,
 }
 
 /// Output settings and names (relative to the output directory).

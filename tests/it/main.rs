@@ -48,6 +48,8 @@ mod metrics_eval;
 mod metrics_eval_damaged;
 mod metrics_nonfinite;
 mod msrv;
+mod noise_chain;
+mod noise_estimate;
 mod noise_physics;
 mod png_rows;
 mod release_compat;
