@@ -98,6 +98,10 @@ pub struct Plan {
     /// so such sidecars replay byte for byte.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub opcodes: Option<OpcodeReport>,
+    /// The burst (`--burst N`, N > 1): frames, motion model and every frame's transform,
+    /// drawn from the burst's own stream. Absent for a single frame.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub burst: Option<super::burst::BurstPlan>,
 }
 
 impl Plan {
@@ -353,6 +357,14 @@ pub fn plan(
     if !noise.is_empty() {
         stages.push("noise".into());
     }
+    // The burst's motion from its own stream (nothing drawn for a single frame).
+    let burst = super::burst::motion::plan_burst(&opts.burst, (w, h), (seed, input_name, variant))?;
+    if let Some(b) = &burst {
+        stages.push("burst_frames".into());
+        if b.transforms.iter().any(|t| !t.is_identity()) {
+            stages.push("burst_warp".into());
+        }
+    }
     // The renders' opcodes: unapplicable optional ones are warnings, mandatory ones errors.
     // The stage `apply_opcodes` is recorded by the synthesis when a render runs.
     let opcodes = crate::isp::opcodes::prepare(&img.meta, opts.opcodes)?.map(|p| p.report);
@@ -387,6 +399,7 @@ pub fn plan(
         stages,
         warnings,
         opcodes,
+        burst,
     };
     // The replay check (`synth --replay`) applies the same table: a plan synth writes is a
     // plan it reads back (e.g. a physics model extrapolated past the noise bounds is
