@@ -157,15 +157,8 @@ pub fn frame_clean_crop(day: &RawImage, plan: &Plan, crop: &Crop, frame: u32) ->
         width: wc.end - (wc.start & !1),
     };
     let (plane, _) = run_clean_crop(day, plan, win)?;
-    // the clean raw's levels (night metadata: linear values)
-    let meta = night_meta(&day.meta, plan, plan.clean_iso, &plan.clean_noise);
-    let frame_img = RawImage {
-        width: day.width,
-        height: day.height,
-        data: Vec::new(),
-        meta,
-    };
-    let norm = Normalizer::new(&frame_img)?.without_linearization();
+    // the clean raw's levels: the day's, linear (the night metadata drops the table)
+    let norm = Normalizer::new(day)?.without_linearization();
     let lv = levels(plan, &norm);
     let src = CleanSource {
         data: &plane,

@@ -20,3 +20,6 @@ pub mod warp;
 
 pub use interp::Interp;
 pub use motion::{BurstOptions, BurstPlan, FrameTransform, Motion, Shake, ValidRect};
+
+#[cfg(test)]
+mod tests;
