@@ -49,4 +49,5 @@ mod png_rows;
 mod release_compat;
 mod runs_concurrent;
 mod runs_interrupt;
+mod synth_burst;
 mod synth_cli;
