@@ -174,6 +174,87 @@ pub const MAX_WARP_PLANES: u32 = 4;
 /// Highest MapPolynomial degree (DNG 1.6, MapPolynomial: "Degree ... from 0 to 8").
 pub const MAX_POLYNOMIAL_DEGREE: u32 = 8;
 
+// ---- Opcode work (docs/limits.md, "Opcode work") ------------------------------------------
+// The work of the lists a render applies is counted at planning, before any pixel is touched:
+// each opcode costs its weight (below) times the pixels of the stage image it acts on (the
+// stored image for OpcodeList1, the active area for lists 2 and 3; an area opcode counts the
+// pixels of its area and pitch). Opcodes that change nothing are dropped first and cost
+// nothing (`isp::opcodes::budget`). One unit is about one pointwise pass over one pixel
+// (4 ns on the 2-core benchmark machine, docs/benchmarks.md "DNG opcodes").
+
+/// Default budget of opcode work, in pixel-passes: 2^34 (about a minute of opcode work on the
+/// benchmark machine). A 150 MP frame with four GainMaps and a warp costs about 2^32.7.
+pub const DEFAULT_OPCODE_BUDGET: u64 = 1 << 34;
+/// Environment variable that sets the opcode work budget (pixel-passes).
+pub const OPCODE_BUDGET_ENV: &str = "D2N_OPCODE_BUDGET";
+/// Weight of a per-sample area opcode (MapTable, MapPolynomial, Delta/Scale per row/column).
+pub const COST_POINTWISE: u64 = 1;
+/// Weight of a GainMap and of a FixVignetteRadial (a bilinear gain or a polynomial per pixel).
+pub const COST_GAIN: u64 = 2;
+/// Weight of a bad-pixel pass (a mask of the pixels, then the repairs).
+pub const COST_BAD_PIXELS: u64 = 2;
+/// Weight of a repeated identical FixBadPixelsConstant (it only revisits the pixels still bad).
+pub const COST_BAD_PIXELS_REPEAT: u64 = 1;
+/// Weight of a rectilinear warp (WarpRectilinear, WarpRectilinear2: 4x4 bicubic per sample).
+pub const COST_WARP: u64 = 32;
+/// Weight of a fisheye warp (an `atan` per pixel more).
+pub const COST_WARP_FISHEYE: u64 = 40;
+/// Weight of a TrimBounds (one copy).
+pub const COST_TRIM: u64 = 1;
+
+/// The opcode work budget in force: `D2N_OPCODE_BUDGET`, else [`DEFAULT_OPCODE_BUDGET`]. A
+/// value that is not a positive integer is an error.
+pub fn opcode_budget() -> Result<u64> {
+    match std::env::var(OPCODE_BUDGET_ENV) {
+        Ok(v) => match v.trim().parse::<u64>() {
+            Ok(n) if n > 0 => Ok(n),
+            _ => Err(Error::invalid(format!(
+                "{OPCODE_BUDGET_ENV}: {v:?} is not a positive number of pixel-passes"
+            ))),
+        },
+        Err(_) => Ok(DEFAULT_OPCODE_BUDGET),
+    }
+}
+
+/// The cost of one opcode: its list's tag name, its description ("WarpRectilinear (opcode
+/// 3 of 4)") and its pixel-passes.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct OpcodeCost {
+    /// "OpcodeList1" ...
+    pub list: &'static str,
+    /// Name and position in its list.
+    pub what: String,
+    /// Pixel-passes.
+    pub cost: u64,
+}
+
+/// Error unless the opcodes' total cost is within `budget`. The error names the list in which
+/// the total passes the budget, and the opcode when that opcode alone costs more than it.
+pub fn check_opcode_work(costs: &[OpcodeCost], budget: u64) -> Result<()> {
+    let mut total = 0u64;
+    for c in costs {
+        if c.cost > budget {
+            return Err(Error::limits(format!(
+                "{}: {} alone costs {} pixel-passes of opcode work, more than the budget of \
+                 {budget} (docs/limits.md, \"Opcode work\"; raise it with {OPCODE_BUDGET_ENV}, \
+                 or render with --opcodes ignore)",
+                c.list, c.what, c.cost
+            )));
+        }
+        total = total.saturating_add(c.cost);
+        if total > budget {
+            let n = costs.iter().filter(|d| d.list == c.list).count();
+            return Err(Error::limits(format!(
+                "{}: its {n} opcodes bring the opcode work to {total} pixel-passes, more than \
+                 the budget of {budget} (docs/limits.md, \"Opcode work\"; raise it with \
+                 {OPCODE_BUDGET_ENV}, or render with --opcodes ignore)",
+                c.list
+            )));
+        }
+    }
+    Ok(())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -196,6 +277,36 @@ mod tests {
         assert!(e.contains("--max-pixels"), "{e}");
         assert!(l.check_pixels("x", u64::MAX, u64::MAX).is_err());
         assert!(Limits::with_max_pixels(0).is_err());
+    }
+
+    #[test]
+    fn opcode_work_names_the_list_or_the_opcode() {
+        let c = |list, what: &str, cost| OpcodeCost {
+            list,
+            what: what.into(),
+            cost,
+        };
+        let costs = [
+            c("OpcodeList2", "GainMap (opcode 1 of 1)", 40),
+            c("OpcodeList3", "WarpRectilinear (opcode 1 of 2)", 50),
+            c("OpcodeList3", "WarpRectilinear (opcode 2 of 2)", 50),
+        ];
+        assert!(check_opcode_work(&costs, 140).is_ok());
+        let e = check_opcode_work(&costs, 100).unwrap_err().to_string();
+        assert!(
+            e.starts_with("limit exceeded: OpcodeList3: its 2 opcodes bring"),
+            "{e}"
+        );
+        assert!(
+            e.contains("140 pixel-passes") && e.contains(OPCODE_BUDGET_ENV),
+            "{e}"
+        );
+        let e = check_opcode_work(&costs, 45).unwrap_err().to_string();
+        assert!(
+            e.contains("OpcodeList3: WarpRectilinear (opcode 1 of 2) alone costs 50"),
+            "{e}"
+        );
+        assert!(check_opcode_work(&[], 1).is_ok());
     }
 
     #[test]

@@ -3,7 +3,9 @@
 //! `day2night::dataset::units` does the work; this file converts Python values (the CLI's
 //! option names and values, in snake case) to the library's types and back.
 
-use crate::{json_obj, on_pool, py_err, value_err};
+use crate::convert::json_obj;
+use crate::errors::{arg_err, py_err, value_err};
+use crate::pool::on_pool;
 use day2night::dataset::synthesis::SynthProcessor;
 use day2night::dataset::units::{self as lib, UnitsOptions, WriteOptions};
 use day2night::dataset::{Record, Shard, Split, SplitRule, Unit};
@@ -153,7 +155,7 @@ exr_compression, exr_zip_level, truncate, compat";
 fn parsed<T: std::str::FromStr<Err = Error>>(v: &Bound<'_, PyAny>, name: &str) -> PyResult<T> {
     v.extract::<String>()?
         .parse::<T>()
-        .map_err(|e| value_err(format!("{name}: {}", e.root())))
+        .map_err(|e| arg_err(name, e))
 }
 
 /// The job `dataset`'s flags spell, from keyword options named like the flags (`--iso` is
@@ -181,7 +183,7 @@ fn dataset_config(variants: u32, options: Option<&Bound<'_, PyDict>>) -> PyResul
                     o.isos = if v.is_none() {
                         Vec::new()
                     } else if let Ok(s) = v.extract::<String>() {
-                        parse_isos(&s).map_err(|e| value_err(format!("iso: {}", e.root())))?
+                        parse_isos(&s).map_err(|e| arg_err("iso", e))?
                     } else if let Ok(i) = v.extract::<u32>() {
                         parse_isos(&i.to_string()).map_err(py_err)?
                     } else {
@@ -191,7 +193,7 @@ fn dataset_config(variants: u32, options: Option<&Bound<'_, PyDict>>) -> PyResul
                             Vec::new()
                         } else {
                             parse_isos(&text.join(","))
-                                .map_err(|e| value_err(format!("iso: {}", e.root())))?
+                                .map_err(|e| arg_err("iso", e))?
                         }
                     }
                 }
@@ -204,7 +206,7 @@ fn dataset_config(variants: u32, options: Option<&Bound<'_, PyDict>>) -> PyResul
                     o.day_neutral = if v.is_none() {
                         None
                     } else if let Ok(s) = v.extract::<String>() {
-                        Some(parse_neutral(&s).map_err(|e| value_err(format!("day_neutral: {}", e.root())))?)
+                        Some(parse_neutral(&s).map_err(|e| arg_err("day_neutral", e))?)
                     } else {
                         let n: Vec<f64> = v.extract()?;
                         match n.as_slice() {

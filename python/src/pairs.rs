@@ -5,7 +5,10 @@
 //! `pack_bayer(synthesize(...)["noisy"][iso], raw.meta, top, left)` and
 //! `synthesize(...)["target"].transpose(2, 0, 1)` exactly (python/tests/test_pairs.py).
 
-use crate::{job_config, job_for, on_pool, value_err, Raw};
+use crate::errors::{py_err, value_err};
+use crate::pool::on_pool;
+use crate::raw::Raw;
+use crate::synth_options::{job_config, job_for};
 use day2night::raw::crop::Crop;
 use day2night::raw::Levels;
 use day2night::synth::night::{synthesize as lib_synthesize, Request};
@@ -169,7 +172,7 @@ pub fn night_pair<'py>(
                 Ok((noisy, clean, target))
             })
         })
-        .map_err(crate::py_err)?;
+        .map_err(py_err)?;
     let shape = |c: usize, h: usize, w: usize, v: Vec<f32>| -> PyResult<Bound<'py, PyAny>> {
         Ok(Array3::from_shape_vec((c, h, w), v)
             .map_err(|e| value_err(e.to_string()))?

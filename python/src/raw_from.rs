@@ -1,12 +1,11 @@
 //! Raws from any source: `Raw.from_array(data, meta, name)` (the metadata dict of
 //! `Raw.meta`, converted to the library's `RawMeta` and checked by
 //! `RawImage::from_parts`), the extra keys of `Raw.meta` that make it complete enough for
-//! that, and `write_dng`. Type conversion only: the checks and defaults are the library's
+//! that. Type conversion only: the checks and defaults are the library's
 //! (`day2night::raw::from_parts`).
 
-use crate::{on_pool, py_err, value_err, Raw};
-use day2night::dng::write::{write_dng as lib_write_dng, Compression, WriteOptions};
-use day2night::output::OutputPolicy;
+use crate::errors::{py_err, py_err_noting, value_err};
+use crate::pool::on_pool;
 use day2night::raw::from_parts::ColorDefault;
 use day2night::raw::meta::RawMeta;
 use day2night::raw::{Bayer, Levels, RawImage, Rect};
@@ -16,8 +15,6 @@ use pyo3::exceptions::PyUserWarning;
 use pyo3::prelude::*;
 use pyo3::types::{PyBytes, PyDict};
 use std::ffi::CString;
-use std::path::PathBuf;
-use std::sync::{Arc, OnceLock};
 
 /// Every key `from_array` reads, as `Raw.meta` returns them.
 const KEYS: &[&str] = &[
@@ -405,7 +402,7 @@ fn parse_meta(
 fn meta_err(e: day2night::Error) -> PyErr {
     let msg = e.to_string();
     match TAG_KEYS.iter().find(|(tag, _)| msg.contains(tag)) {
-        Some((_, key)) => value_err(format!("{msg} (meta[{key:?}])")),
+        Some((_, key)) => py_err_noting(e, &format!("(meta[{key:?}])")),
         None => py_err(e),
     }
 }
@@ -424,12 +421,13 @@ fn names(name: &str) -> PyResult<(String, String)> {
     })
 }
 
+/// `Raw.from_array`: the raw (in memory, named after `name`) and its stem.
 pub(crate) fn from_array(
     py: Python<'_>,
     data: &Bound<'_, PyAny>,
     meta: &Bound<'_, PyAny>,
     name: &str,
-) -> PyResult<Raw> {
+) -> PyResult<(DayInput, String)> {
     let d = meta
         .cast::<PyDict>()
         .map_err(|_| value_err("meta must be a dict (as Raw.meta returns)"))?;
@@ -466,62 +464,5 @@ pub(crate) fn from_array(
         PyErr::warn(py, warn_type.as_any(), &msg, 2)?;
     }
     let day = py.detach(move || on_pool(move || Ok(DayInput::in_memory(raw, &file_name))));
-    let day = day.map_err(py_err)?;
-    let file_name = day.source.display().to_string();
-    Ok(Raw {
-        day: Arc::new(day),
-        name: stem,
-        file_name,
-        from_file: false,
-        data: OnceLock::new(),
-    })
-}
-
-/// Write ``raw`` as a DNG at ``path`` through the library's DNG writer (the one
-/// ``day2night synth`` uses): uncompressed strips (``compression="none"``) or lossless
-/// JPEG tiles (``"ljpeg"``), every modelled tag (levels, CFA, colour matrices, neutral,
-/// ISO, noise profile, crop, orientation, opcode lists; for a read DNG also the tags it
-/// carried). Written to a temporary file, synced and renamed into place; an existing
-/// ``path`` is refused unless ``overwrite=True``.
-///
-/// >>> day2night.write_dng(day2night.from_rawpy(rawpy.imread("a.nef"), "a"), "a.dng")
-#[pyfunction]
-#[pyo3(signature = (raw, path, overwrite=false, compression="none"))]
-pub(crate) fn write_dng(
-    py: Python<'_>,
-    raw: &Bound<'_, Raw>,
-    path: PathBuf,
-    overwrite: bool,
-    compression: &str,
-) -> PyResult<()> {
-    let compression = match compression {
-        "none" => Compression::None,
-        "ljpeg" => Compression::Ljpeg,
-        c => {
-            return Err(value_err(format!(
-                "compression {c:?}: use \"none\" or \"ljpeg\""
-            )))
-        }
-    };
-    let r = raw.get();
-    let day = r.day.clone();
-    let policy = OutputPolicy {
-        overwrite,
-        inputs: if r.from_file {
-            vec![day.source.clone()]
-        } else {
-            Vec::new()
-        },
-        ..OutputPolicy::default()
-    };
-    let opts = WriteOptions {
-        compression,
-        ..WriteOptions::default()
-    };
-    py.detach(move || on_pool(move || lib_write_dng(&day.raw, &path, &opts, &policy)))
-        .map_err(py_err)
-}
-
-pub(crate) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
-    m.add_function(wrap_pyfunction!(write_dng, m)?)
+    Ok((day.map_err(py_err)?, stem))
 }

@@ -31,7 +31,7 @@ fn opcode_verdict(info: &mut DngInfo, path: &std::path::Path) {
         return;
     }
     let verdict = day2night::dng::read_dng(path).and_then(|img| {
-        day2night::isp::opcodes::prepare(&img.meta, day2night::isp::opcodes::OpcodeMode::Apply)
+        day2night::isp::opcodes::prepare_image(&img, day2night::isp::opcodes::OpcodeMode::Apply)
     });
     match verdict {
         Ok(Some(p)) => info.warnings.extend(p.report.warnings()),

@@ -1,10 +1,16 @@
 //! `day2night render IN.dng -o OUT.exr|png|tif`: the software ISP on one DNG.
 use super::args::{lib, parse_neutral, parse_zip_level};
 use super::{usage, CmdResult};
-use day2night::encode::exr::{standard_attributes, write_exr, ExrCompression, ExrOptions};
+use day2night::encode::exr::{
+    encodes_rows, standard_attributes, write_exr, ExrCompression, ExrOptions,
+};
 use day2night::encode::png::{write_png, write_tiff, PngOptions};
+use day2night::encode::target_files::TargetFiles;
 use day2night::isp::opcodes::OpcodeMode;
-use day2night::isp::render::{render_input_opts, render_linear, resolve_neutral, RenderOptions};
+use day2night::isp::render::{
+    render_input_bands_sized, render_input_opts, render_linear, render_linear_bands_sized,
+    resolve_neutral, RenderOptions,
+};
 use day2night::isp::tone::DisplayTone;
 use day2night::isp::Demosaic;
 use day2night::output::OutputPolicy;
@@ -125,8 +131,9 @@ pub fn run(args: RenderArgs) -> CmdResult {
     super::print_meta_warnings(&args.input, &img.meta);
     let in_file = |e: day2night::Error| lib(e.in_file(&args.input));
     let n = resolve_neutral(&img.meta, neutral).map_err(in_file)?;
-    // Optional opcodes that cannot be applied are skipped with a warning; others are errors.
-    if let Some(p) = day2night::isp::opcodes::prepare(&img.meta, opcodes).map_err(in_file)? {
+    // Optional opcodes that cannot be applied are skipped with a warning; others are errors,
+    // and so is opcode work over the budget (before any pixel work).
+    if let Some(p) = day2night::isp::opcodes::prepare_image(&img, opcodes).map_err(in_file)? {
         for w in p.report.warnings() {
             eprintln!("day2night: {}: warning: {w}", args.input.display());
         }
@@ -138,6 +145,45 @@ pub fn run(args: RenderArgs) -> CmdResult {
         orient: !args.no_orient,
         opcodes,
     };
+    let mut attrs = standard_attributes(&args.input, n);
+    attrs.push(("day2night:demosaic".into(), demosaic.name().into()));
+    attrs.push((
+        "day2night:content".into(),
+        if args.camera_rgb {
+            "white-balanced camera RGB (network input)".into()
+        } else {
+            "linear Rec.709/sRGB, D65".into()
+        },
+    ));
+    let exr_opts = ExrOptions {
+        half: !args.float,
+        compression,
+        zip_level,
+    };
+    // EXR (ZIP, ZIPS, none) and 8-bit PNG are written band by band as the render makes them
+    // (the same bytes as the whole-image writers); the rest from the whole image.
+    let streamed = match format {
+        Format::Exr if encodes_rows(&exr_opts) => {
+            stream(&img, &opts, args.camera_rgb, &policy, |dims, policy| {
+                TargetFiles::create(dims, Some(&args.output), (&exr_opts, &attrs), None, policy)
+            })
+            .map_err(in_file)?
+        }
+        Format::Png if !sixteen => stream(&img, &opts, args.camera_rgb, &policy, |dims, policy| {
+            TargetFiles::create(
+                dims,
+                None,
+                (&exr_opts, &[]),
+                Some((&args.output, tone)),
+                policy,
+            )
+        })
+        .map_err(in_file)?,
+        _ => false,
+    };
+    if streamed {
+        return Ok(());
+    }
     let rgb = if args.camera_rgb {
         render_input_opts(&img, &opts).map_err(in_file)?
     } else {
@@ -145,22 +191,7 @@ pub fn run(args: RenderArgs) -> CmdResult {
     };
     match format {
         Format::Exr => {
-            let mut attrs = standard_attributes(&args.input, n);
-            attrs.push(("day2night:demosaic".into(), demosaic.name().into()));
-            attrs.push((
-                "day2night:content".into(),
-                if args.camera_rgb {
-                    "white-balanced camera RGB (network input)".into()
-                } else {
-                    "linear Rec.709/sRGB, D65".into()
-                },
-            ));
-            let opts = ExrOptions {
-                half: !args.float,
-                compression,
-                zip_level,
-            };
-            write_exr(&rgb, &args.output, &opts, &attrs, &policy).map_err(lib)?;
+            write_exr(&rgb, &args.output, &exr_opts, &attrs, &policy).map_err(lib)?;
         }
         Format::Png => write_png(
             &rgb,
@@ -184,6 +215,41 @@ pub fn run(args: RenderArgs) -> CmdResult {
         .map_err(lib)?,
     }
     Ok(())
+}
+
+/// Render band by band into the files `open` makes once the output size is known (`synth`'s
+/// target writer); false when the render cannot be made in bands (Menon, several warps or a
+/// TrimBounds in OpcodeList3, a LinearRaw network input): nothing was written then. On an
+/// error the unfinished file is removed.
+fn stream<'p>(
+    img: &day2night::raw::RawImage,
+    opts: &RenderOptions,
+    camera_rgb: bool,
+    policy: &'p OutputPolicy,
+    open: impl FnOnce((usize, usize), &'p OutputPolicy) -> day2night::Result<TargetFiles<'p>>,
+) -> day2night::Result<bool> {
+    let files = std::sync::OnceLock::new();
+    let start = |w: usize, h: usize| {
+        let f = open((w, h), policy)?;
+        files
+            .set(f)
+            .map_err(|_| day2night::Error::invalid("the render was started twice"))
+    };
+    let band = |y0: usize, w: usize, rows: &[f32]| match files.get() {
+        Some(f) => f.band(y0, w, rows),
+        None => Err(day2night::Error::invalid(
+            "a band came before the render started",
+        )),
+    };
+    let made = if camera_rgb {
+        render_input_bands_sized(img, opts, start, band)?
+    } else {
+        render_linear_bands_sized(img, opts, start, band)?
+    };
+    match (made, files.get()) {
+        (Some(_), Some(f)) => f.finish().map(|_| true),
+        _ => Ok(false),
+    }
 }
 
 #[cfg(test)]

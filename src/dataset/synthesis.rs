@@ -13,6 +13,7 @@ use crate::error::Result;
 use crate::output::OutputPolicy;
 use crate::synth::job::{compression_name, DayInput, OutputKind, OutputSink, SynthJob};
 use std::borrow::Cow;
+use std::io::Write as _;
 use std::path::{Path, PathBuf};
 
 pub use crate::synth::job::Target;
@@ -58,7 +59,12 @@ impl Processor for SynthProcessor {
         let day = DayInput::from_bytes(path, bytes)?;
         // Metadata corrections: said once per input here, and recorded in every sidecar.
         for w in &day.raw.meta.warnings {
-            eprintln!("day2night: {}: warning: {w}", path.display());
+            // a closed stderr (EPIPE) must not panic the run: the line is dropped
+            let _ = writeln!(
+                std::io::stderr(),
+                "day2night: {}: warning: {w}",
+                path.display()
+            );
         }
         Ok(day)
     }

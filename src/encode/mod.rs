@@ -14,3 +14,4 @@ pub mod exr;
 pub mod png;
 pub mod png_rows;
 pub mod read;
+pub mod target_files;

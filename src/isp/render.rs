@@ -2,21 +2,25 @@
 //! sRGB -> DefaultCrop -> orientation. Every stage is parallel over rows and deterministic.
 
 use super::color::normalize_neutral;
-use super::demosaic::{demosaic_rect, demosaic_rows, row_kernel, Demosaic, Post, RowKernel};
+use super::demosaic::{demosaic_rows, row_kernel, Demosaic, Post, RowKernel};
 use super::opcodes::{self, pipeline, OpcodeMode};
 use super::RgbImage;
-use crate::error::{Error, Result};
-use crate::normalize::{Normalizer, SiteTable};
+use crate::error::Result;
+use crate::normalize::Normalizer;
 use crate::raw::RawImage;
-use rayon::prelude::*;
 
 pub use super::geometry::{
     apply_geometry, default_crop, orient_image, oriented_source, DisplayGeometry,
 };
-pub(crate) use super::render_parts::matrix_row;
+use super::place::{collect_bands, collect_bands_of};
+use super::render_bands::{banded, banded_any};
+pub use super::render_bands::{
+    render_input_bands_sized, render_linear_bands, render_linear_bands_sized,
+};
 pub use super::render_parts::{
     apply_matrix, color_matrix, resolve_neutral, Bands, RenderOptions, BAND,
 };
+pub(crate) use super::render_parts::{clip_row, matrix_row};
 
 /// Normalized, white-balanced (clipped to [0, 1]) and demosaiced camera RGB of the whole
 /// active area, not clipped after demosaicing: no colour matrix, no crop, no orientation.
@@ -63,11 +67,6 @@ pub fn render_camera_unclipped(
     render_with(img, neutral, method, &|_| {}, false, false)
 }
 
-/// Clip every sample of a row to [0, 1].
-fn clip_row(row: &mut [f32]) {
-    row.iter_mut().for_each(|v| *v = v.clamp(0.0, 1.0))
-}
-
 /// [`render_camera_unclipped`] clipped to [0, 1]: the network input before geometry.
 pub fn render_camera(img: &RawImage, neutral: [f64; 3], method: Demosaic) -> Result<RgbImage> {
     if img.meta.linear_raw.is_some() {
@@ -106,15 +105,6 @@ fn render_with(
     }
 }
 
-/// The fused render of a single-pass demosaicer: the output image (after crop and
-/// orientation) is cut into bands of [`BAND`] rows, processed in parallel; each band maps
-/// to a rectangle of the active area (rows for orientations 1-4, columns for 5-8), whose
-/// CFA samples (normalized and white-balanced, plus the 2-sample neighbourhood the
-/// kernels read) are computed into a band-sized plane, demosaiced row by row, passed
-/// through `post` and written straight to their final place. No whole-image buffer but
-/// the output. Every pixel is computed by the same expressions as in the whole-image path
-/// ([`render_camera_with`] + [`apply_geometry`]), so the results are identical bit for
-/// bit, for any thread count.
 fn render_banded(
     img: &RawImage,
     neutral: [f64; 3],
@@ -123,233 +113,7 @@ fn render_banded(
     crop: bool,
     orient: bool,
 ) -> Result<RgbImage> {
-    banded(img, neutral, kernel, post, crop, orient, |ow, oh, body| {
-        let mut out = RgbImage::try_new(ow, oh)?;
-        out.data
-            .par_chunks_mut(3 * ow * BAND)
-            .enumerate()
-            .for_each(|(bi, band)| body(bi, band));
-        Ok(out)
-    })
-}
-
-/// The set-up of [`render_banded`]: resolves the geometry and calls `run(ow, oh, body)`,
-/// where `body(bi, band)` renders output rows `[bi * BAND, bi * BAND + band.len() / (3 *
-/// ow))` into `band` (interleaved RGB, `ow` pixels per row).
-fn banded<R>(
-    img: &RawImage,
-    neutral: [f64; 3],
-    kernel: RowKernel,
-    post: &Post,
-    crop: bool,
-    orient: bool,
-    run: impl FnOnce(usize, usize, &(dyn Fn(usize, &mut [f32]) + Sync)) -> Result<R>,
-) -> Result<R> {
-    let bayer = img.bayer()?;
-    let n = normalize_neutral(neutral)?;
-    let norm = Normalizer::new(img)?;
-    let a = img.active_area();
-    let (w, h) = (a.width(), a.height());
-    let (top, left) = (a.top as usize, a.left as usize);
-    let stride = img.width;
-    if w == 0 || h == 0 || (top + h - 1) * stride + left + w > img.data.len() {
-        return Err(Error::invalid(
-            "the active area is empty or outside the pixel buffer",
-        ));
-    }
-    let inv = [1.0 / n[0], 1.0, 1.0 / n[2]];
-    let data = &img.data;
-    // CFA sample (r, cs[k]) into out[k]: normalized, white-balanced, clipped. Wide bands
-    // take the black levels of the whole row from `Normalizer::black_row` (bit-identical
-    // to `black_at`, without two integer divisions per sample); narrow ones (orientations
-    // 5-8) ask per sample.
-    let site = |x: u16, r: usize, c: usize, black: f64| -> f32 {
-        let y = norm.normalize_with_black(x, black) * inv[bayer.color_at(r, c) as usize];
-        y.clamp(0.0, 1.0) as f32
-    };
-    // With a 2x2-periodic black level every stored value up to white is tabulated per
-    // 2x2 position (same expression, same bits).
-    let table = SiteTable::new(&norm, |r, c, x| site(x, r, c, norm.black_at(r, c)));
-    let fill = |blacks: &mut Vec<f64>, r: usize, cs: &[usize], out: &mut [f32]| {
-        let src = &data[(r + top) * stride + left..][..w];
-        if let Some(t) = &table {
-            let (t0, t1) = t.row(r);
-            for (o, &c) in out.iter_mut().zip(cs) {
-                let x = src[c];
-                let tab = if c & 1 == 0 { t0 } else { t1 };
-                *o = match tab.get(x as usize) {
-                    Some(&v) => v,
-                    None => site(x, r, c, norm.black_at(r, c)),
-                };
-            }
-        } else if 2 * cs.len() >= w {
-            blacks.resize(w, 0.0);
-            norm.black_row(r, blacks);
-            for (o, &c) in out.iter_mut().zip(cs) {
-                let y = norm.normalize_with_black(src[c], blacks[c])
-                    * inv[bayer.color_at(r, c) as usize];
-                *o = y.clamp(0.0, 1.0) as f32;
-            }
-        } else {
-            for (o, &c) in out.iter_mut().zip(cs) {
-                let y = norm.normalize(src[c], r, c) * inv[bayer.color_at(r, c) as usize];
-                *o = y.clamp(0.0, 1.0) as f32;
-            }
-        }
-    };
-    let (x0, y0, cw, ch) = if crop {
-        default_crop(&img.meta, w, h)
-    } else {
-        (0, 0, w, h)
-    };
-    let o = if orient && (2..=8).contains(&img.meta.orientation) {
-        img.meta.orientation
-    } else {
-        1
-    };
-    let swap = o >= 5;
-    let (ow, oh) = if swap { (ch, cw) } else { (cw, ch) };
-    let body = |bi: usize, band: &mut [f32]| {
-        let a0 = bi * BAND;
-        let b0 = a0 + band.len() / (3 * ow);
-        let mut blacks = Vec::new();
-        let fill = |r: usize, cs: &[usize], out: &mut [f32]| fill(&mut blacks, r, cs, out);
-        if !swap {
-            // Output rows [a0, b0) are crop rows [s0, s1), in reverse order for 3 and 4,
-            // mirrored left-right for 2 and 3.
-            let (s0, s1) = if o <= 2 { (a0, b0) } else { (ch - b0, ch - a0) };
-            let flip = o == 2 || o == 3;
-            let rows = y0 + s0..y0 + s1;
-            demosaic_rect(
-                w,
-                h,
-                bayer,
-                kernel,
-                rows,
-                x0..x0 + cw,
-                fill,
-                post,
-                |i, rgb| {
-                    let yc = s0 + i;
-                    let yo = if o <= 2 { yc } else { ch - 1 - yc };
-                    let dst = &mut band[3 * ow * (yo - a0)..][..3 * ow];
-                    if flip {
-                        for (d, p) in dst.chunks_exact_mut(3).zip(rgb.chunks_exact(3).rev()) {
-                            d.copy_from_slice(p);
-                        }
-                    } else {
-                        dst.copy_from_slice(rgb);
-                    }
-                },
-            );
-        } else {
-            // Output rows [a0, b0) are crop columns [s0, s1) (reversed for 7 and 8);
-            // crop row y becomes output column y (5, 8) or ch - 1 - y (6, 7).
-            let (s0, s1) = if o <= 6 { (a0, b0) } else { (cw - b0, cw - a0) };
-            let cols = x0 + s0..x0 + s1;
-            demosaic_rect(
-                w,
-                h,
-                bayer,
-                kernel,
-                y0..y0 + ch,
-                cols,
-                fill,
-                post,
-                |y, rgb| {
-                    let xo = if o == 5 || o == 8 { y } else { ch - 1 - y };
-                    for (k, p) in rgb.chunks_exact(3).enumerate() {
-                        let x = s0 + k;
-                        let yo = if o <= 6 { x } else { cw - 1 - x };
-                        let d = 3 * ((yo - a0) * ow + xo);
-                        band[d..d + 3].copy_from_slice(p);
-                    }
-                },
-            );
-        }
-    };
-    run(ow, oh, &body)
-}
-
-/// Band-wise consumer of [`render_linear`]: the render is made band by band ([`BAND`]
-/// output rows each, in parallel, into a per-thread buffer) and `f(first_row, width,
-/// rows)` is called on each band (`rows` is interleaved linear RGB, `width` pixels per
-/// row); the results come back in band order with the output size ([`Bands`]). The rows
-/// are exactly those of [`render_linear`]'s image (same code), so consumers that encode
-/// them (EXR blocks, 8-bit PNG samples) write the same bytes as from the whole image,
-/// without holding it. `None` when the demosaicer is not banded (Menon): use
-/// [`render_linear`]. See [`render_linear_bands_sized`] for the order in which bands are
-/// made.
-pub fn render_linear_bands<T, F>(
-    img: &RawImage,
-    opts: &RenderOptions,
-    f: F,
-) -> Result<Option<Bands<T>>>
-where
-    T: Send,
-    F: Fn(usize, usize, &[f32]) -> Result<T> + Sync,
-{
-    render_linear_bands_sized(img, opts, |_, _| Ok(()), f)
-}
-
-/// [`render_linear_bands`] that first calls `start(width, height)` with the output size,
-/// once, before any band (not at all when it returns `None`), e.g. to open a file that
-/// `f` writes the bands into.
-///
-/// Bands are made nearly in order: each thread takes the lowest band not yet taken, and no
-/// band is started more than 2 x threads + 1 bands beyond the lowest unfinished one, so a
-/// consumer that writes the bands in order (holding those that come early) holds a few
-/// bands at most. `f` must not wait for other rayon work (no parallel iterator or `join`
-/// inside): other threads may be waiting for its band.
-pub fn render_linear_bands_sized<T, S, F>(
-    img: &RawImage,
-    opts: &RenderOptions,
-    start: S,
-    f: F,
-) -> Result<Option<Bands<T>>>
-where
-    T: Send,
-    S: FnOnce(usize, usize) -> Result<()>,
-    F: Fn(usize, usize, &[f32]) -> Result<T> + Sync,
-{
-    if img.meta.linear_raw.is_some() {
-        return super::render_linear_raw::render_linear_bands(img, opts, start, f);
-    }
-    let Some(kernel) = row_kernel(opts.demosaic) else {
-        return Ok(None);
-    };
-    if opcodes::active(&img.meta, opts.opcodes)?.is_some() {
-        // The opcode path is not banded: render_linear makes the whole image.
-        return Ok(None);
-    }
-    let n = resolve_neutral(&img.meta, opts.neutral)?;
-    let m = color_matrix(&img.meta, n)?;
-    let mf = m.map(|r| r.map(|v| v as f32));
-    let post = move |row: &mut [f32]| matrix_row(row, &mf);
-    banded(
-        img,
-        n,
-        kernel,
-        &post,
-        opts.crop,
-        opts.orient,
-        |ow, oh, body| {
-            start(ow, oh)?;
-            let nb = oh.div_ceil(BAND);
-            let bands = super::bands::in_order(nb, |bi, scratch: &mut Vec<f32>| {
-                let rows = BAND.min(oh - bi * BAND);
-                scratch.clear();
-                scratch.resize(3 * ow * rows, 0.0);
-                body(bi, scratch);
-                f(bi * BAND, ow, scratch)
-            })?;
-            Ok(Some(Bands {
-                width: ow,
-                height: oh,
-                bands,
-            }))
-        },
-    )
+    banded(img, neutral, kernel, post, crop, orient, collect_bands)
 }
 
 /// The network input of the paper: normalized, white-balanced, demosaiced camera RGB
@@ -396,7 +160,14 @@ pub fn render_input_opts(img: &RawImage, opts: &RenderOptions) -> Result<RgbImag
             opts.opcodes,
         );
     }
-    if let Some(p) = opcodes::active(&img.meta, opts.opcodes)? {
+    if let Some(p) = opcodes::active_image(img, opts.opcodes)? {
+        if let Some(kernel) = row_kernel(opts.demosaic) {
+            let ends = (opts.crop, opts.orient);
+            let got = banded_any(img, Some(&p), n, kernel, &clip_row, ends, collect_bands)?;
+            if let Some(rgb) = got {
+                return Ok(rgb);
+            }
+        }
         return pipeline::render_frame(
             img,
             &p,
@@ -421,10 +192,65 @@ pub fn render_linear(img: &RawImage, opts: &RenderOptions) -> Result<RgbImage> {
     let m = color_matrix(&img.meta, n)?;
     let mf = m.map(|r| r.map(|v| v as f32));
     let post = move |row: &mut [f32]| matrix_row(row, &mf);
-    if let Some(p) = opcodes::active(&img.meta, opts.opcodes)? {
+    if let Some(p) = opcodes::active_image(img, opts.opcodes)? {
+        if let Some(kernel) = row_kernel(opts.demosaic) {
+            let ends = (opts.crop, opts.orient);
+            let got = banded_any(img, Some(&p), n, kernel, &post, ends, collect_bands)?;
+            if let Some(rgb) = got {
+                return Ok(rgb);
+            }
+        }
         return pipeline::render_frame(img, &p, n, opts.demosaic, &post, opts.crop, opts.orient);
     }
     render_with(img, n, opts.demosaic, &post, opts.crop, opts.orient)
+}
+
+/// [`render_linear`] of a file with opcodes made in bands of `band` output rows (any
+/// height; the renders use [`BAND`]), `None` when its opcodes are not banded. For tests:
+/// it must equal [`render_linear_whole_frame`] bit for bit.
+#[doc(hidden)]
+pub fn render_linear_banded_by(
+    img: &RawImage,
+    opts: &RenderOptions,
+    band: usize,
+) -> Result<Option<RgbImage>> {
+    let (Some(kernel), Some(p)) = (
+        row_kernel(opts.demosaic),
+        opcodes::active_image(img, opts.opcodes)?,
+    ) else {
+        return Ok(None);
+    };
+    let n = resolve_neutral(&img.meta, opts.neutral)?;
+    let m = color_matrix(&img.meta, n)?;
+    let mf = m.map(|r| r.map(|v| v as f32));
+    let post = move |row: &mut [f32]| matrix_row(row, &mf);
+    let ends = (opts.crop, opts.orient);
+    let band = band.max(1);
+    opcodes::banded::render(
+        img,
+        &p,
+        n,
+        kernel,
+        &post,
+        ends,
+        band,
+        collect_bands_of(band),
+    )
+}
+
+/// The whole-frame opcode render ([`pipeline::render_frame`]: every stage on whole
+/// images), the reference the banded opcode render must equal bit for bit. Kept for tests
+/// and benchmarks; files without applicable opcodes take [`render_linear`].
+#[doc(hidden)]
+pub fn render_linear_whole_frame(img: &RawImage, opts: &RenderOptions) -> Result<RgbImage> {
+    let Some(p) = opcodes::active_image(img, opts.opcodes)? else {
+        return render_linear(img, opts);
+    };
+    let n = resolve_neutral(&img.meta, opts.neutral)?;
+    let m = color_matrix(&img.meta, n)?;
+    let mf = m.map(|r| r.map(|v| v as f32));
+    let post = move |row: &mut [f32]| matrix_row(row, &mf);
+    pipeline::render_frame(img, &p, n, opts.demosaic, &post, opts.crop, opts.orient)
 }
 
 /// The unfused reference of [`render_linear`]: whole-image demosaic (colour matrix per

@@ -88,7 +88,7 @@ pub fn render_linear_crop_with(
     let m = color_matrix(&frame.meta, n)?;
     let mf = m.map(|r| r.map(|v| v as f32));
     let post = move |row: &mut [f32]| matrix_row(row, &mf);
-    if let Some(p) = opcodes::active(&frame.meta, mode)? {
+    if let Some(p) = opcodes::active_image(frame, mode)? {
         return pipeline::render_crop(frame, &p, n, method, outer, plane, crop, &post);
     }
     let norm = Normalizer::new(frame)?.without_linearization();

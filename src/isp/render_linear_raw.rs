@@ -159,7 +159,7 @@ fn balanced(
     mode: OpcodeMode,
 ) -> Result<(RgbImage, Bounds, (usize, usize))> {
     let n = normalize_neutral(neutral)?;
-    let p = opcodes::active(&img.meta, mode)?;
+    let p = opcodes::active_image(img, mode)?;
     let (mut rgb, b) = stage_rgb(img, p.as_ref())?;
     white_balance(&mut rgb, n);
     let a = img.active_area();

@@ -98,3 +98,8 @@ pub(crate) fn matrix_row(row: &mut [f32], mf: &[[f32; 3]; 3]) {
         }
     }
 }
+
+/// Clip every sample of a row to [0, 1].
+pub(crate) fn clip_row(row: &mut [f32]) {
+    row.iter_mut().for_each(|v| *v = v.clamp(0.0, 1.0))
+}

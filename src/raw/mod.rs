@@ -1,6 +1,7 @@
 //! The in-memory raw image: a CFA mosaic of `u16` samples plus its metadata, and the
 //! geometry/level helpers every stage shares (Bayer phase, ActiveArea, per-site black).
 
+pub mod camera;
 pub mod crop;
 pub mod from_parts;
 pub mod meta;

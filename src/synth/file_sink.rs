@@ -1,15 +1,15 @@
 //! The [`NightSink`] that writes files: each product of a variant encoded as its DNG, EXR or
 //! PNG and written through an [`OutputSink`]'s paths and policy; the banded target goes into
-//! its open files band by band (`super::target_files`). Used by
+//! its open files band by band (`encode::target_files`). Used by
 //! [`SynthJob`](super::job::SynthJob) for `synth`, `dataset` and Python's `write_outputs`.
 
 use super::night::{NightSink, TargetOut};
 use super::outputs::{OutputKind, OutputSink, Target};
-use super::target_files::TargetFiles;
 use super::Plan;
 use crate::dng::write::{write_dng, write_dng_rows, Compression, WriteOptions};
 use crate::encode::exr::{encodes_rows, standard_attributes, write_exr, ExrOptions};
 use crate::encode::png::{write_png, PngOptions};
+use crate::encode::target_files::TargetFiles;
 use crate::error::{Error, Result};
 use crate::isp::RgbImage;
 use crate::output::OutputPolicy;
@@ -112,7 +112,7 @@ impl NightSink for FileSink<'_> {
 
     /// Band by band when every requested target can be encoded from bands (the default
     /// ZIP/none EXRs, 8-bit PNG): same bytes, no whole f32 image, each band is encoded
-    /// while it is in cache and written at once (`synth::target_files`), so the encoded
+    /// while it is in cache and written at once (`encode::target_files`), so the encoded
     /// target is never held whole either.
     fn banded(&self) -> bool {
         !self.target.exr() || encodes_rows(self.exr)
@@ -131,7 +131,8 @@ impl NightSink for FileSink<'_> {
             (w, h),
             exr.as_deref(),
             (self.exr, &self.attrs),
-            png.as_deref(),
+            png.as_deref()
+                .map(|p| (p, crate::encode::png::PngOptions::default().tone)),
             self.policy,
         )?;
         self.target_files

@@ -30,7 +30,6 @@ pub mod plan_bounds;
 pub mod relight;
 pub mod rng;
 pub mod sidecar;
-mod target_files;
 
 pub use illuminant::{Covariance, Gaussian2, SamplerRules};
 pub use masks::{Light, LightKind, MaskEval};
@@ -82,6 +81,11 @@ pub struct Compat {
     pub neutral_as_stored: bool,
     /// Truncate the noisy raws too when `truncate` is set (the release's `astype(uint16)`).
     pub truncate_noise: bool,
+    /// Normalize and denormalize each site with its own range `white - black(site)`, not
+    /// `white - black_max` (the release's `normalize`/`denormalize` with a 2x2 BlackLevel;
+    /// see [`crate::normalize::Normalizer::with_range_per_site`]). Changes nothing when the
+    /// black level is one value.
+    pub range_per_site: bool,
 }
 
 impl Compat {
@@ -89,6 +93,7 @@ impl Compat {
     pub const RELEASE: Compat = Compat {
         neutral_as_stored: true,
         truncate_noise: true,
+        range_per_site: true,
     };
     /// True when no switch is on.
     pub fn is_off(&self) -> bool {

@@ -23,7 +23,8 @@
 //!
 //! ```no_run
 //! use day2night::synth::night::{synthesize, Request};
-//! use day2night::synth::{self, crop::Crop, Calibration, SynthOptions};
+//! use day2night::raw::crop::Crop;
+//! use day2night::synth::{self, Calibration, SynthOptions};
 //! # fn main() -> day2night::Result<()> {
 //! let day = day2night::dng::read_dng("day.dng".as_ref())?;
 //! let opts = SynthOptions::default();

@@ -61,6 +61,10 @@ pub struct Plan {
     /// Truncate the noisy raws too (`truncate` and `compat.truncate_noise`; absent = false).
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub truncate_noise: bool,
+    /// Normalize and denormalize each site with its own range `white - black(site)`
+    /// (`compat.range_per_site`, the release; absent = false: `white - black_max`).
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub range_per_site: bool,
     /// Keep negative normalized values (no clip at 0).
     pub keep_negative: bool,
     /// Keep white-balanced values above 1 (no clip at 1 after removing the day illuminant).
@@ -367,7 +371,7 @@ pub fn plan(
     }
     // The renders' opcodes: unapplicable optional ones are warnings, mandatory ones errors.
     // The stage `apply_opcodes` is recorded by the synthesis when a render runs.
-    let opcodes = crate::isp::opcodes::prepare(&img.meta, opts.opcodes)?.map(|p| p.report);
+    let opcodes = crate::isp::opcodes::prepare_image(img, opts.opcodes)?.map(|p| p.report);
     if let Some(r) = &opcodes {
         warnings.extend(r.warnings());
     }
@@ -383,6 +387,7 @@ pub fn plan(
         formula: opts.formula,
         truncate: opts.truncate,
         truncate_noise: opts.truncate && opts.compat.truncate_noise,
+        range_per_site: opts.compat.range_per_site,
         keep_negative: opts.keep_negative,
         keep_highlights: opts.keep_highlights,
         mask_eval: opts.mask_eval,

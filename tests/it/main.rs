@@ -36,6 +36,7 @@ mod isp_banded;
 mod isp_demosaic_accuracy;
 mod isp_exr;
 mod isp_opcodes;
+mod isp_opcodes_banded;
 mod isp_render;
 mod layers;
 mod limits_bombs;

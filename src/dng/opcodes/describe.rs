@@ -53,6 +53,18 @@ pub enum OpcodeParams {
         /// Optical centre (x, y), relative.
         center: [f64; 2],
     },
+    /// WarpRectilinear2: per plane kr0..kr14 then kt0, kt1, the valid radius range, the
+    /// optical centre and whether the radial ratio is the polynomial's reciprocal.
+    Warp2 {
+        /// Per plane: kr0..kr14, kt0, kt1.
+        coefficients: Vec<Vec<f64>>,
+        /// Per plane: minimum and maximum valid radius.
+        valid: Vec<[f64; 2]>,
+        /// Optical centre (x, y), relative.
+        center: [f64; 2],
+        /// The ratio is `1 / sum kr_i r^i`.
+        reciprocal: bool,
+    },
     /// FixVignetteRadial.
     Vignette {
         /// k0..k4.
@@ -172,6 +184,19 @@ pub fn describe(op: &Opcode) -> OpcodeInfo {
         OpcodeKind::WarpFisheye { planes, center } => OpcodeParams::Warp {
             coefficients: planes.iter().map(|k| k.to_vec()).collect(),
             center: *center,
+        },
+        OpcodeKind::WarpRectilinear2 {
+            planes,
+            center,
+            reciprocal,
+        } => OpcodeParams::Warp2 {
+            coefficients: planes
+                .iter()
+                .map(|p| p.kr.iter().chain(p.kt.iter()).copied().collect())
+                .collect(),
+            valid: planes.iter().map(|p| p.valid).collect(),
+            center: *center,
+            reciprocal: *reciprocal,
         },
         OpcodeKind::FixVignetteRadial { k, center } => OpcodeParams::Vignette {
             coefficients: *k,
@@ -297,6 +322,25 @@ impl OpcodeInfo {
                     per.join(" "),
                     g(center[0]),
                     g(center[1])
+                )
+            }
+            OpcodeParams::Warp2 {
+                coefficients,
+                valid,
+                center,
+                reciprocal,
+            } => {
+                let per: Vec<String> = coefficients
+                    .iter()
+                    .zip(valid)
+                    .map(|(c, v)| format!("[{}] valid r {}..{}", gs(c), g(v[0]), g(v[1])))
+                    .collect();
+                format!(
+                    "coefficients {} centre {},{}{}",
+                    per.join(" "),
+                    g(center[0]),
+                    g(center[1]),
+                    if *reciprocal { " reciprocal" } else { "" }
                 )
             }
             OpcodeParams::Vignette {

@@ -82,6 +82,21 @@ pub fn encode_params(kind: &OpcodeKind) -> Vec<u8> {
             put_f64(&mut out, center[0]);
             put_f64(&mut out, center[1]);
         }
+        OpcodeKind::WarpRectilinear2 {
+            planes,
+            center,
+            reciprocal,
+        } => {
+            put_u32(&mut out, planes.len() as u32);
+            for p in planes {
+                for &v in p.kr.iter().chain(p.kt.iter()).chain(p.valid.iter()) {
+                    put_f64(&mut out, v);
+                }
+            }
+            put_f64(&mut out, center[0]);
+            put_f64(&mut out, center[1]);
+            put_u32(&mut out, u32::from(*reciprocal));
+        }
         OpcodeKind::WarpFisheye { planes, center } => {
             put_u32(&mut out, planes.len() as u32);
             for p in planes {

@@ -61,7 +61,7 @@ pub const FLAG_PREVIEW_SKIP: u32 = 2;
 /// One parsed opcode.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Opcode {
-    /// Opcode id (1 WarpRectilinear ... 13 ScalePerColumn, others unknown to this reader).
+    /// Opcode id (1 WarpRectilinear ... 14 WarpRectilinear2, others unknown to this reader).
     pub id: u32,
     /// The DNG version the opcode needs, as stored.
     pub dng_version: [u8; 4],
@@ -124,6 +124,18 @@ pub struct WarpPlane {
     pub kt: [f64; 2],
 }
 
+/// WarpRectilinear2 coefficients of one plane (DNG 1.6): radial `kr0..kr14` of the
+/// polynomial in `r` (not `r^2`), tangential `kt0, kt1`, and the valid radius range.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct WarpPlane2 {
+    /// Radial coefficients kr0..kr14: `ratio = sum kr_i r^i` (or its reciprocal).
+    pub kr: [f64; 15],
+    /// Tangential coefficients kt0, kt1.
+    pub kt: [f64; 2],
+    /// Minimum and maximum valid radius (`0 <= min < max <= 1`): `r` is clamped into it.
+    pub valid: [f64; 2],
+}
+
 /// GainMap (id 9): a grid of gains, bilinearly interpolated, multiplied into the area.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct GainMap {
@@ -165,6 +177,16 @@ pub enum OpcodeKind {
         planes: Vec<[f64; 4]>,
         /// Optical centre (x, y), relative.
         center: [f64; 2],
+    },
+    /// 14 (DNG 1.6): lens distortion with a 15-term radial polynomial in `r`, optionally
+    /// its reciprocal, a valid radius range and tangential terms, per plane.
+    WarpRectilinear2 {
+        /// One entry per plane (1 = all planes alike, or one per plane).
+        planes: Vec<WarpPlane2>,
+        /// Optical centre (x, y), relative (0..1).
+        center: [f64; 2],
+        /// The radial ratio is `1 / sum kr_i r^i` instead of the sum.
+        reciprocal: bool,
     },
     /// 3: radial vignette correction, gain `1 + k0 r^2 + k1 r^4 + ... + k4 r^10`.
     FixVignetteRadial {
@@ -265,6 +287,7 @@ impl OpcodeKind {
             OpcodeKind::DeltaPerColumn { .. } => 11,
             OpcodeKind::ScalePerRow { .. } => 12,
             OpcodeKind::ScalePerColumn { .. } => 13,
+            OpcodeKind::WarpRectilinear2 { .. } => 14,
             OpcodeKind::Unknown { .. } => return None,
         })
     }

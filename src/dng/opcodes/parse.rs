@@ -4,7 +4,7 @@
 //! [`Error::Malformed`] (or [`Error::Limits`] for a bound) naming the opcode, its position in
 //! the list and the field; [`super::lists`] adds the list's tag name in front.
 
-use super::{AreaSpec, GainMap, Opcode, OpcodeKind, OpcodeList, WarpPlane};
+use super::{AreaSpec, GainMap, Opcode, OpcodeKind, OpcodeList, WarpPlane, WarpPlane2};
 use crate::error::{Error, Result};
 use crate::limits::{
     MAX_BAD_PIXEL_ENTRIES, MAX_GAIN_MAP_POINTS, MAX_MAP_TABLE_LEN, MAX_OPCODES_PER_LIST,
@@ -253,6 +253,19 @@ fn warp_planes(params: &[u8], per_plane: u64) -> Result<u32> {
     Ok(n)
 }
 
+/// The plane count of a WarpRectilinear2 (19 doubles per plane, then the centre and a u32).
+fn warp_planes2(params: &[u8]) -> Result<u32> {
+    check_min(params, 4)?;
+    let n = be_u32(params, 0);
+    if !(1..=MAX_WARP_PLANES).contains(&n) {
+        return Err(Error::malformed(format!(
+            "N (planes) is {n}, must be 1..={MAX_WARP_PLANES}"
+        )));
+    }
+    check_len(params, 4 + 19 * 8 * u64::from(n) + 16 + 4)?;
+    Ok(n)
+}
+
 fn parse_kind(id: u32, params: &[u8]) -> Result<OpcodeKind> {
     let mut p = Params { b: params, pos: 0 };
     let kind = match id {
@@ -274,6 +287,41 @@ fn parse_kind(id: u32, params: &[u8]) -> Result<OpcodeKind> {
             OpcodeKind::WarpRectilinear {
                 planes,
                 center: center(&mut p)?,
+            }
+        }
+        14 => {
+            // N, per plane kr0..kr14, kt0, kt1, min and max valid radius, then cx, cy and
+            // the reciprocal flag (a u32 after the centre).
+            let n = warp_planes2(params)?;
+            p.pos = 4;
+            let mut planes = Vec::with_capacity(n as usize);
+            for i in 0..n {
+                let mut kr = [0.0; 15];
+                for (j, k) in kr.iter_mut().enumerate() {
+                    *k = p.f64(&format!("plane {i} kr{j}"))?;
+                }
+                let kt = [
+                    p.f64(&format!("plane {i} kt0"))?,
+                    p.f64(&format!("plane {i} kt1"))?,
+                ];
+                let valid = [
+                    p.f64(&format!("plane {i} minimum valid radius"))?,
+                    p.f64(&format!("plane {i} maximum valid radius"))?,
+                ];
+                if !(0.0 <= valid[0] && valid[0] < valid[1] && valid[1] <= 1.0) {
+                    return Err(Error::malformed(format!(
+                        "plane {i}: valid radius range {}..{} must satisfy 0 <= min < max <= 1",
+                        valid[0], valid[1]
+                    )));
+                }
+                planes.push(WarpPlane2 { kr, kt, valid });
+            }
+            let center = center(&mut p)?;
+            let reciprocal = p.u32("reciprocal flag")? != 0;
+            OpcodeKind::WarpRectilinear2 {
+                planes,
+                center,
+                reciprocal,
             }
         }
         2 => {

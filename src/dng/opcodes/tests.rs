@@ -84,11 +84,59 @@ fn empty_list_and_unknown_opcode() {
         },
         FLAG_OPTIONAL,
     );
-    op.id = 14;
+    op.id = 15;
     let l = OpcodeList { opcodes: vec![op] };
     let p = parse_list(&encode_list(&l)).unwrap();
     assert_eq!(p, l);
-    assert_eq!(p.opcodes[0].name(), "WarpRectilinear2");
+    assert_eq!(p.opcodes[0].name(), "unknown");
+}
+
+#[test]
+fn warp_rectilinear2_round_trips_in_the_sdk_layout() {
+    let mut kr = [0.0; 15];
+    kr[0] = 1.0;
+    kr[14] = -0.5;
+    let plane = super::WarpPlane2 {
+        kr,
+        kt: [0.001, -0.002],
+        valid: [0.0, 0.75],
+    };
+    let op = Opcode::new(
+        OpcodeKind::WarpRectilinear2 {
+            planes: vec![plane; 3],
+            center: [0.25, 0.5],
+            reciprocal: true,
+        },
+        0,
+    );
+    assert_eq!(op.id, 14);
+    let l = OpcodeList { opcodes: vec![op] };
+    let b = encode_list(&l);
+    // count, header, then N, 19 doubles per plane, the centre and the reciprocal flag
+    let n = u32::from_be_bytes(b[16..20].try_into().unwrap()) as usize;
+    assert_eq!(n, 4 + 19 * 8 * 3 + 16 + 4);
+    assert_eq!(&b[b.len() - 4..], &1u32.to_be_bytes());
+    assert_eq!(parse_list(&b).unwrap(), l);
+    // a valid range with min >= max, or max > 1, is malformed (the SDK refuses it too)
+    for valid in [[0.5, 0.5], [0.0, 1.5], [-0.1, 0.5]] {
+        let bad = OpcodeList {
+            opcodes: vec![Opcode::new(
+                OpcodeKind::WarpRectilinear2 {
+                    planes: vec![super::WarpPlane2 { valid, ..plane }],
+                    center: [0.5, 0.5],
+                    reciprocal: false,
+                },
+                0,
+            )],
+        };
+        let e = parse_list(&encode_list(&bad)).unwrap_err().to_string();
+        assert!(e.contains("plane 0: valid radius range"), "{e}");
+    }
+    // one byte short
+    let mut short = b.clone();
+    short.pop();
+    short[19] -= 1;
+    assert!(parse_list(&short).is_err());
 }
 
 #[test]

@@ -69,17 +69,13 @@ pub fn is_green(phase: u32, r: usize, c: usize) -> bool {
     }
 }
 
-/// Replace the samples of `reg` (one plane) marked in `bad` (region-sized).
-fn fix(reg: &mut Region, phase: u32, bad: &[bool]) {
-    if reg.planes != 1 || !bad.iter().any(|&b| b) {
-        return;
-    }
+/// Replace the samples `list` of `reg` (one plane), those marked in `bad` (region-sized).
+/// Only marked samples are written and only unmarked ones are read, so the pass reads the
+/// values from before it whatever the order. Returns whether any sample changed.
+fn fix(reg: &mut Region, phase: u32, bad: &[bool], list: &[usize]) -> bool {
     let (w, h) = (reg.width, reg.height);
-    let orig = reg.data.to_vec();
-    for i in 0..w * h {
-        if !bad[i] {
-            continue;
-        }
+    let mut changed = false;
+    for &i in list {
         let (y, x) = (i / w, i % w);
         let (r, c) = (reg.top + y, reg.left + x);
         let rings: &[Ring] = if is_green(phase, r, c) {
@@ -96,31 +92,56 @@ fn fix(reg: &mut Region, phase: u32, bad: &[bool]) {
                 }
                 let j = yy as usize * w + xx as usize;
                 if !bad[j] {
-                    sum += orig[j] as f64;
+                    sum += reg.data[j] as f64;
                     n += 1;
                 }
             }
             if n > 0 {
-                reg.data[i] = (sum / n as f64) as f32;
+                let v = (sum / n as f64) as f32;
+                changed |= v.to_bits() != reg.data[i].to_bits();
+                reg.data[i] = v;
                 break;
             }
         }
     }
+    changed
 }
 
 /// FixBadPixelsConstant on a CFA region.
 pub fn fix_constant(reg: &mut Region, constant: u32, phase: u32) {
+    fix_constant_repeated(reg, constant, phase, 1)
+}
+
+/// `times` FixBadPixelsConstant opcodes in a row (same constant and phase) on a CFA region,
+/// with the samples of `times` separate passes: each pass after the first looks only at the
+/// samples the pass before repaired (the others did not change, so they are still good) and
+/// keeps those whose new value still reads as the constant; the passes stop early when one
+/// changes nothing (the next would see the same values).
+pub fn fix_constant_repeated(reg: &mut Region, constant: u32, phase: u32, times: usize) {
+    if reg.planes != 1 || times == 0 {
+        return;
+    }
     let to16 = 65535.0 / reg.range;
-    let bad: Vec<bool> = reg
-        .data
-        .iter()
-        .map(|&v| ((v * to16).round() as i64) == constant as i64)
-        .collect();
-    fix(reg, phase, &bad);
+    let is_bad = |v: f32| ((v * to16).round() as i64) == constant as i64;
+    let mut bad: Vec<bool> = reg.data.iter().map(|&v| is_bad(v)).collect();
+    let mut list: Vec<usize> = (0..bad.len()).filter(|&i| bad[i]).collect();
+    for pass in 0..times {
+        if list.is_empty() || !fix(reg, phase, &bad, &list) || pass + 1 == times {
+            return;
+        }
+        list.retain(|&i| {
+            let still = is_bad(reg.data[i]);
+            bad[i] = still;
+            still
+        });
+    }
 }
 
 /// FixBadPixelsList on a CFA region.
 pub fn fix_list(reg: &mut Region, phase: u32, points: &[[u32; 2]], rects: &[[u32; 4]]) {
+    if reg.planes != 1 {
+        return;
+    }
     let (w, h, top, left) = (reg.width, reg.height, reg.top, reg.left);
     let mut bad = vec![false; w * h];
     let mut mark = |r0: usize, c0: usize, r1: usize, c1: usize| {
@@ -139,7 +160,8 @@ pub fn fix_list(reg: &mut Region, phase: u32, points: &[[u32; 2]], rects: &[[u32
     for q in rects {
         mark(q[0] as usize, q[1] as usize, q[2] as usize, q[3] as usize);
     }
-    fix(reg, phase, &bad);
+    let list: Vec<usize> = (0..bad.len()).filter(|&i| bad[i]).collect();
+    fix(reg, phase, &bad, &list);
 }
 
 #[cfg(test)]
@@ -200,6 +222,49 @@ mod tests {
         let mut reg = region(&mut d, 3, 3, 1.0);
         fix_list(&mut reg, 1, &[], &[[0, 0, 3, 3]]);
         assert_eq!(d, vec![0.25; 9]);
+    }
+
+    /// The reference: one pass per opcode, each with its own mask over every sample.
+    fn separate_passes(d: &mut [f32], w: usize, h: usize, constant: u32, times: usize) {
+        for _ in 0..times {
+            let mut reg = region(d, w, h, 65535.0);
+            let bad: Vec<bool> = reg
+                .data
+                .iter()
+                .map(|&v| v.round() as i64 == constant as i64)
+                .collect();
+            let list: Vec<usize> = (0..bad.len()).filter(|&i| bad[i]).collect();
+            fix(&mut reg, 0, &bad, &list);
+        }
+    }
+
+    #[test]
+    fn repeated_constant_fixes_equal_separate_passes() {
+        // A blob of bad samples larger than the search reach needs several passes; a pair
+        // of neighbours whose mean is the constant stays bad after the first.
+        let (w, h) = (40, 30);
+        let mut s = 7u64;
+        let base: Vec<f32> = (0..w * h)
+            .map(|i| {
+                s = s
+                    .wrapping_mul(6364136223846793005)
+                    .wrapping_add(1442695040888963407);
+                let (r, c) = (i / w, i % w);
+                if (8..22).contains(&r) && (5..25).contains(&c) {
+                    100.0
+                } else {
+                    ((s >> 33) % 200) as f32
+                }
+            })
+            .collect();
+        for times in [1, 2, 3, 5, 4096] {
+            let mut a = base.clone();
+            separate_passes(&mut a, w, h, 100, times.min(64));
+            let mut b = base.clone();
+            fix_constant_repeated(&mut region(&mut b, w, h, 65535.0), 100, 0, times);
+            // 64 passes reach the fixed point of this blob, so 4096 give the same samples
+            assert_eq!(a, b, "{times} passes");
+        }
     }
 
     #[test]

@@ -16,6 +16,8 @@
 
 pub mod area;
 pub mod bad_pixels;
+pub(crate) mod banded;
+pub mod budget;
 pub mod gain_map;
 pub mod pipeline;
 pub mod trim;
@@ -25,6 +27,7 @@ pub mod warp;
 use crate::dng::opcodes::{ListId, Opcode, OpcodeKind, OpcodeList};
 use crate::error::{Error, Result};
 use crate::raw::meta::RawMeta;
+use crate::raw::RawImage;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use std::str::FromStr;
@@ -99,6 +102,10 @@ pub struct OpcodeReport {
     /// Skipped (optional, not applicable here), in pipeline order.
     #[serde(default)]
     pub skipped: Vec<OpcodeEntry>,
+    /// Dropped before the render because they change nothing (an identity warp, gains of
+    /// 1, ...; `reason` says which), in pipeline order; absent when none.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub dropped: Vec<OpcodeEntry>,
 }
 
 impl OpcodeReport {
@@ -123,10 +130,12 @@ impl OpcodeReport {
 /// The opcodes a render applies, per list, and the report.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Prepared {
-    /// Applicable opcodes of OpcodeList1, 2 and 3, in order.
+    /// Applicable opcodes of OpcodeList1, 2 and 3, in order (no-ops dropped).
     pub lists: [Vec<Opcode>; 3],
-    /// What is applied and skipped.
+    /// What is applied, skipped and dropped.
     pub report: OpcodeReport,
+    /// For each opcode of `lists`, its position (1-based) in its list and the list's length.
+    pub positions: [Vec<(usize, usize)>; 3],
 }
 
 impl Prepared {
@@ -138,6 +147,43 @@ impl Prepared {
     pub fn list(&self, list: ListId) -> &[Opcode] {
         &self.lists[list.index()]
     }
+    /// The cost of each opcode (docs/limits.md, "Opcode work") on an image of `stored`
+    /// (width, height) with an active area of `active`.
+    pub fn costs(
+        &self,
+        stored: (usize, usize),
+        active: (usize, usize),
+    ) -> Vec<crate::limits::OpcodeCost> {
+        let mut out = vec![];
+        for id in ListId::ALL {
+            let dims = if id == ListId::List1 { stored } else { active };
+            let ops = self.list(id);
+            for (i, op) in ops.iter().enumerate() {
+                let repeat = matches!(op.kind, OpcodeKind::FixBadPixelsConstant { .. })
+                    && i > 0
+                    && ops[i - 1].kind == op.kind;
+                let (pos, n) = self.positions[id.index()]
+                    .get(i)
+                    .copied()
+                    .unwrap_or((i + 1, ops.len()));
+                out.push(crate::limits::OpcodeCost {
+                    list: id.tag_name(),
+                    what: format!("{} (opcode {pos} of {n})", op.name()),
+                    cost: budget::cost(&op.kind, dims, repeat),
+                });
+            }
+        }
+        out
+    }
+
+    /// Error unless the work of these opcodes on `img` is within the budget in force
+    /// ([`crate::limits::opcode_budget`]).
+    pub fn check_budget(&self, img: &RawImage) -> Result<()> {
+        let a = img.active_area();
+        let costs = self.costs((img.width, img.height), (a.width(), a.height()));
+        crate::limits::check_opcode_work(&costs, crate::limits::opcode_budget()?)
+    }
+
     /// True when some applied opcode needs more than the samples it writes (bad pixels read
     /// neighbours, warps read anywhere, TrimBounds moves the image): a crop's render then
     /// needs the whole frame.
@@ -173,8 +219,9 @@ pub fn unsupported_reason(list: ListId, kind: &OpcodeKind) -> Option<&'static st
         OpcodeKind::FixBadPixelsConstant { .. } | OpcodeKind::FixBadPixelsList { .. } => {
             (list == ListId::List3).then_some("bad pixels are fixed on the CFA mosaic (lists 1-2)")
         }
-        OpcodeKind::WarpRectilinear { .. } | OpcodeKind::WarpFisheye { .. } => (list
-            != ListId::List3)
+        OpcodeKind::WarpRectilinear { .. }
+        | OpcodeKind::WarpFisheye { .. }
+        | OpcodeKind::WarpRectilinear2 { .. } => (list != ListId::List3)
             .then_some("a warp of the CFA mosaic is not supported (OpcodeList3 only)"),
         OpcodeKind::TrimBounds { .. } => {
             (list != ListId::List3).then_some("TrimBounds is applied in OpcodeList3 only")
@@ -229,20 +276,37 @@ pub fn prepare_lists_for(
         return Ok(None);
     }
     let mut out: [Vec<Opcode>; 3] = Default::default();
+    let mut positions: [Vec<(usize, usize)>; 3] = Default::default();
     let mut report = OpcodeReport {
         mode,
         applied: vec![],
         skipped: vec![],
+        dropped: vec![],
     };
     if mode == OpcodeMode::Ignore {
-        return Ok(Some(Prepared { lists: out, report }));
+        return Ok(Some(Prepared {
+            lists: out,
+            report,
+            positions,
+        }));
     }
     for id in ListId::ALL {
-        for op in &lists[id.index()].opcodes {
+        let all = &lists[id.index()].opcodes;
+        for (i, op) in all.iter().enumerate() {
             match reason(id, &op.kind) {
                 None => {
+                    let kept = &mut out[id.index()];
+                    let noop = budget::noop_reason(&op.kind).or_else(|| {
+                        budget::repeats_idempotently(kept.last(), op)
+                            .then_some("repeats the opcode before it")
+                    });
+                    if let Some(why) = noop {
+                        report.dropped.push(entry(id, op, Some(why)));
+                        continue;
+                    }
                     report.applied.push(entry(id, op, None));
-                    out[id.index()].push(op.clone());
+                    kept.push(op.clone());
+                    positions[id.index()].push((i + 1, all.len()));
                 }
                 Some(why) if op.optional() => report.skipped.push(entry(id, op, Some(why))),
                 Some(why) => {
@@ -257,7 +321,11 @@ pub fn prepare_lists_for(
             }
         }
     }
-    Ok(Some(Prepared { lists: out, report }))
+    Ok(Some(Prepared {
+        lists: out,
+        report,
+        positions,
+    }))
 }
 
 /// [`prepare_lists_for`] on the lists of `meta` (parsed by [`crate::dng::opcodes::lists`]),
@@ -275,7 +343,9 @@ pub fn prepare(meta: &RawMeta, mode: OpcodeMode) -> Result<Option<Prepared>> {
                 mode,
                 applied: vec![],
                 skipped: vec![],
+                dropped: vec![],
             },
+            positions: Default::default(),
         }));
     }
     prepare_lists_for(
@@ -289,6 +359,21 @@ pub fn prepare(meta: &RawMeta, mode: OpcodeMode) -> Result<Option<Prepared>> {
 /// the plain path (no opcode, [`OpcodeMode::Ignore`], or nothing applicable).
 pub fn active(meta: &RawMeta, mode: OpcodeMode) -> Result<Option<Prepared>> {
     Ok(prepare(meta, mode)?.filter(|p| !p.is_noop()))
+}
+
+/// [`prepare`] with the work of the applied opcodes checked against the budget on `img`'s
+/// size ([`Prepared::check_budget`]): what planning calls, before any pixel work.
+pub fn prepare_image(img: &RawImage, mode: OpcodeMode) -> Result<Option<Prepared>> {
+    let p = prepare(&img.meta, mode)?;
+    if let Some(p) = &p {
+        p.check_budget(img)?;
+    }
+    Ok(p)
+}
+
+/// [`active`] with the budget checked ([`prepare_image`]).
+pub fn active_image(img: &RawImage, mode: OpcodeMode) -> Result<Option<Prepared>> {
+    Ok(prepare_image(img, mode)?.filter(|p| !p.is_noop()))
 }
 
 /// A rectangle `[t, b) x [l, r)` in the coordinates of a stage image.
@@ -361,8 +446,8 @@ pub fn pin(v: f32, range: f32) -> f32 {
 /// A per-row operation: `(stage row, samples of the row)`.
 type RowFn<'a> = dyn Fn(usize, &mut [f32]) + Sync + 'a;
 
-/// Apply one pointwise opcode to every row of `reg` (in parallel over rows).
-fn apply_pointwise(kind: &OpcodeKind, reg: &mut Region) {
+/// Apply one pointwise opcode to every row of `reg` (in parallel over rows when `par`).
+fn apply_pointwise(kind: &OpcodeKind, reg: &mut Region, par: bool) {
     let (left, width, planes, top) = (reg.left, reg.width, reg.planes, reg.top);
     let (bounds, range) = (reg.bounds, reg.range);
     let row_fn: Box<RowFn<'_>> = match kind {
@@ -382,28 +467,56 @@ fn apply_pointwise(kind: &OpcodeKind, reg: &mut Region) {
     if width == 0 || planes == 0 {
         return;
     }
-    reg.data
-        .par_chunks_mut(width * planes)
-        .enumerate()
-        .for_each(|(i, row)| row_fn(top + i, row));
+    if par {
+        reg.data
+            .par_chunks_mut(width * planes)
+            .enumerate()
+            .for_each(|(i, row)| row_fn(top + i, row));
+    } else {
+        reg.data
+            .chunks_mut(width * planes)
+            .enumerate()
+            .for_each(|(i, row)| row_fn(top + i, row));
+    }
 }
 
 /// Apply `ops` in order to `reg` (pointwise opcodes and the bad-pixel fixes; warps and
-/// TrimBounds are applied by [`pipeline`] on whole stage-3 images). `phase_origin` is
-/// unused by pointwise opcodes.
+/// TrimBounds are applied by [`pipeline`] on whole stage-3 images), in parallel over rows.
+/// A run of identical FixBadPixelsConstant opcodes is one merged pass
+/// ([`bad_pixels::fix_constant_repeated`]: the same samples as one pass per opcode).
 pub fn apply_region(ops: &[Opcode], reg: &mut Region) {
-    for op in ops {
+    apply_region_with(ops, reg, true)
+}
+
+/// [`apply_region`] on the calling thread only (for the bands of a banded render, which
+/// run in parallel themselves and must not wait for other rayon work).
+pub fn apply_region_seq(ops: &[Opcode], reg: &mut Region) {
+    apply_region_with(ops, reg, false)
+}
+
+fn apply_region_with(ops: &[Opcode], reg: &mut Region, par: bool) {
+    let mut i = 0;
+    while i < ops.len() {
+        let op = &ops[i];
+        i += 1;
         match &op.kind {
             OpcodeKind::FixBadPixelsConstant {
                 constant,
                 bayer_phase,
-            } => bad_pixels::fix_constant(reg, *constant, *bayer_phase),
+            } => {
+                let mut n = 1;
+                while i < ops.len() && ops[i].kind == op.kind {
+                    n += 1;
+                    i += 1;
+                }
+                bad_pixels::fix_constant_repeated(reg, *constant, *bayer_phase, n)
+            }
             OpcodeKind::FixBadPixelsList {
                 bayer_phase,
                 points,
                 rects,
             } => bad_pixels::fix_list(reg, *bayer_phase, points, rects),
-            k if is_pointwise(k) => apply_pointwise(k, reg),
+            k if is_pointwise(k) => apply_pointwise(k, reg, par),
             _ => {}
         }
     }

@@ -228,14 +228,7 @@ pub(crate) fn apply_list3(ops: &[Opcode], s3: &mut Stage3) -> Result<()> {
         // Runs of in-place opcodes go through apply_region; warps and trims one by one.
         let j = ops[i..]
             .iter()
-            .position(|o| {
-                matches!(
-                    o.kind,
-                    OpcodeKind::WarpRectilinear { .. }
-                        | OpcodeKind::WarpFisheye { .. }
-                        | OpcodeKind::TrimBounds { .. }
-                )
-            })
+            .position(|o| moves_pixels(&o.kind))
             .map_or(ops.len(), |k| i + k);
         if j > i {
             let (w, h) = (s3.rgb.width, s3.rgb.height);
@@ -277,22 +270,13 @@ pub(crate) fn apply_list3(ops: &[Opcode], s3: &mut Stage3) -> Result<()> {
                 s3.left = b.l as usize;
             }
             kind => {
-                use super::warp::{apply, Model, Warp};
-                let (models, center) = match kind {
-                    OpcodeKind::WarpRectilinear { planes, center } => (
-                        planes
-                            .iter()
-                            .map(|p| Model::Rectilinear { kr: p.kr, kt: p.kt })
-                            .collect(),
-                        *center,
-                    ),
-                    OpcodeKind::WarpFisheye { planes, center } => (
-                        planes.iter().map(|&kr| Model::Fisheye { kr }).collect(),
-                        *center,
-                    ),
-                    _ => (vec![], [0.5, 0.5]),
-                };
-                let warp = Warp::new(models, center, s3.bounds, 3)?;
+                use super::warp::{apply, Warp};
+                let warp = Warp::of_opcode(kind, s3.bounds, 3).unwrap_or_else(|| {
+                    Err(Error::invalid(format!(
+                        "OpcodeList3: {} is not a warp",
+                        ops[j].name()
+                    )))
+                })?;
                 let (w, h) = (s3.rgb.width, s3.rgb.height);
                 s3.rgb.data = apply(&warp, &s3.rgb.data, w, h, 3, s3.bounds);
             }
@@ -302,7 +286,18 @@ pub(crate) fn apply_list3(ops: &[Opcode], s3: &mut Stage3) -> Result<()> {
     Ok(())
 }
 
-fn inverse_wb(n: [f64; 3]) -> [f32; 3] {
+/// True for the list-3 opcodes that move pixels (warps) or the image (TrimBounds).
+pub(crate) fn moves_pixels(kind: &OpcodeKind) -> bool {
+    matches!(
+        kind,
+        OpcodeKind::WarpRectilinear { .. }
+            | OpcodeKind::WarpRectilinear2 { .. }
+            | OpcodeKind::WarpFisheye { .. }
+            | OpcodeKind::TrimBounds { .. }
+    )
+}
+
+pub(crate) fn inverse_wb(n: [f64; 3]) -> [f32; 3] {
     [(1.0 / n[0]) as f32, 1.0, (1.0 / n[2]) as f32]
 }
 

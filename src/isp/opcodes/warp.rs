@@ -14,10 +14,21 @@
 //!   weights normalised to sum 1; the SDK quantises the fraction to 1/32 of a pixel, day2night
 //!   does not), edges repeated, and the result pinned into [0, 1].
 //!
+//! WarpRectilinear2 (opcode 14, DNG 1.6) is the rectilinear model with `ratio` a polynomial
+//! of degree 14 in `r` (not `r^2`): `ratio = kr0 + kr1 r + ... + kr14 r^14`, with `r^2`
+//! first pinned into the plane's valid range `[min^2, max^2]` (after the clamp to 1), and
+//! `1 / ratio` when its reciprocal flag is set; the tangential terms are those of
+//! WarpRectilinear (with the unpinned `r^2`). (Adobe DNG SDK 1.6 `dng_warp_params_radial`.)
+//!
 //! One set of coefficients applies to every plane; one per plane when the opcode has as
 //! many as the image. Square pixels (PixelAspectRatio 1).
+//!
+//! [`apply_rows`] warps a band of output rows reading only the rows of the source its taps
+//! reach (its source window, from the source positions of the band's pixels); [`apply`]
+//! warps the whole image. Both resample every pixel with the same expressions.
 
 use super::Bounds;
+use crate::dng::opcodes::OpcodeKind;
 use crate::error::{Error, Result};
 use rayon::prelude::*;
 
@@ -36,6 +47,33 @@ pub enum Model {
         /// kr0..kr3.
         kr: [f64; 4],
     },
+    /// WarpRectilinear2: radial kr0..kr14 in `r`, tangential kt0, kt1, the valid radius
+    /// range, and whether the ratio is the polynomial's reciprocal.
+    Rectilinear2 {
+        /// kr0..kr14.
+        kr: [f64; 15],
+        /// kt0, kt1.
+        kt: [f64; 2],
+        /// Minimum and maximum valid radius.
+        valid: [f64; 2],
+        /// `ratio = 1 / sum`.
+        reciprocal: bool,
+    },
+}
+
+/// The radial ratio of WarpRectilinear2 at `rr` (= `min(r^2, 1)`).
+fn ratio2(kr: &[f64; 15], valid: [f64; 2], reciprocal: bool, rr: f64) -> f64 {
+    let r2 = rr.min(valid[1] * valid[1]).max(valid[0] * valid[0]);
+    let r = r2.sqrt();
+    let mut poly = kr[14];
+    for &k in kr[..14].iter().rev() {
+        poly = poly * r + k;
+    }
+    if reciprocal {
+        1.0 / poly
+    } else {
+        poly
+    }
 }
 
 /// A warp ready to map destination pixels to source positions.
@@ -92,20 +130,14 @@ impl Warp {
         let (dv, dh) = (row - self.cv, col - self.ch);
         let (nv, nh) = (dv * self.inv, dh * self.inv);
         let rr = (nv * nv + nh * nh).min(1.0);
-        match self.planes[p] {
-            Model::Rectilinear { kr, kt } => {
-                let ratio = poly(&kr, rr);
-                if kt == [0.0, 0.0] {
-                    (self.cv + dv * ratio, self.ch + dh * ratio)
-                } else {
-                    let tv = kt[0] * (rr + 2.0 * nv * nv) + 2.0 * kt[1] * nh * nv;
-                    let th = kt[1] * (rr + 2.0 * nh * nh) + 2.0 * kt[0] * nh * nv;
-                    (
-                        self.cv + self.norm * (nv * ratio + tv),
-                        self.ch + self.norm * (nh * ratio + th),
-                    )
-                }
-            }
+        let (ratio, kt) = match self.planes[p] {
+            Model::Rectilinear { kr, kt } => (poly(&kr, rr), kt),
+            Model::Rectilinear2 {
+                kr,
+                kt,
+                valid,
+                reciprocal,
+            } => (ratio2(&kr, valid, reciprocal, rr), kt),
             Model::Fisheye { kr } => {
                 let ratio = if rr < 1e-12 {
                     1.0
@@ -114,9 +146,60 @@ impl Warp {
                     let t = r.atan();
                     t * poly(&kr, t * t) / r
                 };
-                (self.cv + dv * ratio, self.ch + dh * ratio)
+                return (self.cv + dv * ratio, self.ch + dh * ratio);
             }
+        };
+        if kt == [0.0, 0.0] {
+            (self.cv + dv * ratio, self.ch + dh * ratio)
+        } else {
+            let tv = kt[0] * (rr + 2.0 * nv * nv) + 2.0 * kt[1] * nh * nv;
+            let th = kt[1] * (rr + 2.0 * nh * nh) + 2.0 * kt[0] * nh * nv;
+            (
+                self.cv + self.norm * (nv * ratio + tv),
+                self.ch + self.norm * (nh * ratio + th),
+            )
         }
+    }
+
+    /// The warp of opcode `kind` (WarpRectilinear, WarpRectilinear2 or WarpFisheye) on an
+    /// image of `b` with `planes` planes; `None` for other kinds.
+    pub fn of_opcode(kind: &OpcodeKind, b: Bounds, planes: usize) -> Option<Result<Warp>> {
+        let (models, center): (Vec<Model>, [f64; 2]) = match kind {
+            OpcodeKind::WarpRectilinear { planes, center } => (
+                planes
+                    .iter()
+                    .map(|p| Model::Rectilinear { kr: p.kr, kt: p.kt })
+                    .collect(),
+                *center,
+            ),
+            OpcodeKind::WarpRectilinear2 {
+                planes,
+                center,
+                reciprocal,
+            } => (
+                planes
+                    .iter()
+                    .map(|p| Model::Rectilinear2 {
+                        kr: p.kr,
+                        kt: p.kt,
+                        valid: p.valid,
+                        reciprocal: *reciprocal,
+                    })
+                    .collect(),
+                *center,
+            ),
+            OpcodeKind::WarpFisheye { planes, center } => (
+                planes.iter().map(|&kr| Model::Fisheye { kr }).collect(),
+                *center,
+            ),
+            _ => return None,
+        };
+        Some(Warp::new(models, center, b, planes))
+    }
+
+    /// True when every plane has the same model (one source position per pixel).
+    fn shared(&self) -> bool {
+        self.planes.windows(2).all(|p| p[0] == p[1])
     }
 }
 
@@ -153,6 +236,42 @@ fn taps(s: f64) -> (i64, [f64; 4]) {
     (i - 1, w)
 }
 
+/// The tap origins and weights (rows, columns) of source position (`sv`, `sh`) in an image
+/// whose pixel (0, 0) sits at stage position (`bounds.t`, `bounds.l`).
+type Taps = ((i64, [f64; 4]), (i64, [f64; 4]));
+
+#[inline]
+fn taps_of((sv, sh): (f64, f64), bounds: Bounds) -> Taps {
+    (taps(sv - bounds.t as f64), taps(sh - bounds.l as f64))
+}
+
+#[inline]
+fn clampi(v: i64, n: usize) -> usize {
+    v.clamp(0, n as i64 - 1) as usize
+}
+
+/// The resample of plane `p` at `taps` from the image rows that `row(yy)` gives (each
+/// `w * planes` samples), edges repeated, pinned into [0, 1].
+#[inline]
+fn resample<'a>(
+    ((y0, wy), (x0, wx)): Taps,
+    p: usize,
+    (w, h, planes): (usize, usize, usize),
+    row: impl Fn(usize) -> &'a [f32],
+) -> f32 {
+    let mut total = 0.0f64;
+    for (i, wyi) in wy.iter().enumerate() {
+        let srow = row(clampi(y0 + i as i64, h));
+        let mut acc = 0.0f64;
+        for (j, wxj) in wx.iter().enumerate() {
+            let xx = clampi(x0 + j as i64, w);
+            acc += wxj * srow[xx * planes + p] as f64;
+        }
+        total += wyi * acc;
+    }
+    super::pin(total as f32, 1.0)
+}
+
 /// Warp a stage-3 image (`w x h` pixels of `planes` interleaved samples in [0, 1], pixel
 /// (0, 0) at stage position (`bounds.t`, `bounds.l`)): every output pixel is the bicubic
 /// resample of `data` at its source position.
@@ -168,44 +287,87 @@ pub fn apply(
     if w == 0 || h == 0 || planes == 0 {
         return out;
     }
-    let clampi = |v: i64, n: usize| v.clamp(0, n as i64 - 1) as usize;
-    // One set of coefficients for every plane (the usual case): one source position and
-    // one set of tap weights per pixel.
-    let shared = warp.planes.windows(2).all(|p| p[0] == p[1]);
+    let shared = warp.shared();
+    let dims = (w, h, planes);
+    let row = |yy: usize| &data[yy * w * planes..];
     out.par_chunks_mut(w * planes)
         .enumerate()
         .for_each(|(y, orow)| {
-            let row = (bounds.t + y as i64) as f64;
-            let mut cache = None;
+            let r = (bounds.t + y as i64) as f64;
             for x in 0..w {
-                let col = (bounds.l + x as i64) as f64;
+                let c = (bounds.l + x as i64) as f64;
+                let mut t = taps_of(warp.source(0, r, c), bounds);
                 for p in 0..planes {
-                    let ((y0, wy), (x0, wx)) = match cache {
-                        Some(t) if shared && p > 0 => t,
-                        _ => {
-                            let (sv, sh) = warp.source(p, row, col);
-                            let t = (taps(sv - bounds.t as f64), taps(sh - bounds.l as f64));
-                            cache = Some(t);
-                            t
-                        }
-                    };
-                    let mut total = 0.0f64;
-                    for (i, wyi) in wy.iter().enumerate() {
-                        let yy = clampi(y0 + i as i64, h);
-                        let srow = &data[yy * w * planes..];
-                        let mut acc = 0.0f64;
-                        for (j, wxj) in wx.iter().enumerate() {
-                            let xx = clampi(x0 + j as i64, w);
-                            acc += wxj * srow[xx * planes + p] as f64;
-                        }
-                        total += wyi * acc;
+                    if p > 0 && !shared {
+                        t = taps_of(warp.source(p, r, c), bounds);
                     }
-                    orow[x * planes + p] = super::pin(total as f32, 1.0);
+                    orow[x * planes + p] = resample(t, p, dims, row);
                 }
-                cache = None;
             }
         });
     out
+}
+
+/// Output rows `rows` (image rows, 0 = `bounds.t`) of the warp of a `w x h` image of
+/// `planes` samples per pixel, reading only the source rows the taps reach: `source(y0,
+/// y1)` is asked once for image rows `[y0, y1)` (the window, from the source positions of
+/// these rows' pixels) and returns them (`(y1 - y0) * w * planes` samples). `out` receives
+/// the rows (`rows.len() * w * planes` samples), equal bit for bit to those of [`apply`].
+pub fn apply_rows<'s>(
+    warp: &Warp,
+    (w, h, planes): (usize, usize, usize),
+    bounds: Bounds,
+    rows: std::ops::Range<usize>,
+    source: impl FnOnce(usize, usize) -> crate::error::Result<std::borrow::Cow<'s, [f32]>>,
+    out: &mut [f32],
+) -> crate::error::Result<()> {
+    if w == 0 || h == 0 || planes == 0 || rows.is_empty() {
+        return Ok(());
+    }
+    let shared = warp.shared();
+    let per = if shared { 1 } else { planes };
+    // Pass 1: every pixel's source position, and the rows their taps reach.
+    let mut pos = Vec::with_capacity(rows.len() * w * per);
+    let (mut lo, mut hi) = (i64::MAX, i64::MIN);
+    for y in rows.clone() {
+        let r = (bounds.t + y as i64) as f64;
+        for x in 0..w {
+            let c = (bounds.l + x as i64) as f64;
+            for p in 0..per {
+                let s = warp.source(p, r, c);
+                let (y0, _) = taps(s.0 - bounds.t as f64);
+                lo = lo.min(y0);
+                hi = hi.max(y0 + 3);
+                pos.push(s);
+            }
+        }
+    }
+    let (y0, y1) = (clampi(lo, h), clampi(hi, h) + 1);
+    let src = source(y0, y1)?;
+    if src.len() != (y1 - y0) * w * planes {
+        return Err(crate::error::Error::invalid(
+            "warp source window of the wrong size",
+        ));
+    }
+    let row = |yy: usize| &src[(yy - y0) * w * planes..];
+    let dims = (w, h, planes);
+    for (k, orow) in out
+        .chunks_exact_mut(w * planes)
+        .take(rows.len())
+        .enumerate()
+    {
+        for x in 0..w {
+            let at = (k * w + x) * per;
+            let mut t = taps_of(pos[at], bounds);
+            for p in 0..planes {
+                if p > 0 && !shared {
+                    t = taps_of(pos[at + p], bounds);
+                }
+                orow[x * planes + p] = resample(t, p, dims, row);
+            }
+        }
+    }
+    Ok(())
 }
 
 #[cfg(test)]
@@ -269,6 +431,136 @@ mod tests {
         let th = 0.02 * (rr + 2.0 * nh * nh) + 2.0 * 0.01 * nh * nv;
         assert!((sv - (50.0 + r * (nv + tv))).abs() < 1e-9);
         assert!((sh - (100.0 + r * (nh + th))).abs() < 1e-9);
+    }
+
+    #[test]
+    fn rectilinear2_follows_the_dng_1_6_formula() {
+        let b = Bounds::of_size(200, 100);
+        let r = 50f64.hypot(100.0);
+        let (nv, nh) = ((10.0 - 50.0) / r, (180.0 - 100.0) / r);
+        let rr = nv * nv + nh * nh;
+        let mut kr = [0.0; 15];
+        kr[0] = 1.0;
+        kr[1] = 0.05; // odd powers of r exist in this model
+        kr[2] = -0.1;
+        let m = |kt, valid, reciprocal| {
+            Warp::new(
+                vec![Model::Rectilinear2 {
+                    kr,
+                    kt,
+                    valid,
+                    reciprocal,
+                }],
+                [0.5, 0.5],
+                b,
+                1,
+            )
+            .unwrap()
+        };
+        let (sv, sh) = m([0.0; 2], [0.0, 1.0], false).source(0, 10.0, 180.0);
+        let ratio = 1.0 + 0.05 * rr.sqrt() - 0.1 * rr;
+        assert!((sv - (50.0 - 40.0 * ratio)).abs() < 1e-9);
+        assert!((sh - (100.0 + 80.0 * ratio)).abs() < 1e-9);
+        // reciprocal
+        let (sv, _) = m([0.0; 2], [0.0, 1.0], true).source(0, 10.0, 180.0);
+        assert!((sv - (50.0 - 40.0 / ratio)).abs() < 1e-9);
+        // the radius is pinned into the valid range [0.2, 0.5]
+        let (sv, _) = m([0.0; 2], [0.2, 0.5], false).source(0, 10.0, 180.0);
+        let pinned = 1.0 + 0.05 * 0.5 - 0.1 * 0.25;
+        assert!((sv - (50.0 - 40.0 * pinned)).abs() < 1e-9);
+        // tangential terms as WarpRectilinear's, with the unpinned r^2
+        let (sv, sh) = m([0.01, 0.02], [0.2, 0.5], false).source(0, 10.0, 180.0);
+        let tv = 0.01 * (rr + 2.0 * nv * nv) + 2.0 * 0.02 * nh * nv;
+        let th = 0.02 * (rr + 2.0 * nh * nh) + 2.0 * 0.01 * nh * nv;
+        assert!((sv - (50.0 + r * (nv * pinned + tv))).abs() < 1e-9);
+        assert!((sh - (100.0 + r * (nh * pinned + th))).abs() < 1e-9);
+        // WarpRectilinear's coefficients in the even terms give WarpRectilinear's positions
+        let mut even = [0.0; 15];
+        (even[0], even[2], even[4], even[6]) = (1.0, 0.1, -0.02, 0.003);
+        let w1 = Warp::new(
+            vec![Model::Rectilinear {
+                kr: [1.0, 0.1, -0.02, 0.003],
+                kt: [0.001, 0.0],
+            }],
+            [0.3, 0.6],
+            b,
+            1,
+        )
+        .unwrap();
+        let w2 = Warp::new(
+            vec![Model::Rectilinear2 {
+                kr: even,
+                kt: [0.001, 0.0],
+                valid: [0.0, 1.0],
+                reciprocal: false,
+            }],
+            [0.3, 0.6],
+            b,
+            1,
+        )
+        .unwrap();
+        for (y, x) in [(0.0, 0.0), (33.0, 150.0), (99.0, 199.0)] {
+            let (a, c) = (w1.source(0, y, x), w2.source(0, y, x));
+            assert!((a.0 - c.0).abs() < 1e-9 && (a.1 - c.1).abs() < 1e-9);
+        }
+    }
+
+    #[test]
+    fn rows_read_only_their_window_and_equal_the_whole_warp() {
+        let (w, h) = (37, 53);
+        let data: Vec<f32> = (0..w * h * 3)
+            .map(|i| ((i * 7919) % 1000) as f32 / 999.0)
+            .collect();
+        let b = Bounds {
+            t: 4,
+            l: 2,
+            b: 4 + h as i64,
+            r: 2 + w as i64,
+        };
+        let models = [
+            vec![Model::Rectilinear {
+                kr: [1.0, -0.2, 0.05, 0.0],
+                kt: [0.002, -0.001],
+            }],
+            vec![
+                Model::Fisheye {
+                    kr: [1.0, 0.1, 0.0, 0.0],
+                },
+                Model::Fisheye {
+                    kr: [1.02, 0.1, 0.0, 0.0],
+                },
+                Model::Fisheye {
+                    kr: [0.98, 0.1, 0.0, 0.0],
+                },
+            ],
+        ];
+        for m in models {
+            let warp = Warp::new(m, [0.4, 0.7], b, 3).unwrap();
+            let whole = apply(&warp, &data, w, h, 3, b);
+            for band in [1, 5, 16, 53] {
+                let mut got = vec![0.0f32; data.len()];
+                let mut widest = 0;
+                for (k, out) in got.chunks_mut(band * w * 3).enumerate() {
+                    let rows = k * band..(k * band + band).min(h);
+                    apply_rows(
+                        &warp,
+                        (w, h, 3),
+                        b,
+                        rows,
+                        |y0, y1| {
+                            widest = widest.max(y1 - y0);
+                            Ok(std::borrow::Cow::Borrowed(&data[y0 * w * 3..y1 * w * 3]))
+                        },
+                        out,
+                    )
+                    .unwrap();
+                }
+                assert_eq!(got, whole, "band {band}");
+                if band == 1 {
+                    assert!(widest < h, "a one-row band read {widest} of {h} rows");
+                }
+            }
+        }
     }
 
     #[test]

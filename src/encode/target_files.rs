@@ -1,5 +1,5 @@
-//! The target files of a banded render (EXR and/or PNG), written while the target is
-//! rendered: `synth` never holds the encoded target whole.
+//! The target files of a banded render (EXR and/or 8-bit PNG), written while the target is
+//! rendered: `synth` and `render` never hold the encoded target whole.
 //!
 //! [`TargetFiles::create`] opens the files (header first: [`ExrFile`], [`PngFile`], each an
 //! [`crate::output::AtomicFile`]) once the output size is known; [`TargetFiles::band`]
@@ -18,6 +18,7 @@ use crate::encode::png::{encode_u8_slice, PngOptions};
 use crate::encode::png_rows::{PngFile, PngRows};
 use crate::error::{Error, Result};
 use crate::isp::render::BAND;
+use crate::isp::tone::DisplayTone;
 use crate::output::OutputPolicy;
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -28,21 +29,22 @@ type Blocks = Vec<Vec<u8>>;
 
 /// The open target files of one render.
 #[derive(Debug)]
-pub(crate) struct TargetFiles<'p> {
+pub struct TargetFiles<'p> {
     exr: Option<InOrder<Blocks, ExrFile<'p>>>,
     exr_opts: ExrOptions,
     png: Option<InOrder<PngRows, PngFile<'p>>>,
+    tone: DisplayTone,
 }
 
 impl<'p> TargetFiles<'p> {
     /// Open the EXR at `exr` (with options `exr_opts` and header attributes `attrs`)
-    /// and/or the 8-bit PNG (default [`PngOptions`]) at `png`, for a `width` x `height`
+    /// and/or the 8-bit PNG (display encoding `tone`) at `png`, for a `width` x `height`
     /// render.
-    pub(crate) fn create(
+    pub fn create(
         (width, height): (usize, usize),
         exr: Option<&Path>,
         (exr_opts, attrs): (&ExrOptions, &[(String, String)]),
-        png: Option<&Path>,
+        png: Option<(&Path, DisplayTone)>,
         policy: &'p OutputPolicy,
     ) -> Result<TargetFiles<'p>> {
         let exr = match exr {
@@ -51,26 +53,25 @@ impl<'p> TargetFiles<'p> {
             )?)),
             None => None,
         };
+        let tone = png.map_or(PngOptions::default().tone, |(_, t)| t);
         let png = match png {
-            Some(path) => {
-                let tone = PngOptions::default().tone;
-                Some(InOrder::new(PngFile::create(
-                    path, width, height, tone, policy,
-                )?))
-            }
+            Some((path, tone)) => Some(InOrder::new(PngFile::create(
+                path, width, height, tone, policy,
+            )?)),
             None => None,
         };
         Ok(TargetFiles {
             exr,
             exr_opts: *exr_opts,
             png,
+            tone,
         })
     }
 
     /// Encode the band of rows from output row `y0` (a multiple of [`BAND`]; `width`
     /// interleaved linear RGB pixels per row) and write it to each file once the bands
     /// above it are written.
-    pub(crate) fn band(&self, y0: usize, width: usize, rows: &[f32]) -> Result<()> {
+    pub fn band(&self, y0: usize, width: usize, rows: &[f32]) -> Result<()> {
         if !y0.is_multiple_of(BAND) {
             return Err(Error::invalid(format!(
                 "target band from row {y0}: not a multiple of {BAND} rows"
@@ -82,7 +83,7 @@ impl<'p> TargetFiles<'p> {
             exr.submit(bi, blocks, |f, i, b| f.push_rows(i * BAND, &b))?;
         }
         if let Some(png) = &self.png {
-            let rgb8 = encode_u8_slice(rows, PngOptions::default().tone);
+            let rgb8 = encode_u8_slice(rows, self.tone);
             let group = PngRows::encode(&rgb8, width, &mut Encoder::new())?;
             png.submit(bi, group, |f, _, g| f.push(&g))?;
         }
@@ -91,7 +92,7 @@ impl<'p> TargetFiles<'p> {
 
     /// Complete the files (every band must have been written) and hand them to the
     /// output policy; the EXR's error first.
-    pub(crate) fn finish(&self) -> Result<()> {
+    pub fn finish(&self) -> Result<()> {
         let exr = self.exr.as_ref().map(InOrder::take).transpose();
         let png = self.png.as_ref().map(InOrder::take).transpose();
         // Both files are taken first, so that on an error neither is left open.
@@ -248,9 +249,14 @@ mod tests {
                 ];
                 for order in orders {
                     let (c, d) = (dir.path().join("c.exr"), dir.path().join("c.png"));
-                    let t =
-                        TargetFiles::create((w, h), Some(&c), (&opts, &attrs), Some(&d), &policy)
-                            .unwrap();
+                    let t = TargetFiles::create(
+                        (w, h),
+                        Some(&c),
+                        (&opts, &attrs),
+                        Some((&d, PngOptions::default().tone)),
+                        &policy,
+                    )
+                    .unwrap();
                     for &bi in &order {
                         let rows = &img.data
                             [3 * w * BAND * bi..(3 * w * BAND * (bi + 1)).min(img.data.len())];
@@ -291,7 +297,7 @@ mod tests {
                 (w, h),
                 Some(&e),
                 (&ExrOptions::default(), &[]),
-                Some(&p),
+                Some((&p, PngOptions::default().tone)),
                 &policy,
             )
             .unwrap()

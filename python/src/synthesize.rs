@@ -1,0 +1,292 @@
+//! `synthesize` (one night variant in memory, whole frame or crop) and `write_outputs` (its
+//! files, as `day2night synth` writes them).
+
+use crate::convert::{json_obj, raw_image_from, rgb_array, u16_array};
+use crate::errors::{py_err, value_err};
+use crate::pool::on_pool;
+use crate::raw::Raw;
+use crate::synth_options::{job_config, job_for};
+use day2night::isp::render_crop::target_origin;
+use day2night::isp::RgbImage;
+use day2night::output::OutputPolicy;
+use day2night::raw::crop::Crop;
+use day2night::synth::job::{DayInput, DirSink, SynthJob, Target};
+use day2night::synth::night::{synthesize as lib_synthesize, Night, Request};
+use day2night::synth::relight::RunReport;
+use day2night::synth::Plan;
+use day2night::Error;
+use numpy::PyReadonlyArray3;
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+use std::path::PathBuf;
+use std::sync::Arc;
+
+/// What ``write_outputs`` needs besides the result's arrays: the job, the plan, the run
+/// report and the output metadata of each raw.
+#[pyclass(module = "day2night", name = "Synthesis", frozen)]
+pub(crate) struct Synthesis {
+    job: Arc<SynthJob>,
+    plan: Plan,
+    report: RunReport,
+    clean_meta: day2night::raw::meta::RawMeta,
+    noisy_meta: Vec<(u32, day2night::raw::meta::RawMeta)>,
+    crop: Option<Crop>,
+    sha256: String,
+}
+
+/// Synthesize one night variant of ``raw`` in memory.
+///
+/// The plan (lights, bulbs, illuminants, dimming, noise seeds) is sampled for the whole
+/// frame from the stream keyed by (``seed``, ``raw.file_name``, ``variant``), exactly as
+/// ``day2night synth --seed SEED`` samples its variant ``variant`` (0-based), so ``clean``,
+/// ``noisy`` and ``target`` equal the pixels of the files that command writes.
+///
+/// With ``crop=(top, left, height, width)`` (active-area coordinates, even offsets) only
+/// the crop and the 2-sample margin its demosaicer reads are computed: ``clean`` equals
+/// that region of the whole-frame clean raw, ``target`` that region of the whole-frame
+/// target (before orientation) and ``noisy`` carries the model's noise from the crop's own
+/// random stream (keyed by the noise seed and the crop).
+///
+/// Options (as the command line's flags): relight_formula ("release" | "paper"), bulbs,
+/// lights, truncate, covariance ("unbiased" | "ml"), day_neutral ((r, g, b)), mask_eval
+/// ("separable" | "exact" | "truncated:K" | "release"), compat ("release": the authors'
+/// release semantics, docs/synthesis.md), illuminants, brightness, noise_model (paths; a
+/// physics noise model file is recognized).
+///
+/// Returns a dict: ``clean`` (uint16, the whole stored plane, or the crop), ``noisy``
+/// ({iso: uint16 array}), ``target`` (float32 HxWx3 linear Rec.709, or None), ``plan``
+/// (the sidecar's plan), ``neutral`` (the night AsShotNeutral), ``noise_profile``
+/// ({iso: [[S, O] per colour plane]}), ``clean_noise_profile``, ``report``, ``stages``,
+/// ``crop``, ``target_origin`` ((row, column) of the crop's target in the whole-frame
+/// target, None outside the DefaultCrop or without a crop) and ``synthesis`` (for
+/// ``write_outputs``).
+///
+/// >>> out = day2night.synthesize(raw, seed=0, isos=(1600,), crop=(0, 0, 512, 512))
+/// >>> out["noisy"][1600].shape, out["target"].shape
+/// ((512, 512), (512, 512, 3))
+#[pyfunction]
+#[pyo3(signature = (raw, seed=0, variant=0, mode="local", isos=vec![1600, 3200], target=Some("linear"), crop=None, **options))]
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn synthesize<'py>(
+    py: Python<'py>,
+    raw: &Bound<'py, Raw>,
+    seed: u64,
+    variant: u32,
+    mode: &str,
+    isos: Vec<u32>,
+    target: Option<&str>,
+    crop: Option<(usize, usize, usize, usize)>,
+    options: Option<&Bound<'py, PyDict>>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let want_target = match target {
+        None => false,
+        Some("linear") => true,
+        Some(t) => return Err(value_err(format!("target {t:?}: use \"linear\" or None"))),
+    };
+    let cfg = job_config(mode, isos, want_target, options)?;
+    let crop = crop.map(|(top, left, height, width)| Crop {
+        top,
+        left,
+        height,
+        width,
+    });
+    let r = raw.get();
+    let day = r.day.clone();
+    let file_name = r.file_name.clone();
+    let (job, plan, night) = py
+        .detach(move || {
+            on_pool(move || {
+                let job = job_for(&cfg)?;
+                let plan = job.plan(&day, &file_name, seed, variant)?;
+                let req = Request {
+                    target: want_target,
+                    input: false,
+                    crop,
+                };
+                let night = lib_synthesize(&day.raw, &plan, &req)?;
+                Ok((job, plan, night))
+            })
+        })
+        .map_err(py_err)?;
+    let Night {
+        clean,
+        noisy,
+        target,
+        report,
+        stages,
+        crop,
+        ..
+    } = night;
+    let d = PyDict::new(py);
+    let bayer = plan.bayer;
+    let profile = |p: &day2night::noise::NoiseParams| -> Vec<Vec<f64>> {
+        p.to_dng_profile(bayer)
+            .into_iter()
+            .map(|(s, o)| vec![s, o])
+            .collect()
+    };
+    let np = PyDict::new(py);
+    let noisy_arrays = PyDict::new(py);
+    let mut noisy_meta = Vec::new();
+    for (iso, img) in noisy {
+        noisy_meta.push((iso, img.meta.clone()));
+        noisy_arrays.set_item(iso, u16_array(py, img)?)?;
+    }
+    for n in &plan.noise {
+        np.set_item(n.iso, profile(&n.params))?;
+    }
+    let a = r.day.raw.active_area();
+    let origin = crop.and_then(|c| target_origin(&r.day.raw.meta, a.width(), a.height(), &c));
+    d.set_item("clean_noise_profile", profile(&plan.clean_noise))?;
+    d.set_item("noise_profile", np)?;
+    d.set_item("neutral", plan.night_neutral.to_vec())?;
+    d.set_item("plan", json_obj(py, &plan)?)?;
+    d.set_item("report", json_obj(py, &report)?)?;
+    d.set_item("stages", stages)?;
+    d.set_item("crop", crop.map(|c| (c.top, c.left, c.height, c.width)))?;
+    d.set_item("target_origin", origin)?;
+    let synthesis = Synthesis {
+        job,
+        plan,
+        report,
+        clean_meta: clean.meta.clone(),
+        noisy_meta,
+        crop,
+        sha256: r.day.sha256.clone(),
+    };
+    d.set_item("clean", u16_array(py, clean)?)?;
+    d.set_item("noisy", noisy_arrays)?;
+    d.set_item(
+        "target",
+        match target {
+            Some(t) => Some(rgb_array(py, t)?),
+            None => None,
+        },
+    )?;
+    d.set_item("synthesis", Bound::new(py, synthesis)?)?;
+    Ok(d)
+}
+
+/// Write a whole-frame ``synthesize`` result as the files ``day2night synth`` writes for
+/// the same input, seed, variant and options (clean DNG, one DNG per ISO, the EXR target
+/// (plus the sRGB PNG with ``png=True``), the sidecar), byte for byte, into ``out_dir``.
+/// The arrays are taken from ``result`` (as returned, they give the same bytes). Existing
+/// files are refused unless ``overwrite=True``. Returns the file names written.
+///
+/// >>> day2night.write_outputs(out, raw, "night/")
+/// ['day_clean.dng', 'day_iso1600.dng', 'day_iso3200.dng', 'day_target.exr', 'day.json']
+#[pyfunction]
+#[pyo3(signature = (result, raw, out_dir, png=false, overwrite=false))]
+pub(crate) fn write_outputs(
+    py: Python<'_>,
+    result: &Bound<'_, PyDict>,
+    raw: &Bound<'_, Raw>,
+    out_dir: PathBuf,
+    png: bool,
+    overwrite: bool,
+) -> PyResult<Vec<String>> {
+    let item = |k: &str| -> PyResult<Bound<'_, PyAny>> {
+        result.get_item(k)?.ok_or_else(|| {
+            value_err(format!(
+                "result has no {k:?}: pass what synthesize returned"
+            ))
+        })
+    };
+    let syn = item("synthesis")?;
+    let syn: &Bound<'_, Synthesis> = syn
+        .cast()
+        .map_err(|_| value_err("result[\"synthesis\"] is not a synthesis"))?;
+    let s = syn.get();
+    if s.crop.is_some() {
+        return Err(value_err(
+            "invalid parameter: a crop's products are not written as files: synthesize the whole frame",
+        ));
+    }
+    let r = raw.get();
+    if r.day.sha256 != s.sha256 {
+        return Err(value_err(
+            "invalid parameter: the result was synthesized from another input",
+        ));
+    }
+    let clean = raw_image_from(&item("clean")?, &s.clean_meta, "result[\"clean\"]")?;
+    let noisy_d = item("noisy")?;
+    let mut noisy = Vec::new();
+    for (iso, meta) in &s.noisy_meta {
+        let a = noisy_d.get_item(*iso)?;
+        noisy.push((
+            *iso,
+            raw_image_from(&a, meta, &format!("result[\"noisy\"][{iso}]"))?,
+        ));
+    }
+    let t = item("target")?;
+    let target = if t.is_none() {
+        None
+    } else {
+        let a: PyReadonlyArray3<'_, f32> = t
+            .extract()
+            .map_err(|_| value_err("result[\"target\"] must be a float32 HxWx3 array"))?;
+        let v = a.as_array();
+        let (h, w, c) = v.dim();
+        if c != 3 {
+            return Err(value_err("result[\"target\"] must be HxWx3"));
+        }
+        Some(RgbImage {
+            width: w,
+            height: h,
+            data: v.iter().copied().collect(),
+        })
+    };
+    let mut job = (*s.job).clone();
+    // Variant k is the (k+1)-th variant of `day2night synth --variants k+1`: its names
+    // carry `_v{k+1}` when k > 0, and the sidecar records k+1 variants.
+    job.variants = s.plan.variant.saturating_add(1);
+    job.target = match (target.is_some(), png) {
+        (false, _) => Target::None,
+        (true, false) => Target::Exr,
+        (true, true) => Target::Both,
+    };
+    let night = Night {
+        clean,
+        noisy,
+        target,
+        input: None,
+        report: s.report.clone(),
+        stages: Vec::new(),
+        crop: None,
+    };
+    let day = r.day.clone();
+    let stem = r.name.clone();
+    let plan = s.plan.clone();
+    let from_file = r.from_file;
+    py.detach(move || {
+        on_pool(move || write_files(day, from_file, stem, plan, job, night, out_dir, overwrite))
+    })
+    .map_err(py_err)
+}
+
+#[allow(clippy::too_many_arguments)]
+fn write_files(
+    day: Arc<DayInput>,
+    from_file: bool,
+    stem: String,
+    plan: Plan,
+    job: SynthJob,
+    night: Night,
+    out_dir: PathBuf,
+    overwrite: bool,
+) -> Result<Vec<String>, Error> {
+    {
+        std::fs::create_dir_all(&out_dir).map_err(|e| Error::from(e).in_file(&out_dir))?;
+        let policy = OutputPolicy {
+            overwrite,
+            inputs: if from_file {
+                vec![day.source.clone()]
+            } else {
+                Vec::new()
+            },
+            ..OutputPolicy::default()
+        };
+        let sink = DirSink::new(&out_dir, job.base_name(&stem, &plan), &policy);
+        Ok(job.write_night(&day, &plan, &night, &sink)?.files)
+    }
+}
