@@ -37,7 +37,9 @@ fn main() {
     // 16 motions from a fixed LCG
     let mut s = 12345u64;
     let mut u = || {
-        s = s.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        s = s
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
         (s >> 11) as f64 / (1u64 << 53) as f64
     };
     let motions: Vec<[[f64; 3]; 2]> = (0..16)

@@ -9,6 +9,7 @@
 //! (`NightPairs` items), `dataset_units`, `pool` (`set_threads`, `threads`).
 #![forbid(unsafe_code)]
 
+mod burst;
 mod convert;
 mod dataset_units;
 mod errors;
