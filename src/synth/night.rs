@@ -17,8 +17,9 @@
 //! reported in a fixed order (clean, noisy, target). With `request.crop` only the crop is
 //! computed: the plan stays the whole frame's (lights, bulbs, illuminants), the clean pass
 //! covers the crop plus the demosaicer's margin ([`run_clean_crop`]), the crop's Gaussian
-//! noise draws from its own documented stream ([`apply_noise_crop_with`]; the physics model's
-//! draws are per site, so a crop gets the frame's samples: [`apply_physics_noise_crop`])
+//! noise draws from its own documented stream
+//! ([`crate::noise::apply::apply_noise_crop_with`]; the physics model's draws are per site,
+//! so a crop gets the frame's samples: [`crate::noise::apply_physics_noise_crop`])
 //! and the target is the crop's region of the frame's render ([`crate::isp::render_crop::render_linear_crop`]).
 //!
 //! ```no_run
@@ -35,7 +36,7 @@
 //! # Ok(()) }
 //! ```
 
-use super::burst::frames::{frame_clean_crop, frame_noisy_crop, transform, with_frame_rows};
+use super::burst::frames::{clean_crops, frame_noisy_crop, with_frame_rows};
 use super::relight::{run_clean, run_clean_crop, RunReport};
 use super::{night_meta, run_noise, with_noisy_rows, Plan};
 use crate::error::{Error, Result};
@@ -45,8 +46,6 @@ use crate::isp::render::{
 };
 use crate::isp::render_crop::{render_linear_crop_with, CROP_MARGIN};
 use crate::isp::{render_linear, Demosaic, RenderOptions, RgbImage};
-use crate::noise::apply::apply_noise_crop_with;
-use crate::noise::apply_physics_noise_crop;
 use crate::raw::crop::{crop_meta, Crop};
 use crate::raw::rows::RowSource;
 use crate::raw::{RawImage, RawMeta};
@@ -299,25 +298,10 @@ fn cropped<S: NightSink>(
             rayon::join(
                 || -> Result<()> {
                     // a burst's frames 1.. (their clean samples are shared by the ISOs)
-                    let frames = burst_crops(day, plan, crop, &clean.data)?;
+                    let frames = clean_crops(day, plan, crop, &clean.data)?;
                     for np in &plan.noise {
-                        let data = match &np.physics {
-                            Some(p) => {
-                                apply_physics_noise_crop(day, crop, &clean.data, p, np.seed)?
-                            }
-                            None => {
-                                let mut data = clean.data.clone();
-                                apply_noise_crop_with(
-                                    day,
-                                    crop,
-                                    &mut data,
-                                    &np.params,
-                                    np.seed,
-                                    plan.truncate_noise,
-                                )?;
-                                data
-                            }
-                        };
+                        // frame 00's noise is the single-frame crop's
+                        let data = frame_noisy_crop(day, plan, crop, np, 0, &clean.data)?;
                         let meta = night_meta(&day.meta, plan, np.iso, &np.params);
                         let noisy = RawImage {
                             width: crop.width,
@@ -384,21 +368,6 @@ fn cropped<S: NightSink>(
     n?;
     t?;
     Ok((clean, report))
-}
-
-/// The clean samples of `crop` in a burst's frames 1.. (`clean` is frame 00's): an
-/// identity frame's are frame 00's, a moved frame's its warp ([`frame_clean_crop`]).
-fn burst_crops(day: &RawImage, plan: &Plan, crop: &Crop, clean: &[u16]) -> Result<Vec<Vec<u16>>> {
-    let n = plan.burst.as_ref().map_or(1, |b| b.frames);
-    (1..n)
-        .map(|k| {
-            if transform(plan, k)?.is_identity() {
-                Ok(clean.to_vec())
-            } else {
-                frame_clean_crop(day, plan, crop, k)
-            }
-        })
-        .collect()
 }
 
 /// Every product of one variant, in memory (what [`synthesize`] returns).

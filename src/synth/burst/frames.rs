@@ -179,6 +179,26 @@ pub fn frame_clean_crop(day: &RawImage, plan: &Plan, crop: &Crop, frame: u32) ->
     Ok(out)
 }
 
+/// The clean samples of `crop` in a burst's frames 1.. (`clean` is frame 00's): an
+/// identity frame's are frame 00's, a moved frame's its warp ([`frame_clean_crop`]).
+pub fn clean_crops(
+    day: &RawImage,
+    plan: &Plan,
+    crop: &Crop,
+    clean: &[u16],
+) -> Result<Vec<Vec<u16>>> {
+    let n = plan.burst.as_ref().map_or(1, |b| b.frames);
+    (1..n)
+        .map(|k| {
+            if transform(plan, k)?.is_identity() {
+                Ok(clean.to_vec())
+            } else {
+                frame_clean_crop(day, plan, crop, k)
+            }
+        })
+        .collect()
+}
+
 /// Frame `frame`'s noisy samples of `crop` at the plan's noise entry `np` from its clean
 /// crop samples `clean` (the crop's own Gaussian stream, or the frame's physics draws at
 /// the crop's sites), with the frame's noise seed.
