@@ -11,6 +11,7 @@
 #![forbid(unsafe_code)]
 
 mod args;
+mod burst;
 mod convert;
 mod dataset_units;
 mod errors;

@@ -91,10 +91,14 @@ pub(crate) fn job_config(
                 "illuminants" => cfg.illuminants = path(&v)?,
                 "brightness" => cfg.brightness = path(&v)?,
                 "noise_model" => cfg.noise_model = path(&v)?,
+                k if crate::burst::OPTIONS.contains(&k) => {
+                    crate::burst::set_option(&mut o.burst, k, &v)?
+                }
                 other => {
                     return Err(value_err(format!(
                     "unknown option {other:?} (known: relight_formula, bulbs, lights, truncate, \
-covariance, day_neutral, mask_eval, opcodes, illuminants, brightness, noise_model)"
+covariance, day_neutral, mask_eval, opcodes, illuminants, brightness, noise_model, burst, \
+motion, shake_step, shake_roll, warp_interp)"
                 )))
                 }
             }

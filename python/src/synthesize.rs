@@ -56,8 +56,14 @@ pub(crate) struct Synthesis {
 /// through each file's colour matrices otherwise), brightness, noise_model (paths; a
 /// physics noise model file is recognized).
 ///
+/// Bursts: ``burst=N`` (with ``motion="shake"|"none"``, ``shake_step``, ``shake_roll``,
+/// ``warp_interp``, as ``--burst`` and its flags) makes every ``noisy[iso]`` an (N, H, W)
+/// array, frame 00 first (N = 1 keeps the 2-D array); ``transforms`` lists each frame's
+/// transform (``affine``, ``dx``, ``dy``, ``theta_deg``, ``valid``; None without a burst).
+/// A crop is a window in frame coordinates: frame k's crop is that region of frame k.
+///
 /// Returns a dict: ``clean`` (uint16, the whole stored plane, or the crop), ``noisy``
-/// ({iso: uint16 array}), ``target`` (float32 HxWx3 linear Rec.709, or None), ``plan``
+/// ({iso: uint16 array}), ``transforms``, ``target`` (float32 HxWx3 linear Rec.709, or None), ``plan``
 /// (the sidecar's plan), ``neutral`` (the night AsShotNeutral), ``noise_profile``
 /// ({iso: [[S, O] per colour plane]}), ``clean_noise_profile``, ``report``, ``stages``,
 /// ``crop``, ``target_origin`` ((row, column) of the crop's target in the whole-frame
@@ -117,6 +123,17 @@ pub(crate) fn synthesize<'py>(
             })
         })
         .map_err(py_err)?;
+    // a burst's frames, stacked per ISO (frame 00 first) before the night is taken apart
+    let frames_n = plan.burst.as_ref().map_or(1, |b| b.frames);
+    let mut stacks = Vec::new();
+    if frames_n > 1 {
+        for (iso, img) in &night.noisy {
+            stacks.push(crate::burst::stack(
+                py,
+                &crate::burst::frames_of(&night, *iso, img),
+            )?);
+        }
+    }
     let Night {
         clean,
         noisy,
@@ -139,10 +156,15 @@ pub(crate) fn synthesize<'py>(
     let np = PyDict::new(py);
     let noisy_arrays = PyDict::new(py);
     let mut noisy_meta = Vec::new();
+    let mut stacks = stacks.into_iter();
     for (iso, img) in noisy {
         noisy_meta.push((iso, img.meta.clone()));
-        noisy_arrays.set_item(iso, u16_array(py, img)?)?;
+        match stacks.next() {
+            Some(a) => noisy_arrays.set_item(iso, a)?,
+            None => noisy_arrays.set_item(iso, u16_array(py, img)?)?,
+        }
     }
+    d.set_item("transforms", crate::burst::transforms(py, &plan)?)?;
     for n in &plan.noise {
         np.set_item(n.iso, profile(&n.params))?;
     }
@@ -223,12 +245,28 @@ pub(crate) fn write_outputs(
     let clean = raw_image_from(&item("clean")?, &s.clean_meta, "result[\"clean\"]")?;
     let noisy_d = item("noisy")?;
     let mut noisy = Vec::new();
+    let mut frames = Vec::new();
+    let n = s.plan.burst.as_ref().map_or(1, |b| b.frames);
     for (iso, meta) in &s.noisy_meta {
         let a = noisy_d.get_item(*iso)?;
-        noisy.push((
-            *iso,
-            raw_image_from(&a, meta, &format!("result[\"noisy\"][{iso}]"))?,
-        ));
+        let what = format!("result[\"noisy\"][{iso}]");
+        if n == 1 {
+            noisy.push((*iso, raw_image_from(&a, meta, &what)?));
+            continue;
+        }
+        // a burst: (N, H, W), frame 00 first
+        if a.len()? != n as usize {
+            return Err(value_err(format!(
+                "{what} must hold the burst's {n} frames"
+            )));
+        }
+        for k in 0..n {
+            let img = raw_image_from(&a.get_item(k)?, meta, &format!("{what}[{k}]"))?;
+            match k {
+                0 => noisy.push((*iso, img)),
+                k => frames.push((*iso, k, img)),
+            }
+        }
     }
     let t = item("target")?;
     let target = if t.is_none() {
@@ -260,6 +298,7 @@ pub(crate) fn write_outputs(
     let night = Night {
         clean,
         noisy,
+        frames,
         target,
         input: None,
         report: s.report.clone(),

@@ -9,6 +9,7 @@ use day2night::dng::write::Compression;
 use day2night::encode::exr::{ExrCompression, ExrOptions};
 use day2night::error::Error;
 use day2night::output::{stop_requested, OutputPolicy, OutputSetLock};
+use day2night::synth::burst::BurstOptions;
 use day2night::synth::config::{parse_isos, parse_neutral, JobConfig};
 use day2night::synth::job::{DayInput, DirSink, SynthJob, Target};
 use day2night::synth::sidecar::Sidecar;
@@ -81,10 +82,11 @@ pub enum CovArg {
 #[command(after_help = "Examples:\n  \
   day2night synth day.dng -o night/                      # clean + ISO 1600/3200 + target.exr\n  \
   day2night synth a.dng b.dng -o out/ --seed 7 --variants 3 --iso 800,6400 --target both\n  \
-  day2night synth day.dng -o again/ --replay night/day.json   # byte-identical outputs\n\n\
+  day2night synth day.dng -o again/ --replay night/day.json   # byte-identical outputs\n  \
+  day2night synth day.dng -o burst/ --burst 8 --iso 3200     # 8 hand-held frames per ISO\n\n\
 Outputs per input <stem> and variant K (the _vK part, K = 1.., only when --variants > 1):\n  \
-<stem>[_vK]_clean.dng, <stem>[_vK]_iso<ISO>.dng, <stem>[_vK]_target.exr|png,\n  \
-<stem>[_vK]_input.exr (--input-exr), <stem>[_vK].json (sidecar).")]
+<stem>[_vK]_clean.dng, <stem>[_vK]_iso<ISO>.dng (--burst N: <stem>[_vK]_iso<ISO>_f<NN>.dng),\n  \
+<stem>[_vK]_target.exr|png, <stem>[_vK]_input.exr (--input-exr), <stem>[_vK].json (sidecar).")]
 pub struct SynthArgs {
     /// Day DNG files.
     #[arg(required = true, value_name = "DAY.dng")]
@@ -212,6 +214,59 @@ pub struct ExtraArgs {
     /// ignore (implied by --compat release). The night DNGs keep the lists either way.
     #[arg(long, value_name = "MODE")]
     pub opcodes: Option<String>,
+    /// Frames per ISO: a night burst of N noisy DNGs <stem>[_vK]_iso<ISO>_f<NN>.dng (1 to
+    /// 64; 1 = one noisy DNG per ISO, as without a burst). See docs/synthesis.md, "Bursts".
+    #[arg(long, default_value_t = 1, value_name = "N")]
+    pub burst: u32,
+    /// Motion between the frames of a burst: none (a tripod) or shake (a hand-held camera,
+    /// the default).
+    #[arg(long, value_name = "none|shake")]
+    pub motion: Option<String>,
+    /// Hand-held walk: standard deviation of each frame's translation step per axis, in
+    /// pixels [default: 0.6].
+    #[arg(long = "shake-step", value_name = "PX")]
+    pub shake_step: Option<f64>,
+    /// Hand-held walk: standard deviation of each frame's rotation step, in degrees
+    /// [default: 0.015].
+    #[arg(long = "shake-roll", value_name = "DEG")]
+    pub shake_roll: Option<f64>,
+    /// Interpolant of the burst warp: catmull-rom (default), lanczos3 or bilinear.
+    #[arg(long = "warp-interp", value_name = "KIND")]
+    pub warp_interp: Option<String>,
+}
+
+impl ExtraArgs {
+    /// The burst these flags ask for (the single-frame default for --burst 1; the motion
+    /// flags need a burst).
+    fn burst(&self) -> Result<BurstOptions, Failure> {
+        let mut b = BurstOptions {
+            frames: self.burst,
+            ..BurstOptions::default()
+        };
+        if let Some(m) = &self.motion {
+            b.motion = flag("--motion", m.parse())?;
+        }
+        if let Some(v) = self.shake_step {
+            b.shake.step_px = v;
+        }
+        if let Some(v) = self.shake_roll {
+            b.shake.roll_deg = v;
+        }
+        if let Some(k) = &self.warp_interp {
+            b.interp = flag("--warp-interp", k.parse())?;
+        }
+        b.validate().map_err(usage)?;
+        let motion_flags = self.motion.is_some()
+            || self.shake_step.is_some()
+            || self.shake_roll.is_some()
+            || self.warp_interp.is_some();
+        if b.is_single() && motion_flags {
+            return Err(usage(
+                "--motion, --shake-step, --shake-roll and --warp-interp need --burst N with N > 1",
+            ));
+        }
+        Ok(b)
+    }
 }
 
 impl SynthOpts {
@@ -252,6 +307,7 @@ impl SynthOpts {
         if let Some(m) = &self.extra.opcodes {
             options.opcodes = flag("--opcodes", m.parse())?;
         }
+        options.burst = self.extra.burst()?;
         options.validate().map_err(usage)?;
         Ok(JobConfig {
             options,

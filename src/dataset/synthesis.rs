@@ -89,10 +89,15 @@ impl Processor for SynthProcessor {
 }
 
 /// The dataset folder and file name of each synth output.
-fn place(kind: OutputKind) -> (Kind, String) {
+fn place(sink: &Sink, kind: OutputKind) -> (Kind, String) {
     match kind {
         OutputKind::CleanDng => (Kind::CleanRaw, ".dng".into()),
         OutputKind::NoisyDng { iso } => (Kind::NoisyRaw, format!("_iso{iso}.dng")),
+        // a burst's frames: one folder per sample, `noisy_raw/<id>/<id>_iso<ISO>_f<NN>.dng`
+        OutputKind::NoisyFrame { iso, frame } => (
+            Kind::NoisyRaw,
+            format!("/{}_iso{iso}_f{frame:02}.dng", sink.id()),
+        ),
         OutputKind::TargetExr => (Kind::Target, ".exr".into()),
         OutputKind::TargetPng => (Kind::Target, ".png".into()),
         OutputKind::InputExr => (Kind::Input, ".exr".into()),
@@ -105,20 +110,20 @@ fn place(kind: OutputKind) -> (Kind, String) {
 /// is hashed into the manifest once written.
 impl OutputSink for Sink {
     fn path(&self, kind: OutputKind) -> Result<PathBuf> {
-        let (k, suffix) = place(kind);
+        let (k, suffix) = place(self, kind);
         let p = Sink::path(self, k, &suffix);
         ensure_parent(&p)?;
         Ok(p)
     }
     fn name(&self, kind: OutputKind) -> String {
-        let (k, suffix) = place(kind);
+        let (k, suffix) = place(self, kind);
         self.rel_path(k, &suffix)
     }
     fn policy(&self) -> &OutputPolicy {
         Sink::policy(self)
     }
     fn written(&self, kind: OutputKind) -> Result<()> {
-        let (k, suffix) = place(kind);
+        let (k, suffix) = place(self, kind);
         self.adopt(k, &suffix)
     }
 }

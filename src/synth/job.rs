@@ -216,7 +216,14 @@ impl SynthJob {
         }
         let isos: Vec<u32> = night.noisy.iter().map(|(iso, _)| *iso).collect();
         let planned: Vec<u32> = plan.noise.iter().map(|n| n.iso).collect();
+        let frames = plan.burst.as_ref().map_or(1, |b| b.frames);
+        let planned_frames: Vec<(u32, u32)> = planned
+            .iter()
+            .flat_map(|&iso| (1..frames).map(move |k| (iso, k)))
+            .collect();
+        let got_frames: Vec<(u32, u32)> = night.frames.iter().map(|f| (f.0, f.1)).collect();
         if isos != planned
+            || got_frames != planned_frames
             || (self.target != Target::None) != night.target.is_some()
             || self.input_exr != night.input.is_some()
         {
@@ -231,7 +238,10 @@ impl SynthJob {
                     rayon::join(
                         || -> Result<()> {
                             for (iso, noisy) in &night.noisy {
-                                files.noisy(*iso, noisy)?;
+                                files.noisy(*iso, 0, noisy)?;
+                                for (_, k, f) in night.frames.iter().filter(|f| f.0 == *iso) {
+                                    files.noisy(*iso, *k, f)?;
+                                }
                             }
                             Ok(())
                         },
@@ -275,14 +285,16 @@ impl SynthJob {
         let report = compute(&files)?;
         let warnings = report.warnings.clone();
         let isos: Vec<u32> = plan.noise.iter().map(|np| np.iso).collect();
+        let frames = plan.burst.as_ref().map_or(1, |b| b.frames);
+        let noisy_kinds: Vec<OutputKind> = isos
+            .iter()
+            .flat_map(|&iso| (0..frames).map(move |k| OutputKind::noisy(iso, k, frames)))
+            .collect();
         let (want_exr, want_png) = (self.target.exr(), self.target.png());
         let mut stages = plan.stages.clone();
         let mut files = vec![sink.name(OutputKind::CleanDng)];
         stages.push("write_clean_dng".into());
-        files.extend(
-            isos.iter()
-                .map(|&iso| sink.name(OutputKind::NoisyDng { iso })),
-        );
+        files.extend(noisy_kinds.iter().map(|&k| sink.name(k)));
         if !isos.is_empty() {
             stages.push("write_noisy_dng".into());
         }
@@ -300,7 +312,7 @@ impl SynthJob {
         }
         syncs.finish(sink.policy())?;
         let mut kinds = vec![OutputKind::CleanDng];
-        kinds.extend(isos.iter().map(|&iso| OutputKind::NoisyDng { iso }));
+        kinds.extend(noisy_kinds.iter().copied());
         for (want, kind) in [
             (want_exr, OutputKind::TargetExr),
             (want_png, OutputKind::TargetPng),
@@ -558,11 +570,17 @@ mod tests {
         fn clean(&self, clean: &RawImage) -> Result<()> {
             self.inner.clean(clean)
         }
-        fn noisy(&self, iso: u32, noisy: &RawImage) -> Result<()> {
-            self.inner.noisy(iso, noisy)
+        fn noisy(&self, iso: u32, frame: u32, noisy: &RawImage) -> Result<()> {
+            self.inner.noisy(iso, frame, noisy)
         }
-        fn noisy_rows(&self, iso: u32, meta: &RawMeta, rows: &dyn RowSource) -> Result<()> {
-            self.inner.noisy_rows(iso, meta, rows)
+        fn noisy_rows(
+            &self,
+            iso: u32,
+            frame: u32,
+            meta: &RawMeta,
+            rows: &dyn RowSource,
+        ) -> Result<()> {
+            self.inner.noisy_rows(iso, frame, meta, rows)
         }
         fn banded(&self) -> bool {
             self.inner.banded()

@@ -13,6 +13,7 @@
 //! # Ok(()) }
 //! ```
 
+pub mod burst;
 pub mod config;
 pub mod day_input;
 pub mod dictionaries;
@@ -158,6 +159,10 @@ pub struct SynthOptions {
     /// raws never change: the night DNGs keep the lists byte for byte.
     #[serde(default, skip_serializing_if = "OpcodeMode::is_apply")]
     pub opcodes: OpcodeMode,
+    /// Burst frames and their motion (`--burst N`); absent from serialized options for a
+    /// single frame, so single-frame sidecars and dataset fingerprints are unchanged.
+    #[serde(default, skip_serializing_if = "burst::BurstOptions::is_single")]
+    pub burst: burst::BurstOptions,
 }
 
 impl Default for SynthOptions {
@@ -180,6 +185,7 @@ impl Default for SynthOptions {
             mask_eval: MaskEval::Separable,
             compat: Compat::default(),
             opcodes: OpcodeMode::Apply,
+            burst: burst::BurstOptions::default(),
         }
     }
 }
@@ -267,6 +273,7 @@ impl SynthOptions {
                 "compat.truncate_noise truncates the noisy raws when truncating: it needs truncate",
             ));
         }
+        self.burst.validate()?;
         let s = &self.sampler;
         if s.max_mahalanobis.is_nan()
             || s.max_mahalanobis <= 0.0

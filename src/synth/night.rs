@@ -17,8 +17,9 @@
 //! reported in a fixed order (clean, noisy, target). With `request.crop` only the crop is
 //! computed: the plan stays the whole frame's (lights, bulbs, illuminants), the clean pass
 //! covers the crop plus the demosaicer's margin ([`run_clean_crop`]), the crop's Gaussian
-//! noise draws from its own documented stream ([`apply_noise_crop_with`]; the physics model's
-//! draws are per site, so a crop gets the frame's samples: [`apply_physics_noise_crop`])
+//! noise draws from its own documented stream
+//! ([`crate::noise::apply::apply_noise_crop_with`]; the physics model's draws are per site,
+//! so a crop gets the frame's samples: [`crate::noise::apply_physics_noise_crop`])
 //! and the target is the crop's region of the frame's render ([`crate::isp::render_crop::render_linear_crop`]).
 //!
 //! ```no_run
@@ -35,6 +36,7 @@
 //! # Ok(()) }
 //! ```
 
+use super::burst::frames::{clean_crops, frame_noisy_crop, with_frame_rows};
 use super::relight::{run_clean, run_clean_crop, RunReport};
 use super::{night_meta, run_noise, with_noisy_rows, Plan};
 use crate::error::{Error, Result};
@@ -45,8 +47,6 @@ use crate::isp::render::{
 };
 use crate::isp::render_crop::{render_linear_crop_with, CROP_MARGIN};
 use crate::isp::{render_linear, Demosaic, RenderOptions, RgbImage};
-use crate::noise::apply::apply_noise_crop_with;
-use crate::noise::apply_physics_noise_crop;
 use crate::raw::crop::{crop_meta, Crop};
 use crate::raw::rows::RowSource;
 use crate::raw::{RawImage, RawMeta};
@@ -74,7 +74,8 @@ pub enum TargetOut<B> {
 }
 
 /// A consumer of the products of [`synthesize_into`], called from concurrent rayon tasks
-/// (hence `Sync`): `clean` once, `noisy` once per ISO in plan order (from one task),
+/// (hence `Sync`): `clean` once, `noisy` once per ISO in plan order and, for a burst,
+/// per frame of that ISO (frame 0 first; all from one task),
 /// for a banded target `target_start` once, `target_band` for every band in parallel
 /// (nearly top to bottom: see [`crate::isp::render::render_linear_bands_sized`]) then
 /// `target` once, `input` last. After an error, `target` may never be called: a sink
@@ -84,20 +85,21 @@ pub trait NightSink: Sync {
     type Band: Send;
     /// The clean night raw (with its output metadata).
     fn clean(&self, clean: &RawImage) -> Result<()>;
-    /// The noisy night raw at `iso` (with its output metadata).
-    fn noisy(&self, iso: u32, noisy: &RawImage) -> Result<()>;
-    /// The noisy night raw at `iso` as rows made on demand, with its output metadata `meta`
-    /// (the samples [`NightSink::noisy`] would get). The default makes the plane and hands
-    /// it to [`NightSink::noisy`]; a sink that writes files packs the rows strip by strip
-    /// instead, so no noisy plane is ever held.
-    fn noisy_rows(&self, iso: u32, meta: &RawMeta, rows: &dyn RowSource) -> Result<()> {
+    /// Frame `frame` of the noisy night raw at `iso` (with its output metadata); frame 0
+    /// is the single-frame noisy raw, frames 1.. exist for a burst (`plan.burst`).
+    fn noisy(&self, iso: u32, frame: u32, noisy: &RawImage) -> Result<()>;
+    /// Frame `frame` of the noisy night raw at `iso` as rows made on demand, with its
+    /// output metadata `meta` (the samples [`NightSink::noisy`] would get). The default
+    /// makes the plane and hands it to [`NightSink::noisy`]; a sink that writes files packs
+    /// the rows strip by strip instead, so no noisy plane is ever held.
+    fn noisy_rows(&self, iso: u32, frame: u32, meta: &RawMeta, rows: &dyn RowSource) -> Result<()> {
         let noisy = RawImage {
             width: rows.width(),
             height: rows.height(),
             data: crate::raw::rows::to_plane(rows)?,
             meta: meta.clone(),
         };
-        self.noisy(iso, &noisy)
+        self.noisy(iso, frame, &noisy)
     }
     /// True when the sink takes the target band by band ([`NightSink::target_band`]).
     fn banded(&self) -> bool {
@@ -207,11 +209,17 @@ fn whole_frame<S: NightSink>(
                     if i == 0 && req.input {
                         // kept whole: the network input is rendered from it
                         let (iso, noisy) = run_noise(clean, plan, i)?;
-                        sink.noisy(iso, &noisy)?;
+                        sink.noisy(iso, 0, &noisy)?;
                         first_noisy = Some(noisy);
                     } else {
                         with_noisy_rows(clean, plan, i, |iso, meta, rows| {
-                            sink.noisy_rows(iso, meta, rows)
+                            sink.noisy_rows(iso, 0, meta, rows)
+                        })?;
+                    }
+                    // a burst's other frames, streamed one after another
+                    for k in 1..plan.burst.as_ref().map_or(1, |b| b.frames) {
+                        with_frame_rows(clean, plan, i, k, |iso, meta, rows| {
+                            sink.noisy_rows(iso, k, meta, rows)
                         })?;
                     }
                 }
@@ -303,24 +311,11 @@ fn cropped<S: NightSink>(
         || {
             rayon::join(
                 || -> Result<()> {
+                    // a burst's frames 1.. (their clean samples are shared by the ISOs)
+                    let frames = clean_crops(day, plan, crop, &clean.data)?;
                     for np in &plan.noise {
-                        let data = match &np.physics {
-                            Some(p) => {
-                                apply_physics_noise_crop(day, crop, &clean.data, p, np.seed)?
-                            }
-                            None => {
-                                let mut data = clean.data.clone();
-                                apply_noise_crop_with(
-                                    day,
-                                    crop,
-                                    &mut data,
-                                    &np.params,
-                                    np.seed,
-                                    plan.truncate_noise,
-                                )?;
-                                data
-                            }
-                        };
+                        // frame 00's noise is the single-frame crop's
+                        let data = frame_noisy_crop(day, plan, crop, np, 0, &clean.data)?;
                         let meta = night_meta(&day.meta, plan, np.iso, &np.params);
                         let noisy = RawImage {
                             width: crop.width,
@@ -328,7 +323,19 @@ fn cropped<S: NightSink>(
                             data,
                             meta: crop_meta(&meta, crop),
                         };
-                        sink.noisy(np.iso, &noisy)?;
+                        sink.noisy(np.iso, 0, &noisy)?;
+                        for (k, fc) in frames.iter().enumerate() {
+                            let k = k as u32 + 1;
+                            let data = frame_noisy_crop(day, plan, crop, np, k, fc)?;
+                            sink.noisy(
+                                np.iso,
+                                k,
+                                &RawImage {
+                                    data,
+                                    ..noisy.clone()
+                                },
+                            )?;
+                        }
                     }
                     Ok(())
                 },
@@ -385,8 +392,11 @@ pub struct Night {
     /// The clean night raw: the whole stored image with the night metadata, or the crop as
     /// a raw image of its own ([`crop_meta`]).
     pub clean: RawImage,
-    /// (ISO, noisy raw) per planned ISO, same layout as `clean`.
+    /// (ISO, noisy raw) per planned ISO, same layout as `clean` (a burst's frame 00).
     pub noisy: Vec<(u32, RawImage)>,
+    /// A burst's other frames: (ISO, frame 1.., noisy raw), ISO by ISO in plan order,
+    /// frames in order; empty without a burst.
+    pub frames: Vec<(u32, u32, RawImage)>,
     /// The linear target (whole frame: DefaultCrop and orientation applied, exactly the
     /// EXR target's pixels before half rounding; crop: the crop's region, unoriented).
     pub target: Option<RgbImage>,
@@ -404,6 +414,7 @@ pub struct Night {
 #[derive(Default)]
 struct Collect {
     noisy: Mutex<Vec<(u32, RawImage)>>,
+    frames: Mutex<Vec<(u32, u32, RawImage)>>,
     target: Mutex<Option<RgbImage>>,
     input: Mutex<Option<RgbImage>>,
 }
@@ -413,8 +424,11 @@ impl NightSink for Collect {
     fn clean(&self, _clean: &RawImage) -> Result<()> {
         Ok(()) // returned by synthesize_into
     }
-    fn noisy(&self, iso: u32, noisy: &RawImage) -> Result<()> {
-        lock(&self.noisy).push((iso, noisy.clone()));
+    fn noisy(&self, iso: u32, frame: u32, noisy: &RawImage) -> Result<()> {
+        match frame {
+            0 => lock(&self.noisy).push((iso, noisy.clone())),
+            k => lock(&self.frames).push((iso, k, noisy.clone())),
+        }
         Ok(())
     }
     fn target(&self, target: TargetOut<()>) -> Result<()> {
@@ -441,6 +455,7 @@ pub fn synthesize(day: &RawImage, plan: &Plan, req: &Request) -> Result<Night> {
     Ok(Night {
         clean: out.clean,
         noisy: sink.noisy.into_inner().unwrap_or_else(|e| e.into_inner()),
+        frames: sink.frames.into_inner().unwrap_or_else(|e| e.into_inner()),
         target: sink.target.into_inner().unwrap_or_else(|e| e.into_inner()),
         input: sink.input.into_inner().unwrap_or_else(|e| e.into_inner()),
         report: out.report,

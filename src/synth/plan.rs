@@ -113,6 +113,10 @@ pub struct Plan {
     /// so such sidecars replay byte for byte.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub opcodes: Option<OpcodeReport>,
+    /// The burst (`--burst N`, N > 1): frames, motion model and every frame's transform,
+    /// drawn from the burst's own stream. Absent for a single frame.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub burst: Option<super::burst::BurstPlan>,
 }
 
 impl Plan {
@@ -406,9 +410,17 @@ pub fn plan_with_estimate(
     if !noise.is_empty() {
         stages.push("noise".into());
     }
+    // The burst's motion from its own stream (nothing drawn for a single frame).
+    let burst = super::burst::motion::plan_burst(&opts.burst, (w, h), (seed, input_name, variant))?;
+    if let Some(b) = &burst {
+        stages.push("burst_frames".into());
+        if b.transforms.iter().any(|t| !t.is_identity()) {
+            stages.push("burst_warp".into());
+        }
+    }
     // The renders' opcodes: unapplicable optional ones are warnings, mandatory ones and
-    // work over the budget errors (warnings when nothing is rendered, and no budget). The stage `apply_opcodes` is recorded by the
-    // synthesis when a render runs.
+    // work over the budget errors (warnings when nothing is rendered, and no budget). The
+    // stage `apply_opcodes` is recorded by the synthesis when a render runs.
     let (opcodes, target_size) = if renders {
         let c = crate::isp::opcodes::check::check_render(img, opts.opcodes, true, true)?;
         warnings.extend(c.warnings);
@@ -452,6 +464,7 @@ pub fn plan_with_estimate(
         stages,
         warnings,
         opcodes,
+        burst,
     };
     // The replay check (`synth --replay`) applies the same table: a plan synth writes is a
     // plan it reads back (e.g. a physics model extrapolated past the noise bounds is

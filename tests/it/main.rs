@@ -55,5 +55,6 @@ mod png_rows;
 mod release_compat;
 mod runs_concurrent;
 mod runs_interrupt;
+mod synth_burst;
 mod synth_cli;
 mod synth_lamps;
