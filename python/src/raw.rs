@@ -170,7 +170,11 @@ fn read_input(path: &Path) -> Result<DayInput, Error> {
         || day2night::synth::sidecar::sha256_hex(&bytes),
         || day2night::dng::read::read_dng_bytes(&bytes),
     );
-    Ok(DayInput::new(raw.in_file(path)?, sha256, path.to_path_buf()))
+    Ok(DayInput::new(
+        raw.in_file(path)?,
+        sha256,
+        path.to_path_buf(),
+    ))
 }
 
 /// Read a DNG into memory (the GIL is released while it is read and decoded). A LinearRaw
