@@ -259,7 +259,17 @@ proptest! {
         prop_assert!((d - duv).abs() < 1e-4, "{d} {duv}");
         for color in [canon_5d_mark_ii(), off_diagonal_camera()] {
             let cc = CameraColor::new(&color).unwrap();
-            let neutral = cc.xy_to_neutral(xy).unwrap();
+            let neutral = match cc.xy_to_neutral(xy) {
+                Ok(n) => n,
+                // Past the warm, green corner of the box (no lamp is there: the warmest,
+                // HP1 at 1,959 K, has Duv +0.0008) both test cameras' matrices can give a
+                // slightly negative blue, which xy_to_neutral refuses (the lamp path clamps
+                // it, docs/synthesis.md): allowed there only.
+                Err(e) => {
+                    prop_assert!(mired > 450.0 && duv > 0.005, "{xy:?}: {e}");
+                    continue;
+                }
+            };
             let back = cc.neutral_to_xy(neutral).unwrap();
             prop_assert!((back[0] - xy[0]).abs() < 1e-6 && (back[1] - xy[1]).abs() < 1e-6,
                 "{xy:?} -> {neutral:?} -> {back:?}");
