@@ -61,6 +61,12 @@ pub const MAX_MATRIX_CONDITION: f64 = 1e4;
 pub const SDK_MIN_DETERMINANT: f64 = 1e-10;
 /// Decimal places the DNG SDK rounds a normalized ColorMatrix to.
 pub const SDK_MATRIX_ROUNDING: f64 = 1e4;
+/// Each of x, y and z = 1 - x - y of a lamp in an xy illuminant dictionary is at least
+/// this: a light with no X, Y or Z at all is not a lamp, and xy -> XYZ divides by y.
+pub const MIN_XYZ_CHROMATICITY: f64 = 1e-3;
+/// Largest weight of a lamp in an xy illuminant dictionary (a count of gray cards, like
+/// [`MAX_DICT_ENTRIES`]).
+pub const MAX_LAMP_WEIGHT: f64 = 1e6;
 
 // ---------------------------------------------------------------------------------------
 // Lights and plans.
@@ -71,6 +77,37 @@ pub const MAX_GAIN: f64 = 1e6;
 pub const MAX_EXTENT_FACTOR: f64 = 100.0;
 /// Most stages or warnings listed in a plan.
 pub const MAX_LIST: usize = 1000;
+
+// ---------------------------------------------------------------------------------------
+// Integer arguments (the command line's flags and the Python package's arguments).
+
+/// Master seed (`--seed`, Python `seed`): any 64-bit unsigned value (the random streams are
+/// keyed by all of its bits).
+pub const SEED_RANGE: (u64, u64) = (0, u64::MAX);
+/// Variants per input (`--variants`): at least one. Python's 0-based `variant` is variant
+/// `variant + 1` of `--variants variant + 1`, so it is at most `VARIANTS_RANGE.1 - 1`.
+pub const VARIANTS_RANGE: (u32, u32) = (1, u32::MAX);
+/// Most local lights and most bulbs (`--lights`, `--bulbs`): each costs a pass over its
+/// window (the paper draws 4 to 6 lights, the release adds 5 bulbs).
+pub const MAX_LIGHTS: u32 = 256;
+/// EXR zip levels (`--exr-zip-level`): 1 (day2night's encoder) to 9 (zlib's largest).
+pub const EXR_ZIP_LEVEL_RANGE: (u8, u8) = (1, 9);
+/// Worker threads or inputs in parallel (`--jobs`; Python `set_threads`, where 0 means one
+/// per core): each is an OS thread with its own stack and, for `dataset`, an image in
+/// memory, and more of them than cores do not help (docs/dataset.md); 4096 is above the
+/// hardware threads of any one machine day2night runs on.
+pub const JOBS_RANGE: (usize, usize) = (1, 4096);
+
+/// Error unless `n` is in [`JOBS_RANGE`]; the message names `field`.
+pub fn jobs(field: &str, n: usize) -> Result<()> {
+    let (lo, hi) = JOBS_RANGE;
+    if (lo..=hi).contains(&n) {
+        return Ok(());
+    }
+    Err(Error::invalid(format!(
+        "{field}: {n} is outside {lo}..={hi}"
+    )))
+}
 
 // ---------------------------------------------------------------------------------------
 // Calibration files.
@@ -162,6 +199,23 @@ pub fn iso(field: &str, iso: u32) -> Result<()> {
 pub fn ratios(field: &str, v: &[f64], max: f64) -> Result<()> {
     for (i, &x) in v.iter().enumerate() {
         in_range(&format!("{field}[{i}]"), x, 1.0 / max, max)?;
+    }
+    Ok(())
+}
+
+/// Error unless `xy` is a chromaticity of a light: finite, with x, y and z = 1 - x - y each
+/// at least [`MIN_XYZ_CHROMATICITY`].
+pub fn chromaticity_xy(field: &str, xy: [f64; 2]) -> Result<()> {
+    let z = 1.0 - xy[0] - xy[1];
+    let hi = 1.0 - 2.0 * MIN_XYZ_CHROMATICITY;
+    in_range(&format!("{field} x"), xy[0], MIN_XYZ_CHROMATICITY, hi)?;
+    in_range(&format!("{field} y"), xy[1], MIN_XYZ_CHROMATICITY, hi)?;
+    if z < MIN_XYZ_CHROMATICITY {
+        return Err(Error::invalid(format!(
+            "{field}: x + y = {} leaves z = 1 - x - y below {} (not a light's chromaticity)",
+            short(xy[0] + xy[1]),
+            short(MIN_XYZ_CHROMATICITY)
+        )));
     }
     Ok(())
 }
@@ -339,6 +393,14 @@ mod tests {
         let e = iso("--iso", ISO_RANGE.1 + 1).unwrap_err().to_string();
         assert!(e.contains("--iso") && e.contains("4000001"), "{e}");
         assert!(iso("x", 0).is_err());
+    }
+
+    #[test]
+    fn jobs_at_and_past_the_edges() {
+        assert!(jobs("--jobs", JOBS_RANGE.0).is_ok() && jobs("--jobs", JOBS_RANGE.1).is_ok());
+        let e = jobs("--jobs", JOBS_RANGE.1 + 1).unwrap_err().to_string();
+        assert!(e.contains("--jobs: 4097 is outside 1..=4096"), "{e}");
+        assert!(jobs("--jobs", 0).is_err());
     }
 
     #[test]

@@ -5,6 +5,10 @@
 //! (values past its end map to its last entry), `black(site)` is BlackLevel (repeat pattern
 //! relative to the ActiveArea origin) plus BlackLevelDeltaH\[col\] plus BlackLevelDeltaV\[row\],
 //! and `black_max` is the largest black over the plane.
+//!
+//! [`Normalizer::with_range_per_site`] divides by each site's own range instead,
+//! `y = (lin(x) - black(site)) / (white - black(site))` (and denormalizes with it): what the
+//! authors' release does with a 2x2 BlackLevel (`--compat release`, docs/synthesis.md).
 
 use crate::error::Result;
 use crate::raw::RawImage;
@@ -48,6 +52,8 @@ pub struct Normalizer {
     black: Vec<f64>,
     delta_h: Vec<f64>,
     delta_v: Vec<f64>,
+    /// Divide by `white - black(site)` instead of `scale`.
+    range_per_site: bool,
 }
 
 impl Normalizer {
@@ -72,7 +78,25 @@ impl Normalizer {
             black: l.black.clone(),
             delta_h: l.black_delta_h.clone(),
             delta_v: l.black_delta_v.clone(),
+            range_per_site: false,
         })
+    }
+    /// The same levels with each site's own range `white - black(site)` as the unit of
+    /// normalized values, instead of `white - black_max` (the authors' release; a site whose
+    /// stored value is white then normalizes to exactly 1 whatever its black level).
+    pub fn with_range_per_site(mut self) -> Normalizer {
+        self.range_per_site = true;
+        self
+    }
+    /// The DN per normalized unit at a site whose black level is `black`: `scale`, or
+    /// `white - black` with [`with_range_per_site`](Self::with_range_per_site).
+    #[inline]
+    pub fn range_at_black(&self, black: f64) -> f64 {
+        if self.range_per_site {
+            self.white - black
+        } else {
+            self.scale
+        }
     }
     /// The same levels for linear samples: any LinearizationTable dropped (what a clean
     /// night raw made from this image holds).
@@ -118,13 +142,14 @@ impl Normalizer {
     /// Normalize one stored sample at active-area (row, col).
     #[inline]
     pub fn normalize(&self, x: u16, row: usize, col: usize) -> f64 {
-        (self.linearize(x) - self.black_at(row, col)) / self.scale
+        self.normalize_with_black(x, self.black_at(row, col))
     }
     /// Denormalize (SYNTHESIS.md 6): `y * scale + black(site)`, rounded (or truncated),
     /// clipped to [0, white], as a linear (post-LinearizationTable) value.
     #[inline]
     pub fn denormalize(&self, y: f64, row: usize, col: usize, truncate: bool) -> u16 {
-        let v = y * self.scale + self.black_at(row, col);
+        let b = self.black_at(row, col);
+        let v = y * self.range_at_black(b) + b;
         let v = if truncate { v.trunc() } else { v.round() };
         let v = if v.is_nan() { 0.0 } else { v };
         v.clamp(0.0, self.white.min(u16::MAX as f64)) as u16
@@ -154,12 +179,12 @@ impl Normalizer {
     /// [`normalize`](Self::normalize) with the site's black level given (from [`black_row`](Self::black_row)).
     #[inline]
     pub fn normalize_with_black(&self, x: u16, black: f64) -> f64 {
-        (self.linearize(x) - black) / self.scale
+        (self.linearize(x) - black) / self.range_at_black(black)
     }
     /// [`denormalize`](Self::denormalize) with the site's black level given.
     #[inline]
     pub fn denormalize_with_black(&self, y: f64, black: f64, truncate: bool) -> u16 {
-        let v = y * self.scale + black;
+        let v = y * self.range_at_black(black) + black;
         let white = self.white.min(u16::MAX as f64);
         if !truncate {
             return round_clamp(v, white);
@@ -347,5 +372,31 @@ mod tests {
         assert_eq!(n.denormalize(-1.0, 0, 0, false), 0);
         assert_eq!(n.denormalize(f64::NAN, 0, 0, false), 0);
         assert_eq!(n.denormalize(0.49 / n.scale, 0, 0, true), 64);
+    }
+
+    #[test]
+    fn range_per_site_maps_white_to_one_on_every_site() {
+        let mut i = img(2, 2, vec![4095; 4]);
+        i.meta.levels.black_repeat = (2, 2);
+        i.meta.levels.black = vec![250.0, 256.0, 260.0, 254.0];
+        let max = Normalizer::new(&i).unwrap();
+        let own = max.clone().with_range_per_site();
+        for (r, c) in [(0, 0), (0, 1), (1, 0), (1, 1)] {
+            let b = own.black_at(r, c);
+            assert_eq!(own.range_at_black(b), 4095.0 - b);
+            assert_eq!(max.range_at_black(b), 4095.0 - 260.0);
+            assert_eq!(own.normalize(4095, r, c), 1.0);
+            assert_eq!(own.denormalize(1.0, r, c, true), 4095);
+            // white - black_max as the unit: 1 falls short of white by black_max - black
+            assert_eq!(
+                max.denormalize(1.0, r, c, true) as f64,
+                4095.0 - (260.0 - b)
+            );
+            for x in [250u16, 700, 3000] {
+                let y = own.normalize(x, r, c);
+                assert_eq!(y, (x as f64 - b) / (4095.0 - b));
+                assert_eq!(own.denormalize(y, r, c, false), x);
+            }
+        }
     }
 }

@@ -17,7 +17,10 @@
 //! [`DeferredSyncs::finish`] refuse to start, so a run stops at its next output and its
 //! temporary files are removed as the errors unwind; [`remove_temp_files_and_close`]
 //! (called before exiting at once, e.g. on a second signal) removes every registered
-//! temporary file and refuses any new one or any rename into place from then on.
+//! temporary file and refuses any new one or any rename into place from then on. A set
+//! whose deferred renames have begun ([`DeferredSyncs::finish`]) is open until its queue is
+//! dropped (after its sidecar): the removal waits for open sets, at most [`SET_GRACE`], so
+//! that an exit on an interrupt leaves them whole.
 
 use crate::error::{Error, Result, ResultExt};
 use std::fs::{self, File};
@@ -26,6 +29,11 @@ use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicI32, Ordering};
 use std::sync::{Arc, Mutex, MutexGuard, PoisonError};
 use std::thread::JoinHandle;
+use std::time::{Duration, Instant};
+
+/// How long [`remove_temp_files_and_close`] waits for the output sets being renamed into
+/// place to be completed (their sidecars written) before it removes what is left.
+pub const SET_GRACE: Duration = Duration::from_millis(300);
 
 /// The signal number that asked this process to stop; 0 while none did.
 static STOP: AtomicI32 = AtomicI32::new(0);
@@ -57,6 +65,8 @@ pub struct TempRegistry {
 struct TempState {
     closed: bool,
     live: Vec<PathBuf>,
+    /// Output sets whose renames have begun and whose queue is not dropped yet.
+    sets_open: usize,
 }
 
 /// The registry of this process's temporary files (used by [`write_atomic`]).
@@ -75,7 +85,7 @@ fn held_locks() -> MutexGuard<'static, Vec<PathBuf>> {
 /// sets held are removed too (the locks themselves end with the process). For a process
 /// about to exit on an interrupt.
 pub fn remove_temp_files_and_close() -> usize {
-    let n = TEMPS.close_and_remove();
+    let n = TEMPS.close_and_remove_within(SET_GRACE);
     #[cfg(unix)]
     for p in held_locks().iter() {
         let _ = fs::remove_file(p);
@@ -90,6 +100,7 @@ impl TempRegistry {
             state: Mutex::new(TempState {
                 closed: false,
                 live: Vec::new(),
+                sets_open: 0,
             }),
         }
     }
@@ -155,10 +166,38 @@ impl TempRegistry {
         self.lock().live.clone()
     }
 
-    /// Remove every recorded temporary file and close the registry (see
-    /// [`remove_temp_files_and_close`]); returns how many were removed.
-    pub fn close_and_remove(&self) -> usize {
+    /// Record an output set whose renames begin; [`Error::Interrupted`] once closed.
+    fn open_set(&self) -> Result<()> {
         let mut st = self.lock();
+        if st.closed {
+            return Err(Error::Interrupted);
+        }
+        st.sets_open += 1;
+        Ok(())
+    }
+
+    /// The set recorded by [`open_set`](Self::open_set) is done (whole or failed).
+    fn close_set(&self) {
+        let mut st = self.lock();
+        st.sets_open = st.sets_open.saturating_sub(1);
+    }
+
+    /// [`close_and_remove_within`](Self::close_and_remove_within) without waiting.
+    pub fn close_and_remove(&self) -> usize {
+        self.close_and_remove_within(Duration::ZERO)
+    }
+
+    /// Remove every recorded temporary file and close the registry (see
+    /// [`remove_temp_files_and_close`]), once no output set is being renamed into place or
+    /// after `grace`; returns how many were removed.
+    pub fn close_and_remove_within(&self, grace: Duration) -> usize {
+        let t0 = Instant::now();
+        let mut st = self.lock();
+        while st.sets_open > 0 && t0.elapsed() < grace {
+            drop(st);
+            std::thread::sleep(Duration::from_millis(2));
+            st = self.lock();
+        }
         st.closed = true;
         let mut n = 0;
         for p in std::mem::take(&mut st.live) {
@@ -292,6 +331,9 @@ struct PendingSync {
 #[derive(Debug, Default)]
 pub struct DeferredSyncs {
     pending: Mutex<Vec<PendingSync>>,
+    /// The renames of [`finish`](Self::finish) began: the set stays open in the registry
+    /// until this queue is dropped.
+    set_open: std::sync::atomic::AtomicBool,
 }
 
 impl DeferredSyncs {
@@ -325,6 +367,12 @@ impl DeferredSyncs {
         if first_err.is_none() && stop_requested().is_some() {
             first_err = synced.first().map(|(_, p)| Error::Interrupted.in_file(p));
         }
+        if first_err.is_none() && !self.set_open.load(Ordering::SeqCst) {
+            match TEMPS.open_set() {
+                Ok(()) => self.set_open.store(true, Ordering::SeqCst),
+                Err(e) => first_err = synced.first().map(|(_, p)| e.in_file(p)),
+            }
+        }
         if let Some(e) = first_err {
             for (tmp, _) in &synced {
                 TEMPS.discard(tmp);
@@ -340,6 +388,9 @@ impl Drop for DeferredSyncs {
         for p in self.take() {
             let _ = p.sync.join();
             TEMPS.discard(&p.tmp);
+        }
+        if self.set_open.load(Ordering::SeqCst) {
+            TEMPS.close_set();
         }
     }
 }
@@ -741,5 +792,32 @@ mod tests {
             .unwrap_err();
         assert!(matches!(err.root(), Error::Interrupted), "{err}");
         assert!(!t3.exists() && !dir.path().join("d.bin").exists());
+    }
+
+    #[test]
+    fn close_waits_for_an_open_set_within_its_grace() {
+        let dir = tempfile::tempdir().unwrap();
+        let reg = Arc::new(TempRegistry::new());
+        reg.open_set().unwrap();
+        let side = dir.path().join("s.json");
+        let (tmp, side2, reg2) = (dir.path().join(".s.json.tmp-1"), side.clone(), reg.clone());
+        let writer = std::thread::spawn(move || {
+            std::thread::sleep(Duration::from_millis(50));
+            reg2.create(&tmp).unwrap();
+            reg2.commit_all(vec![(tmp, side2)], |_| Ok(())).unwrap();
+            reg2.close_set();
+        });
+        // the close waits for the set's last file (its sidecar), then refuses new ones
+        reg.close_and_remove_within(Duration::from_secs(5));
+        assert!(side.exists());
+        writer.join().unwrap();
+        assert!(matches!(reg.open_set(), Err(Error::Interrupted)));
+        // a set that never completes delays the close by the grace only
+        let reg = TempRegistry::new();
+        reg.open_set().unwrap();
+        let t0 = Instant::now();
+        reg.close_and_remove_within(Duration::from_millis(30));
+        let waited = t0.elapsed();
+        assert!(waited >= Duration::from_millis(30) && waited < Duration::from_secs(2));
     }
 }

@@ -1,11 +1,12 @@
 #!/usr/bin/env python3
-"""`day2night dataset` on a Ray cluster: one Ray task per (input, variant) unit.
+"""`day2night dataset` on a Ray cluster: one Ray task per input (its variants' units).
 
     python ray_dataset.py DAY_DIR -o OUT [--address ADDR] [dataset's options]
 
 The output tree equals `day2night dataset DAY_DIR -o OUT` with the same options: the same
 file names, every file byte for byte, the same manifest lines (python/tests/test_ray.py).
-A rerun after a kill completes the tree, skipping the units already complete.
+A rerun after a kill completes the tree, skipping the units already complete. Each task
+reads and decodes its input once for all of its variants (`write_units`), as `dataset` does.
 
 Without --address a new local Ray cluster is started (--num-cpus CPUs); with
 `--address auto` or `--address HEAD_IP:6379` (on a node of a cluster made by `ray start`;
@@ -53,7 +54,8 @@ def parse_args(argv=None):
     ap.add_argument("--address", help="Ray cluster address (default: start a local cluster)")
     ap.add_argument("--num-cpus", type=int, help="CPUs of the local cluster (default: all)")
     ap.add_argument("--cpus-per-task", type=int, default=1,
-                    help="CPUs reserved per unit; also its synthesis threads (default 1)")
+                    help="CPUs reserved per task (one input); also its synthesis threads "
+                         "(default 1)")
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--variants", type=int, default=1)
     split = ap.add_mutually_exclusive_group()
@@ -68,15 +70,16 @@ def parse_args(argv=None):
     return ap.parse_args(argv)
 
 
-def unit_writer(out, threads, overwrite, wait, options):
-    """The Ray task body: write one unit, return its manifest record (as JSON text, so Ray's
-    Arrow blocks need no schema for it) and why it was computed ("" when skipped)."""
+def input_writer(out, threads, overwrite, wait, options):
+    """The Ray task body: write the units of one input (its variants; the input is decoded
+    once), return their manifest records (as JSON text, so Ray's Arrow blocks need no
+    schema for them) and why each was computed ("" when skipped)."""
 
-    def write(unit):
+    def write(item):
         day2night.set_threads(threads)
-        record, reason = day2night.write_unit(unit, out, overwrite=overwrite, wait=wait,
-                                              reason=True, **options)
-        return {"record": json.dumps(record), "reason": reason or ""}
+        done = day2night.write_units(json.loads(item["units"]), out, overwrite=overwrite,
+                                     wait=wait, reason=True, **options)
+        return {"records": json.dumps([[record, reason or ""] for record, reason in done])}
 
     return write
 
@@ -102,14 +105,16 @@ def main(argv=None):
                  log_to_driver=not a.quiet)
     ctx = ray.data.DataContext.get_current()
     ctx.enable_progress_bars = not a.quiet
-    work = unit_writer(a.out, a.cpus_per_task, a.overwrite, a.wait, options)
-    rows = (ray.data.from_items(units, override_num_blocks=max(1, len(units)))
+    work = input_writer(a.out, a.cpus_per_task, a.overwrite, a.wait, options)
+    groups = [{"units": json.dumps(g)} for g in day2night.group_units(units)]
+    rows = (ray.data.from_items(groups, override_num_blocks=max(1, len(groups)))
             .map(work, num_cpus=a.cpus_per_task)
             .take_all())
-    records = [json.loads(r["record"]) for r in rows]
+    done = [pair for r in rows for pair in json.loads(r["records"])]
+    records = [record for record, _ in done]
     path = day2night.write_manifest(records, a.out, shard=a.shard)
     failed = [r for r in records if r["status"] != "ok"]
-    skipped = sum(1 for r in rows if not r["reason"])
+    skipped = sum(1 for _, reason in done if not reason)
     print(f"ray_dataset: {len(records)} units: {len(records) - skipped - len(failed)} computed, "
           f"{skipped} skipped (up to date), {len(failed)} failed; manifest {path}; "
           f"{time.time() - t0:.1f} s", file=sys.stderr)

@@ -7,7 +7,10 @@ use day2night::isp::RgbImage;
 use day2night::raw::meta::RawMeta;
 use day2night::RawImage;
 use numpy::ndarray::{Array2, Array3};
-use numpy::{IntoPyArray, PyArray2, PyReadonlyArray2, PyReadonlyArray3};
+use numpy::{
+    IntoPyArray, PyArray2, PyArrayDescrMethods, PyReadonlyArray2, PyReadonlyArray3, PyUntypedArray,
+    PyUntypedArrayMethods,
+};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
@@ -49,6 +52,46 @@ pub(crate) fn rgb_from(a: &PyReadonlyArray3<'_, f32>, what: &str) -> PyResult<Rg
     })
 }
 
+/// A height x width x 3 numpy array of any float dtype (float16, float32, float64, ...) as
+/// an RGB image of f32 samples, the precision `day2night eval` reads EXRs in: float16 and
+/// float32 are exact, wider floats are rounded to the nearest f32. `what` names the
+/// argument in errors (`ValueError`).
+pub(crate) fn float_rgb(a: &Bound<'_, PyAny>, what: &str) -> PyResult<RgbImage> {
+    let arr = a.cast::<PyUntypedArray>().map_err(|_| {
+        value_err(format!(
+            "{what} must be a numpy float array of height x width x 3 (got {})",
+            a.get_type()
+                .name()
+                .map(|n| n.to_string())
+                .unwrap_or_else(|_| "?".into())
+        ))
+    })?;
+    let dtype = arr.dtype();
+    if dtype.kind() != b'f' {
+        return Err(value_err(format!(
+            "{what}: dtype {dtype} is not a float dtype (float16, float32 or float64)"
+        )));
+    }
+    let shape = arr.shape();
+    if shape.len() != 3 || shape[2] != 3 {
+        let dims: Vec<String> = shape.iter().map(|d| d.to_string()).collect();
+        return Err(value_err(format!(
+            "{what} must be height x width x 3 (got shape ({}{}))",
+            dims.join(", "),
+            if dims.len() == 1 { "," } else { "" }
+        )));
+    }
+    let f32_arr = if dtype.is_equiv_to(&numpy::dtype::<f32>(a.py())) {
+        a.clone()
+    } else {
+        a.call_method1("astype", ("float32",))?
+    };
+    let v: PyReadonlyArray3<'_, f32> = f32_arr
+        .extract()
+        .map_err(|_| value_err(format!("{what}: cannot be read as float32")))?;
+    rgb_from(&v, what)
+}
+
 /// A 2-D uint16 array with the metadata `meta` as a raw (`what` names it in errors).
 pub(crate) fn raw_image_from(
     arr: &Bound<'_, PyAny>,
@@ -75,12 +118,23 @@ pub(crate) fn meta_dict<'py>(py: Python<'py>, raw: &RawImage) -> PyResult<Bound<
     let a = raw.active_area();
     let (aw, ah) = (a.width(), a.height());
     d.set_item("cfa_pattern", raw.bayer().ok().map(|b| b.name()))?;
-    d.set_item("black_level", m.levels.black.clone())?;
     d.set_item(
         "black_level_repeat_dim",
         (m.levels.black_repeat.0, m.levels.black_repeat.1),
     )?;
-    d.set_item("white_level", m.levels.white)?;
+    match &m.linear_raw {
+        None => {
+            d.set_item("samples_per_pixel", 1)?;
+            d.set_item("black_level", m.levels.black.clone())?;
+            d.set_item("white_level", m.levels.white)?;
+        }
+        Some(lr) => {
+            // As the DNG stores them: BlackLevel rows x cols x samples, WhiteLevel per sample.
+            d.set_item("samples_per_pixel", lr.samples_per_pixel)?;
+            d.set_item("black_level", lr.black.clone())?;
+            d.set_item("white_level", lr.white.clone())?;
+        }
+    }
     d.set_item("as_shot_neutral", m.as_shot_neutral.map(|n| n.to_vec()))?;
     d.set_item("iso", m.exif.iso)?;
     d.set_item(
@@ -116,4 +170,43 @@ pub(crate) fn warn_meta(py: Python<'_>, path: &std::path::Path, meta: &RawMeta) 
         )?;
     }
     Ok(())
+}
+
+/// Raise each of `warnings` about the raw `name` as a `UserWarning` (`<name>: <message>`),
+/// as the command line prints `day2night: <file>: warning: <message>`.
+pub(crate) fn warn_lines(py: Python<'_>, name: &str, warnings: &[String]) -> PyResult<()> {
+    for w in warnings {
+        let msg = std::ffi::CString::new(format!("{name}: {w}"))
+            .unwrap_or_else(|_| c"day2night warning".into());
+        PyErr::warn(
+            py,
+            &py.get_type::<pyo3::exceptions::PyUserWarning>(),
+            &msg,
+            1,
+        )?;
+    }
+    Ok(())
+}
+
+/// Raise the warnings of a plan beyond the reader's own (those `read_dng` already raised):
+/// the noise model's source (another camera's table, an untrusted estimate, a model file of
+/// another camera), another camera's illuminants, ISO extrapolation, opcodes; then
+/// `extra` (the run's); each a `UserWarning` `<file>: <message>`, as `day2night synth`
+/// prints `day2night: <file>: warning: <message>`.
+pub(crate) fn warn_plan(
+    py: Python<'_>,
+    file: &str,
+    meta: &RawMeta,
+    plan: &day2night::synth::Plan,
+    extra: &[String],
+) -> PyResult<()> {
+    // The plan's list starts with the reader's corrections (dng::check).
+    let own = if plan.warnings.starts_with(&meta.warnings) {
+        meta.warnings.len()
+    } else {
+        0
+    };
+    let mut new = plan.warnings[own..].to_vec();
+    new.extend(extra.iter().cloned());
+    warn_lines(py, file, &new)
 }

@@ -3,9 +3,11 @@
 //! `day2night::dataset::units` does the work; this file converts Python values (the CLI's
 //! option names and values, in snake case) to the library's types and back.
 
+use crate::args::{self, Seed, Val, Variants, BULBS, EXR_ZIP_LEVEL, ISO, LIGHTS, SEED, VARIANTS};
 use crate::convert::json_obj;
 use crate::errors::{arg_err, py_err, value_err};
 use crate::pool::on_pool;
+use day2night::dataset::resume::Reason;
 use day2night::dataset::synthesis::SynthProcessor;
 use day2night::dataset::units::{self as lib, UnitsOptions, WriteOptions};
 use day2night::dataset::{Record, Shard, Split, SplitRule, Unit};
@@ -59,19 +61,20 @@ fn parse_shard(shard: Option<&str>) -> PyResult<Shard> {
 ///
 /// >>> units = day2night.dataset_units("day/", "night/", variants=2, val=10, seed=1)
 #[pyfunction]
-#[pyo3(signature = (day_dir, out_dir=None, *, variants=1, val=None, val_fraction=None, seed=0, shard=None, overwrite=false))]
+#[pyo3(signature = (day_dir, out_dir=None, *, variants=Variants(1), val=None, val_fraction=None, seed=Seed(0), shard=None, overwrite=false))]
 #[allow(clippy::too_many_arguments)]
 pub fn dataset_units<'py>(
     py: Python<'py>,
     day_dir: PathBuf,
     out_dir: Option<PathBuf>,
-    variants: u32,
-    val: Option<usize>,
+    variants: Variants,
+    val: Option<Val>,
     val_fraction: Option<f64>,
-    seed: u64,
+    seed: Seed,
     shard: Option<&str>,
     overwrite: bool,
 ) -> PyResult<Bound<'py, PyList>> {
+    let (variants, val, seed) = (variants.0, val.map(|v| v.0), seed.0);
     let opts = UnitsOptions {
         day_dir,
         out_dir,
@@ -129,9 +132,14 @@ fn unit_from(d: &Bound<'_, PyAny>) -> PyResult<(Unit, Option<Record>)> {
         "val" => Split::Val,
         s => return Err(value_err(format!("unit split {s:?}: train or val"))),
     };
-    let variant: u32 = get("variant")?.extract()?;
-    let variants: u32 = get("variants")?.extract()?;
-    let seed: u64 = get("seed")?.extract()?;
+    let variants: u32 = VARIANTS.get_as(&get("variants")?, "unit[\"variants\"]")?;
+    let variant: u32 = args::in_range(
+        &get("variant")?,
+        "unit[\"variant\"]",
+        1,
+        u64::from(variants),
+    )?;
+    let seed: u64 = SEED.get_as(&get("seed")?, "unit[\"seed\"]")?;
     let unit = lib::unit(&rel, path, split, variant, variants, seed).map_err(py_err)?;
     if let Ok(id) = d.get_item("id") {
         if !id.is_none() && id.extract::<String>()? != unit.id {
@@ -180,27 +188,28 @@ fn dataset_config(variants: u32, options: Option<&Bound<'_, PyDict>>) -> PyResul
             let o = &mut cfg.options;
             match key.as_str() {
                 "iso" => {
+                    // As --iso: "1600,3200" or "none"; or one ISO, or a list of them (each
+                    // in ISO_RANGE, duplicates dropped).
                     o.isos = if v.is_none() {
                         Vec::new()
                     } else if let Ok(s) = v.extract::<String>() {
                         parse_isos(&s).map_err(|e| arg_err("iso", e))?
-                    } else if let Ok(i) = v.extract::<u32>() {
-                        parse_isos(&i.to_string()).map_err(py_err)?
+                    } else if v.hasattr("__index__")? {
+                        vec![ISO.get(&v)?]
                     } else {
-                        let list: Vec<u32> = v.extract()?;
-                        let text: Vec<String> = list.iter().map(|i| i.to_string()).collect();
-                        if text.is_empty() {
-                            Vec::new()
-                        } else {
-                            parse_isos(&text.join(","))
-                                .map_err(|e| arg_err("iso", e))?
+                        let mut list = Vec::new();
+                        for i in args::isos(&v, "iso")? {
+                            if !list.contains(&i) {
+                                list.push(i);
+                            }
                         }
+                        list
                     }
                 }
                 "mode" => o.mode = parsed::<Mode>(&v, "mode")?,
                 "relight_formula" => o.formula = parsed::<RelightFormula>(&v, "relight_formula")?,
-                "bulbs" => o.bulbs = v.extract()?,
-                "lights" => o.local_lights = v.extract()?,
+                "bulbs" => o.bulbs = BULBS.opt(&v)?,
+                "lights" => o.local_lights = LIGHTS.opt(&v)?,
                 "covariance" => o.covariance = parsed::<Covariance>(&v, "covariance")?,
                 "day_neutral" => {
                     o.day_neutral = if v.is_none() {
@@ -247,7 +256,7 @@ fn dataset_config(variants: u32, options: Option<&Bound<'_, PyDict>>) -> PyResul
                 "exr_compression" => {
                     cfg.exr.compression = parsed::<ExrCompression>(&v, "exr_compression")?
                 }
-                "exr_zip_level" => zip_level = v.extract()?,
+                "exr_zip_level" => zip_level = EXR_ZIP_LEVEL.get(&v)?,
                 other => {
                     return Err(value_err(format!(
                         "unknown option {other:?} (known: {KNOWN}; seed, variants, val and shard are dataset_units')"
@@ -335,6 +344,83 @@ pub fn write_unit<'py>(
     } else {
         Ok(rec)
     }
+}
+
+/// ``write_unit`` for several units (dicts from ``dataset_units``), each input read,
+/// hashed and decoded once for all of its units (its variants), as ``day2night dataset``
+/// does; units of several inputs are grouped by input (``group_units`` gives the groups, one
+/// per scheduler task). Returns the records (or ``(record, reason)`` pairs with
+/// ``reason=True``) in the order of ``units``. Same options as ``write_unit``.
+///
+/// >>> for group in day2night.group_units(units):
+/// ...     records += day2night.write_units(group, "night/", iso="800,3200")
+#[pyfunction]
+#[pyo3(signature = (units, out_dir, *, overwrite=false, wait=false, reason=false, **options))]
+pub fn write_units<'py>(
+    py: Python<'py>,
+    units: &Bound<'py, PyAny>,
+    out_dir: PathBuf,
+    overwrite: bool,
+    wait: bool,
+    reason: bool,
+    options: Option<&Bound<'py, PyDict>>,
+) -> PyResult<Bound<'py, PyList>> {
+    let mut parsed = Vec::new();
+    for (i, u) in units.try_iter()?.enumerate() {
+        let u = u?;
+        parsed.push(unit_from(&u).map_err(|e| {
+            let msg = e.value(py).to_string();
+            if e.is_instance_of::<pyo3::exceptions::PyValueError>(py) {
+                value_err(format!("units[{i}]: {msg}"))
+            } else {
+                e
+            }
+        })?);
+    }
+    let list = PyList::empty(py);
+    let Some((first, _)) = parsed.first() else {
+        return Ok(list);
+    };
+    let cfg = dataset_config(first.variants, options)?;
+    // Groups by input, in the order each input first appears.
+    let mut groups: Vec<(PathBuf, Vec<usize>)> = Vec::new();
+    for (i, (u, _)) in parsed.iter().enumerate() {
+        match groups.iter_mut().find(|(p, _)| *p == u.path) {
+            Some((_, idx)) => idx.push(i),
+            None => groups.push((u.path.clone(), vec![i])),
+        }
+    }
+    let w = WriteOptions {
+        out_dir,
+        overwrite,
+        wait,
+    };
+    let n = parsed.len();
+    let done = py
+        .detach(move || {
+            on_pool(move || {
+                let p = processor_for(&cfg)?;
+                let mut done: Vec<Option<(Record, Option<Reason>)>> = vec![None; n];
+                for (_, idx) in &groups {
+                    let group: Vec<(Unit, Option<Record>)> =
+                        idx.iter().map(|&i| parsed[i].clone()).collect();
+                    for (&i, r) in idx.iter().zip(lib::write_units(&group, &w, p.as_ref())?) {
+                        done[i] = Some(r);
+                    }
+                }
+                Ok(done)
+            })
+        })
+        .map_err(py_err)?;
+    for (rec, why) in done.into_iter().flatten() {
+        let rec = json_obj(py, &rec)?;
+        if reason {
+            list.append((rec, why.map(|r| r.describe())))?;
+        } else {
+            list.append(rec)?;
+        }
+    }
+    Ok(list)
 }
 
 /// Write the manifest of a run (``manifest.jsonl``, or ``manifest.shard-I-of-N.jsonl``

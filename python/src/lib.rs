@@ -2,13 +2,16 @@
 //! Every computation is the Rust library's (`day2night::synth::night::synthesize`, the same
 //! path `day2night synth` runs), with the GIL released while it runs.
 //!
-//! Conversions: `errors` (the one mapping of library errors to Python exceptions),
-//! `convert` (numpy arrays, JSON values, `Raw.meta`), `synth_options` (keyword options to a
-//! job), `raw_from` (a metadata dict to a raw). Entry points: `raw` (`Raw`, `read_dng`),
+//! Conversions: `errors` (the one mapping of library errors to Python exceptions), `args`
+//! (integer arguments checked against the command line's bounds), `convert` (numpy arrays,
+//! JSON values, `Raw.meta`), `synth_options` (keyword options to a job), `raw_from` (a
+//! metadata dict to a raw). Entry points: `raw` (`Raw`, `read_dng`),
 //! `synthesize` (`synthesize`, `write_outputs`), `render`, `metrics`, `pairs`
 //! (`NightPairs` items), `dataset_units`, `pool` (`set_threads`, `threads`).
 #![forbid(unsafe_code)]
 
+mod args;
+mod burst;
 mod convert;
 mod dataset_units;
 mod errors;
@@ -44,9 +47,12 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(pool::set_threads, m)?)?;
     m.add_function(wrap_pyfunction!(pool::threads, m)?)?;
     m.add_function(wrap_pyfunction!(raw::write_dng, m)?)?;
+    m.add("BOUNDS", args::bounds_dict(m.py())?)?;
+    m.add_function(wrap_pyfunction!(args::check_int, m)?)?;
     m.add_function(wrap_pyfunction!(pairs::night_pair, m)?)?;
     m.add_function(wrap_pyfunction!(dataset_units::dataset_units, m)?)?;
     m.add_function(wrap_pyfunction!(dataset_units::write_unit, m)?)?;
+    m.add_function(wrap_pyfunction!(dataset_units::write_units, m)?)?;
     m.add_function(wrap_pyfunction!(dataset_units::write_manifest, m)?)?;
     Ok(())
 }

@@ -5,6 +5,7 @@
 //! `pack_bayer(synthesize(...)["noisy"][iso], raw.meta, top, left)` and
 //! `synthesize(...)["target"].transpose(2, 0, 1)` exactly (python/tests/test_pairs.py).
 
+use crate::args::{self, Iso, Seed, Variant};
 use crate::errors::{py_err, value_err};
 use crate::pool::on_pool;
 use crate::raw::Raw;
@@ -13,7 +14,7 @@ use day2night::raw::crop::Crop;
 use day2night::raw::Levels;
 use day2night::synth::night::{synthesize as lib_synthesize, Request};
 use day2night::{Error, RawImage};
-use numpy::ndarray::Array3;
+use numpy::ndarray::{Array3, Array4};
 use numpy::IntoPyArray;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
@@ -107,24 +108,31 @@ fn planar(rgb: &[f32], n: usize) -> Vec<f32> {
 pub fn night_pair<'py>(
     py: Python<'py>,
     raw: &Bound<'py, Raw>,
-    seed: u64,
-    variant: u32,
-    iso: u32,
-    crop: (usize, usize, usize, usize),
+    seed: Seed,
+    variant: Variant,
+    iso: Iso,
+    crop: &Bound<'py, PyAny>,
     mode: &str,
     options: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let (top, left, height, width) = crop;
-    if height == 0 || width == 0 || height % 2 != 0 || width % 2 != 0 {
+    let (seed, variant, iso) = (seed.0, variant.0, iso.0);
+    let a = raw.get().day.raw.active_area();
+    let Crop {
+        top,
+        left,
+        height,
+        width,
+    } = args::crop(crop, a.width(), a.height())?;
+    if height % 2 != 0 || width % 2 != 0 {
         return Err(value_err(format!(
-            "crop {height}x{width}: the packed Bayer layout needs an even, non-empty size"
+            "crop {height}x{width}: the packed Bayer layout needs an even size"
         )));
     }
     let cfg = job_config(mode, vec![iso], true, options)?;
     let r = raw.get();
-    let day = r.day.clone();
+    let day = r.cfa_day()?;
     let file_name = r.file_name.clone();
-    let (noisy, clean, target) = py
+    let (noisy, clean, target, plan) = py
         .detach(move || {
             on_pool(move || {
                 let job = job_for(&cfg)?;
@@ -147,11 +155,15 @@ pub fn night_pair<'py>(
                     .find(|(i, _)| *i == iso)
                     .map(|(_, img)| img)
                     .ok_or_else(|| Error::invalid(format!("no noisy raw at ISO {iso}")))?;
+                // a burst's frames, frame 00 first (one frame without a burst)
+                let frames = crate::burst::frames_of(&night, iso, noisy_img);
                 let t = night
                     .target
                     .as_ref()
                     .ok_or_else(|| Error::invalid("no target rendered"))?;
-                if (noisy_img.height, noisy_img.width) != (height, width)
+                if frames
+                    .iter()
+                    .any(|f| (f.height, f.width) != (height, width))
                     || (night.clean.height, night.clean.width) != (height, width)
                     || (t.height, t.width) != (height, width)
                 {
@@ -163,13 +175,19 @@ pub fn night_pair<'py>(
                 let ((noisy, clean), target) = rayon::join(
                     || {
                         rayon::join(
-                            || pack(noisy_img, &black, scale),
+                            || {
+                                let mut v = Vec::new();
+                                for f in &frames {
+                                    v.extend(pack(f, &black, scale));
+                                }
+                                v
+                            },
                             || pack(&night.clean, &black, scale),
                         )
                     },
                     || planar(&t.data, height * width),
                 );
-                Ok((noisy, clean, target))
+                Ok((noisy, clean, target, plan))
             })
         })
         .map_err(py_err)?;
@@ -180,7 +198,18 @@ pub fn night_pair<'py>(
             .into_any())
     };
     let d = PyDict::new(py);
-    d.set_item("noisy", shape(4, height / 2, width / 2, noisy)?)?;
+    match crate::burst::transform_arrays(py, &plan)? {
+        // a burst: (N, 4, h/2, w/2), the frames' affines and valid rectangles
+        Some((affine, valid)) => {
+            let n = noisy.len() / (height * width);
+            let a = Array4::from_shape_vec((n, 4, height / 2, width / 2), noisy)
+                .map_err(|e| value_err(e.to_string()))?;
+            d.set_item("noisy", a.into_pyarray(py))?;
+            d.set_item("transforms", affine)?;
+            d.set_item("valid", valid)?;
+        }
+        None => d.set_item("noisy", shape(4, height / 2, width / 2, noisy)?)?,
+    }
     d.set_item("clean", shape(4, height / 2, width / 2, clean)?)?;
     d.set_item("target", shape(3, height, width, target)?)?;
     Ok(d)

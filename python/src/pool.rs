@@ -1,6 +1,7 @@
 //! The worker threads computations run on: one rayon pool per Python thread and process
 //! (`set_threads`, `threads`).
 
+use crate::args::Threads;
 use crate::errors::py_err;
 use day2night::Error;
 use pyo3::prelude::*;
@@ -62,15 +63,16 @@ pub(crate) fn on_pool<T: Send>(f: impl FnOnce() -> Result<T, Error> + Send) -> R
     pool()?.install(f)
 }
 
-/// Set the number of worker threads each computation uses (0 = one per core, the default;
-/// the ``RAYON_NUM_THREADS`` environment variable also sets it). Every Python thread that
-/// computes has its own workers: with several ``DataLoader`` workers or Python threads,
-/// about cores / workers each avoids oversubscription.
+/// Set the number of worker threads each computation uses: 0 (one per core, the default;
+/// the ``RAYON_NUM_THREADS`` environment variable also sets it) to 4096 (``--jobs``'s
+/// limit; more is a ``ValueError``). Every Python thread that computes has its own workers:
+/// with several ``DataLoader`` workers or Python threads, about cores / workers each avoids
+/// oversubscription.
 ///
 /// >>> day2night.set_threads(1)
 #[pyfunction]
-pub(crate) fn set_threads(n: usize) {
-    THREADS.store(n, Ordering::Relaxed);
+pub(crate) fn set_threads(n: Threads) {
+    THREADS.store(n.0, Ordering::Relaxed);
 }
 
 /// The number of worker threads computations of the calling thread use.

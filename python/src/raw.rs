@@ -1,24 +1,29 @@
 //! `Raw` (a raw in memory, read from a DNG or built from an array), `read_dng` and
-//! `write_dng`.
+//! `write_dng`. A LinearRaw DNG (already demosaiced) is read too, so that it can be
+//! rendered; the synthesis refuses it with the command line's reason ([`Raw::cfa_day`]).
 
 use crate::convert::{meta_dict, warn_meta};
 use crate::errors::{py_err, value_err};
 use crate::pool::on_pool;
 use day2night::dng::write::{write_dng as lib_write_dng, Compression, WriteOptions};
+use day2night::error::ResultExt;
 use day2night::output::OutputPolicy;
+use day2night::raw::meta::LINEAR_RAW_NOT_CFA;
 use day2night::synth::job::DayInput;
-use numpy::ndarray::Array2;
-use numpy::{IntoPyArray, PyArray2, PyArrayMethods};
+use day2night::Error;
+use numpy::ndarray::{Array2, Array3};
+use numpy::{IntoPyArray, PyArrayMethods};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::sync::{Arc, OnceLock};
 
 /// A day DNG read into memory.
 ///
 /// Attributes: ``data`` (uint16 ndarray of the whole stored plane, masked border
-/// included: LibRaw's ``raw_image``), ``meta`` (dict), ``name`` (file stem), ``file_name``
-/// (the name the random streams are keyed by, as in ``day2night synth``), ``path``.
+/// included: LibRaw's ``raw_image``; height x width x 3 for a LinearRaw DNG), ``meta``
+/// (dict), ``name`` (file stem), ``file_name`` (the name the random streams are keyed by,
+/// as in ``day2night synth``), ``path``.
 ///
 /// >>> raw = day2night.read_dng("day.dng")
 /// >>> raw.data.shape, raw.meta["cfa_pattern"]
@@ -30,22 +35,51 @@ pub(crate) struct Raw {
     pub(crate) file_name: String,
     /// Read from `day.source` (false: built in memory, e.g. `Raw.from_array`).
     pub(crate) from_file: bool,
-    pub(crate) data: OnceLock<Py<PyArray2<u16>>>,
+    pub(crate) data: OnceLock<Py<PyAny>>,
+}
+
+impl Raw {
+    /// The day input of a synthesis: a LinearRaw image is refused with the reason
+    /// `day2night synth` gives (`<file>: unsupported: LinearRaw: ...`).
+    pub(crate) fn cfa_day(&self) -> PyResult<Arc<DayInput>> {
+        if self.day.raw.meta.linear_raw.is_some() {
+            return Err(py_err(
+                Error::unsupported(LINEAR_RAW_NOT_CFA).in_file(&self.day.source),
+            ));
+        }
+        Ok(self.day.clone())
+    }
 }
 
 #[pymethods]
 impl Raw {
-    /// The whole stored CFA plane as a read-only uint16 array (height x width).
+    /// The whole stored plane as a read-only uint16 array: height x width for a CFA
+    /// mosaic, height x width x samples (3) for a LinearRaw image (samples interleaved as
+    /// stored, before any black level or linearization).
     #[getter]
-    fn data<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<u16>>> {
+    fn data<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
         if let Some(a) = self.data.get() {
             return Ok(a.bind(py).clone());
         }
         let raw = &self.day.raw;
-        let arr = Array2::from_shape_vec((raw.height, raw.width), raw.data.clone())
-            .map_err(|e| value_err(e.to_string()))?
-            .into_pyarray(py);
-        arr.readwrite().make_nonwriteable();
+        let err = |e: numpy::ndarray::ShapeError| value_err(e.to_string());
+        let arr = match &raw.meta.linear_raw {
+            None => {
+                let a = Array2::from_shape_vec((raw.height, raw.width), raw.data.clone())
+                    .map_err(err)?
+                    .into_pyarray(py);
+                a.readwrite().make_nonwriteable();
+                a.into_any()
+            }
+            Some(lr) => {
+                let spp = usize::from(lr.samples_per_pixel);
+                let a = Array3::from_shape_vec((raw.height, raw.width, spp), raw.data.clone())
+                    .map_err(err)?
+                    .into_pyarray(py);
+                a.readwrite().make_nonwriteable();
+                a.into_any()
+            }
+        };
         let _ = self.data.set(arr.clone().unbind());
         Ok(self.data.get().map(|a| a.bind(py).clone()).unwrap_or(arr))
     }
@@ -117,20 +151,40 @@ impl Raw {
             self.file_name,
             r.width,
             r.height,
-            r.bayer()
-                .map(|b| b.name())
-                .unwrap_or_else(|_| "non-Bayer".into())
+            match &r.meta.linear_raw {
+                Some(lr) => format!("LinearRaw x{}", lr.samples_per_pixel),
+                None => r
+                    .bayer()
+                    .map(|b| b.name())
+                    .unwrap_or_else(|_| "non-Bayer".into()),
+            }
         )
     }
 }
 
-/// Read a DNG into memory (the GIL is released while it is read and decoded).
+/// The DNG at `path` as [`DayInput::read`] decodes it, LinearRaw images included (that
+/// function refuses them: a day input of the synthesis is a CFA mosaic).
+fn read_input(path: &Path) -> Result<DayInput, Error> {
+    let bytes = std::fs::read(path).map_err(Error::Io).in_file(path)?;
+    let (sha256, raw) = rayon::join(
+        || day2night::synth::sidecar::sha256_hex(&bytes),
+        || day2night::dng::read::read_dng_bytes(&bytes),
+    );
+    Ok(DayInput::new(
+        raw.in_file(path)?,
+        sha256,
+        path.to_path_buf(),
+    ))
+}
+
+/// Read a DNG into memory (the GIL is released while it is read and decoded). A LinearRaw
+/// DNG (already demosaiced) is read for ``render``; ``synthesize`` refuses it.
 ///
 /// >>> raw = day2night.read_dng("day.dng")
 #[pyfunction]
 pub(crate) fn read_dng(py: Python<'_>, path: PathBuf) -> PyResult<Raw> {
     let day = py
-        .detach(|| on_pool(|| DayInput::read(&path)))
+        .detach(|| on_pool(|| read_input(&path)))
         .map_err(py_err)?;
     let file_name = path
         .file_name()

@@ -19,6 +19,7 @@ use std::ffi::CString;
 /// Every key `from_array` reads, as `Raw.meta` returns them.
 const KEYS: &[&str] = &[
     "cfa_pattern",
+    "samples_per_pixel",
     "black_level",
     "black_level_repeat_dim",
     "black_level_delta_h",
@@ -268,6 +269,17 @@ fn parse_meta(
             if v != n {
                 return Err(Meta::bad(k, format!("{v} but the data array has {n}")));
             }
+        }
+    }
+    if let Some(spp) = m.extract::<u64>("samples_per_pixel", "an integer")? {
+        if spp != 1 {
+            return Err(Meta::bad(
+                "samples_per_pixel",
+                format!(
+                    "{spp}: Raw.from_array builds CFA mosaics (1 sample per pixel); \
+                     a LinearRaw image is read with read_dng"
+                ),
+            ));
         }
     }
     let bayer = parse_cfa(m)?;

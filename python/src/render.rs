@@ -1,6 +1,6 @@
 //! `render` (the software ISP's linear render, as `day2night render --format exr`).
 
-use crate::convert::rgb_array;
+use crate::convert::{rgb_array, warn_lines};
 use crate::errors::py_err;
 use crate::pool::on_pool;
 use crate::raw::Raw;
@@ -8,11 +8,12 @@ use day2night::isp::render::{render_linear, RenderOptions};
 use day2night::isp::Demosaic;
 use pyo3::prelude::*;
 
-/// Linear sRGB (Rec.709, D65) render of a raw, float32 HxWx3 in [0, 1], as ``day2night
-/// render --format exr`` computes it: white balance by ``neutral`` (default: the file's
-/// AsShotNeutral), demosaic (``"mhc"``, ``"bilinear"`` or ``"menon"``), colour matrices,
-/// DefaultCrop (``crop``) and orientation (``orient``); the DNG opcode lists (lens shading,
-/// distortion) are applied unless ``opcodes="ignore"``.
+/// Linear sRGB (Rec.709, D65) render of a raw, float32 HxWx3 in [0, 1], the values of
+/// ``day2night render IN.dng -o OUT.exr --float``: white balance by ``neutral`` (default:
+/// the file's AsShotNeutral), demosaic (``"mhc"``, ``"bilinear"`` or ``"menon"``), colour
+/// matrices, DefaultCrop (``crop``) and orientation (``orient``); the DNG opcode lists (lens
+/// shading, distortion) are applied unless ``opcodes="ignore"``. A LinearRaw raw (already
+/// demosaiced) is rendered without demosaicing (``demosaic`` is not used).
 ///
 /// >>> rgb = day2night.render(raw)
 #[pyfunction]
@@ -36,8 +37,21 @@ pub(crate) fn render<'py>(
         orient,
         opcodes,
     };
-    let rgb = py
-        .detach(move || on_pool(move || render_linear(&day.raw, &opts)))
+    let name = raw.get().file_name.clone();
+    // The command line's warnings: skipped optional opcodes, opcodes that make their samples
+    // constant, a TrimBounds that changes the size, a render that comes out constant.
+    let (rgb, warnings) = py
+        .detach(move || {
+            on_pool(move || {
+                use day2night::isp::opcodes::check::check_render;
+                let checked = check_render(&day.raw, opts.opcodes, opts.crop, opts.orient)?;
+                let rgb = render_linear(&day.raw, &opts)?;
+                let mut w = checked.warnings;
+                w.extend(day2night::isp::flat::warning(&rgb, "the render"));
+                Ok((rgb, w))
+            })
+        })
         .map_err(py_err)?;
+    warn_lines(py, &name, &warnings)?;
     rgb_array(py, rgb)
 }

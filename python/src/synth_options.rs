@@ -1,6 +1,7 @@
 //! The options of `synthesize` and `night_pair` (the command line's flags as keyword
 //! arguments) converted to a `JobConfig`, and the jobs built from them, cached per process.
 
+use crate::args::{BULBS, LIGHTS};
 use crate::errors::{py_err, value_err};
 use day2night::synth::config::JobConfig;
 use day2night::synth::job::{SynthJob, Target};
@@ -24,9 +25,7 @@ pub(crate) fn job_config(
     o.mode = mode.parse::<Mode>().map_err(py_err)?;
     o.isos = Vec::new();
     for iso in isos {
-        if iso == 0 {
-            return Err(value_err("invalid parameter: ISO 0"));
-        }
+        // Each in ISO_RANGE: checked when the argument was extracted (args::Isos).
         if !o.isos.contains(&iso) {
             o.isos.push(iso);
         }
@@ -50,8 +49,8 @@ pub(crate) fn job_config(
                         .parse::<RelightFormula>()
                         .map_err(py_err)?
                 }
-                "bulbs" => o.bulbs = v.extract()?,
-                "lights" => o.local_lights = v.extract()?,
+                "bulbs" => o.bulbs = BULBS.opt(&v)?,
+                "lights" => o.local_lights = LIGHTS.opt(&v)?,
                 "truncate" => o.truncate = v.extract()?,
                 "covariance" => {
                     o.covariance = v
@@ -92,10 +91,14 @@ pub(crate) fn job_config(
                 "illuminants" => cfg.illuminants = path(&v)?,
                 "brightness" => cfg.brightness = path(&v)?,
                 "noise_model" => cfg.noise_model = path(&v)?,
+                k if crate::burst::OPTIONS.contains(&k) => {
+                    crate::burst::set_option(&mut o.burst, k, &v)?
+                }
                 other => {
                     return Err(value_err(format!(
                     "unknown option {other:?} (known: relight_formula, bulbs, lights, truncate, \
-covariance, day_neutral, mask_eval, opcodes, illuminants, brightness, noise_model)"
+covariance, day_neutral, mask_eval, opcodes, illuminants, brightness, noise_model, burst, \
+motion, shake_step, shake_roll, warp_interp)"
                 )))
                 }
             }

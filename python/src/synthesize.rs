@@ -1,7 +1,8 @@
 //! `synthesize` (one night variant in memory, whole frame or crop) and `write_outputs` (its
 //! files, as `day2night synth` writes them).
 
-use crate::convert::{json_obj, raw_image_from, rgb_array, u16_array};
+use crate::args::{self, Isos, Seed, Variant};
+use crate::convert::{json_obj, raw_image_from, rgb_array, u16_array, warn_plan};
 use crate::errors::{py_err, value_err};
 use crate::pool::on_pool;
 use crate::raw::Raw;
@@ -50,32 +51,44 @@ pub(crate) struct Synthesis {
 /// Options (as the command line's flags): relight_formula ("release" | "paper"), bulbs,
 /// lights, truncate, covariance ("unbiased" | "ml"), day_neutral ((r, g, b)), mask_eval
 /// ("separable" | "exact" | "truncated:K" | "release"), compat ("release": the authors'
-/// release semantics, docs/synthesis.md), illuminants, brightness, noise_model (paths; a
+/// release semantics, docs/synthesis.md), illuminants ("paper" | "cie" | a path; default:
+/// the paper phone's dictionary for the S20 FE and under compat "release", the CIE lamps
+/// through each file's colour matrices otherwise), brightness, noise_model (paths; a
 /// physics noise model file is recognized).
 ///
+/// Bursts: ``burst=N`` (with ``motion="shake"|"none"``, ``shake_step``, ``shake_roll``,
+/// ``warp_interp``, as ``--burst`` and its flags) makes every ``noisy[iso]`` an (N, H, W)
+/// array, frame 00 first (N = 1 keeps the 2-D array); ``transforms`` lists each frame's
+/// transform (``affine``, ``dx``, ``dy``, ``theta_deg``, ``valid``; None without a burst).
+/// A crop is a window in frame coordinates: frame k's crop is that region of frame k.
+///
 /// Returns a dict: ``clean`` (uint16, the whole stored plane, or the crop), ``noisy``
-/// ({iso: uint16 array}), ``target`` (float32 HxWx3 linear Rec.709, or None), ``plan``
+/// ({iso: uint16 array}), ``transforms``, ``target`` (float32 HxWx3 linear Rec.709, or None), ``plan``
 /// (the sidecar's plan), ``neutral`` (the night AsShotNeutral), ``noise_profile``
 /// ({iso: [[S, O] per colour plane]}), ``clean_noise_profile``, ``report``, ``stages``,
 /// ``crop``, ``target_origin`` ((row, column) of the crop's target in the whole-frame
-/// target, None outside the DefaultCrop or without a crop) and ``synthesis`` (for
-/// ``write_outputs``).
+/// target, None outside the DefaultCrop or without a crop), ``noise_provenance`` (where
+/// the noise model came from and whose camera it is: ``source``, ``camera``, ``note``; also
+/// in ``plan``) and ``synthesis`` (for ``write_outputs``).
+///
+/// The plan's warnings (e.g. another camera's noise table applied to this input) are
+/// raised as ``UserWarning``, as ``day2night synth`` prints them.
 ///
 /// >>> out = day2night.synthesize(raw, seed=0, isos=(1600,), crop=(0, 0, 512, 512))
 /// >>> out["noisy"][1600].shape, out["target"].shape
 /// ((512, 512), (512, 512, 3))
 #[pyfunction]
-#[pyo3(signature = (raw, seed=0, variant=0, mode="local", isos=vec![1600, 3200], target=Some("linear"), crop=None, **options))]
+#[pyo3(signature = (raw, seed=Seed(0), variant=Variant(0), mode="local", isos=Isos(vec![1600, 3200]), target=Some("linear"), crop=None, **options))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn synthesize<'py>(
     py: Python<'py>,
     raw: &Bound<'py, Raw>,
-    seed: u64,
-    variant: u32,
+    seed: Seed,
+    variant: Variant,
     mode: &str,
-    isos: Vec<u32>,
+    isos: Isos,
     target: Option<&str>,
-    crop: Option<(usize, usize, usize, usize)>,
+    crop: Option<&Bound<'py, PyAny>>,
     options: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let want_target = match target {
@@ -83,15 +96,17 @@ pub(crate) fn synthesize<'py>(
         Some("linear") => true,
         Some(t) => return Err(value_err(format!("target {t:?}: use \"linear\" or None"))),
     };
-    let cfg = job_config(mode, isos, want_target, options)?;
-    let crop = crop.map(|(top, left, height, width)| Crop {
-        top,
-        left,
-        height,
-        width,
-    });
+    let cfg = job_config(mode, isos.0, want_target, options)?;
+    let (seed, variant) = (seed.0, variant.0);
     let r = raw.get();
-    let day = r.day.clone();
+    let crop = match crop.filter(|c| !c.is_none()) {
+        None => None,
+        Some(c) => {
+            let a = r.day.raw.active_area();
+            Some(args::crop(c, a.width(), a.height())?)
+        }
+    };
+    let day = r.cfa_day()?;
     let file_name = r.file_name.clone();
     let (job, plan, night) = py
         .detach(move || {
@@ -108,6 +123,17 @@ pub(crate) fn synthesize<'py>(
             })
         })
         .map_err(py_err)?;
+    // a burst's frames, stacked per ISO (frame 00 first) before the night is taken apart
+    let frames_n = plan.burst.as_ref().map_or(1, |b| b.frames);
+    let mut stacks = Vec::new();
+    if frames_n > 1 {
+        for (iso, img) in &night.noisy {
+            stacks.push(crate::burst::stack(
+                py,
+                &crate::burst::frames_of(&night, *iso, img),
+            )?);
+        }
+    }
     let Night {
         clean,
         noisy,
@@ -117,6 +143,8 @@ pub(crate) fn synthesize<'py>(
         crop,
         ..
     } = night;
+    // The plan's warnings after the reader's (raised by read_dng already), then the run's.
+    warn_plan(py, &r.file_name, &r.day.raw.meta, &plan, &report.warnings)?;
     let d = PyDict::new(py);
     let bayer = plan.bayer;
     let profile = |p: &day2night::noise::NoiseParams| -> Vec<Vec<f64>> {
@@ -128,10 +156,15 @@ pub(crate) fn synthesize<'py>(
     let np = PyDict::new(py);
     let noisy_arrays = PyDict::new(py);
     let mut noisy_meta = Vec::new();
+    let mut stacks = stacks.into_iter();
     for (iso, img) in noisy {
         noisy_meta.push((iso, img.meta.clone()));
-        noisy_arrays.set_item(iso, u16_array(py, img)?)?;
+        match stacks.next() {
+            Some(a) => noisy_arrays.set_item(iso, a)?,
+            None => noisy_arrays.set_item(iso, u16_array(py, img)?)?,
+        }
     }
+    d.set_item("transforms", crate::burst::transforms(py, &plan)?)?;
     for n in &plan.noise {
         np.set_item(n.iso, profile(&n.params))?;
     }
@@ -141,6 +174,7 @@ pub(crate) fn synthesize<'py>(
     d.set_item("noise_profile", np)?;
     d.set_item("neutral", plan.night_neutral.to_vec())?;
     d.set_item("plan", json_obj(py, &plan)?)?;
+    d.set_item("noise_provenance", json_obj(py, &plan.noise_provenance)?)?;
     d.set_item("report", json_obj(py, &report)?)?;
     d.set_item("stages", stages)?;
     d.set_item("crop", crop.map(|c| (c.top, c.left, c.height, c.width)))?;
@@ -211,12 +245,28 @@ pub(crate) fn write_outputs(
     let clean = raw_image_from(&item("clean")?, &s.clean_meta, "result[\"clean\"]")?;
     let noisy_d = item("noisy")?;
     let mut noisy = Vec::new();
+    let mut frames = Vec::new();
+    let n = s.plan.burst.as_ref().map_or(1, |b| b.frames);
     for (iso, meta) in &s.noisy_meta {
         let a = noisy_d.get_item(*iso)?;
-        noisy.push((
-            *iso,
-            raw_image_from(&a, meta, &format!("result[\"noisy\"][{iso}]"))?,
-        ));
+        let what = format!("result[\"noisy\"][{iso}]");
+        if n == 1 {
+            noisy.push((*iso, raw_image_from(&a, meta, &what)?));
+            continue;
+        }
+        // a burst: (N, H, W), frame 00 first
+        if a.len()? != n as usize {
+            return Err(value_err(format!(
+                "{what} must hold the burst's {n} frames"
+            )));
+        }
+        for k in 0..n {
+            let img = raw_image_from(&a.get_item(k)?, meta, &format!("{what}[{k}]"))?;
+            match k {
+                0 => noisy.push((*iso, img)),
+                k => frames.push((*iso, k, img)),
+            }
+        }
     }
     let t = item("target")?;
     let target = if t.is_none() {
@@ -248,6 +298,7 @@ pub(crate) fn write_outputs(
     let night = Night {
         clean,
         noisy,
+        frames,
         target,
         input: None,
         report: s.report.clone(),

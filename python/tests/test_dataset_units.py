@@ -110,3 +110,61 @@ def test_errors(days, tmp_path):
     z = [u for u in day2night.dataset_units(days) if u["input"] == "z.dng"][0]
     rec = day2night.write_unit(z, out)
     assert rec["status"] == "failed" and "z.dng" in rec["error"]
+
+
+def with_bad_noise_profile(src, dst):
+    """A copy of a DNG whose NoiseProfile is invalid (S < 0): the reader ignores it with a
+    warning that `dataset`'s loader prints once per decode, so the warnings count decodes."""
+    import struct
+
+    import tifffile
+    with tifffile.TiffFile(src) as t:
+        tag = t.pages[0].tags["NoiseProfile"]
+        order, offset = t.byteorder, tag.valueoffset
+    data = bytearray(src.read_bytes())
+    struct.pack_into(order + "d", data, offset, -1.0)
+    dst.write_bytes(bytes(data))
+
+
+def test_write_units_decodes_each_input_once(cli, tmp_path, capfd):
+    from dataset_trees import FIXTURES
+    days = tmp_path / "days"
+    days.mkdir()
+    for name in ("a", "b"):
+        with_bad_noise_profile(FIXTURES / "day.dng", days / f"{name}.dng")
+    kw = dict(variants=3, val=1, seed=11)
+    opts = dict(iso="800", target="exr")
+    a, b, c = tmp_path / "cli", tmp_path / "one_by_one", tmp_path / "grouped"
+    capfd.readouterr()
+    cli("dataset", days, "-o", a, "--variants", "3", "--val", "1", "--seed", "11", "--iso", "800",
+        "--quiet")
+    units = day2night.dataset_units(days, b, **kw)
+    assert [len(g) for g in day2night.group_units(units)] == [3, 3]
+    assert [u["id"] for g in day2night.group_units(units) for u in g] == [u["id"] for u in units]
+    capfd.readouterr()
+    day2night.write_manifest([day2night.write_unit(u, b, **opts) for u in units], b)
+    one_by_one = capfd.readouterr().err.count("warning: NoiseProfile pair 0")
+    units = day2night.dataset_units(days, c, **kw)
+    records = []
+    for group in day2night.group_units(units):
+        records += day2night.write_units(group, c, **opts)
+    grouped = capfd.readouterr().err.count("warning: NoiseProfile pair 0")
+    day2night.write_manifest(records, c)
+    # One decode per unit, against one per input (as `dataset`); the same bytes.
+    assert (one_by_one, grouped) == (6, 2)
+    assert_same_tree(a, b)
+    assert_same_tree(a, c)
+    # Up to date: every unit skipped, nothing decoded. Units of both inputs in one call
+    # (any order) are grouped by input; one output deleted: one decode, one unit redone.
+    (c / "train" / "target" / "a_v2.exr").unlink()
+    units = day2night.dataset_units(days, c, **kw)
+    capfd.readouterr()
+    done = day2night.write_units(list(reversed(units)), c, reason=True, **opts)
+    assert capfd.readouterr().err.count("warning: NoiseProfile pair 0") == 1
+    assert [why for _, why in done] == [None] * 4 + ["outputs missing or altered", None]
+    assert [r["variant"] for r, _ in done] == [3, 2, 1, 3, 2, 1]
+    day2night.write_manifest([r for r, _ in done], c)
+    assert_same_tree(a, c)
+    assert day2night.write_units([], c) == []
+    with pytest.raises(ValueError, match=r"units\[1\]: unit has no \"path\""):
+        day2night.write_units([units[0], {"input": "a.dng"}], c)

@@ -4,6 +4,7 @@
 //! meaning; the extra keys (per-file measurements, fit quality, DN forms, ISO laws) are for
 //! people and are ignored by synth. Tests parse every written file with synth's readers.
 
+use crate::raw::camera::CameraId;
 use serde::{Deserialize, Serialize};
 
 /// Format tag of illuminant dictionaries.
@@ -42,6 +43,13 @@ pub struct GrayCardMeasurement {
     pub saturated: [usize; 3],
     /// `[r/g, 1, b/g]`.
     pub chromaticity: [f64; 3],
+    /// CIE 1931 xy of the card's light through the capture's own colour matrices (DNG
+    /// chapter 6); absent when the capture has none (the reason is in `warnings`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub xy: Option<[f64; 2]>,
+    /// The capture's camera (Make, Model, UniqueCameraModel).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub camera: Option<CameraId>,
     /// Things the user should know (e.g. many saturated sites).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub warnings: Vec<String>,
@@ -56,8 +64,19 @@ pub struct IlluminantDictionary {
     pub what: String,
     /// Number of illuminants.
     pub count: usize,
-    /// The dictionary: `[r/g, 1, b/g]` per illuminant (same key as the shared s20fe file).
+    /// The dictionary: `[r/g, 1, b/g]` per illuminant (same key as the shared s20fe file),
+    /// in the raw colours of `camera`.
     pub illuminants_rgb_over_g: Vec<[f64; 3]>,
+    /// The camera the gray cards were shot with (null when unknown or when they come from
+    /// several cameras): synth uses the camera neutrals for this camera, the xy for others.
+    pub camera: Option<CameraId>,
+    /// "CIE 1931 2 degree" when `xy` is given.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub observer: Option<String>,
+    /// CIE 1931 xy of each illuminant through its capture's own colour matrices (same order
+    /// as `illuminants_rgb_over_g`); absent unless every illuminant has one.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub xy: Vec<[f64; 2]>,
     /// The fitted Gaussian over `[r/g, b/g]`.
     pub fit: Gaussian2Fit,
     /// Per gray-card file measurements (empty for refits of a list).
@@ -152,7 +171,7 @@ pub struct IsoModel {
     pub iso: u32,
     /// `[[S, O]; 4]` per 2x2 position (normalized units): what synth reads.
     pub positions: [[f64; 2]; 4],
-    /// "burst", "pair", "burst+pair" or "noise_profile".
+    /// "burst", "pair", "burst+pair", "noise_profile" or "image_estimate".
     pub source: String,
     /// Black level (max over the plane, DN) used for the DN conversion.
     pub black: f64,
@@ -190,8 +209,10 @@ pub struct NoiseModelFile {
     pub units: String,
     /// Provenance.
     pub source: String,
-    /// Camera make/model of the first input.
-    pub camera: Option<String>,
+    /// The camera of the first input (Make, Model, UniqueCameraModel): synth warns when the
+    /// model is applied to another camera. (Files written before this held a string; synth
+    /// still reads them.)
+    pub camera: Option<crate::raw::camera::CameraId>,
     /// One entry per ISO, ascending.
     pub isos: Vec<IsoModel>,
     /// Laws across ISOs (None with fewer than two ISOs).

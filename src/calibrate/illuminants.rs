@@ -9,11 +9,18 @@
 //! (`synth::illuminant::Gaussian2::fit`): mean and covariance, unbiased (1/(M-1), default, as
 //! the released code) or maximum-likelihood (1/M, the paper's eq. 2). A single illuminant gives
 //! a zero covariance (documented fallback: synth then always draws that illuminant).
+//!
+//! Each card's light is also mapped to CIE 1931 xy through its capture's own colour matrices
+//! (DNG chapter 6, [`CameraColor::neutral_to_xy`]), and the dictionary records the camera the
+//! cards were shot with: `synth` uses the camera neutrals for that camera and the xy, through
+//! the input's matrices, for any other (docs/calibration.md).
 
 use super::format::{Gaussian2Fit, GrayCardMeasurement, IlluminantDictionary, ILLUMINANTS_FORMAT};
 use super::stats::trimmed_mean;
 use crate::error::{Error, Result};
+use crate::isp::color::CameraColor;
 use crate::normalize::Normalizer;
+use crate::raw::camera::CameraId;
 use crate::raw::RawImage;
 use crate::synth::dictionaries::IlluminantDict;
 use crate::synth::illuminant::{Covariance, Gaussian2};
@@ -154,13 +161,34 @@ pub fn measure_gray_card(
         }
         means[k] = m;
     }
+    let chromaticity = [means[0] / means[1], 1.0, means[2] / means[1]];
+    let xy = match CameraColor::new(&img.meta.color).and_then(|c| c.neutral_to_xy(chromaticity)) {
+        Ok(xy) if crate::bounds::chromaticity_xy("xy", xy).is_ok() => Some(xy),
+        Ok(xy) => {
+            warnings.push(format!(
+                "the colour matrices map this light to xy {xy:?}, not a light's chromaticity: \
+                 no xy (the dictionary serves this camera only)"
+            ));
+            None
+        }
+        Err(e) => {
+            warnings.push(format!(
+                "no xy ({}): the dictionary serves this camera only",
+                e.root()
+            ));
+            None
+        }
+    };
+    let camera = CameraId::of(&img.meta);
     Ok(GrayCardMeasurement {
         file: file.to_string(),
         roi: [roi.x, roi.y, roi.w, roi.h],
         means,
         pixels,
         saturated: sat,
-        chromaticity: [means[0] / means[1], 1.0, means[2] / means[1]],
+        chromaticity,
+        xy,
+        camera: (!camera.is_unknown()).then_some(camera),
         warnings,
     })
 }
@@ -182,6 +210,7 @@ pub fn fit_gaussian(chroma: &[[f64; 3]], est: Estimator) -> Result<Gaussian2Fit>
         name: "calibrate illuminants".into(),
         source: String::new(),
         chromaticities: chroma.iter().map(|c| [c[0], c[2]]).collect(),
+        weights: Vec::new(),
     };
     let g = Gaussian2::fit(&dict, est.covariance())?;
     Ok(Gaussian2Fit {
@@ -189,6 +218,58 @@ pub fn fit_gaussian(chroma: &[[f64; 3]], est: Estimator) -> Result<Gaussian2Fit>
         covariance: g.cov,
         count: g.count,
         estimator: g.estimator,
+    })
+}
+
+/// Illuminants read from a JSON input of `calibrate illuminants`: their chromaticities and,
+/// from a day2night dictionary, their xy (when it has one per chromaticity) and camera.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct ListedIlluminants {
+    /// `[r/g, 1, b/g]` each.
+    pub chromaticities: Vec<[f64; 3]>,
+    /// CIE 1931 xy, one per chromaticity, or empty.
+    pub xy: Vec<[f64; 2]>,
+    /// The camera the document says they were measured on.
+    pub camera: Option<CameraId>,
+}
+
+/// [`parse_chromaticity_list`] plus a day2night dictionary's `xy` and `camera`.
+pub fn parse_listed(text: &str) -> Result<ListedIlluminants> {
+    let chromaticities = parse_chromaticity_list(text)?;
+    let v: serde_json::Value =
+        serde_json::from_str(text).map_err(|e| Error::malformed(format!("not valid JSON: {e}")))?;
+    let xy = match v.get("xy") {
+        Some(list) => {
+            let xy: Vec<[f64; 2]> = serde_json::from_value(list.clone())
+                .map_err(|e| Error::malformed(format!("xy: {e}")))?;
+            if xy.len() != chromaticities.len() {
+                return Err(Error::malformed(format!(
+                    "{} xy for {} chromaticities",
+                    xy.len(),
+                    chromaticities.len()
+                )));
+            }
+            for (i, p) in xy.iter().enumerate() {
+                crate::bounds::chromaticity_xy(&format!("xy[{i}]"), *p)
+                    .map_err(crate::bounds::malformed)?;
+            }
+            xy
+        }
+        None => vec![],
+    };
+    let camera = match v.get("camera") {
+        Some(c) if !c.is_null() => {
+            let c: CameraId = serde_json::from_value(c.clone())
+                .map_err(|e| Error::malformed(format!("camera: {e}")))?;
+            let c = CameraId::new(c.make, c.model, c.unique_camera_model);
+            (!c.is_unknown()).then_some(c)
+        }
+        _ => None,
+    };
+    Ok(ListedIlluminants {
+        chromaticities,
+        xy,
+        camera,
     })
 }
 
@@ -237,23 +318,82 @@ pub fn parse_chromaticity_list(text: &str) -> Result<Vec<[f64; 3]>> {
         .collect()
 }
 
-/// Assemble the dictionary file from gray-card measurements and extra chromaticities.
+/// Assemble the dictionary file from gray-card measurements and listed illuminants (JSON
+/// inputs), with what the user should know: the xy list is written when every illuminant
+/// has one, the camera when every illuminant comes from the same known camera.
 pub fn build_dictionary(
     files: Vec<GrayCardMeasurement>,
-    extra: Vec<[f64; 3]>,
+    extra: Vec<ListedIlluminants>,
     est: Estimator,
-) -> Result<IlluminantDictionary> {
-    let mut all: Vec<[f64; 3]> = extra;
-    all.extend(files.iter().map(|m| m.chromaticity));
+) -> Result<(IlluminantDictionary, Vec<String>)> {
+    let mut all: Vec<[f64; 3]> = vec![];
+    let mut xy: Vec<Option<[f64; 2]>> = vec![];
+    let mut cameras: Vec<Option<CameraId>> = vec![];
+    for l in &extra {
+        all.extend(&l.chromaticities);
+        xy.extend((0..l.chromaticities.len()).map(|i| l.xy.get(i).copied()));
+        cameras.extend(l.chromaticities.iter().map(|_| l.camera.clone()));
+    }
+    for m in &files {
+        all.push(m.chromaticity);
+        xy.push(m.xy);
+        cameras.push(m.camera.clone());
+    }
     let fit = fit_gaussian(&all, est)?;
-    Ok(IlluminantDictionary {
+    let mut notes = vec![];
+    let xy: Vec<[f64; 2]> = match xy.iter().copied().collect::<Option<Vec<_>>>() {
+        Some(v) => v,
+        None => {
+            let n = xy.iter().filter(|p| p.is_none()).count();
+            notes.push(format!(
+                "{n} of {} illuminants have no xy (no colour matrices, or a listed dictionary \
+                 without them): the dictionary holds camera neutrals only, for this camera",
+                xy.len()
+            ));
+            vec![]
+        }
+    };
+    let first = cameras.first().cloned().flatten();
+    let camera = match &first {
+        Some(c)
+            if cameras
+                .iter()
+                .all(|o| o.as_ref().and_then(|o| o.same_camera(c)) == Some(true)) =>
+        {
+            Some(c.clone())
+        }
+        _ => {
+            let mut names: Vec<String> = cameras
+                .iter()
+                .map(|c| c.as_ref().map_or("an unknown camera".into(), |c| c.label()))
+                .collect();
+            names.sort();
+            names.dedup();
+            notes.push(format!(
+                "the illuminants come from {}: the camera is not recorded, so synth uses the \
+                 camera neutrals as they are for every camera{}",
+                names.join(", "),
+                if xy.is_empty() {
+                    ""
+                } else {
+                    " unless it uses the xy"
+                }
+            ));
+            None
+        }
+    };
+    let dict = IlluminantDictionary {
         format: ILLUMINANTS_FORMAT.into(),
-        what: "Night illuminant dictionary: gray-card chromaticities [r/g, 1, b/g] in camera raw space, and the 2-D Gaussian over [r/g, b/g] that synth samples illuminants from".into(),
+        what: "Night illuminant dictionary: gray-card chromaticities [r/g, 1, b/g] in the raw colours of `camera`, their CIE 1931 xy through the captures' own colour matrices, and the 2-D Gaussian over [r/g, b/g] that synth samples illuminants from (for `camera`; other cameras use the xy through their own matrices)".into(),
         count: all.len(),
         illuminants_rgb_over_g: all,
+        camera,
+        observer: (!xy.is_empty()).then(|| "CIE 1931 2 degree".to_string()),
+        xy,
         fit,
         files,
-    })
+    };
+    Ok((dict, notes))
 }
 
 #[cfg(test)]
@@ -357,6 +497,65 @@ mod tests {
         assert_eq!((one.covariance, one.count), ([[0.0; 2]; 2], 1));
         assert!(fit_gaussian(&[], Estimator::Unbiased).is_err());
         assert!(fit_gaussian(&[[0.0, 1.0, 0.3]], Estimator::Unbiased).is_err());
+    }
+
+    #[test]
+    fn cards_record_their_camera_and_xy() {
+        // A card lit by illuminant A, as the test camera's own matrices see it.
+        let a = [0.44758, 0.40745];
+        let meta = RawMeta::new_bayer(Bayer::RGGB, 12, 256.0, 4095.0);
+        let n = CameraColor::new(&meta.color)
+            .unwrap()
+            .xy_to_neutral(a)
+            .unwrap();
+        let img = card(Bayer::GRBG, [1600.0 * n[0], 1600.0, 1600.0 * n[2]], 64, 48);
+        let m = measure_gray_card(&img, None, "a").unwrap();
+        let xy = m.xy.unwrap();
+        assert!(
+            (xy[0] - a[0]).abs() < 2e-3 && (xy[1] - a[1]).abs() < 2e-3,
+            "{xy:?}"
+        );
+        assert_eq!(m.camera.as_ref().unwrap().label(), "day2night Synthetic");
+        let (d, notes) =
+            build_dictionary(vec![m.clone(), m.clone()], vec![], Estimator::Unbiased).unwrap();
+        assert!(notes.is_empty(), "{notes:?}");
+        assert_eq!(
+            (d.xy.len(), d.camera, d.observer.is_some()),
+            (2, m.camera.clone(), true)
+        );
+        // A listed dictionary without xy or camera: neutrals only, camera unknown, said.
+        let listed = ListedIlluminants {
+            chromaticities: vec![[0.5, 1.0, 0.3]],
+            ..Default::default()
+        };
+        let (d, notes) =
+            build_dictionary(vec![m.clone()], vec![listed], Estimator::Unbiased).unwrap();
+        assert!(d.xy.is_empty() && d.camera.is_none() && d.observer.is_none());
+        assert!(
+            notes[0].contains("1 of 2 illuminants have no xy"),
+            "{notes:?}"
+        );
+        assert!(notes[1].contains("an unknown camera"), "{notes:?}");
+        // Another camera's cards: camera not recorded, xy kept.
+        let mut other = m.clone();
+        other.camera = Some(CameraId::new(Some("Nikon".into()), Some("D3".into()), None));
+        let (d, notes) = build_dictionary(vec![m, other], vec![], Estimator::Unbiased).unwrap();
+        assert!(d.camera.is_none() && d.xy.len() == 2);
+        assert!(notes[0].contains("Nikon D3") && notes[0].contains("day2night Synthetic"));
+        // No colour matrices: no xy, a warning on the card.
+        let mut bare = card(Bayer::RGGB, [800.0, 1600.0, 400.0], 64, 48);
+        bare.meta.color = Default::default();
+        let m = measure_gray_card(&bare, None, "b").unwrap();
+        assert!(
+            m.xy.is_none() && m.warnings[0].contains("no ColorMatrix1"),
+            "{m:?}"
+        );
+        // Round trip through JSON and parse_listed.
+        let one = measure_gray_card(&img, None, "a").unwrap();
+        let (d, _) = build_dictionary(vec![one], vec![], Estimator::Unbiased).unwrap();
+        assert!(build_dictionary(vec![], vec![], Estimator::Unbiased).is_err());
+        let l = parse_listed(&serde_json::to_string(&d).unwrap()).unwrap();
+        assert_eq!((l.xy, l.camera), (d.xy.clone(), d.camera.clone()));
     }
 
     #[test]

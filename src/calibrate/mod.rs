@@ -1,7 +1,7 @@
 //! Calibration of a new camera from real captures (issue 5, SYNTHESIS.md 3, 4, 7):
 //! night-illuminant dictionaries from gray cards ([`illuminants`]), night-brightness
 //! dictionaries ([`brightness`]), per-ISO noise models from bursts, pairs or NoiseProfile
-//! tags ([`noise`]), and burst merging for low-noise ground truth ([`merge`]).
+//! tags ([`noise`]) or estimated from day images ([`noise_image`]), and burst merging for low-noise ground truth ([`merge`]).
 //! Every output is JSON in the formats of [`format`](mod@format), consumed by `synth`.
 
 pub mod brightness;
@@ -9,6 +9,7 @@ pub mod format;
 pub mod illuminants;
 pub mod merge;
 pub mod noise;
+pub mod noise_image;
 pub mod physics;
 pub mod stats;
 

@@ -31,6 +31,7 @@ use super::{check_same_capture, SameCapture};
 use crate::error::{Error, Result};
 use crate::noise::model::NoiseParams;
 use crate::normalize::Normalizer;
+use crate::raw::camera::CameraId;
 use crate::raw::{Bayer, RawImage};
 use std::collections::BTreeMap;
 
@@ -631,12 +632,13 @@ pub fn fit_iso_laws(models: &[IsoModel]) -> Option<IsoLaws> {
     Some(laws)
 }
 
-/// Assemble the model file from measured sources and NoiseProfile models. Measured ISOs take
-/// precedence over NoiseProfile ones at the same ISO (returned as warnings).
+/// Assemble the model file from measured sources and other models (NoiseProfile tags, image
+/// estimates), recording `camera`. Measured ISOs take precedence over the others at the
+/// same ISO, and earlier others over later ones (returned as warnings).
 pub fn build_model(
     sources: Vec<SourceStats>,
     profiles: Vec<IsoModel>,
-    camera: Option<String>,
+    camera: Option<CameraId>,
 ) -> Result<(NoiseModelFile, Vec<String>)> {
     let mut by_iso: BTreeMap<u32, Vec<SourceStats>> = BTreeMap::new();
     for s in sources {
@@ -649,9 +651,11 @@ pub fn build_model(
     let mut warnings = vec![];
     for p in profiles {
         match models.entry(p.iso) {
-            std::collections::btree_map::Entry::Occupied(_) => warnings.push(format!(
-                "ISO {}: measured bursts/pairs take precedence over NoiseProfile tags",
-                p.iso
+            std::collections::btree_map::Entry::Occupied(o) => warnings.push(format!(
+                "ISO {}: the {} model takes precedence over the {} one",
+                p.iso,
+                o.get().source,
+                p.source
             )),
             std::collections::btree_map::Entry::Vacant(v) => {
                 v.insert(p);
@@ -660,7 +664,7 @@ pub fn build_model(
     }
     if models.is_empty() {
         return Err(Error::invalid(
-            "nothing to calibrate: give --burst, --pair or --from-noise-profile",
+            "nothing to calibrate: give --burst, --pair, --from-noise-profile or --from-image",
         ));
     }
     let isos: Vec<IsoModel> = models.into_values().collect();
@@ -682,8 +686,8 @@ pub fn build_model(
                 "day2night {} calibrate noise{}",
                 crate::VERSION,
                 camera
-                    .as_deref()
-                    .map(|c| format!(" ({c})"))
+                    .as_ref()
+                    .map(|c| format!(" ({})", c.label()))
                     .unwrap_or_default()
             ),
             camera,

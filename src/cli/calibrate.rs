@@ -1,9 +1,10 @@
 //! `day2night calibrate illuminants|brightness|noise`: calibration files for a new camera.
 use super::{usage, CmdResult};
-use day2night::calibrate::{brightness, illuminants, noise};
+use day2night::calibrate::{brightness, illuminants, noise, noise_image};
 use day2night::dng::read_dng;
 use day2night::error::ResultExt;
 use day2night::output::{write_bytes_atomic, OutputPolicy};
+use day2night::raw::camera::CameraId;
 use day2night::raw::RawImage;
 use std::path::{Path, PathBuf};
 
@@ -14,9 +15,12 @@ pub enum CalibrateCommand {
     #[command(after_help = "\
 Per gray card: black-subtracted 10%-trimmed means of R, G, B over the ROI (default: the
 central quarter x quarter of the active area), saturated sites excluded, chromaticity
-[r/g, 1, b/g]. Then a 2-D Gaussian over [r/g, b/g] (unbiased covariance by default).
-A .json input is a list of chromaticities to include (a day2night dictionary, the shared
-s20fe file, or a bare [[r/g, 1, b/g], ...] list).
+[r/g, 1, b/g], and its CIE 1931 xy through the capture's own colour matrices (DNG
+chapter 6). Then a 2-D Gaussian over [r/g, b/g] (unbiased covariance by default). The file
+records the camera (Make, Model, UniqueCameraModel): synth uses the camera neutrals for that
+camera and the xy, through its own matrices, for any other camera.
+A .json input is a list of chromaticities to include (a day2night dictionary, with its xy
+and camera, the shared s20fe file, or a bare [[r/g, 1, b/g], ...] list).
 
 Example:
   day2night calibrate illuminants card_*.dng -o illuminants.json
@@ -30,14 +34,20 @@ Normalized mean intensity of each image's active area and the normal fit N(mean,
 Example:
   day2night calibrate brightness night/*.dng -o brightness.json")]
     Brightness(BrightnessArgs),
-    /// Per-ISO noise model from bursts, clean/noisy pairs or NoiseProfile tags, or the
-    /// physics-based model from dark and flat frames (--physics).
+    /// Per-ISO noise model from bursts, clean/noisy pairs, NoiseProfile tags or ordinary day
+    /// images (--from-image), or the physics-based model from dark and flat frames
+    /// (--physics).
     #[command(after_help = "\
 Per ISO (Exif ISO of the frames) and 2x2 CFA position: var(y) = S*y + O on normalized data,
 fitted by weighted least squares over intensity bins (split-half burst statistics or pair
 residuals), clipped pixels excluded, rounding variance removed from O. Several ISOs in one
 file; S = c*ISO and O = a + b*ISO^2 fitted across them. A burst needs >= 4 frames; 16 frames
 of 1024x512 pixels measure S and O to about 1 %.
+
+--from-image: the noise of each day image estimated from the image itself (smooth regions,
+Poisson-Gaussian fit per 2x2 position, clipping aware): what synth does for an input without
+NoiseProfile. Less exact than a burst (docs/noise.md gives its accuracy); --assume-iso N for
+images without an Exif ISO.
 
 --physics: per ISO, K (DN per electron) from flat-pair differences against the dark point,
 sigma_row from dark row means, sigma_read and the Tukey lambda (PPCC) from row-corrected dark
@@ -47,6 +57,7 @@ Examples:
   day2night calibrate noise --burst iso1600_*.dng --burst iso3200_*.dng -o noise.json
   day2night calibrate noise --pair merged_iso50.dng iso3200_01.dng -o noise.json
   day2night calibrate noise --from-noise-profile shots/*.dng -o noise.json
+  day2night calibrate noise --from-image day_*.dng --assume-iso 100 -o noise.json
   day2night calibrate noise --physics --dark dark_*.dng --flat flat_*.dng -o physics.json --plot fit.svg")]
     Noise(NoiseArgs),
 }
@@ -104,6 +115,7 @@ pub struct NoiseArgs {
     burst: Vec<Vec<PathBuf>>,
     pair: Vec<Vec<PathBuf>>,
     from_noise_profile: Vec<PathBuf>,
+    from_image: Vec<PathBuf>,
     assume_iso: Option<u32>,
     physics: bool,
     dark: Vec<PathBuf>,
@@ -124,6 +136,7 @@ impl clap::FromArgMatches for NoiseArgs {
             burst: occ("burst"),
             pair: occ("pair"),
             from_noise_profile: occ("from_noise_profile").into_iter().flatten().collect(),
+            from_image: occ("from_image").into_iter().flatten().collect(),
             assume_iso: m.get_one::<u32>("assume_iso").copied(),
             physics: m.get_flag("physics"),
             dark: occ("dark").into_iter().flatten().collect(),
@@ -171,6 +184,15 @@ impl clap::Args for NoiseArgs {
                     .help("DNGs whose NoiseProfile tags (and Exif ISO) give the model"),
             )
             .arg(
+                Arg::new("from_image")
+                    .long("from-image")
+                    .num_args(1..)
+                    .action(ArgAction::Append)
+                    .value_parser(value_parser!(PathBuf))
+                    .value_name("DAY.dng")
+                    .help("Ordinary day images: the noise estimated from each image itself (one ISO point per input ISO; docs/noise.md)"),
+            )
+            .arg(
                 Arg::new("assume_iso")
                     .long("assume-iso")
                     .value_parser(value_parser!(u32).range(1..))
@@ -182,7 +204,7 @@ impl clap::Args for NoiseArgs {
                 Arg::new("physics")
                     .long("physics")
                     .action(ArgAction::SetTrue)
-                    .conflicts_with_all(["burst", "pair", "from_noise_profile"])
+                    .conflicts_with_all(["burst", "pair", "from_noise_profile", "from_image"])
                     .requires_all(["dark", "flat"])
                     .help("Fit the physics-based model (shot, Tukey-lambda read, row noise) from --dark and --flat frames"),
             )
@@ -288,15 +310,25 @@ fn run_illuminants(a: IlluminantsArgs) -> CmdResult {
             .is_some_and(|e| e.eq_ignore_ascii_case("json"));
         if is_json {
             let text = day2night::synth::dictionaries::read_calibration_text(p)?;
-            let list = illuminants::parse_chromaticity_list(&text).in_file(p)?;
-            eprintln!("{}: {} chromaticities", p.display(), list.len());
-            extra.extend(list);
+            let list = illuminants::parse_listed(&text).in_file(p)?;
+            eprintln!(
+                "{}: {} chromaticities{}",
+                p.display(),
+                list.chromaticities.len(),
+                if list.xy.is_empty() { "" } else { " with xy" }
+            );
+            extra.push(list);
         } else {
             let img = read(p)?;
             let m =
                 illuminants::measure_gray_card(&img, roi, &p.display().to_string()).in_file(p)?;
+            let xy = m.xy.map_or(String::new(), |xy| {
+                let cct = day2night::isp::planck::cct_duv(xy)
+                    .map_or(String::new(), |(t, d)| format!(", {t:.0} K, Duv {d:+.4}"));
+                format!("  xy {:.4} {:.4}{cct}", xy[0], xy[1])
+            });
             eprintln!(
-                "{}: r/g {:.5}  b/g {:.5}  (R/G/B means {:.5} {:.5} {:.5}, {}/{}/{} px, {} saturated)",
+                "{}: r/g {:.5}  b/g {:.5}{xy}  (R/G/B means {:.5} {:.5} {:.5}, {}/{}/{} px, {} saturated)",
                 p.display(),
                 m.chromaticity[0],
                 m.chromaticity[2],
@@ -314,7 +346,20 @@ fn run_illuminants(a: IlluminantsArgs) -> CmdResult {
             files.push(m);
         }
     }
-    let dict = illuminants::build_dictionary(files, extra, est)?;
+    let (dict, notes) = illuminants::build_dictionary(files, extra, est)?;
+    for n in &notes {
+        eprintln!("day2night: warning: {n}");
+    }
+    if let Some(c) = &dict.camera {
+        eprintln!(
+            "camera: {c}: synth uses the camera neutrals for it{}",
+            if dict.xy.is_empty() {
+                ""
+            } else {
+                ", the xy through their own colour matrices for other cameras"
+            }
+        );
+    }
     let f = &dict.fit;
     eprintln!(
         "fit over {} illuminants ({} covariance): mean [{:.6}, {:.6}]  covariance [[{:.6e}, {:.6e}], [{:.6e}, {:.6e}]]",
@@ -376,16 +421,37 @@ fn run_noise(a: NoiseArgs) -> CmdResult {
         }
         Ok(img)
     };
-    if a.burst.is_empty() && a.pair.is_empty() && a.from_noise_profile.is_empty() {
+    if a.burst.is_empty()
+        && a.pair.is_empty()
+        && a.from_noise_profile.is_empty()
+        && a.from_image.is_empty()
+    {
         return Err(usage(
-            "give at least one --burst FRAMES..., --pair CLEAN NOISY, --from-noise-profile DNG... or --physics --dark ... --flat ...",
+            "give at least one --burst FRAMES..., --pair CLEAN NOISY, --from-noise-profile DNG..., --from-image DAY.dng... or --physics --dark ... --flat ...",
         ));
     }
     let mut inputs: Vec<PathBuf> = vec![];
     let mut sources = vec![];
-    let mut camera = None;
-    let total =
-        a.burst.iter().map(Vec::len).sum::<usize>() + 2 * a.pair.len() + a.from_noise_profile.len();
+    // The camera of the first input; inputs of other cameras are said.
+    let mut camera: Option<CameraId> = None;
+    let mut note_camera = |p: &Path, img: &RawImage| {
+        let c = CameraId::of(&img.meta);
+        match &camera {
+            None if !c.is_unknown() => camera = Some(c),
+            Some(first) if first.same_camera(&c) == Some(false) => eprintln!(
+                "day2night: warning: {}: another camera ({}) than the first input's ({}): the model records {}",
+                p.display(),
+                c.label(),
+                first.label(),
+                first.label()
+            ),
+            _ => {}
+        }
+    };
+    let total = a.burst.iter().map(Vec::len).sum::<usize>()
+        + 2 * a.pair.len()
+        + a.from_noise_profile.len()
+        + a.from_image.len();
     let pb = progress(total);
     for burst in &a.burst {
         inputs.extend(burst.iter().cloned());
@@ -393,7 +459,7 @@ fn run_noise(a: NoiseArgs) -> CmdResult {
         let Some(first) = it.next() else { continue };
         let img = read(first)?;
         pb.inc(1);
-        camera = camera.or_else(|| img.meta.unique_camera_model.clone());
+        note_camera(first, &img);
         let mut acc = noise::BurstAccumulator::new(img).in_file(first)?;
         for p in it {
             let img = read(p)?;
@@ -416,7 +482,7 @@ fn run_noise(a: NoiseArgs) -> CmdResult {
         inputs.extend([clean.clone(), noisy.clone()]);
         let (c, n) = (read(clean)?, read(noisy)?);
         pb.inc(2);
-        camera = camera.or_else(|| n.meta.unique_camera_model.clone());
+        note_camera(noisy, &n);
         let st = noise::pair_stats(&c, &n).in_file(noisy)?;
         eprintln!(
             "pair {} / {}: ISO {}",
@@ -431,7 +497,7 @@ fn run_noise(a: NoiseArgs) -> CmdResult {
         inputs.push(p.clone());
         let img = read(p)?;
         pb.inc(1);
-        camera = camera.or_else(|| img.meta.unique_camera_model.clone());
+        note_camera(p, &img);
         // Keep metadata only: pixels are not needed.
         profiled.push((
             p.display().to_string(),
@@ -441,10 +507,38 @@ fn run_noise(a: NoiseArgs) -> CmdResult {
             },
         ));
     }
+    let mut estimates = vec![];
+    for p in &a.from_image {
+        inputs.push(p.clone());
+        let img = read(p)?;
+        pb.inc(1);
+        note_camera(p, &img);
+        let name = p.display().to_string();
+        let e = noise_image::estimate_image(&name, &img, &Default::default()).in_file(p)?;
+        eprintln!(
+            "{}: ISO {}, noise estimated from the image ({} smooth 2x2 blocks, one band in {}){}",
+            p.display(),
+            e.iso,
+            e.estimate.smooth_blocks(),
+            e.estimate.step,
+            match e.estimate.trusted() {
+                Ok(_) => String::new(),
+                Err(why) => format!(": cannot be trusted: {why}"),
+            }
+        );
+        estimates.push(e);
+    }
     pb.finish_and_clear();
     let refs: Vec<(String, &RawImage)> = profiled.iter().map(|(n, i)| (n.clone(), i)).collect();
-    let profiles = noise::from_noise_profiles(&refs)?;
-    let (model, warnings) = noise::build_model(sources, profiles, camera)?;
+    let mut profiles = noise::from_noise_profiles(&refs)?;
+    let mut est_warnings = vec![];
+    if !estimates.is_empty() {
+        let (models, w) = noise_image::from_image_estimates(&estimates)?;
+        profiles.extend(models);
+        est_warnings = w;
+    }
+    let (model, mut warnings) = noise::build_model(sources, profiles, camera)?;
+    warnings.splice(0..0, est_warnings);
     for m in &model.isos {
         eprintln!(
             "ISO {} ({}, {} input(s), black {} white {}):",
@@ -495,9 +589,13 @@ fn run_noise_physics(a: NoiseArgs) -> CmdResult {
     let flats = read_all(&a.flat)?;
     let dr: Vec<physics::Named> = darks.iter().map(|(n, i)| (n.as_str(), i)).collect();
     let fr: Vec<physics::Named> = flats.iter().map(|(n, i)| (n.as_str(), i)).collect();
-    let camera = darks
+    let camera_id = darks
         .first()
-        .and_then(|(_, i)| i.meta.unique_camera_model.clone())
+        .map(|(_, i)| CameraId::of(&i.meta))
+        .filter(|c| !c.is_unknown());
+    let camera = camera_id
+        .as_ref()
+        .map(|c| c.label())
         .unwrap_or_else(|| "unknown camera".into());
     let source = format!(
         "{camera}: physics noise calibration from {} dark and {} flat frames (day2night calibrate noise --physics)",
@@ -505,6 +603,7 @@ fn run_noise_physics(a: NoiseArgs) -> CmdResult {
         flats.len()
     );
     let mut cal = physics::fit_physics(&dr, &fr, &source)?;
+    cal.model.camera = camera_id;
     if let Some(n) = a.poisson_max_electrons {
         cal.model = cal.model.with_poisson_max(n)?;
     }

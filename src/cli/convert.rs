@@ -1,5 +1,7 @@
-//! `day2night convert IN OUT [--compression none|ljpeg] [--raw-ifd main|sub] [--overwrite]`:
-//! re-write a DNG through the reader and writer (same pixels, same meaning, fresh layout).
+//! `day2night convert IN OUT [--compression none|ljpeg] [--raw-ifd main|sub]
+//! [--bad-opcode-lists refuse|drop] [--overwrite]`: re-write a DNG through the reader and
+//! writer (same pixels, same meaning, fresh layout). An opcode list the renders could not
+//! use is refused (default) or dropped with a warning: a written DNG always renders.
 use super::CmdResult;
 use day2night::dng::read::read_dng;
 use day2night::dng::write::{write_dng, Compression, RawIfd, WriteOptions};
@@ -22,6 +24,15 @@ pub enum RawIfdArg {
     Main,
     /// Raw image in a SubIFD behind a small RGB thumbnail.
     Sub,
+}
+
+/// What `convert` does with an opcode list that day2night's renders cannot use.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum BadOpcodeListsArg {
+    /// Refuse the file, naming the list and the reason (nothing is written).
+    Refuse,
+    /// Write the file without that list, with a warning naming it and the reason.
+    Drop,
 }
 
 /// Arguments of `day2night convert`.
@@ -52,6 +63,11 @@ pub struct ConvertArgs {
     /// IFD that holds the raw image.
     #[arg(long, value_enum, default_value = "main")]
     pub raw_ifd: RawIfdArg,
+    /// An opcode list day2night's renders cannot use (malformed, a mandatory opcode they
+    /// cannot apply, a TrimBounds outside the image): refuse the file, or drop the list
+    /// with a warning. A written DNG always renders.
+    #[arg(long, value_enum, default_value = "refuse", value_name = "WHAT")]
+    pub bad_opcode_lists: BadOpcodeListsArg,
     /// Replace an existing output file.
     #[arg(long)]
     pub overwrite: bool,
@@ -71,8 +87,28 @@ pub fn run(args: ConvertArgs) -> CmdResult {
     };
     // Fail before reading a large input when the output is refused anyway.
     policy.check(&output)?;
-    let img = read_dng(&args.input)?;
+    let mut img = read_dng(&args.input)?;
     super::print_meta_warnings(&args.input, &img.meta);
+    // Never write a DNG that day2night's own renders refuse (LinearRaw files are refused by
+    // the writer anyway, with their own reason).
+    if img.meta.linear_raw.is_none() {
+        for (list, e) in day2night::isp::opcodes::check::unrenderable_lists(&img) {
+            let tag = list.tag_name();
+            if args.bad_opcode_lists == BadOpcodeListsArg::Refuse {
+                return Err(anyhow::anyhow!(
+                    "{}: {e}: renders of the file would fail, so convert refuses it \
+                     (--bad-opcode-lists drop writes it without {tag})",
+                    args.input.display()
+                )
+                .into());
+            }
+            eprintln!(
+                "day2night: {}: warning: {e}: {tag} dropped (--bad-opcode-lists drop)",
+                args.input.display()
+            );
+            img.meta.opcode_lists[list.index()] = None;
+        }
+    }
     let opts = WriteOptions {
         compression: match args.compression {
             CompressionArg::None => Compression::None,

@@ -97,8 +97,10 @@ pub fn run(args: DatasetArgs) -> CmdResult {
         return Err(usage("--variants must be at least 1"));
     }
     let jobs = match args.jobs {
-        Some(0) => return Err(usage("--jobs must be at least 1")),
-        Some(n) => n,
+        Some(n) => {
+            day2night::bounds::jobs("--jobs", n).map_err(usage)?;
+            n
+        }
         None => std::thread::available_parallelism()
             .map(|n| n.get())
             .unwrap_or(1),

@@ -1,6 +1,8 @@
 //! `day2night info FILE... [--json]`: describe DNG files, including ones synthesis cannot use.
 use super::CmdResult;
 use day2night::dng::read::{inspect, DngInfo};
+use day2night::raw::camera::CameraId;
+use day2night::synth::{Covariance, IlluminantChoice, IlluminantProvenance};
 use std::fmt::Write as _;
 use std::path::PathBuf;
 
@@ -19,9 +21,10 @@ pub struct InfoArgs {
 }
 
 /// What synthesis would make of the file's opcode lists (the ISP decides which opcodes it
-/// can apply; the DNG layer's `inspect` cannot ask it): an optional opcode the renders skip
-/// is a warning, a mandatory one they cannot apply makes the file unusable, so "ready" is
-/// said only when `synth` would run without a word.
+/// can apply; the DNG layer's `inspect` cannot ask it): an optional opcode the renders skip,
+/// an opcode that makes its samples constant and a TrimBounds that changes the target's
+/// size are warnings, a mandatory one they cannot apply makes the file unusable, so
+/// "ready" is said only when `synth` would run without a word.
 fn opcode_verdict(info: &mut DngInfo, path: &std::path::Path) {
     let has_lists = info
         .raw
@@ -31,14 +34,67 @@ fn opcode_verdict(info: &mut DngInfo, path: &std::path::Path) {
         return;
     }
     let verdict = day2night::dng::read_dng(path).and_then(|img| {
-        day2night::isp::opcodes::prepare_image(&img, day2night::isp::opcodes::OpcodeMode::Apply)
+        use day2night::isp::opcodes::{check::check_render, OpcodeMode};
+        check_render(&img, OpcodeMode::Apply, true, true)
     });
     match verdict {
-        Ok(Some(p)) => info.warnings.extend(p.report.warnings()),
-        Ok(None) => {}
+        Ok(c) => info.warnings.extend(c.warnings),
         Err(e) => {
             info.synth_ready = false;
             info.reason = Some(e.root().to_string());
+        }
+    }
+}
+
+/// The night illuminant dictionary a default `synth` run samples for this file (its
+/// provenance), or why it cannot: then synthesis is not ready (docs/synthesis.md, "Night
+/// lamps in CIE xy").
+fn illuminant_verdict(info: &mut DngInfo) -> Option<Result<IlluminantProvenance, String>> {
+    let raw = info.raw.as_ref()?;
+    let camera = CameraId::new(
+        info.make.clone(),
+        info.model.clone(),
+        info.unique_camera_model.clone(),
+    );
+    let r = IlluminantChoice::Auto.resolve(&camera, &raw.meta.color, Covariance::Unbiased);
+    Some(match r {
+        Ok(r) => Ok(r.provenance),
+        Err(e) => {
+            let why = e.root().to_string();
+            if info.synth_ready {
+                info.synth_ready = false;
+                info.reason = Some(why.clone());
+            }
+            Err(why)
+        }
+    })
+}
+
+/// Where `synth` (no `--noise-model`, default options) would take this file's noise model
+/// from, and which camera's it is (issue 24): the noise chain of
+/// `day2night::synth::noise_source`, its warnings joining the file's. The pixels are read
+/// only when the chain gets to the estimate from the image.
+fn noise_verdict(
+    info: &mut DngInfo,
+    path: &std::path::Path,
+) -> Option<day2night::noise::NoiseProvenance> {
+    use day2night::synth::{noise_source::choose_noise_model, Calibration, SynthOptions};
+    if !info.synth_ready {
+        return None;
+    }
+    let img = day2night::dng::read_dng(path).ok()?;
+    let bayer = img.bayer().ok()?;
+    let opts = SynthOptions::default();
+    let cal = Calibration::embedded(&opts).ok()?;
+    let est = || day2night::noise::estimate(&img, &Default::default());
+    match choose_noise_model(&img, &cal, &opts, bayer, &est) {
+        Ok(c) => {
+            info.warnings.extend(c.warnings);
+            Some(c.provenance)
+        }
+        Err(e) => {
+            info.warnings.push(format!("noise: {}", e.root()));
+            None
         }
     }
 }
@@ -52,6 +108,8 @@ pub fn run(args: InfoArgs) -> CmdResult {
         match inspect(f) {
             Ok(mut info) => {
                 opcode_verdict(&mut info, f);
+                let ill = illuminant_verdict(&mut info);
+                let noise = noise_verdict(&mut info, f);
                 for w in &info.warnings {
                     eprintln!("day2night: {}: warning: {w}", f.display());
                 }
@@ -63,10 +121,20 @@ pub fn run(args: InfoArgs) -> CmdResult {
                     let mut v = serde_json::to_value(&info)?;
                     if let Some(o) = v.as_object_mut() {
                         o.insert("file".into(), f.display().to_string().into());
+                        if let Some(ill) = &ill {
+                            let j = match ill {
+                                Ok(p) => serde_json::to_value(p)?,
+                                Err(e) => serde_json::json!({ "error": e }),
+                            };
+                            o.insert("night_illuminants".into(), j);
+                        }
+                        if let Some(n) = &noise {
+                            o.insert("noise_model".into(), serde_json::to_value(n)?);
+                        }
                     }
                     objects.push(v);
                 } else {
-                    describe(&mut text, f, &info);
+                    describe(&mut text, f, &info, &ill, noise.as_ref());
                 }
             }
             Err(e) => {
@@ -176,7 +244,13 @@ fn describe_opcodes(out: &mut String, lists: &[day2night::dng::opcodes::describe
     }
 }
 
-fn describe(out: &mut String, file: &std::path::Path, i: &DngInfo) {
+fn describe(
+    out: &mut String,
+    file: &std::path::Path,
+    i: &DngInfo,
+    ill: &Option<Result<IlluminantProvenance, String>>,
+    noise: Option<&day2night::noise::NoiseProvenance>,
+) {
     let _ = writeln!(out, "{}", file.display());
     let _ = writeln!(
         out,
@@ -350,6 +424,29 @@ fn describe(out: &mut String, file: &std::path::Path, i: &DngInfo) {
             }
         );
         describe_opcodes(out, &m.opcodes);
+    }
+    match ill {
+        Some(Ok(p)) => {
+            let _ = writeln!(out, "  night illuminants: {}", p.summary());
+        }
+        Some(Err(e)) => {
+            let _ = writeln!(out, "  night illuminants: not available: {e}");
+        }
+        None => {}
+    }
+    if let Some(n) = noise {
+        let _ = writeln!(
+            out,
+            "  noise model:   {} ({}): {}",
+            n.source.name(),
+            n.camera
+                .as_ref()
+                .map_or("camera unknown".to_string(), |c| format!(
+                    "camera {}",
+                    c.label()
+                )),
+            n.note
+        );
     }
     let _ = writeln!(
         out,

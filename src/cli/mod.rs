@@ -120,7 +120,7 @@ pub fn main() -> ExitCode {
     if let Some(sig) = day2night::output::stop_requested() {
         // Stopped by a signal: whatever failed on the way is a consequence of the stop.
         day2night::output::remove_temp_files_and_close();
-        eprintln!("day2night: {}", interrupt::message(resumable));
+        interrupt::print_once(resumable);
         return ExitCode::from(interrupt::exit_code(sig));
     }
     match result {

@@ -132,12 +132,21 @@ pub fn run(args: RenderArgs) -> CmdResult {
     let in_file = |e: day2night::Error| lib(e.in_file(&args.input));
     let n = resolve_neutral(&img.meta, neutral).map_err(in_file)?;
     // Optional opcodes that cannot be applied are skipped with a warning; others are errors,
-    // and so is opcode work over the budget (before any pixel work).
-    if let Some(p) = day2night::isp::opcodes::prepare_image(&img, opcodes).map_err(in_file)? {
-        for w in p.report.warnings() {
+    // and so is opcode work over the budget (before any pixel work). Opcodes that make their
+    // samples constant and a TrimBounds that changes the size warn.
+    let checked =
+        day2night::isp::opcodes::check::check_render(&img, opcodes, !args.no_crop, !args.no_orient)
+            .map_err(in_file)?;
+    for w in &checked.warnings {
+        eprintln!("day2night: {}: warning: {w}", args.input.display());
+    }
+    // A render that comes out constant is said too (watched band by band).
+    let flat = day2night::isp::flat::FlatCheck::new();
+    let say_flat = || {
+        if let Some(w) = flat.warning("the render") {
             eprintln!("day2night: {}: warning: {w}", args.input.display());
         }
-    }
+    };
     let opts = RenderOptions {
         demosaic,
         neutral: Some(n),
@@ -163,25 +172,38 @@ pub fn run(args: RenderArgs) -> CmdResult {
     // EXR (ZIP, ZIPS, none) and 8-bit PNG are written band by band as the render makes them
     // (the same bytes as the whole-image writers); the rest from the whole image.
     let streamed = match format {
-        Format::Exr if encodes_rows(&exr_opts) => {
-            stream(&img, &opts, args.camera_rgb, &policy, |dims, policy| {
+        Format::Exr if encodes_rows(&exr_opts) => stream(
+            &img,
+            &opts,
+            args.camera_rgb,
+            &policy,
+            &flat,
+            |dims, policy| {
                 TargetFiles::create(dims, Some(&args.output), (&exr_opts, &attrs), None, policy)
-            })
-            .map_err(in_file)?
-        }
-        Format::Png if !sixteen => stream(&img, &opts, args.camera_rgb, &policy, |dims, policy| {
-            TargetFiles::create(
-                dims,
-                None,
-                (&exr_opts, &[]),
-                Some((&args.output, tone)),
-                policy,
-            )
-        })
+            },
+        )
+        .map_err(in_file)?,
+        Format::Png if !sixteen => stream(
+            &img,
+            &opts,
+            args.camera_rgb,
+            &policy,
+            &flat,
+            |dims, policy| {
+                TargetFiles::create(
+                    dims,
+                    None,
+                    (&exr_opts, &[]),
+                    Some((&args.output, tone)),
+                    policy,
+                )
+            },
+        )
         .map_err(in_file)?,
         _ => false,
     };
     if streamed {
+        say_flat();
         return Ok(());
     }
     let rgb = if args.camera_rgb {
@@ -189,6 +211,8 @@ pub fn run(args: RenderArgs) -> CmdResult {
     } else {
         render_linear(&img, &opts).map_err(in_file)?
     };
+    flat.image(&rgb);
+    say_flat();
     match format {
         Format::Exr => {
             write_exr(&rgb, &args.output, &exr_opts, &attrs, &policy).map_err(lib)?;
@@ -226,6 +250,7 @@ fn stream<'p>(
     opts: &RenderOptions,
     camera_rgb: bool,
     policy: &'p OutputPolicy,
+    flat: &day2night::isp::flat::FlatCheck,
     open: impl FnOnce((usize, usize), &'p OutputPolicy) -> day2night::Result<TargetFiles<'p>>,
 ) -> day2night::Result<bool> {
     let files = std::sync::OnceLock::new();
@@ -236,7 +261,10 @@ fn stream<'p>(
             .map_err(|_| day2night::Error::invalid("the render was started twice"))
     };
     let band = |y0: usize, w: usize, rows: &[f32]| match files.get() {
-        Some(f) => f.band(y0, w, rows),
+        Some(f) => {
+            flat.rows(rows);
+            f.band(y0, w, rows)
+        }
         None => Err(day2night::Error::invalid(
             "a band came before the render started",
         )),

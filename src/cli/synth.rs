@@ -9,6 +9,7 @@ use day2night::dng::write::Compression;
 use day2night::encode::exr::{ExrCompression, ExrOptions};
 use day2night::error::Error;
 use day2night::output::{stop_requested, OutputPolicy, OutputSetLock};
+use day2night::synth::burst::BurstOptions;
 use day2night::synth::config::{parse_isos, parse_neutral, JobConfig};
 use day2night::synth::job::{DayInput, DirSink, SynthJob, Target};
 use day2night::synth::sidecar::Sidecar;
@@ -81,10 +82,11 @@ pub enum CovArg {
 #[command(after_help = "Examples:\n  \
   day2night synth day.dng -o night/                      # clean + ISO 1600/3200 + target.exr\n  \
   day2night synth a.dng b.dng -o out/ --seed 7 --variants 3 --iso 800,6400 --target both\n  \
-  day2night synth day.dng -o again/ --replay night/day.json   # byte-identical outputs\n\n\
+  day2night synth day.dng -o again/ --replay night/day.json   # byte-identical outputs\n  \
+  day2night synth day.dng -o burst/ --burst 8 --iso 3200     # 8 hand-held frames per ISO\n\n\
 Outputs per input <stem> and variant K (the _vK part, K = 1.., only when --variants > 1):\n  \
-<stem>[_vK]_clean.dng, <stem>[_vK]_iso<ISO>.dng, <stem>[_vK]_target.exr|png,\n  \
-<stem>[_vK]_input.exr (--input-exr), <stem>[_vK].json (sidecar).")]
+<stem>[_vK]_clean.dng, <stem>[_vK]_iso<ISO>.dng (--burst N: <stem>[_vK]_iso<ISO>_f<NN>.dng),\n  \
+<stem>[_vK]_target.exr|png, <stem>[_vK]_input.exr (--input-exr), <stem>[_vK].json (sidecar).")]
 pub struct SynthArgs {
     /// Day DNG files.
     #[arg(required = true, value_name = "DAY.dng")]
@@ -156,8 +158,9 @@ pub struct SynthOpts {
     pub truncate: bool,
     /// Reproduce the authors' released code where it is deterministic: implies --truncate
     /// and --mask-eval release, truncates the noisy raws too, divides by the day neutral as
-    /// stored (not normalized to green = 1) and does not cut illuminant draws at
-    /// Mahalanobis 3. See docs/synthesis.md, "Release compatibility".
+    /// stored (not normalized to green = 1), does not cut illuminant draws at Mahalanobis 3
+    /// and samples every camera's lights from the paper phone's dictionary (unless
+    /// --illuminants says otherwise). See docs/synthesis.md, "Release compatibility".
     #[arg(long, value_enum, value_name = "PRESET")]
     pub compat: Option<CompatArg>,
 }
@@ -168,8 +171,12 @@ pub struct ExtraArgs {
     /// Local lights besides the ambient (default 4 release; paper: 4 to 6 drawn).
     #[arg(long)]
     pub lights: Option<u32>,
-    /// Night illuminant dictionary (JSON); default: the embedded paper phone's.
-    #[arg(long, value_name = "FILE.json")]
+    /// Night illuminant dictionary: `paper` (the paper phone's gray cards, its camera RGB),
+    /// `cie` (CIE 015:2018 night lamps through each file's colour matrices) or a JSON file
+    /// (camera neutrals, a Gaussian, xy lamps; `./paper` for a file named paper). Default:
+    /// `paper` for the paper's phone (Samsung SM-G780*/SM-G781*) and under --compat release,
+    /// `cie` for every other camera.
+    #[arg(long, value_name = "paper|cie|FILE.json")]
     pub illuminants: Option<PathBuf>,
     /// Illuminant covariance estimator.
     #[arg(long, value_enum, default_value = "unbiased")]
@@ -178,7 +185,8 @@ pub struct ExtraArgs {
     #[arg(long, value_name = "FILE.json")]
     pub brightness: Option<PathBuf>,
     /// Noise model (day2night-noise-model/1 JSON); default: the input's NoiseProfile, else
-    /// the embedded paper phone table.
+    /// (the paper's phone: its embedded table) an estimate from the image at its ISO, else
+    /// the embedded paper phone table with a warning. See docs/noise.md.
     #[arg(long = "noise-model", value_name = "FILE.json")]
     pub noise_model: Option<PathBuf>,
     /// Re-run a sidecar's plan on its input (one input): byte-identical outputs.
@@ -206,6 +214,59 @@ pub struct ExtraArgs {
     /// ignore (implied by --compat release). The night DNGs keep the lists either way.
     #[arg(long, value_name = "MODE")]
     pub opcodes: Option<String>,
+    /// Frames per ISO: a night burst of N noisy DNGs <stem>[_vK]_iso<ISO>_f<NN>.dng (1 to
+    /// 64; 1 = one noisy DNG per ISO, as without a burst). See docs/synthesis.md, "Bursts".
+    #[arg(long, default_value_t = 1, value_name = "N")]
+    pub burst: u32,
+    /// Motion between the frames of a burst: none (a tripod) or shake (a hand-held camera,
+    /// the default).
+    #[arg(long, value_name = "none|shake")]
+    pub motion: Option<String>,
+    /// Hand-held walk: standard deviation of each frame's translation step per axis, in
+    /// pixels [default: 0.6].
+    #[arg(long = "shake-step", value_name = "PX")]
+    pub shake_step: Option<f64>,
+    /// Hand-held walk: standard deviation of each frame's rotation step, in degrees
+    /// [default: 0.015].
+    #[arg(long = "shake-roll", value_name = "DEG")]
+    pub shake_roll: Option<f64>,
+    /// Interpolant of the burst warp: catmull-rom (default), lanczos3 or bilinear.
+    #[arg(long = "warp-interp", value_name = "KIND")]
+    pub warp_interp: Option<String>,
+}
+
+impl ExtraArgs {
+    /// The burst these flags ask for (the single-frame default for --burst 1; the motion
+    /// flags need a burst).
+    fn burst(&self) -> Result<BurstOptions, Failure> {
+        let mut b = BurstOptions {
+            frames: self.burst,
+            ..BurstOptions::default()
+        };
+        if let Some(m) = &self.motion {
+            b.motion = flag("--motion", m.parse())?;
+        }
+        if let Some(v) = self.shake_step {
+            b.shake.step_px = v;
+        }
+        if let Some(v) = self.shake_roll {
+            b.shake.roll_deg = v;
+        }
+        if let Some(k) = &self.warp_interp {
+            b.interp = flag("--warp-interp", k.parse())?;
+        }
+        b.validate().map_err(usage)?;
+        let motion_flags = self.motion.is_some()
+            || self.shake_step.is_some()
+            || self.shake_roll.is_some()
+            || self.warp_interp.is_some();
+        if b.is_single() && motion_flags {
+            return Err(usage(
+                "--motion, --shake-step, --shake-roll and --warp-interp need --burst N with N > 1",
+            ));
+        }
+        Ok(b)
+    }
 }
 
 impl SynthOpts {
@@ -246,6 +307,7 @@ impl SynthOpts {
         if let Some(m) = &self.extra.opcodes {
             options.opcodes = flag("--opcodes", m.parse())?;
         }
+        options.burst = self.extra.burst()?;
         options.validate().map_err(usage)?;
         Ok(JobConfig {
             options,
@@ -285,8 +347,8 @@ pub fn run(args: SynthArgs) -> CmdResult {
     if args.variants == 0 {
         return Err(usage("--variants must be at least 1"));
     }
-    if args.jobs == Some(0) {
-        return Err(usage("--jobs must be at least 1"));
+    if let Some(n) = args.jobs {
+        day2night::bounds::jobs("--jobs", n).map_err(usage)?;
     }
     let (job, seed, replay) = match &args.synth.extra.replay {
         Some(p) => {
@@ -413,6 +475,15 @@ impl Run<'_> {
     /// Every variant of one input (the sidecar's one with --replay).
     fn input(&self, input: &Path) -> day2night::Result<()> {
         let day = DayInput::read(input)?;
+        if !self.quiet && matches!(self.job.options.mode, Mode::Global | Mode::Local) {
+            // Where this input's lamp colours come from (its warnings come with the plan).
+            let ill = self.job.illuminants(&day)?;
+            self.say(format!(
+                "day2night: {}: night illuminants: {}",
+                input.display(),
+                ill.provenance.summary()
+            ));
+        }
         let name = input
             .file_name()
             .map(|n| n.to_string_lossy().into_owned())
@@ -461,6 +532,9 @@ impl Run<'_> {
         let _set = OutputSetLock::acquire(self.out, &base, self.wait)?;
         let sink = DirSink::new(self.out, base, self.policy);
         let written = self.job.run_variant(day, plan, &sink)?;
+        for w in &written.warnings {
+            self.say(format!("day2night: {}: warning: {}", input.display(), w));
+        }
         if let Some(b) = self.bar {
             b.inc(1);
         }

@@ -164,6 +164,11 @@ impl Sink {
         }
     }
 
+    /// The unit's sample id (file names are `<id><suffix>`).
+    pub fn id(&self) -> &str {
+        &self.id
+    }
+
     /// Path relative to OUT_DIR of the output `<split>/<kind>/<id><suffix>` (suffix such
     /// as `.dng`, `_iso1600.dng`, `.exr`).
     pub fn rel_path(&self, kind: Kind, suffix: &str) -> String {

@@ -12,7 +12,7 @@ use crate::error::{Error, Result, ResultExt};
 use crate::output::{stop_requested, OutputPolicy, OutputSetLock};
 use serde::Serialize;
 use std::collections::{BTreeMap, HashMap};
-use std::io::IsTerminal;
+use std::io::{IsTerminal, Write as _};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::Mutex;
@@ -678,7 +678,9 @@ impl Progress {
             } else {
                 format!("{done} done, {skipped} skipped")
             };
-            eprintln!(
+            // a closed stderr (EPIPE) must not panic the run: the line is dropped
+            let _ = writeln!(
+                std::io::stderr(),
                 "dataset: [{k}/{}] {} {}: {state} ({secs:.1} s)",
                 self.total,
                 task.split.name(),

@@ -13,6 +13,7 @@ use crate::error::Result;
 use crate::output::OutputPolicy;
 use crate::synth::job::{compression_name, DayInput, OutputKind, OutputSink, SynthJob};
 use std::borrow::Cow;
+use std::io::Write as _;
 use std::path::{Path, PathBuf};
 
 pub use crate::synth::job::Target;
@@ -58,7 +59,12 @@ impl Processor for SynthProcessor {
         let day = DayInput::from_bytes(path, bytes)?;
         // Metadata corrections: said once per input here, and recorded in every sidecar.
         for w in &day.raw.meta.warnings {
-            eprintln!("day2night: {}: warning: {w}", path.display());
+            // a closed stderr (EPIPE) must not panic the run: the line is dropped
+            let _ = writeln!(
+                std::io::stderr(),
+                "day2night: {}: warning: {w}",
+                path.display()
+            );
         }
         Ok(day)
     }
@@ -83,10 +89,15 @@ impl Processor for SynthProcessor {
 }
 
 /// The dataset folder and file name of each synth output.
-fn place(kind: OutputKind) -> (Kind, String) {
+fn place(sink: &Sink, kind: OutputKind) -> (Kind, String) {
     match kind {
         OutputKind::CleanDng => (Kind::CleanRaw, ".dng".into()),
         OutputKind::NoisyDng { iso } => (Kind::NoisyRaw, format!("_iso{iso}.dng")),
+        // a burst's frames: one folder per sample, `noisy_raw/<id>/<id>_iso<ISO>_f<NN>.dng`
+        OutputKind::NoisyFrame { iso, frame } => (
+            Kind::NoisyRaw,
+            format!("/{}_iso{iso}_f{frame:02}.dng", sink.id()),
+        ),
         OutputKind::TargetExr => (Kind::Target, ".exr".into()),
         OutputKind::TargetPng => (Kind::Target, ".png".into()),
         OutputKind::InputExr => (Kind::Input, ".exr".into()),
@@ -99,20 +110,20 @@ fn place(kind: OutputKind) -> (Kind, String) {
 /// is hashed into the manifest once written.
 impl OutputSink for Sink {
     fn path(&self, kind: OutputKind) -> Result<PathBuf> {
-        let (k, suffix) = place(kind);
+        let (k, suffix) = place(self, kind);
         let p = Sink::path(self, k, &suffix);
         ensure_parent(&p)?;
         Ok(p)
     }
     fn name(&self, kind: OutputKind) -> String {
-        let (k, suffix) = place(kind);
+        let (k, suffix) = place(self, kind);
         self.rel_path(k, &suffix)
     }
     fn policy(&self) -> &OutputPolicy {
         Sink::policy(self)
     }
     fn written(&self, kind: OutputKind) -> Result<()> {
-        let (k, suffix) = place(kind);
+        let (k, suffix) = place(self, kind);
         self.adopt(k, &suffix)
     }
 }

@@ -137,80 +137,106 @@ pub struct WriteOptions {
 /// latest record (`previous`, or the journal's, which is newer) is up to date. Returns the
 /// unit's manifest record and why it was computed (None: skipped, the record is the
 /// previous one). A unit that fails returns a `failed` record with the error, as `dataset`
-/// records it; `Err` only for an OUT_DIR that cannot be created.
+/// records it; `Err` only for an OUT_DIR that cannot be created. [`write_units`] of one.
 pub fn write_unit<P: Processor>(
     unit: &Unit,
     previous: Option<&Record>,
     o: &WriteOptions,
     processor: &P,
 ) -> Result<(Record, Option<Reason>)> {
-    let out_dir = &o.out_dir;
-    let journal = journal_path(out_dir, &unit.rel, unit.variant);
-    let journaled = read_journal(&journal);
-    let prev = journaled.as_ref().or(previous);
-    let options_sha = sha256_hex(processor.fingerprint().as_bytes());
-    let (rec, reason) = match std::fs::read(&unit.path) {
-        Err(e) => {
-            let reason = match decide(prev, want(unit, "", &options_sha), out_dir, o.overwrite) {
-                Decision::Redo(r) => r,
-                Decision::Skip => Reason::InputChanged,
-            };
-            let mut r = blank_record(unit, "", &options_sha);
-            r.error = Some(Error::Io(e).in_file(&unit.path).to_string());
-            (r, reason)
-        }
-        Ok(bytes) => {
-            let input_sha = sha256_hex(&bytes);
-            let reason = match decide(
-                prev,
-                want(unit, &input_sha, &options_sha),
-                out_dir,
-                o.overwrite,
-            ) {
-                Decision::Skip => {
-                    if let Some(p) = prev {
-                        return Ok((p.clone(), None));
-                    }
-                    Reason::New
-                }
-                Decision::Redo(r) => r,
-            };
-            std::fs::create_dir_all(out_dir)
-                .map_err(Error::Io)
-                .in_file(out_dir)?;
-            let blank = blank_record(unit, &input_sha, &options_sha);
-            let rec = match load_input(processor, &unit.path, &bytes) {
-                Ok(input) => {
-                    let policy = OutputPolicy {
-                        overwrite: true,
-                        inputs: vec![],
-                        ..OutputPolicy::default()
-                    };
-                    compute_unit(
-                        processor, &input, unit, prev, blank, out_dir, &policy, o.wait,
-                    )
-                }
-                Err(msg) => Record {
-                    error: Some(msg),
-                    ..blank
-                },
-            };
-            (rec, reason)
-        }
+    let mut done = write_units(&[(unit.clone(), previous.cloned())], o, processor)?;
+    done.pop()
+        .ok_or_else(|| Error::invalid("write_unit: no record was made"))
+}
+
+/// [`write_unit`] for several units of one input (its variants), as `dataset` processes an
+/// input: the file is read and hashed once, and decoded once (only if some unit is not up
+/// to date) for all of them. Returns each unit's record and reason, in order. Units of
+/// different inputs are refused (group them by input first).
+pub fn write_units<P: Processor>(
+    units: &[(Unit, Option<Record>)],
+    o: &WriteOptions,
+    processor: &P,
+) -> Result<Vec<(Record, Option<Reason>)>> {
+    let Some((first, _)) = units.first() else {
+        return Ok(Vec::new());
     };
-    let mut rec = rec;
+    if let Some((other, _)) = units.iter().find(|(u, _)| u.path != first.path) {
+        return Err(Error::invalid(format!(
+            "units of two inputs ({} and {}) in one call: group the units by input",
+            first.rel, other.rel
+        )));
+    }
+    let out_dir = &o.out_dir;
+    let options_sha = sha256_hex(processor.fingerprint().as_bytes());
+    let read =
+        std::fs::read(&first.path).map_err(|e| Error::Io(e).in_file(&first.path).to_string());
+    let input_sha = read.as_ref().map(|b| sha256_hex(b)).unwrap_or_default();
     let policy = OutputPolicy {
         overwrite: true,
         inputs: vec![],
         ..OutputPolicy::default()
     };
-    let saved = super::ensure_parent(&journal)
-        .and_then(|_| write_bytes_atomic(&journal, &policy, rec.to_line()?.as_bytes()));
-    if let Err(e) = saved {
-        rec.status = manifest::Status::Failed;
-        rec.error = Some(format!("writing the unit's record: {e}"));
+    let mut loaded: Option<std::result::Result<P::Loaded, String>> = None;
+    let mut done = Vec::with_capacity(units.len());
+    for (unit, previous) in units {
+        let journal = journal_path(out_dir, &unit.rel, unit.variant);
+        let journaled = read_journal(&journal);
+        let prev = journaled.as_ref().or(previous.as_ref());
+        let decision = decide(
+            prev,
+            want(unit, &input_sha, &options_sha),
+            out_dir,
+            o.overwrite,
+        );
+        let (rec, reason) = match &read {
+            Err(msg) => {
+                let reason = match decision {
+                    Decision::Redo(r) => r,
+                    Decision::Skip => Reason::InputChanged,
+                };
+                let mut r = blank_record(unit, "", &options_sha);
+                r.error = Some(msg.clone());
+                (r, reason)
+            }
+            Ok(bytes) => {
+                let reason = match decision {
+                    Decision::Skip => {
+                        if let Some(p) = prev {
+                            done.push((p.clone(), None));
+                            continue;
+                        }
+                        Reason::New
+                    }
+                    Decision::Redo(r) => r,
+                };
+                std::fs::create_dir_all(out_dir)
+                    .map_err(Error::Io)
+                    .in_file(out_dir)?;
+                let blank = blank_record(unit, &input_sha, &options_sha);
+                let input = loaded.get_or_insert_with(|| load_input(processor, &unit.path, bytes));
+                let rec = match input {
+                    Ok(input) => compute_unit(
+                        processor, input, unit, prev, blank, out_dir, &policy, o.wait,
+                    ),
+                    Err(msg) => Record {
+                        error: Some(msg.clone()),
+                        ..blank
+                    },
+                };
+                (rec, reason)
+            }
+        };
+        let mut rec = rec;
+        let saved = super::ensure_parent(&journal)
+            .and_then(|_| write_bytes_atomic(&journal, &policy, rec.to_line()?.as_bytes()));
+        if let Err(e) = saved {
+            rec.status = manifest::Status::Failed;
+            rec.error = Some(format!("writing the unit's record: {e}"));
+        }
+        done.push((rec, Some(reason)));
     }
-    Ok((rec, Some(reason)))
+    Ok(done)
 }
 
 /// Write the manifest of a run from its records (one per unit, the latest of each key

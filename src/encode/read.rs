@@ -8,7 +8,8 @@
 //! decide (eval replaces them and says so). Damaged files are refused with an error, never a
 //! panic; absurd sizes are refused before allocating.
 
-use super::exr::error::exr_err;
+use crate::encode::exr::chunks::damaged_chunk;
+use crate::encode::exr::error::{exr_err, guarded};
 use crate::error::{Error, Result, ResultExt};
 use crate::isp::RgbImage;
 use std::io::Read;
@@ -57,7 +58,11 @@ fn read_raster(path: &Path) -> Result<LoadedImage> {
     let format = match reader.format() {
         Some(image::ImageFormat::Png) => "png",
         Some(image::ImageFormat::Tiff) => "tiff",
-        _ => return Err(Error::unsupported("image format")),
+        _ => {
+            return Err(Error::unsupported(
+                "the image format is neither PNG nor TIFF",
+            ))
+        }
     };
     let img = reader.decode().map_err(|e| match e {
         image::ImageError::IoError(io) => Error::Io(io),
@@ -103,9 +108,9 @@ pub fn pick_rgb(names: &[String]) -> Result<[usize; 3]> {
             None if names.len() == 1 => Ok([0; 3]),
             None if !names.is_empty() => match names.iter().position(|n| n != "A") {
                 Some(c) => Ok([c; 3]),
-                None => Err(Error::unsupported("EXR: no colour channel")),
+                None => Err(Error::unsupported("EXR: the file has no colour channel")),
             },
-            None => Err(Error::unsupported("EXR: no channels")),
+            None => Err(Error::unsupported("EXR: the file has no channel")),
         },
     }
 }
@@ -117,7 +122,7 @@ fn exr_meta(path: &Path, max_pixels: u64) -> Result<exr::meta::MetaData> {
     let header = meta
         .headers
         .first()
-        .ok_or_else(|| Error::malformed("EXR: no header"))?;
+        .ok_or_else(|| Error::malformed("EXR: the file has no header"))?;
     let size = header.layer_size;
     crate::limits::Limits::with_max_pixels(max_pixels)?.check_pixels(
         "EXR data window",
@@ -125,7 +130,9 @@ fn exr_meta(path: &Path, max_pixels: u64) -> Result<exr::meta::MetaData> {
         size.1 as u64,
     )?;
     if meta.headers.iter().any(|h| h.deep) {
-        return Err(Error::unsupported("EXR: deep data"));
+        return Err(Error::unsupported(
+            "EXR: the file holds deep data, which eval cannot read",
+        ));
     }
     crate::encode::exr::chunks::check_chunk_table(path, &meta)?;
     Ok(meta)
@@ -137,21 +144,24 @@ fn read_exr(path: &Path) -> Result<LoadedImage> {
     // Headers first: refuse absurd sizes and bombs before the decoder allocates.
     let max = (MAX_PIXELS as u64).min(crate::limits::Limits::current()?.max_pixels);
     exr_meta(path, max)?;
-    let p = path.to_path_buf();
-    // The decoder of a third-party crate on untrusted data: contain any panic as an error.
-    let decoded = std::panic::catch_unwind(move || {
-        read()
-            .no_deep_data()
-            .largest_resolution_level()
-            .all_channels()
-            .first_valid_layer()
-            .all_attributes()
-            // sequential: a panic in a worker thread could not be contained here
-            .non_parallel()
-            .from_file(&p)
-    })
-    .map_err(|_| Error::malformed("EXR: the decoder failed on damaged data"))?
-    .map_err(exr_err)?;
+    // The decoder of a third-party crate on untrusted data: a panic is an error. When the
+    // read fails, the first chunk that does not decode is named.
+    let decoded = guarded(
+        || {
+            read()
+                .no_deep_data()
+                .largest_resolution_level()
+                .all_channels()
+                .first_valid_layer()
+                .all_attributes()
+                // sequential: a panic in a worker thread could not be contained here
+                .non_parallel()
+                .from_file(path)
+                .map_err(exr_err)
+        },
+        || Error::malformed("EXR: the decoder failed on damaged data"),
+    )
+    .map_err(|e| damaged_chunk(path).unwrap_or(e))?;
     let layer = decoded.layer_data;
     let (w, h) = (layer.size.0, layer.size.1);
     let channels = &layer.channel_data.list;
@@ -161,7 +171,7 @@ fn read_exr(path: &Path) -> Result<LoadedImage> {
     for c in &picked {
         if c.sampling != Vec2(1, 1) {
             return Err(Error::unsupported(format!(
-                "EXR: subsampled channel {}",
+                "EXR: channel {} is subsampled, which eval cannot read",
                 c.name
             )));
         }
@@ -244,7 +254,7 @@ impl BandSource {
                 v.extend_from_slice(src);
                 v
             }
-            BandSource::Exr(b) => b.rows(y0, y1)?,
+            BandSource::Exr(b) => b.rows(y0, y1).in_file(b.path())?,
         };
         Ok(RgbImage {
             width: w,

@@ -378,10 +378,17 @@ impl CameraColor {
         Ok(last)
     }
 
+    /// Camera response (not normalized) to a white of chromaticity `xy` with Y = 1:
+    /// `XYZtoCamera(CCT(xy)) * XYZ(xy)` (DNG spec chapter 6, "Translating White Balance xy
+    /// Coordinates to Camera Neutral Coordinates": the matrices for a known white are
+    /// interpolated at its own CCT, no iteration needed).
+    pub fn xy_to_camera(&self, xy: [f64; 2]) -> [f64; 3] {
+        mul_vec(&self.xyz_to_camera(xy_to_cct(xy)), xy_to_xyz(xy))
+    }
+
     /// Camera neutral (green = 1) of a white chromaticity (for AsShotWhiteXY).
     pub fn xy_to_neutral(&self, xy: [f64; 2]) -> Result<[f64; 3]> {
-        let n = mul_vec(&self.xyz_to_camera(xy_to_cct(xy)), xy_to_xyz(xy));
-        normalize_neutral(n)
+        normalize_neutral(self.xy_to_camera(xy))
     }
 
     /// Camera (not white-balanced) -> XYZ D50 for the given neutral, per chapter 6.

@@ -9,9 +9,11 @@
 pub(crate) mod bands;
 pub mod color;
 pub mod demosaic;
+pub mod flat;
 pub mod geometry;
 pub mod opcodes;
 pub(crate) mod place;
+pub mod planck;
 pub mod render;
 pub mod render_bands;
 pub mod render_crop;

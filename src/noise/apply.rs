@@ -118,10 +118,27 @@ pub fn gaussian_rows<'a>(
     seed: u64,
     truncate: bool,
 ) -> Result<GaussianRows<'a>> {
+    Ok(MappedRows::new(
+        clean,
+        gaussian_map(clean, params, seed, truncate)?,
+    ))
+}
+
+/// The Gaussian noise of [`gaussian_rows`] as an [`ActiveRowMap`] that noises any active-area
+/// row handed to it (e.g. a burst frame's warped clean row) with `clean`'s levels, drawing
+/// row `r` from stream `r` of `seed`'s key.
+pub fn gaussian_map<'a>(
+    clean: &RawImage,
+    params: &'a NoiseParams,
+    seed: u64,
+    truncate: bool,
+) -> Result<GaussianMap<'a>> {
     let mut rows = RowNoise::new(clean, params)?;
     rows.truncate = truncate;
-    let key = noise_key(seed);
-    Ok(MappedRows::new(clean, GaussianMap { rows, key }))
+    Ok(GaussianMap {
+        rows,
+        key: noise_key(seed),
+    })
 }
 
 impl ActiveRowMap for GaussianMap<'_> {

@@ -14,6 +14,7 @@
 //! negative, and non-finite parameters are refused.
 
 use crate::error::{Error, Result};
+use crate::raw::camera::CameraId;
 use crate::raw::Bayer;
 use serde::{Deserialize, Serialize};
 
@@ -40,8 +41,19 @@ pub struct NoiseModel {
     /// Where the figures come from (camera, calibration, licence).
     #[serde(default)]
     pub source: String,
+    /// The camera the model was calibrated on (`calibrate noise` writes it; files without it,
+    /// and the legacy string form, stay valid: see [`super::provenance::deserialize_camera`]).
+    #[serde(
+        default,
+        deserialize_with = "super::provenance::deserialize_camera",
+        skip_serializing_if = "Option::is_none"
+    )]
+    pub camera: Option<CameraId>,
     /// Calibrated points, any order (sorted on load), distinct ISOs.
     pub isos: Vec<IsoPoint>,
+    /// The file the model was read from ([`NoiseModel::from_file`]; not serialized).
+    #[serde(skip)]
+    pub file: Option<String>,
     /// The physics-based model when the file was one (`"model": "physics"`); `isos` then
     /// holds its equivalent Gaussian at the file's levels. Never written for Gaussian
     /// models, so their files are unchanged.
@@ -66,7 +78,9 @@ impl NoiseModel {
             format: NOISE_MODEL_FORMAT.into(),
             units: NOISE_MODEL_UNITS.into(),
             source: source.into(),
+            camera: None,
             isos,
+            file: None,
             physics: None,
         };
         m.validate()?;
@@ -76,6 +90,7 @@ impl NoiseModel {
     /// A model carrying a physics model (its equivalent Gaussian as `isos`).
     pub fn from_physics(p: super::physics::PhysicsModel) -> Result<NoiseModel> {
         let mut m = NoiseModel::new(p.source.clone(), p.gaussian_points())?;
+        m.camera = p.camera.clone();
         m.physics = Some(p);
         Ok(m)
     }
@@ -193,13 +208,17 @@ impl NoiseModel {
                 m.format, NOISE_MODEL_FORMAT
             )));
         }
-        NoiseModel::new(m.source, m.isos)
+        let mut out = NoiseModel::new(m.source, m.isos)?;
+        out.camera = m.camera;
+        Ok(out)
     }
 
-    /// Read a noise model file.
+    /// Read a noise model file (its path is kept in [`NoiseModel::file`]).
     pub fn from_file(path: &std::path::Path) -> Result<NoiseModel> {
         let text = crate::bounds::read_calibration_text(path)?;
-        NoiseModel::from_json(&text).map_err(|e| e.in_file(path))
+        let mut m = NoiseModel::from_json(&text).map_err(|e| e.in_file(path))?;
+        m.file = Some(path.display().to_string());
+        Ok(m)
     }
 
     /// Serialize to pretty JSON.

@@ -216,6 +216,13 @@ pub struct PhysicsModel {
     /// Where the figures come from.
     #[serde(default)]
     pub source: String,
+    /// The camera the model was calibrated on (absent in older files).
+    #[serde(
+        default,
+        deserialize_with = "super::provenance::deserialize_camera",
+        skip_serializing_if = "Option::is_none"
+    )]
+    pub camera: Option<crate::raw::camera::CameraId>,
     /// Black level (max over the CFA tile) of the calibration frames, DN.
     pub black: f64,
     /// White level of the calibration frames, DN.
@@ -292,6 +299,7 @@ impl PhysicsModel {
             format: PHYSICS_FORMAT.into(),
             units: PHYSICS_UNITS.into(),
             source: source.into(),
+            camera: None,
             black,
             white,
             poisson_max_electrons: DEFAULT_POISSON_MAX_ELECTRONS,
@@ -333,8 +341,10 @@ impl PhysicsModel {
                 m.model, m.format, PHYSICS_MODEL_TAG, PHYSICS_FORMAT
             )));
         }
-        PhysicsModel::new(m.source, m.black, m.white, m.isos)?
-            .with_poisson_max(m.poisson_max_electrons)
+        let mut out = PhysicsModel::new(m.source, m.black, m.white, m.isos)?
+            .with_poisson_max(m.poisson_max_electrons)?;
+        out.camera = m.camera;
+        Ok(out)
     }
 
     /// Pretty JSON.

@@ -314,11 +314,18 @@ impl<'a, 'n> Region<'a, 'n> {
     /// Noise active-area row `r` into `out` (its `cols`); `blk` is scratch of the
     /// active-area width.
     fn noise_one_row(&self, r: usize, out: &mut [u16], blk: &mut [f64]) {
+        let xs = &(self.src)(r)[self.cols.start - self.src_left..][..self.cols.len()];
+        self.noise_one_row_from(r, xs, out, blk);
+    }
+
+    /// [`Region::noise_one_row`] of the clean samples `xs` (the region's columns of row
+    /// `r`).
+    fn noise_one_row_from(&self, r: usize, xs: &[u16], out: &mut [u16], blk: &mut [f64]) {
         let s = &self.sampler;
         // one copy of the row loop per kind of read noise
         match &s.tukey {
-            Some(t) => self.noise_row(r, out, blk, &|g| t.sample(g.next_u64())),
-            None => self.noise_row(r, out, blk, &|g| gaussian_read(s.sigma_read, g)),
+            Some(t) => self.noise_row(r, xs, out, blk, &|g| t.sample(g.next_u64())),
+            None => self.noise_row(r, xs, out, blk, &|g| gaussian_read(s.sigma_read, g)),
         }
     }
 
@@ -328,6 +335,7 @@ impl<'a, 'n> Region<'a, 'n> {
     fn noise_row<R: Fn(&mut SiteRng) -> f64>(
         &self,
         r: usize,
+        xs: &[u16],
         out: &mut [u16],
         blk: &mut [f64],
         read: &R,
@@ -339,7 +347,6 @@ impl<'a, 'n> Region<'a, 'n> {
         // the row's SplitMix64 positioned before site cols.start
         let start = (cols.start as u64).wrapping_mul(GAMMA);
         let mut rng = SiteRng(row_seed.wrapping_add(start));
-        let xs = &(self.src)(r)[cols.start - self.src_left..][..w];
         let mut site_at = |x: u16, b: f64, level: Option<&LevelTables>| {
             s.site(read, rng.next_u64(), x, b, level, row_dn)
         };
@@ -409,6 +416,36 @@ pub fn with_physics_rows<T>(
     let src = |r: usize| &clean.data[(top + r) * clean.width + left..][..aw];
     let region = Region::new(&norm, aw, params, seed, 0..aw, 0, &src)?;
     f(&MappedRows::new(clean, PhysicsMap(&region)))
+}
+
+/// Hand `f` the physics noise as an [`ActiveRowMap`] that noises the clean samples it is
+/// handed in place (e.g. a burst frame's warped clean row), with `clean`'s levels: the
+/// samples [`with_physics_rows`] gives for a clean row equal to the one handed over.
+pub fn with_physics_map<T>(
+    clean: &RawImage,
+    params: &PhysicsParams,
+    seed: u64,
+    f: impl FnOnce(&dyn ActiveRowMap) -> Result<T>,
+) -> Result<T> {
+    let norm = linear_normalizer(clean)?;
+    let aw = clean.active_area().width();
+    let none = |_: usize| -> &[u16] { &[] };
+    let region = Region::new(&norm, aw, params, seed, 0..aw, 0, &none)?;
+    f(&PhysicsInPlace(&region))
+}
+
+/// The physics noise of the samples handed over (an [`ActiveRowMap`] reading its input).
+struct PhysicsInPlace<'r, 'a, 'n>(&'r Region<'a, 'n>);
+
+impl ActiveRowMap for PhysicsInPlace<'_, '_, '_> {
+    fn map_row(&self, r: usize, seg: &mut [u16], scratch: &mut Vec<f64>) {
+        scratch.resize(self.0.aw, 0.0);
+        let clean = seg.to_vec();
+        self.0.noise_one_row_from(r, &clean, seg, scratch);
+    }
+    fn bound(&self) -> u16 {
+        self.0.norm.white.min(u16::MAX as f64) as u16
+    }
 }
 
 /// The physics noise of the active-area rows (an [`ActiveRowMap`]).

@@ -68,6 +68,16 @@ pub trait ActiveRowMap: Sync {
     fn bound(&self) -> u16;
 }
 
+/// A reference to a map is the map (so `&dyn ActiveRowMap` can drive [`MappedRows`]).
+impl<M: ActiveRowMap + ?Sized> ActiveRowMap for &M {
+    fn map_row(&self, r: usize, seg: &mut [u16], scratch: &mut Vec<f64>) {
+        (**self).map_row(r, seg, scratch)
+    }
+    fn bound(&self) -> u16 {
+        (**self).bound()
+    }
+}
+
 /// The rows of `img` with an [`ActiveRowMap`] applied to their active-area part (the
 /// samples outside the active area are `img`'s).
 pub struct MappedRows<'a, M> {

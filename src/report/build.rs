@@ -68,6 +68,14 @@ pub trait Visuals {
     ) -> Result<Vec<(String, Rgb8)>>;
     /// Sampled illuminants and light centres from a sidecar.
     fn illuminants(&self, sidecar: &serde_json::Value) -> Result<Illuminants>;
+    /// The same lights in CIE 1931 xy (axes `x`, `y`, no ellipse): each light's camera
+    /// neutral through the colour matrices of `night_dng` (the clean night DNG, which keeps
+    /// the day file's).
+    fn illuminants_xy(
+        &self,
+        sidecar: &serde_json::Value,
+        night_dng: Option<&Path>,
+    ) -> Result<Illuminants>;
     /// Dimming factor from a sidecar.
     fn dim_factor(&self, sidecar: &serde_json::Value) -> Option<f64>;
 }
@@ -223,15 +231,16 @@ pub fn build(opts: &ReportOptions, vis: &dyn Visuals) -> Result<ReportSummary> {
                 .unwrap_or_else(|| "?".into())
         );
         png("noisy", &noisy_title, noisy, &mut summary);
-        let (masks, ill) = match sc {
+        fn missing<T>() -> Result<T> {
+            Err(Error::invalid("sidecar missing or unreadable"))
+        }
+        let (masks, ill, ill_xy) = match sc {
             Some(sc) => (
                 vis.masks(sc, clean_path.as_deref(), opts.thumb),
                 vis.illuminants(sc),
+                vis.illuminants_xy(sc, clean_path.as_deref()),
             ),
-            None => (
-                Err(Error::invalid("sidecar missing or unreadable")),
-                Err(Error::invalid("sidecar missing or unreadable")),
-            ),
+            None => (missing(), missing(), missing()),
         };
         match masks {
             Ok(ms) => {
@@ -275,6 +284,32 @@ pub fn build(opts: &ReportOptions, vis: &dyn Visuals) -> Result<ReportSummary> {
         cells.push(Cell {
             title: "Illuminants (over the dictionary ellipse, 1-3 sigma)".into(),
             html: ill_html,
+        });
+        let xy_html = match ill_xy.and_then(|il| {
+            let pts: Vec<(f64, f64, usize)> = il
+                .lights
+                .iter()
+                .map(|l| (l.chroma[0], l.chroma[1], l.kind))
+                .collect();
+            let kinds: Vec<&str> = il.kinds.iter().map(|s| s.as_str()).collect();
+            super::plot_xy::planckian("Lights in CIE xy", &pts, &kinds)
+        }) {
+            Ok(svg) => svg,
+            Err(e) => {
+                summary
+                    .warnings
+                    .push(format!("{id}: illuminants in xy: {e}"));
+                format!(
+                    "<p class=\"na\">not available: {}</p>",
+                    escape(&e.to_string())
+                )
+            }
+        };
+        cells.push(Cell {
+            title: "Lights in CIE 1931 xy through the camera's colour matrices, against the \
+                    Planckian locus (ticks: CCT; grey: Duv +-0.01)"
+                .into(),
+            html: xy_html,
         });
         let nn = r
             .night_neutral

@@ -2,6 +2,7 @@
 pub mod build;
 pub mod html;
 pub mod plot;
+pub mod plot_xy;
 pub mod thumb;
 
 pub use build::{build, Illuminants, LightMark, ReportOptions, ReportSummary, Visuals};

@@ -4,14 +4,14 @@
 use crate::error::{Error, Result};
 use plotters::prelude::*;
 
-const W: u32 = 420;
-const H: u32 = 300;
+pub(super) const W: u32 = 420;
+pub(super) const H: u32 = 300;
 
-fn perr<E: std::fmt::Display>(e: E) -> Error {
+pub(super) fn perr<E: std::fmt::Display>(e: E) -> Error {
     Error::invalid(format!("plot: {e}"))
 }
 
-fn empty(title: &str) -> String {
+pub(super) fn empty(title: &str) -> String {
     format!(
         "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{W}\" height=\"{H}\"><text x=\"20\" y=\"40\" font-size=\"16\">{}: no data</text></svg>",
         super::html::escape(title)

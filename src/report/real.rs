@@ -5,6 +5,7 @@ use super::build::{Illuminants, LightMark, Visuals};
 use super::plot::Ellipse;
 use super::thumb::{downscale, fit, Rgb8};
 use crate::error::{Error, Result};
+use crate::isp::color::CameraColor;
 use crate::isp::render::DisplayGeometry;
 use crate::isp::{render_linear, RenderOptions, RgbImage};
 use crate::synth::masks::PreparedMask;
@@ -165,6 +166,29 @@ impl Visuals for LibraryVisuals {
         })
     }
 
+    fn illuminants_xy(
+        &self,
+        v: &serde_json::Value,
+        night_dng: Option<&Path>,
+    ) -> Result<Illuminants> {
+        let mut ill = self.illuminants(v)?;
+        let dng = night_dng.ok_or_else(|| {
+            Error::invalid("no clean night DNG: the xy plot needs the camera's colour matrices")
+        })?;
+        let raw = crate::dng::read::read_dng(dng)?;
+        let color = CameraColor::new(&raw.meta.color).map_err(|e| e.in_file(dng))?;
+        let plan = sidecar(v)?.plan;
+        for (mark, light) in ill.lights.iter_mut().zip(&plan.lights) {
+            let xy = color
+                .neutral_to_xy(light.illuminant)
+                .map_err(|e| e.in_file(dng))?;
+            mark.chroma = xy;
+        }
+        ill.axes = ("x".into(), "y".into());
+        ill.ellipse = None;
+        Ok(ill)
+    }
+
     fn dim_factor(&self, v: &serde_json::Value) -> Option<f64> {
         v.pointer("/run/dim_scale").and_then(|x| x.as_f64())
     }
@@ -181,6 +205,42 @@ mod tests {
     fn at(img: &Rgb8, x: usize, y: usize) -> [u8; 3] {
         let i = 3 * (y * img.width + x);
         [img.data[i], img.data[i + 1], img.data[i + 2]]
+    }
+
+    #[test]
+    fn lights_in_xy_go_through_the_files_matrices_and_lie_near_the_locus() {
+        let fix = Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/day.dng");
+        let day = DayInput::read(&fix).unwrap();
+        let dir = tempfile::tempdir().unwrap();
+        let mut job = SynthJob::new(SynthOptions {
+            isos: vec![],
+            ..SynthOptions::default()
+        })
+        .unwrap();
+        job.target = Target::None;
+        let plan = job.plan(&day, "day.dng", 1, 0).unwrap();
+        let policy = OutputPolicy::default();
+        let sink = DirSink::new(dir.path(), job.base_name("day", &plan), &policy);
+        job.run_variant(&day, &plan, &sink).unwrap();
+        let sc: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(dir.path().join("day.json")).unwrap()).unwrap();
+        let vis = LibraryVisuals;
+        let clean = dir.path().join("day_clean.dng");
+        let xy = vis.illuminants_xy(&sc, Some(&clean)).unwrap();
+        assert_eq!(xy.lights.len(), plan.lights.len());
+        assert_eq!(xy.axes.0, "x");
+        let color = CameraColor::new(&day.raw.meta.color).unwrap();
+        for (m, l) in xy.lights.iter().zip(&plan.lights) {
+            let (cct, duv) = crate::isp::planck::cct_duv(m.chroma).unwrap();
+            assert!(
+                (1500.0..8000.0).contains(&cct) && duv.abs() < 0.03,
+                "{cct} {duv}"
+            );
+            // back to the same neutral through the day file's matrices
+            let n = color.xy_to_neutral(m.chroma).unwrap();
+            assert!((n[0] - l.illuminant[0]).abs() < 1e-6 && (n[2] - l.illuminant[2]).abs() < 1e-6);
+        }
+        assert!(vis.illuminants_xy(&sc, None).is_err());
     }
 
     #[test]

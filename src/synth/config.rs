@@ -4,12 +4,14 @@
 //! dictionary, noise model), output settings validated. `synth`, `dataset` and
 //! `day2night.synthesize` build their jobs here, so the same flags mean the same job.
 
-use super::dictionaries::{self, embedded};
+use super::dictionaries;
 use super::job::{SynthJob, Target};
-use super::{Calibration, Covariance, Gaussian2, MaskEval, Mode, RelightFormula, SynthOptions};
+use super::{
+    Calibration, Covariance, IlluminantChoice, MaskEval, Mode, RelightFormula, SynthOptions,
+};
 use crate::dng::write::Compression;
 use crate::encode::exr::ExrOptions;
-use crate::error::{Error, Result, ResultExt};
+use crate::error::{Error, Result};
 use crate::noise::NoiseModel;
 use std::path::PathBuf;
 use std::str::FromStr;
@@ -19,7 +21,9 @@ use std::str::FromStr;
 pub struct JobConfig {
     /// Synthesis options (mode, formula, bulbs, lights, ISOs, mask evaluation...).
     pub options: SynthOptions,
-    /// Night illuminant dictionary or fitted Gaussian (`--illuminants`); None = embedded.
+    /// Night illuminant dictionary (`--illuminants`): `paper`, `cie` or a file (camera
+    /// neutrals, a fitted Gaussian, xy lamps); None = the default
+    /// ([`IlluminantChoice::Auto`], or the paper's under the release preset).
     pub illuminants: Option<PathBuf>,
     /// Brightness dictionary (`--brightness`).
     pub brightness: Option<PathBuf>,
@@ -61,12 +65,9 @@ impl JobConfig {
             return Err(Error::invalid("variants must be at least 1"));
         }
         self.exr.validate()?;
-        let cov = self.options.covariance;
         let illuminants = match &self.illuminants {
-            Some(p) => {
-                Gaussian2::from_source(&dictionaries::load_illuminants(p)?, cov).in_file(p)?
-            }
-            None => Gaussian2::fit(&embedded::illuminants(), cov)?,
+            Some(p) => IlluminantChoice::from_arg(p, self.options.covariance)?,
+            None => IlluminantChoice::default_for(self.options.compat.paper_illuminants),
         };
         let brightness = self
             .brightness

@@ -3,8 +3,10 @@
 
 use super::sidecar::sha256_hex;
 use crate::error::{Error, Result, ResultExt};
+use crate::noise::NoiseEstimate;
 use crate::raw::RawImage;
 use std::path::{Path, PathBuf};
+use std::sync::OnceLock;
 
 /// A decoded day DNG with what the outputs record about it.
 #[derive(Debug, Clone)]
@@ -15,6 +17,8 @@ pub struct DayInput {
     pub sha256: String,
     /// The file; its name goes into the EXR renders' attributes.
     pub source: PathBuf,
+    /// The image's noise estimate, made on first use ([`DayInput::noise_estimate`]).
+    estimate: OnceLock<std::result::Result<NoiseEstimate, String>>,
 }
 
 impl DayInput {
@@ -29,11 +33,28 @@ impl DayInput {
             // A day input is a CFA mosaic: refused here, before anything is planned.
             return Err(Error::unsupported(crate::raw::meta::LINEAR_RAW_NOT_CFA).in_file(source));
         }
-        Ok(DayInput {
+        Ok(DayInput::new(raw, sha256, source.to_path_buf()))
+    }
+
+    /// A decoded raw with the SHA-256 of its file and the file's path.
+    pub fn new(raw: RawImage, sha256: String, source: PathBuf) -> DayInput {
+        DayInput {
             raw,
             sha256,
-            source: source.to_path_buf(),
-        })
+            source,
+            estimate: OnceLock::new(),
+        }
+    }
+
+    /// The single-image noise estimate of the raw (default options), computed once: every
+    /// variant planned from this input reuses it.
+    pub fn noise_estimate(&self) -> Result<NoiseEstimate> {
+        self.estimate
+            .get_or_init(|| {
+                crate::noise::estimate(&self.raw, &Default::default()).map_err(|e| e.to_string())
+            })
+            .clone()
+            .map_err(Error::invalid)
     }
 
     /// Read and decode the DNG at `path`.
@@ -59,10 +80,10 @@ impl DayInput {
         if let Ok(json) = serde_json::to_vec(&raw.meta) {
             h.update(&json);
         }
-        DayInput {
+        DayInput::new(
             raw,
-            sha256: h.finalize().iter().map(|b| format!("{b:02x}")).collect(),
-            source: PathBuf::from(file_name),
-        }
+            h.finalize().iter().map(|b| format!("{b:02x}")).collect(),
+            PathBuf::from(file_name),
+        )
     }
 }

@@ -28,6 +28,8 @@ pub struct FileSink<'a> {
     policy: &'a OutputPolicy,
     wopts: WriteOptions,
     attrs: Vec<(String, String)>,
+    /// Frames per ISO (1 without a burst).
+    frames: u32,
     /// The banded target's files, open while it is rendered.
     target_files: OnceLock<TargetFiles<'a>>,
 }
@@ -54,6 +56,7 @@ impl<'a> FileSink<'a> {
                 ..WriteOptions::default()
             },
             attrs: exr_attributes(source, plan),
+            frames: plan.burst.as_ref().map_or(1, |b| b.frames),
             target_files: OnceLock::new(),
         }
     }
@@ -96,14 +99,14 @@ impl NightSink for FileSink<'_> {
         write_dng(clean, &path, &self.wopts, self.policy)
     }
 
-    fn noisy(&self, iso: u32, noisy: &RawImage) -> Result<()> {
-        let path = self.sink.path(OutputKind::NoisyDng { iso })?;
+    fn noisy(&self, iso: u32, frame: u32, noisy: &RawImage) -> Result<()> {
+        let path = self.sink.path(OutputKind::noisy(iso, frame, self.frames))?;
         write_dng(noisy, &path, &self.wopts, self.policy)
     }
 
     /// Packed and written strip by strip: no noisy plane (same bytes as `noisy`).
-    fn noisy_rows(&self, iso: u32, meta: &RawMeta, rows: &dyn RowSource) -> Result<()> {
-        let path = self.sink.path(OutputKind::NoisyDng { iso })?;
+    fn noisy_rows(&self, iso: u32, frame: u32, meta: &RawMeta, rows: &dyn RowSource) -> Result<()> {
+        let path = self.sink.path(OutputKind::noisy(iso, frame, self.frames))?;
         write_dng_rows(meta, rows, &path, &self.wopts, self.policy)
     }
 

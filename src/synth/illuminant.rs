@@ -63,8 +63,11 @@ impl Default for SamplerRules {
 }
 
 impl Gaussian2 {
-    /// Fit a dictionary.
+    /// Fit a dictionary (weighted when it has weights: [`Gaussian2::fit_weighted`]).
     pub fn fit(dict: &IlluminantDict, est: Covariance) -> Result<Gaussian2> {
+        if !dict.weights.is_empty() {
+            return Gaussian2::fit_weighted(dict, est);
+        }
         let m = dict.chromaticities.len();
         if m == 0 {
             return Err(Error::invalid(format!(
@@ -114,6 +117,67 @@ impl Gaussian2 {
             mean,
             cov,
             count: m,
+            estimator: est,
+        })
+    }
+
+    /// Fit a weighted dictionary: each weight is a count of gray cards (frequency weights).
+    /// Mean `sum(w c) / W`, covariance `sum(w d d^T) / (W - 1)` (unbiased) or `/ W`
+    /// (maximum likelihood), `W = sum(w)`; weight 1 each gives [`Gaussian2::fit`]'s figures.
+    /// Errors unless there is one finite weight >= 0 per chromaticity, `W > 0`, and `W > 1`
+    /// for the unbiased estimator.
+    pub fn fit_weighted(dict: &IlluminantDict, est: Covariance) -> Result<Gaussian2> {
+        let name = &dict.name;
+        let (c, w) = (&dict.chromaticities, &dict.weights);
+        if c.is_empty() {
+            return Err(Error::invalid(format!(
+                "illuminant dictionary {name} is empty"
+            )));
+        }
+        if w.len() != c.len() {
+            return Err(Error::invalid(format!(
+                "illuminant dictionary {name}: {} weights for {} chromaticities",
+                w.len(),
+                c.len()
+            )));
+        }
+        if c.iter().flatten().chain(w).any(|v| !v.is_finite()) || w.iter().any(|&v| v < 0.0) {
+            return Err(Error::invalid(format!(
+                "illuminant dictionary {name} holds a non-finite value or a negative weight"
+            )));
+        }
+        let total: f64 = w.iter().sum();
+        let div = match est {
+            Covariance::Unbiased => total - 1.0,
+            Covariance::MaximumLikelihood => total,
+        };
+        if !(total > 0.0 && div > 0.0) {
+            return Err(Error::invalid(format!(
+                "illuminant dictionary {name}: weights sum to {} (the unbiased covariance needs \
+                 more than 1: weights count gray cards)",
+                crate::bounds::short(total)
+            )));
+        }
+        let mut mean = [0.0; 2];
+        for (ci, wi) in c.iter().zip(w) {
+            mean[0] += wi * ci[0];
+            mean[1] += wi * ci[1];
+        }
+        mean = mean.map(|v| v / total);
+        let mut cov = [[0.0; 2]; 2];
+        for (ci, wi) in c.iter().zip(w) {
+            let d = [ci[0] - mean[0], ci[1] - mean[1]];
+            for i in 0..2 {
+                for j in 0..2 {
+                    cov[i][j] += wi * d[i] * d[j];
+                }
+            }
+        }
+        Ok(Gaussian2 {
+            name: name.clone(),
+            mean,
+            cov: cov.map(|r| r.map(|v| v / div)),
+            count: c.len(),
             estimator: est,
         })
     }
@@ -210,6 +274,7 @@ mod tests {
             name: "test".into(),
             source: String::new(),
             chromaticities: c,
+            weights: Vec::new(),
         }
     }
 
@@ -327,6 +392,47 @@ mod tests {
             let l = g.sample(&mut rng, &SamplerRules::default()).unwrap();
             assert!((l[2] - 0.35 - 0.5 * (l[0] - 0.7)).abs() < 1e-9, "{l:?}");
         }
+    }
+
+    #[test]
+    fn weights_are_counts_of_gray_cards() {
+        // [a, a, b] unweighted == [a x2, b x1] weighted, both estimators.
+        let (a, b) = ([0.6, 0.4], [0.9, 0.25]);
+        for est in [Covariance::Unbiased, Covariance::MaximumLikelihood] {
+            let plain = Gaussian2::fit(&dict(vec![a, a, b]), est).unwrap();
+            let mut d = dict(vec![a, b]);
+            d.weights = vec![2.0, 1.0];
+            let w = Gaussian2::fit(&d, est).unwrap();
+            for i in 0..2 {
+                assert!((plain.mean[i] - w.mean[i]).abs() < 1e-15);
+                for j in 0..2 {
+                    assert!((plain.cov[i][j] - w.cov[i][j]).abs() < 1e-15, "{est:?}");
+                }
+            }
+            assert_eq!(w.count, 2);
+        }
+        // weight 0 drops a point; weight 1 each is the plain fit
+        let mut d = dict(vec![a, b, [5.0, 5.0]]);
+        d.weights = vec![1.0, 1.0, 0.0];
+        let g = Gaussian2::fit(&d, Covariance::Unbiased).unwrap();
+        let p = Gaussian2::fit(&dict(vec![a, b]), Covariance::Unbiased).unwrap();
+        assert!((g.mean[0] - p.mean[0]).abs() < 1e-15 && (g.cov[0][0] - p.cov[0][0]).abs() < 1e-15);
+        // bad weights
+        for (w, what) in [
+            (vec![1.0], "1 weights"),
+            (vec![1.0, -1.0, 1.0], "negative"),
+            (vec![0.5, 0.25, 0.0], "sum to 0.75"),
+            (vec![0.0, 0.0, 0.0], "sum to 0"),
+            (vec![1.0, f64::NAN, 1.0], "non-finite"),
+        ] {
+            d.weights = w;
+            let e = Gaussian2::fit(&d, Covariance::Unbiased)
+                .unwrap_err()
+                .to_string();
+            assert!(e.contains(what) && e.contains("test"), "{e}");
+        }
+        d.weights = vec![0.5, 0.25, 0.0];
+        assert!(Gaussian2::fit(&d, Covariance::MaximumLikelihood).is_ok());
     }
 
     #[test]

@@ -52,8 +52,8 @@ use super::night::synthesize;
 use super::night::Night;
 use super::night::{synthesize_into, NightSink, Request};
 use super::relight::RunReport;
-use super::sidecar::{CalibrationInfo, InputInfo, OutputInfo, Sidecar, SIDECAR_FORMAT};
-use super::{Calibration, Plan, SynthOptions};
+use super::sidecar::{CalibrationInfo, InputInfo, OutputInfo, Provenance, Sidecar, SIDECAR_FORMAT};
+use super::{Calibration, IlluminantChoice, Plan, ResolvedIlluminants, SynthOptions};
 use crate::dng::write::Compression;
 use crate::encode::exr::ExrOptions;
 use crate::error::{Error, Result};
@@ -116,7 +116,13 @@ impl SynthJob {
         Ok(SynthJob {
             options: sc.options.clone(),
             calibration: Calibration {
-                illuminants: sc.calibration.illuminants.clone(),
+                illuminants: IlluminantChoice::Gaussian(
+                    sc.calibration.illuminants.clone(),
+                    sc.calibration
+                        .provenance
+                        .as_ref()
+                        .and_then(|p| p.illuminants.clone()),
+                ),
                 brightness: sc.calibration.brightness.clone(),
                 noise: None,
             },
@@ -134,15 +140,28 @@ impl SynthJob {
 
     /// Sample the plan of variant `variant` (0-based) of `day`; the random stream is keyed
     /// by (`seed`, `name`, `variant`), and `name` is recorded as the sidecar's input name.
+    /// A job that renders nothing (no target, no input EXR) does not fail on opcode lists
+    /// a render could not apply ([`super::plan_for`]).
     pub fn plan(&self, day: &DayInput, name: &str, seed: u64, variant: u32) -> Result<Plan> {
-        super::plan(
+        let req = self.request();
+        super::plan_with_estimate(
             &day.raw,
             name,
             seed,
             variant,
             &self.options,
             &self.calibration,
+            req.target || req.input,
+            &|| day.noise_estimate(),
         )
+    }
+
+    /// The night illuminant dictionary of `day` as the sidecar records it: the one the plan
+    /// samples from, its provenance and the warnings it gives
+    /// ([`Calibration::illuminants_recorded`]).
+    pub fn illuminants(&self, day: &DayInput) -> Result<ResolvedIlluminants> {
+        self.calibration
+            .illuminants_recorded(&day.raw.meta, &self.options)
     }
 
     /// The base of the output names of `plan`'s variant of the input `stem`: the stem, plus
@@ -197,7 +216,14 @@ impl SynthJob {
         }
         let isos: Vec<u32> = night.noisy.iter().map(|(iso, _)| *iso).collect();
         let planned: Vec<u32> = plan.noise.iter().map(|n| n.iso).collect();
+        let frames = plan.burst.as_ref().map_or(1, |b| b.frames);
+        let planned_frames: Vec<(u32, u32)> = planned
+            .iter()
+            .flat_map(|&iso| (1..frames).map(move |k| (iso, k)))
+            .collect();
+        let got_frames: Vec<(u32, u32)> = night.frames.iter().map(|f| (f.0, f.1)).collect();
         if isos != planned
+            || got_frames != planned_frames
             || (self.target != Target::None) != night.target.is_some()
             || self.input_exr != night.input.is_some()
         {
@@ -212,7 +238,10 @@ impl SynthJob {
                     rayon::join(
                         || -> Result<()> {
                             for (iso, noisy) in &night.noisy {
-                                files.noisy(*iso, noisy)?;
+                                files.noisy(*iso, 0, noisy)?;
+                                for (_, k, f) in night.frames.iter().filter(|f| f.0 == *iso) {
+                                    files.noisy(*iso, *k, f)?;
+                                }
                             }
                             Ok(())
                         },
@@ -254,15 +283,18 @@ impl SynthJob {
             plan,
         );
         let report = compute(&files)?;
+        let warnings = report.warnings.clone();
         let isos: Vec<u32> = plan.noise.iter().map(|np| np.iso).collect();
+        let frames = plan.burst.as_ref().map_or(1, |b| b.frames);
+        let noisy_kinds: Vec<OutputKind> = isos
+            .iter()
+            .flat_map(|&iso| (0..frames).map(move |k| OutputKind::noisy(iso, k, frames)))
+            .collect();
         let (want_exr, want_png) = (self.target.exr(), self.target.png());
         let mut stages = plan.stages.clone();
         let mut files = vec![sink.name(OutputKind::CleanDng)];
         stages.push("write_clean_dng".into());
-        files.extend(
-            isos.iter()
-                .map(|&iso| sink.name(OutputKind::NoisyDng { iso })),
-        );
+        files.extend(noisy_kinds.iter().map(|&k| sink.name(k)));
         if !isos.is_empty() {
             stages.push("write_noisy_dng".into());
         }
@@ -280,7 +312,7 @@ impl SynthJob {
         }
         syncs.finish(sink.policy())?;
         let mut kinds = vec![OutputKind::CleanDng];
-        kinds.extend(isos.iter().map(|&iso| OutputKind::NoisyDng { iso }));
+        kinds.extend(noisy_kinds.iter().copied());
         for (want, kind) in [
             (want_exr, OutputKind::TargetExr),
             (want_png, OutputKind::TargetPng),
@@ -294,6 +326,15 @@ impl SynthJob {
             sink.written(kind)?;
         }
         files.push(sink.name(OutputKind::Sidecar));
+        let ill = self.illuminants(day)?;
+        // A replayed sidecar without provenance (written before it existed) records none.
+        let illuminants = match &self.calibration.illuminants {
+            IlluminantChoice::Gaussian(_, None) => None,
+            _ => Some(ill.provenance),
+        };
+        let noise = plan.noise_provenance.clone();
+        let provenance =
+            (illuminants.is_some() || noise.is_some()).then_some(Provenance { illuminants, noise });
         let sc = Sidecar {
             format: SIDECAR_FORMAT.into(),
             tool: "day2night".into(),
@@ -304,9 +345,10 @@ impl SynthJob {
             },
             options: self.options.clone(),
             calibration: CalibrationInfo {
-                illuminants: self.calibration.illuminants.clone(),
+                illuminants: ill.gaussian,
                 brightness: self.calibration.brightness.clone(),
                 noise_model: plan.noise_model_source.clone(),
+                provenance,
             },
             plan: plan.clone(),
             run: report,
@@ -328,6 +370,7 @@ impl SynthJob {
             files,
             stages,
             isos,
+            warnings,
         })
     }
 }
@@ -527,11 +570,17 @@ mod tests {
         fn clean(&self, clean: &RawImage) -> Result<()> {
             self.inner.clean(clean)
         }
-        fn noisy(&self, iso: u32, noisy: &RawImage) -> Result<()> {
-            self.inner.noisy(iso, noisy)
+        fn noisy(&self, iso: u32, frame: u32, noisy: &RawImage) -> Result<()> {
+            self.inner.noisy(iso, frame, noisy)
         }
-        fn noisy_rows(&self, iso: u32, meta: &RawMeta, rows: &dyn RowSource) -> Result<()> {
-            self.inner.noisy_rows(iso, meta, rows)
+        fn noisy_rows(
+            &self,
+            iso: u32,
+            frame: u32,
+            meta: &RawMeta,
+            rows: &dyn RowSource,
+        ) -> Result<()> {
+            self.inner.noisy_rows(iso, frame, meta, rows)
         }
         fn banded(&self) -> bool {
             self.inner.banded()

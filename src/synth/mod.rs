@@ -13,16 +13,19 @@
 //! # Ok(()) }
 //! ```
 
+pub mod burst;
 pub mod config;
 pub mod day_input;
 pub mod dictionaries;
 pub mod dim;
 pub mod file_sink;
 pub mod illuminant;
+pub mod illuminant_choice;
 pub mod job;
 pub mod masks;
 pub mod neutral;
 pub mod night;
+pub mod noise_source;
 pub mod outputs;
 pub mod plan;
 pub mod plan_bounds;
@@ -31,8 +34,9 @@ pub mod rng;
 pub mod sidecar;
 
 pub use illuminant::{Covariance, Gaussian2, SamplerRules};
+pub use illuminant_choice::{IlluminantChoice, IlluminantProvenance, ResolvedIlluminants};
 pub use masks::{Light, LightKind, MaskEval};
-pub use plan::{plan, NoisePlan, Plan};
+pub use plan::{plan, plan_for, plan_with_estimate, NoisePlan, Plan};
 pub use relight::{run, run_clean, RunReport};
 
 use crate::error::{Error, Result};
@@ -80,6 +84,22 @@ pub struct Compat {
     pub neutral_as_stored: bool,
     /// Truncate the noisy raws too when `truncate` is set (the release's `astype(uint16)`).
     pub truncate_noise: bool,
+    /// Normalize and denormalize each site with its own range `white - black(site)`, not
+    /// `white - black_max` (the release's `normalize`/`denormalize` with a 2x2 BlackLevel;
+    /// see [`crate::normalize::Normalizer::with_range_per_site`]). Changes nothing when the
+    /// black level is one value.
+    pub range_per_site: bool,
+    /// Sample every input's night illuminants from the paper phone's dictionary (its camera
+    /// RGB), as the release does, unless `--illuminants` says otherwise; off: the CIE lamps
+    /// through each file's colour matrices for cameras other than the phone (absent from
+    /// serialized options when off, so sidecars written before it replay unchanged).
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub paper_illuminants: bool,
+    /// Use the embedded noise table (the paper's phone's) for inputs without a NoiseProfile
+    /// instead of an estimate from the image (the release applies its table to every
+    /// input). Absent from serialized options when off, so older sidecars are unchanged.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub embedded_noise: bool,
 }
 
 impl Compat {
@@ -87,6 +107,9 @@ impl Compat {
     pub const RELEASE: Compat = Compat {
         neutral_as_stored: true,
         truncate_noise: true,
+        range_per_site: true,
+        paper_illuminants: true,
+        embedded_noise: true,
     };
     /// True when no switch is on.
     pub fn is_off(&self) -> bool {
@@ -136,6 +159,10 @@ pub struct SynthOptions {
     /// raws never change: the night DNGs keep the lists byte for byte.
     #[serde(default, skip_serializing_if = "OpcodeMode::is_apply")]
     pub opcodes: OpcodeMode,
+    /// Burst frames and their motion (`--burst N`); absent from serialized options for a
+    /// single frame, so single-frame sidecars and dataset fingerprints are unchanged.
+    #[serde(default, skip_serializing_if = "burst::BurstOptions::is_single")]
+    pub burst: burst::BurstOptions,
 }
 
 impl Default for SynthOptions {
@@ -158,6 +185,7 @@ impl Default for SynthOptions {
             mask_eval: MaskEval::Separable,
             compat: Compat::default(),
             opcodes: OpcodeMode::Apply,
+            burst: burst::BurstOptions::default(),
         }
     }
 }
@@ -170,8 +198,8 @@ impl SynthOptions {
     /// The `--compat release` preset applied to `self`: the authors' released code where it
     /// is deterministic (docs/synthesis.md, "Release compatibility"): the release formula,
     /// the unbiased covariance, truncation of clean and noisy raws, the day neutral as
-    /// stored, illuminant draws not cut by a Mahalanobis radius, and the release's sampled,
-    /// resized light kernels. Errors when `self` asks for something else on one of these
+    /// stored, illuminant draws not cut by a Mahalanobis radius, the paper phone's illuminant
+    /// dictionary for every camera, and the release's sampled, resized light kernels. Errors when `self` asks for something else on one of these
     /// (the paper formula, the ML covariance, another mask evaluation).
     pub fn release_compat(mut self) -> Result<SynthOptions> {
         if self.formula != RelightFormula::Release {
@@ -200,7 +228,7 @@ impl SynthOptions {
 }
 
 /// Upper bound on lights and bulbs (each costs a pass over its window).
-pub const MAX_LIGHTS: u32 = 256;
+pub use crate::bounds::MAX_LIGHTS;
 
 impl SynthOptions {
     /// Error on out-of-range options.
@@ -245,6 +273,7 @@ impl SynthOptions {
                 "compat.truncate_noise truncates the noisy raws when truncating: it needs truncate",
             ));
         }
+        self.burst.validate()?;
         let s = &self.sampler;
         if s.max_mahalanobis.is_nan()
             || s.max_mahalanobis <= 0.0
@@ -259,26 +288,70 @@ impl SynthOptions {
     }
 }
 
-/// Calibration used by planning: illuminant fit, optional brightness and noise model.
+/// Calibration used by planning: illuminant dictionary, optional brightness and noise model.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Calibration {
-    /// The fitted night illuminant Gaussian.
-    pub illuminants: Gaussian2,
+    /// The night illuminant dictionary, resolved per input ([`IlluminantChoice::resolve`]).
+    pub illuminants: IlluminantChoice,
     /// Brightness dictionary (`--brightness`), if any.
     pub brightness: Option<BrightnessDict>,
-    /// Noise model file (`--noise-model`), if any; otherwise the input's NoiseProfile or the
-    /// embedded table is used.
+    /// Noise model file (`--noise-model`), if any; otherwise the input's NoiseProfile, an
+    /// estimate from the image or the embedded table ([`noise_source`]).
     pub noise: Option<NoiseModel>,
 }
 
 impl Calibration {
-    /// The embedded default (the paper phone's dictionary and noise table).
+    /// The default calibration for `opts`: night illuminants from the paper phone's
+    /// dictionary for the phone and the CIE lamps through each file's colour matrices for
+    /// other cameras (the phone's dictionary everywhere under the release preset), no
+    /// brightness dictionary, the input's NoiseProfile or the embedded noise table.
     pub fn embedded(opts: &SynthOptions) -> Result<Calibration> {
         Ok(Calibration {
-            illuminants: Gaussian2::fit(&dictionaries::embedded::illuminants(), opts.covariance)?,
+            illuminants: IlluminantChoice::default_for(opts.compat.paper_illuminants),
             brightness: None,
             noise: None,
         })
+    }
+
+    /// The night illuminant dictionary of an input with metadata `meta`
+    /// ([`IlluminantChoice::resolve`]).
+    pub fn illuminants_for(
+        &self,
+        meta: &RawMeta,
+        opts: &SynthOptions,
+    ) -> Result<ResolvedIlluminants> {
+        self.illuminants.resolve(
+            &crate::raw::camera::CameraId::of(meta),
+            &meta.color,
+            opts.covariance,
+        )
+    }
+
+    /// The dictionary a sidecar records for `meta`: [`Calibration::illuminants_for`]; for
+    /// the modes that sample no illuminant (`day`, `dimmed`) an input whose dictionary cannot
+    /// be made (no colour matrices) records the paper phone's, saying it was not used.
+    pub fn illuminants_recorded(
+        &self,
+        meta: &RawMeta,
+        opts: &SynthOptions,
+    ) -> Result<ResolvedIlluminants> {
+        match self.illuminants_for(meta, opts) {
+            Err(e) if matches!(opts.mode, Mode::Day | Mode::Dimmed) => {
+                let mut r = IlluminantChoice::Paper.resolve(
+                    &illuminant_choice::s20_fe(),
+                    &meta.color,
+                    opts.covariance,
+                )?;
+                let mode = if opts.mode == Mode::Day {
+                    "day"
+                } else {
+                    "dimmed"
+                };
+                r.provenance.note = format!("not used (mode {mode}); this input has none: {e}");
+                Ok(r)
+            }
+            r => r,
+        }
     }
 }
 

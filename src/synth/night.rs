@@ -17,13 +17,15 @@
 //! reported in a fixed order (clean, noisy, target). With `request.crop` only the crop is
 //! computed: the plan stays the whole frame's (lights, bulbs, illuminants), the clean pass
 //! covers the crop plus the demosaicer's margin ([`run_clean_crop`]), the crop's Gaussian
-//! noise draws from its own documented stream ([`apply_noise_crop_with`]; the physics model's
-//! draws are per site, so a crop gets the frame's samples: [`apply_physics_noise_crop`])
+//! noise draws from its own documented stream
+//! ([`crate::noise::apply::apply_noise_crop_with`]; the physics model's draws are per site,
+//! so a crop gets the frame's samples: [`crate::noise::apply_physics_noise_crop`])
 //! and the target is the crop's region of the frame's render ([`crate::isp::render_crop::render_linear_crop`]).
 //!
 //! ```no_run
 //! use day2night::synth::night::{synthesize, Request};
-//! use day2night::synth::{self, crop::Crop, Calibration, SynthOptions};
+//! use day2night::raw::crop::Crop;
+//! use day2night::synth::{self, Calibration, SynthOptions};
 //! # fn main() -> day2night::Result<()> {
 //! let day = day2night::dng::read_dng("day.dng".as_ref())?;
 //! let opts = SynthOptions::default();
@@ -34,17 +36,17 @@
 //! # Ok(()) }
 //! ```
 
+use super::burst::frames::{clean_crops, frame_noisy_crop, with_frame_rows};
 use super::relight::{run_clean, run_clean_crop, RunReport};
 use super::{night_meta, run_noise, with_noisy_rows, Plan};
 use crate::error::{Error, Result};
+use crate::isp::flat::{self, FlatCheck};
 use crate::isp::opcodes::{self, pipeline};
 use crate::isp::render::{
     color_matrix, matrix_row, render_input_with, render_linear_bands_sized, Bands,
 };
 use crate::isp::render_crop::{render_linear_crop_with, CROP_MARGIN};
 use crate::isp::{render_linear, Demosaic, RenderOptions, RgbImage};
-use crate::noise::apply::apply_noise_crop_with;
-use crate::noise::apply_physics_noise_crop;
 use crate::raw::crop::{crop_meta, Crop};
 use crate::raw::rows::RowSource;
 use crate::raw::{RawImage, RawMeta};
@@ -72,7 +74,8 @@ pub enum TargetOut<B> {
 }
 
 /// A consumer of the products of [`synthesize_into`], called from concurrent rayon tasks
-/// (hence `Sync`): `clean` once, `noisy` once per ISO in plan order (from one task),
+/// (hence `Sync`): `clean` once, `noisy` once per ISO in plan order and, for a burst,
+/// per frame of that ISO (frame 0 first; all from one task),
 /// for a banded target `target_start` once, `target_band` for every band in parallel
 /// (nearly top to bottom: see [`crate::isp::render::render_linear_bands_sized`]) then
 /// `target` once, `input` last. After an error, `target` may never be called: a sink
@@ -82,20 +85,21 @@ pub trait NightSink: Sync {
     type Band: Send;
     /// The clean night raw (with its output metadata).
     fn clean(&self, clean: &RawImage) -> Result<()>;
-    /// The noisy night raw at `iso` (with its output metadata).
-    fn noisy(&self, iso: u32, noisy: &RawImage) -> Result<()>;
-    /// The noisy night raw at `iso` as rows made on demand, with its output metadata `meta`
-    /// (the samples [`NightSink::noisy`] would get). The default makes the plane and hands
-    /// it to [`NightSink::noisy`]; a sink that writes files packs the rows strip by strip
-    /// instead, so no noisy plane is ever held.
-    fn noisy_rows(&self, iso: u32, meta: &RawMeta, rows: &dyn RowSource) -> Result<()> {
+    /// Frame `frame` of the noisy night raw at `iso` (with its output metadata); frame 0
+    /// is the single-frame noisy raw, frames 1.. exist for a burst (`plan.burst`).
+    fn noisy(&self, iso: u32, frame: u32, noisy: &RawImage) -> Result<()>;
+    /// Frame `frame` of the noisy night raw at `iso` as rows made on demand, with its
+    /// output metadata `meta` (the samples [`NightSink::noisy`] would get). The default
+    /// makes the plane and hands it to [`NightSink::noisy`]; a sink that writes files packs
+    /// the rows strip by strip instead, so no noisy plane is ever held.
+    fn noisy_rows(&self, iso: u32, frame: u32, meta: &RawMeta, rows: &dyn RowSource) -> Result<()> {
         let noisy = RawImage {
             width: rows.width(),
             height: rows.height(),
             data: crate::raw::rows::to_plane(rows)?,
             meta: meta.clone(),
         };
-        self.noisy(iso, &noisy)
+        self.noisy(iso, frame, &noisy)
     }
     /// True when the sink takes the target band by band ([`NightSink::target_band`]).
     fn banded(&self) -> bool {
@@ -172,15 +176,21 @@ pub fn synthesize_into<S: NightSink>(
     })
 }
 
+/// What the warnings about a constant render call the target and the network input.
+const TARGET: &str = "the target render";
+const INPUT: &str = "the network input render";
+
 fn whole_frame<S: NightSink>(
     day: &RawImage,
     plan: &Plan,
     req: &Request,
     sink: &S,
 ) -> Result<(RawImage, RunReport)> {
-    let (mut clean, report) = run_clean(day, plan)?;
+    let (mut clean, mut report) = run_clean(day, plan)?;
     clean.meta = night_meta(&day.meta, plan, plan.clean_iso, &plan.clean_noise);
     let clean = clean;
+    // Watches the target's bands as they are made: a constant render is said (sidecar).
+    let target_flat = FlatCheck::new();
     let neutral = plan.night_neutral;
     // The clean hand-over, the noisy raws (made and handed over one ISO after the other)
     // and the target render run as concurrent rayon tasks: each product is computed the
@@ -199,11 +209,17 @@ fn whole_frame<S: NightSink>(
                     if i == 0 && req.input {
                         // kept whole: the network input is rendered from it
                         let (iso, noisy) = run_noise(clean, plan, i)?;
-                        sink.noisy(iso, &noisy)?;
+                        sink.noisy(iso, 0, &noisy)?;
                         first_noisy = Some(noisy);
                     } else {
                         with_noisy_rows(clean, plan, i, |iso, meta, rows| {
-                            sink.noisy_rows(iso, meta, rows)
+                            sink.noisy_rows(iso, 0, meta, rows)
+                        })?;
+                    }
+                    // a burst's other frames, streamed one after another
+                    for k in 1..plan.burst.as_ref().map_or(1, |b| b.frames) {
+                        with_frame_rows(clean, plan, i, k, |iso, meta, rows| {
+                            sink.noisy_rows(iso, k, meta, rows)
                         })?;
                     }
                 }
@@ -229,13 +245,17 @@ fn whole_frame<S: NightSink>(
                 };
                 if sink.banded() {
                     let start = |w: usize, h: usize| sink.target_start(w, h);
-                    let f = |y0: usize, w: usize, rows: &[f32]| sink.target_band(y0, w, rows);
+                    let f = |y0: usize, w: usize, rows: &[f32]| {
+                        target_flat.rows(rows);
+                        sink.target_band(y0, w, rows)
+                    };
                     if let Some(bands) = render_linear_bands_sized(clean, &ropts, start, f)? {
                         start_noise();
                         return sink.target(TargetOut::Bands(bands));
                     }
                 }
                 let rgb = render_linear(clean, &ropts)?;
+                target_flat.image(&rgb);
                 start_noise();
                 sink.target(TargetOut::Image(rgb))
             })());
@@ -246,9 +266,11 @@ fn whole_frame<S: NightSink>(
     clean_res.unwrap_or(Ok(()))?;
     let first_noisy = noisy_res.unwrap_or(Ok(None))?;
     target_res.unwrap_or(Ok(()))?;
+    report.warnings.extend(target_flat.warning(TARGET));
     if req.input {
         let src = first_noisy.as_ref().unwrap_or(&clean);
         let rgb = render_input_with(src, Some(neutral), Default::default(), plan.opcode_mode())?;
+        report.warnings.extend(flat::warning(&rgb, INPUT));
         sink.input(&rgb)?;
     }
     Ok((clean, report))
@@ -270,7 +292,8 @@ fn cropped<S: NightSink>(
     } else {
         *crop
     };
-    let (plane, report) = run_clean_crop(day, plan, outer)?;
+    let (plane, mut report) = run_clean_crop(day, plan, outer)?;
+    let target_flat = FlatCheck::new();
     let data = if outer == *crop {
         plane.clone()
     } else {
@@ -288,24 +311,11 @@ fn cropped<S: NightSink>(
         || {
             rayon::join(
                 || -> Result<()> {
+                    // a burst's frames 1.. (their clean samples are shared by the ISOs)
+                    let frames = clean_crops(day, plan, crop, &clean.data)?;
                     for np in &plan.noise {
-                        let data = match &np.physics {
-                            Some(p) => {
-                                apply_physics_noise_crop(day, crop, &clean.data, p, np.seed)?
-                            }
-                            None => {
-                                let mut data = clean.data.clone();
-                                apply_noise_crop_with(
-                                    day,
-                                    crop,
-                                    &mut data,
-                                    &np.params,
-                                    np.seed,
-                                    plan.truncate_noise,
-                                )?;
-                                data
-                            }
-                        };
+                        // frame 00's noise is the single-frame crop's
+                        let data = frame_noisy_crop(day, plan, crop, np, 0, &clean.data)?;
                         let meta = night_meta(&day.meta, plan, np.iso, &np.params);
                         let noisy = RawImage {
                             width: crop.width,
@@ -313,7 +323,19 @@ fn cropped<S: NightSink>(
                             data,
                             meta: crop_meta(&meta, crop),
                         };
-                        sink.noisy(np.iso, &noisy)?;
+                        sink.noisy(np.iso, 0, &noisy)?;
+                        for (k, fc) in frames.iter().enumerate() {
+                            let k = k as u32 + 1;
+                            let data = frame_noisy_crop(day, plan, crop, np, k, fc)?;
+                            sink.noisy(
+                                np.iso,
+                                k,
+                                &RawImage {
+                                    data,
+                                    ..noisy.clone()
+                                },
+                            )?;
+                        }
                     }
                     Ok(())
                 },
@@ -351,6 +373,7 @@ fn cropped<S: NightSink>(
                             mode,
                         )?,
                     };
+                    target_flat.image(&rgb);
                     sink.target(TargetOut::Image(rgb))
                 },
             )
@@ -359,6 +382,7 @@ fn cropped<S: NightSink>(
     c?;
     n?;
     t?;
+    report.warnings.extend(target_flat.warning(TARGET));
     Ok((clean, report))
 }
 
@@ -368,8 +392,11 @@ pub struct Night {
     /// The clean night raw: the whole stored image with the night metadata, or the crop as
     /// a raw image of its own ([`crop_meta`]).
     pub clean: RawImage,
-    /// (ISO, noisy raw) per planned ISO, same layout as `clean`.
+    /// (ISO, noisy raw) per planned ISO, same layout as `clean` (a burst's frame 00).
     pub noisy: Vec<(u32, RawImage)>,
+    /// A burst's other frames: (ISO, frame 1.., noisy raw), ISO by ISO in plan order,
+    /// frames in order; empty without a burst.
+    pub frames: Vec<(u32, u32, RawImage)>,
     /// The linear target (whole frame: DefaultCrop and orientation applied, exactly the
     /// EXR target's pixels before half rounding; crop: the crop's region, unoriented).
     pub target: Option<RgbImage>,
@@ -387,6 +414,7 @@ pub struct Night {
 #[derive(Default)]
 struct Collect {
     noisy: Mutex<Vec<(u32, RawImage)>>,
+    frames: Mutex<Vec<(u32, u32, RawImage)>>,
     target: Mutex<Option<RgbImage>>,
     input: Mutex<Option<RgbImage>>,
 }
@@ -396,8 +424,11 @@ impl NightSink for Collect {
     fn clean(&self, _clean: &RawImage) -> Result<()> {
         Ok(()) // returned by synthesize_into
     }
-    fn noisy(&self, iso: u32, noisy: &RawImage) -> Result<()> {
-        lock(&self.noisy).push((iso, noisy.clone()));
+    fn noisy(&self, iso: u32, frame: u32, noisy: &RawImage) -> Result<()> {
+        match frame {
+            0 => lock(&self.noisy).push((iso, noisy.clone())),
+            k => lock(&self.frames).push((iso, k, noisy.clone())),
+        }
         Ok(())
     }
     fn target(&self, target: TargetOut<()>) -> Result<()> {
@@ -424,6 +455,7 @@ pub fn synthesize(day: &RawImage, plan: &Plan, req: &Request) -> Result<Night> {
     Ok(Night {
         clean: out.clean,
         noisy: sink.noisy.into_inner().unwrap_or_else(|e| e.into_inner()),
+        frames: sink.frames.into_inner().unwrap_or_else(|e| e.into_inner()),
         target: sink.target.into_inner().unwrap_or_else(|e| e.into_inner()),
         input: sink.input.into_inner().unwrap_or_else(|e| e.into_inner()),
         report: out.report,
@@ -433,445 +465,5 @@ pub fn synthesize(day: &RawImage, plan: &Plan, req: &Request) -> Result<Night> {
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::isp::render::default_crop;
-    use crate::isp::render_crop::target_origin;
-    use crate::synth::{plan, Calibration, Mode, SynthOptions};
-    use std::path::Path;
-
-    fn day() -> RawImage {
-        let fix = Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/day.dng");
-        crate::dng::read_dng(&fix).unwrap()
-    }
-
-    fn planned(day: &RawImage, mode: Mode, isos: Vec<u32>) -> Plan {
-        let opts = SynthOptions {
-            mode,
-            isos,
-            ..SynthOptions::default()
-        };
-        plan(
-            day,
-            "day.dng",
-            3,
-            1,
-            &opts,
-            &Calibration::embedded(&opts).unwrap(),
-        )
-        .unwrap()
-    }
-
-    /// Every sample of the crop raw `c` equals the same active-area site of `full`.
-    fn assert_region(c: &RawImage, full: &RawImage, crop: &Crop, what: &str) {
-        let a = full.active_area();
-        for r in 0..crop.height {
-            for k in 0..crop.width {
-                let want = full.get(
-                    a.top as usize + crop.top + r,
-                    a.left as usize + crop.left + k,
-                );
-                assert_eq!(c.get(r, k), want, "{what} {crop:?} ({r},{k})");
-            }
-        }
-    }
-
-    /// The crop's target `t` equals the frame target `ft` at `(oy, ox)`, pixel for pixel.
-    fn assert_target_region(
-        t: &crate::isp::RgbImage,
-        ft: &crate::isp::RgbImage,
-        (oy, ox): (usize, usize),
-        crop: &Crop,
-        what: &str,
-    ) {
-        for r in 0..crop.height {
-            for k in 0..crop.width {
-                assert_eq!(
-                    t.pixel(k, r),
-                    ft.pixel(ox + k, oy + r),
-                    "{what} {crop:?} ({r},{k})"
-                );
-            }
-        }
-    }
-
-    #[test]
-    fn crops_equal_the_whole_frame_region() {
-        let day = day();
-        let a = day.active_area();
-        let (aw, ah) = (a.width(), a.height());
-        for mode in [Mode::Local, Mode::Global, Mode::Dimmed, Mode::Day] {
-            let p = planned(&day, mode, vec![1600]);
-            let full = synthesize(
-                &day,
-                &p,
-                &Request {
-                    target: true,
-                    ..Request::default()
-                },
-            )
-            .unwrap();
-            let (x0, y0, _, _) = default_crop(&full.clean.meta, aw, ah);
-            // corners, edges and the middle, with and without the target
-            let crops = [
-                Crop {
-                    top: 0,
-                    left: 0,
-                    height: 6,
-                    width: 8,
-                },
-                Crop {
-                    top: ah - ah % 2 - 10,
-                    left: aw - aw % 2 - 12,
-                    height: 10,
-                    width: 12,
-                },
-                Crop {
-                    top: 2,
-                    left: 4,
-                    height: 7,
-                    width: 9,
-                },
-                Crop {
-                    top: 0,
-                    left: 0,
-                    height: ah,
-                    width: aw,
-                },
-            ];
-            for crop in crops {
-                let crop = Crop {
-                    height: crop.height.min(ah - crop.top),
-                    width: crop.width.min(aw - crop.left),
-                    ..crop
-                };
-                let c = synthesize(
-                    &day,
-                    &p,
-                    &Request {
-                        target: true,
-                        crop: Some(crop),
-                        ..Request::default()
-                    },
-                )
-                .unwrap();
-                assert_eq!((c.clean.width, c.clean.height), (crop.width, crop.height));
-                assert_region(&c.clean, &full.clean, &crop, &format!("{mode:?} clean"));
-                // The target of a crop inside the DefaultCrop equals the frame's region.
-                let t = c.target.as_ref().unwrap();
-                let ft = full.target.as_ref().unwrap();
-                if let Some((oy, ox)) = target_origin(&full.clean.meta, aw, ah, &crop) {
-                    assert_eq!((oy, ox), (crop.top - y0, crop.left - x0));
-                    assert_target_region(t, ft, (oy, ox), &crop, &format!("{mode:?} target"));
-                }
-                assert_eq!(c.noisy.len(), 1);
-                assert_eq!(c.noisy[0].1.data.len(), crop.width * crop.height);
-                assert!(c.stages.iter().any(|s| s == "crop"));
-                // Nothing was computed that the request did not ask for.
-                let bare = synthesize(
-                    &day,
-                    &p,
-                    &Request {
-                        crop: Some(crop),
-                        ..Request::default()
-                    },
-                )
-                .unwrap();
-                assert!(bare.target.is_none());
-                assert_eq!(bare.clean.data, c.clean.data);
-                assert_eq!(bare.noisy[0].1.data, c.noisy[0].1.data);
-            }
-        }
-    }
-
-    /// A GainMap over the active area (radial falloff 1 .. 2.6), for opcode tests.
-    fn shading(aw: u32, ah: u32) -> crate::dng::opcodes::Opcode {
-        use crate::dng::opcodes::{AreaSpec, GainMap, Opcode, OpcodeKind};
-        let (pv, ph) = (5u32, 7u32);
-        let gains = (0..pv * ph)
-            .map(|i| {
-                let v = (i / ph) as f32 / (pv - 1) as f32 * 2.0 - 1.0;
-                let h = (i % ph) as f32 / (ph - 1) as f32 * 2.0 - 1.0;
-                1.0 + 0.8 * (v * v + h * h)
-            })
-            .collect();
-        Opcode::new(
-            OpcodeKind::GainMap(GainMap {
-                area: AreaSpec {
-                    top: 0,
-                    left: 0,
-                    bottom: ah,
-                    right: aw,
-                    plane: 0,
-                    planes: 1,
-                    row_pitch: 1,
-                    col_pitch: 1,
-                },
-                points_v: pv,
-                points_h: ph,
-                spacing_v: 1.0 / (pv - 1) as f64,
-                spacing_h: 1.0 / (ph - 1) as f64,
-                origin_v: 0.0,
-                origin_h: 0.0,
-                map_planes: 1,
-                gains,
-            }),
-            0,
-        )
-    }
-
-    #[test]
-    fn crop_targets_equal_the_frame_region_with_opcodes() {
-        use crate::dng::opcodes::{encode_list, Opcode, OpcodeKind, OpcodeList, WarpPlane};
-        let mut day = day();
-        let a = day.active_area();
-        let (aw, ah) = (a.width(), a.height());
-        let poly = Opcode::new(
-            OpcodeKind::MapPolynomial {
-                area: crate::dng::opcodes::AreaSpec {
-                    top: 0,
-                    left: 0,
-                    bottom: 0,
-                    right: 0,
-                    plane: 0,
-                    planes: 1,
-                    row_pitch: 1,
-                    col_pitch: 1,
-                },
-                coefficients: vec![3.0, 0.97, 1e-6],
-            },
-            0,
-        );
-        let warp = Opcode::new(
-            OpcodeKind::WarpRectilinear {
-                planes: vec![WarpPlane {
-                    kr: [1.0, -0.03, 0.0, 0.0],
-                    kt: [0.001, 0.0],
-                }],
-                center: [0.45, 0.55],
-            },
-            0,
-        );
-        let cases = [
-            // pointwise: the crop path computes the crop only
-            [
-                vec![poly.clone()],
-                vec![shading(aw as u32, ah as u32)],
-                vec![],
-            ],
-            // a warp: the crop's target is cut from the frame render
-            [vec![], vec![shading(aw as u32, ah as u32)], vec![warp]],
-        ];
-        for (ci, lists) in cases.into_iter().enumerate() {
-            for (i, l) in lists.into_iter().enumerate() {
-                day.meta.opcode_lists[i] =
-                    (!l.is_empty()).then(|| encode_list(&OpcodeList { opcodes: l }));
-            }
-            let p = planned(&day, Mode::Local, vec![]);
-            let report = p.opcodes.as_ref().unwrap();
-            assert_eq!(report.mode, crate::isp::opcodes::OpcodeMode::Apply);
-            assert!(!p.stages.iter().any(|s| s == "apply_opcodes"));
-            let full = synthesize(
-                &day,
-                &p,
-                &Request {
-                    target: true,
-                    ..Request::default()
-                },
-            )
-            .unwrap();
-            assert!(full.stages.iter().any(|s| s == "apply_opcodes"));
-            assert_eq!(full.clean.meta.opcode_lists, day.meta.opcode_lists);
-            let ft = full.target.as_ref().unwrap();
-            assert_eq!(ft.count_non_finite(), 0);
-            for crop in [
-                Crop {
-                    top: 0,
-                    left: 0,
-                    height: 6,
-                    width: 8,
-                },
-                Crop {
-                    top: 10,
-                    left: 20,
-                    height: 17,
-                    width: 23,
-                },
-                Crop {
-                    top: ah - ah % 2 - 10,
-                    left: aw - aw % 2 - 12,
-                    height: 10,
-                    width: 12,
-                },
-            ] {
-                let c = synthesize(
-                    &day,
-                    &p,
-                    &Request {
-                        target: true,
-                        crop: Some(crop),
-                        ..Request::default()
-                    },
-                )
-                .unwrap();
-                let t = c.target.as_ref().unwrap();
-                let Some((oy, ox)) = target_origin(&full.clean.meta, aw, ah, &crop) else {
-                    continue;
-                };
-                assert_target_region(t, ft, (oy, ox), &crop, &format!("case {ci}"));
-            }
-            // ignoring them gives the plain target
-            let plain = {
-                let mut d = day.clone();
-                d.meta.opcode_lists = [None, None, None];
-                let p = planned(&d, Mode::Local, vec![]);
-                synthesize(
-                    &d,
-                    &p,
-                    &Request {
-                        target: true,
-                        ..Request::default()
-                    },
-                )
-                .unwrap()
-                .target
-                .unwrap()
-            };
-            assert_ne!(&plain, ft, "case {ci}: opcodes change the target");
-        }
-    }
-
-    #[test]
-    fn crop_noise_is_deterministic_and_has_the_model_variance() {
-        let day = day();
-        let p = planned(&day, Mode::Dimmed, vec![3200]);
-        let crop = Crop {
-            top: 0,
-            left: 0,
-            height: day.active_area().height() & !1,
-            width: day.active_area().width() & !1,
-        };
-        let req = Request {
-            crop: Some(crop),
-            ..Request::default()
-        };
-        let a = synthesize(&day, &p, &req).unwrap();
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(1)
-            .build()
-            .unwrap();
-        let b = pool.install(|| synthesize(&day, &p, &req).unwrap());
-        assert_eq!(a.noisy[0].1.data, b.noisy[0].1.data);
-        // Standardized residuals (noisy - clean) / sigma over unclipped sites: mean ~0, var ~1.
-        let norm = crate::normalize::Normalizer::new(&a.clean).unwrap();
-        let params = &p.noise[0].params;
-        let (mut n, mut s1, mut s2) = (0f64, 0f64, 0f64);
-        for r in 0..crop.height {
-            for k in 0..crop.width {
-                let x = a.clean.get(r, k) as f64;
-                let y = (x - norm.black_at(r, k)) / norm.scale;
-                let var =
-                    params.var_norm(crate::raw::Bayer::position(r, k), y) * norm.scale * norm.scale;
-                let v = a.noisy[0].1.get(r, k) as f64;
-                if var < 4.0 || v <= 0.0 || v >= norm.white {
-                    continue;
-                }
-                let z = (v - x) / var.sqrt();
-                n += 1.0;
-                s1 += z;
-                s2 += z * z;
-            }
-        }
-        assert!(n > 1000.0, "{n}");
-        let mean = s1 / n;
-        let var = s2 / n - mean * mean;
-        assert!(mean.abs() < 0.05, "{mean}");
-        assert!((var - 1.0).abs() < 0.1, "{var}");
-    }
-
-    #[test]
-    fn physics_noise_on_a_crop_equals_the_frame_region() {
-        use crate::noise::physics::{PhysicsModel, PhysicsPoint};
-        use crate::noise::NoiseModel;
-        let day = day();
-        let opts = SynthOptions {
-            isos: vec![1200],
-            ..SynthOptions::default()
-        };
-        let mut cal = Calibration::embedded(&opts).unwrap();
-        let pt = |iso, k| PhysicsPoint {
-            iso,
-            k,
-            sigma_read: 2.0 * k,
-            lambda: 0.05,
-            gaussian_read: false,
-            sigma_row: 0.5 * k,
-        };
-        let (b, w) = (day.meta.levels.black_max(), day.meta.levels.white);
-        let pm = PhysicsModel::new("t", b, w, vec![pt(800, 0.5), pt(1600, 1.0)]).unwrap();
-        cal.noise = Some(NoiseModel::from_physics(pm).unwrap());
-        let p = plan(&day, "day.dng", 3, 0, &opts, &cal).unwrap();
-        assert!(p.noise[0].physics.is_some());
-        let full = synthesize(&day, &p, &Request::default()).unwrap();
-        let crop = Crop {
-            top: 4,
-            left: 6,
-            height: 9,
-            width: 11,
-        };
-        let c = synthesize(
-            &day,
-            &p,
-            &Request {
-                crop: Some(crop),
-                ..Request::default()
-            },
-        )
-        .unwrap();
-        assert_region(&c.noisy[0].1, &full.noisy[0].1, &crop, "physics noisy");
-    }
-
-    #[test]
-    fn bad_crops_are_errors() {
-        let day = day();
-        let p = planned(&day, Mode::Local, vec![]);
-        for crop in [
-            Crop {
-                top: 1,
-                left: 0,
-                height: 4,
-                width: 4,
-            },
-            Crop {
-                top: 0,
-                left: 0,
-                height: 0,
-                width: 4,
-            },
-            Crop {
-                top: 0,
-                left: 0,
-                height: 4,
-                width: 100_000,
-            },
-        ] {
-            let req = Request {
-                crop: Some(crop),
-                target: true,
-                ..Request::default()
-            };
-            assert!(synthesize(&day, &p, &req).is_err(), "{crop:?}");
-        }
-        let req = Request {
-            input: true,
-            crop: Some(Crop {
-                top: 0,
-                left: 0,
-                height: 4,
-                width: 4,
-            }),
-            ..Request::default()
-        };
-        assert!(synthesize(&day, &p, &req).is_err());
-    }
-}
+#[path = "night_tests.rs"]
+mod tests;

@@ -73,6 +73,14 @@ pub enum OutputKind {
         /// Its ISO.
         iso: u32,
     },
+    /// Frame `frame` (0 = the reference) of a burst's noisy night raw at `iso` (a burst of
+    /// more than one frame; a single frame is [`OutputKind::NoisyDng`]).
+    NoisyFrame {
+        /// Its ISO.
+        iso: u32,
+        /// Its frame index.
+        frame: u32,
+    },
     /// The EXR target.
     TargetExr,
     /// The PNG target.
@@ -81,6 +89,18 @@ pub enum OutputKind {
     InputExr,
     /// The sidecar JSON.
     Sidecar,
+}
+
+impl OutputKind {
+    /// The noisy raw of frame `frame` at `iso` in a burst of `frames` frames: the
+    /// single-frame name for one frame, the frame's own otherwise.
+    pub fn noisy(iso: u32, frame: u32, frames: u32) -> OutputKind {
+        if frames > 1 {
+            OutputKind::NoisyFrame { iso, frame }
+        } else {
+            OutputKind::NoisyDng { iso }
+        }
+    }
 }
 
 /// Where the outputs of one variant go. Called from concurrent rayon tasks (hence `Sync`).
@@ -99,7 +119,7 @@ pub trait OutputSink: Sync {
 }
 
 /// `synth`'s layout: every output of a variant in one folder, named `<base>_clean.dng`,
-/// `<base>_iso<ISO>.dng`, `<base>_target.exr|png`, `<base>_input.exr`, `<base>.json`, where
+/// `<base>_iso<ISO>.dng` (a burst: `<base>_iso<ISO>_f<NN>.dng`, NN = 00..N-1), `<base>_target.exr|png`, `<base>_input.exr`, `<base>.json`, where
 /// `<base>` is the input's stem plus `_vK` (K = variant + 1) when the job makes more than
 /// one variant ([`SynthJob::base_name`](super::job::SynthJob::base_name)).
 #[derive(Debug, Clone)]
@@ -125,6 +145,7 @@ impl OutputSink for DirSink<'_> {
         match kind {
             OutputKind::CleanDng => format!("{b}_clean.dng"),
             OutputKind::NoisyDng { iso } => format!("{b}_iso{iso}.dng"),
+            OutputKind::NoisyFrame { iso, frame } => format!("{b}_iso{iso}_f{frame:02}.dng"),
             OutputKind::TargetExr => format!("{b}_target.exr"),
             OutputKind::TargetPng => format!("{b}_target.png"),
             OutputKind::InputExr => format!("{b}_input.exr"),
@@ -145,6 +166,9 @@ pub struct VariantOutputs {
     pub stages: Vec<String>,
     /// ISO of each noisy raw, in order.
     pub isos: Vec<u32>,
+    /// Warnings about what the renders made (the sidecar's `run.warnings`: a constant
+    /// target or input); the plan's warnings are in [`super::Plan::warnings`].
+    pub warnings: Vec<String>,
 }
 
 #[cfg(test)]
@@ -176,6 +200,11 @@ mod tests {
             "day_v2_iso800.dng"
         );
         assert_eq!(v.name(OutputKind::TargetPng), "day_v2_target.png");
+        assert_eq!(
+            v.name(OutputKind::noisy(1600, 3, 8)),
+            "day_v2_iso1600_f03.dng"
+        );
+        assert_eq!(v.name(OutputKind::noisy(1600, 0, 1)), "day_v2_iso1600.dng");
         assert_eq!(v.name(OutputKind::InputExr), "day_v2_input.exr");
     }
 }

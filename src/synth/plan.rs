@@ -6,11 +6,12 @@ use super::dim::{sample_dim, DimPlan};
 use super::illuminant::Gaussian2;
 use super::masks::{opencv_sigma, release_sigma, Light, LightKind, MaskEval, MASK_FLOOR};
 use super::neutral::day_neutral_for;
+use super::noise_source::choose_noise_model;
 use super::rng::SynthRng;
 use super::{Calibration, Mode, RelightFormula, SynthOptions};
 use crate::error::{Error, Result};
 use crate::isp::opcodes::{OpcodeMode, OpcodeReport};
-use crate::noise::{Evaluated, NoiseModel, NoiseParams, PhysicsParams};
+use crate::noise::{Evaluated, NoiseEstimate, NoiseParams, NoiseProvenance, PhysicsParams};
 use crate::raw::{Bayer, RawImage};
 use serde::{Deserialize, Serialize};
 
@@ -50,6 +51,11 @@ pub struct Plan {
     pub active_width: usize,
     /// Active-area height.
     pub active_height: usize,
+    /// Size `[width, height]` of the rendered target (and network input) when an
+    /// OpcodeList3 TrimBounds changes it; absent otherwise (the target is then the raw's
+    /// DefaultCrop, oriented), so other sidecars are unchanged.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub target_size: Option<[usize; 2]>,
     /// Bayer pattern of the active area.
     pub bayer: Bayer,
     /// Relighting mode.
@@ -61,6 +67,10 @@ pub struct Plan {
     /// Truncate the noisy raws too (`truncate` and `compat.truncate_noise`; absent = false).
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub truncate_noise: bool,
+    /// Normalize and denormalize each site with its own range `white - black(site)`
+    /// (`compat.range_per_site`, the release; absent = false: `white - black_max`).
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub range_per_site: bool,
     /// Keep negative normalized values (no clip at 0).
     pub keep_negative: bool,
     /// Keep white-balanced values above 1 (no clip at 1 after removing the day illuminant).
@@ -86,6 +96,11 @@ pub struct Plan {
     pub clean_noise: NoiseParams,
     /// Where the noise model came from.
     pub noise_model_source: String,
+    /// Where the noise model came from and which camera it belongs to (also the sidecar's
+    /// `calibration.provenance.noise`). Absent in plans written before it existed, so their
+    /// sidecars replay byte for byte.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub noise_provenance: Option<NoiseProvenance>,
     /// One entry per noisy output.
     pub noise: Vec<NoisePlan>,
     /// The stages that run, in order.
@@ -98,6 +113,10 @@ pub struct Plan {
     /// so such sidecars replay byte for byte.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub opcodes: Option<OpcodeReport>,
+    /// The burst (`--burst N`, N > 1): frames, motion model and every frame's transform,
+    /// drawn from the burst's own stream. Absent for a single frame.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub burst: Option<super::burst::BurstPlan>,
 }
 
 impl Plan {
@@ -117,24 +136,9 @@ fn center(rng: &mut SynthRng, n: usize) -> f64 {
     rng.range(0.1, 0.9) * n as f64
 }
 
-/// The noise model a plan uses: `--noise-model`, else the input's own NoiseProfile (when
-/// its ISO is known), else the embedded default.
-pub fn choose_noise_model(img: &RawImage, cal: &Calibration, bayer: Bayer) -> Result<NoiseModel> {
-    if let Some(m) = &cal.noise {
-        return Ok(m.clone());
-    }
-    if let (Some(p), Some(iso)) = (
-        &img.meta.noise_profile,
-        img.meta.exif.iso.filter(|&i| i > 0),
-    ) {
-        if let Ok(m) = NoiseModel::from_dng_profile(p, bayer, iso) {
-            return Ok(m);
-        }
-    }
-    Ok(super::dictionaries::embedded::noise_model())
-}
-
-/// Sample a plan for `img` (metadata and geometry only; pixels are not read).
+/// Sample a plan for `img` (metadata and geometry; the pixels are read only when the noise
+/// model is estimated from the image, [`super::noise_source`]), for a job that renders (a
+/// target or the network input): [`plan_for`] with `renders` true.
 pub fn plan(
     img: &RawImage,
     input_name: &str,
@@ -142,6 +146,42 @@ pub fn plan(
     variant: u32,
     opts: &SynthOptions,
     cal: &Calibration,
+) -> Result<Plan> {
+    plan_for(img, input_name, seed, variant, opts, cal, true)
+}
+
+/// [`plan`] for a job that renders (`renders`: a target or the network input) or not. The
+/// opcode lists are checked for the renders ([`crate::isp::opcodes::check::check_render`]:
+/// an opcode that cannot be applied and is not optional is an error, opcodes that make
+/// their samples constant and a TrimBounds that changes the target's size are warnings);
+/// without a render nothing about them fails: lists that cannot be parsed or applied are
+/// warnings ([`crate::isp::opcodes::check::report_without_render`]).
+pub fn plan_for(
+    img: &RawImage,
+    input_name: &str,
+    seed: u64,
+    variant: u32,
+    opts: &SynthOptions,
+    cal: &Calibration,
+    renders: bool,
+) -> Result<Plan> {
+    plan_with_estimate(img, input_name, seed, variant, opts, cal, renders, &|| {
+        crate::noise::estimate(img, &Default::default())
+    })
+}
+
+/// [`plan_for`] with the image's noise estimate given by `estimate` (called only when the
+/// noise chain gets to it; e.g. a cached one, [`super::job::DayInput::noise_estimate`]).
+#[allow(clippy::too_many_arguments)]
+pub fn plan_with_estimate(
+    img: &RawImage,
+    input_name: &str,
+    seed: u64,
+    variant: u32,
+    opts: &SynthOptions,
+    cal: &Calibration,
+    renders: bool,
+    estimate: &dyn Fn() -> Result<NoiseEstimate>,
 ) -> Result<Plan> {
     opts.validate()?;
     img.validate()?;
@@ -161,7 +201,21 @@ pub fn plan(
         sample_dim(&mut rng, opts.dim_range, cal.brightness.as_ref())?
     };
 
-    let g: &Gaussian2 = &cal.illuminants;
+    // The night illuminant dictionary of this input, only when illuminants are sampled
+    // (docs/synthesis.md, "Night lamps in CIE xy"): another camera's colours are a warning.
+    let resolved = match opts.mode {
+        Mode::Global | Mode::Local => {
+            let r = cal.illuminants_for(&img.meta, opts)?;
+            warnings.extend(r.warnings.iter().cloned());
+            Some(r.gaussian)
+        }
+        Mode::Day | Mode::Dimmed => None,
+    };
+    let sampled = || -> Result<&Gaussian2> {
+        resolved
+            .as_ref()
+            .ok_or_else(|| Error::invalid("no night illuminant dictionary in this mode"))
+    };
     let rules = &opts.sampler;
     let mut lights = Vec::new();
     let (night_neutral, definition) = match opts.mode {
@@ -176,7 +230,7 @@ pub fn plan(
         Mode::Global => {
             stages.push("sample_illuminants".into());
             stages.push("relight_global".into());
-            let l = g.sample(&mut rng, rules)?;
+            let l = sampled()?.sample(&mut rng, rules)?;
             lights.push(Light {
                 kind: LightKind::Ambient,
                 illuminant: l,
@@ -202,6 +256,7 @@ pub fn plan(
             );
             stages.push("ambient".into());
             stages.push("masks".into());
+            let g = sampled()?;
             // Ambient.
             let l0 = g.sample(&mut rng, rules)?;
             let (gain0, weight0) = if paper {
@@ -302,7 +357,9 @@ pub fn plan(
     let night_neutral = super::neutral::check_neutral(night_neutral, "night neutral")?;
     stages.push("denormalize".into());
 
-    let model = choose_noise_model(img, cal, bayer)?;
+    let choice = choose_noise_model(img, cal, opts, bayer, estimate)?;
+    warnings.extend(choice.warnings);
+    let model = choice.model;
     let clean_iso = img.meta.iso_or_default();
     // Physics model: its equivalent Gaussian at this image's levels (the NoiseProfile).
     let scale = img.meta.levels.white - img.meta.levels.black_max();
@@ -353,12 +410,29 @@ pub fn plan(
     if !noise.is_empty() {
         stages.push("noise".into());
     }
-    // The renders' opcodes: unapplicable optional ones are warnings, mandatory ones errors.
-    // The stage `apply_opcodes` is recorded by the synthesis when a render runs.
-    let opcodes = crate::isp::opcodes::prepare_image(img, opts.opcodes)?.map(|p| p.report);
-    if let Some(r) = &opcodes {
-        warnings.extend(r.warnings());
+    // The burst's motion from its own stream (nothing drawn for a single frame).
+    let burst = super::burst::motion::plan_burst(&opts.burst, (w, h), (seed, input_name, variant))?;
+    if let Some(b) = &burst {
+        stages.push("burst_frames".into());
+        if b.transforms.iter().any(|t| !t.is_identity()) {
+            stages.push("burst_warp".into());
+        }
     }
+    // The renders' opcodes: unapplicable optional ones are warnings, mandatory ones and
+    // work over the budget errors (warnings when nothing is rendered, and no budget). The
+    // stage `apply_opcodes` is recorded by the synthesis when a render runs.
+    let (opcodes, target_size) = if renders {
+        let c = crate::isp::opcodes::check::check_render(img, opts.opcodes, true, true)?;
+        warnings.extend(c.warnings);
+        (
+            c.prepared.map(|p| p.report),
+            c.trimmed_size.map(|(w, h)| [w, h]),
+        )
+    } else {
+        let (r, w) = crate::isp::opcodes::check::report_without_render(&img.meta, opts.opcodes);
+        warnings.extend(w);
+        (r, None)
+    };
     let plan = Plan {
         format: PLAN_FORMAT.into(),
         input_name: input_name.into(),
@@ -366,11 +440,13 @@ pub fn plan(
         variant,
         active_width: w,
         active_height: h,
+        target_size,
         bayer,
         mode: opts.mode,
         formula: opts.formula,
         truncate: opts.truncate,
         truncate_noise: opts.truncate && opts.compat.truncate_noise,
+        range_per_site: opts.compat.range_per_site,
         keep_negative: opts.keep_negative,
         keep_highlights: opts.keep_highlights,
         mask_eval: opts.mask_eval,
@@ -383,10 +459,12 @@ pub fn plan(
         clean_iso,
         clean_noise,
         noise_model_source: model.source.clone(),
+        noise_provenance: Some(choice.provenance),
         noise,
         stages,
         warnings,
         opcodes,
+        burst,
     };
     // The replay check (`synth --replay`) applies the same table: a plan synth writes is a
     // plan it reads back (e.g. a physics model extrapolated past the noise bounds is

@@ -3,6 +3,7 @@
 //! hostile or damaged sidecar (200,000 lights, sigma 1e30) is refused at once with the field
 //! named, before any pixel work. Plans sampled by [`super::plan::plan`] always pass.
 
+use super::burst::BurstPlan;
 use super::dim::DimPlan;
 use super::masks::LightKind;
 use super::plan::Plan;
@@ -56,6 +57,13 @@ impl Plan {
                 return Err(field(name, format!("{v} is outside 1..={max_side}")));
             }
         }
+        if let Some([w, h]) = self.target_size {
+            for (name, v) in [("target_size[0]", w), ("target_size[1]", h)] {
+                if v == 0 || v > max_side {
+                    return Err(field(name, format!("{v} is outside 1..={max_side}")));
+                }
+            }
+        }
         if self.lights.len() > MAX_PLAN_LIGHTS {
             return Err(field(
                 "lights",
@@ -90,6 +98,9 @@ impl Plan {
             }
         }
         let extent = MAX_EXTENT_FACTOR * self.active_width.max(self.active_height) as f64;
+        if let Some(b) = &self.burst {
+            burst(b, (self.active_width, self.active_height), extent)?;
+        }
         for (i, l) in self.lights.iter().enumerate() {
             let n = |f: &str| format!("lights[{i}].{f}");
             ratio(&n("illuminant"), &l.illuminant)?;
@@ -130,4 +141,59 @@ impl Plan {
         }
         Ok(())
     }
+}
+
+/// The burst part: frame count, parameters, and every frame's transform finite, rigid,
+/// within `extent` pixels and consistent with its frame index; frame 00 the identity.
+fn burst(b: &BurstPlan, (w, h): (usize, usize), extent: f64) -> Result<()> {
+    use super::burst::motion::{BurstOptions, IDENTITY, MAX_FRAMES};
+    if !(2..=MAX_FRAMES).contains(&b.frames) || b.transforms.len() != b.frames as usize {
+        return Err(field(
+            "burst",
+            format!(
+                "{} frames with {} transforms (2 to {MAX_FRAMES}, one each)",
+                b.frames,
+                b.transforms.len()
+            ),
+        ));
+    }
+    BurstOptions {
+        frames: b.frames,
+        motion: b.motion,
+        shake: b.shake,
+        interp: b.interp,
+    }
+    .validate()
+    .map_err(|e| field("burst", e))?;
+    for (k, &c) in b.centre.iter().enumerate() {
+        in_range(&format!("burst.centre[{k}]"), c, -extent, extent)?;
+    }
+    for (i, t) in b.transforms.iter().enumerate() {
+        let n = |f: &str| format!("burst.transforms[{i}].{f}");
+        if t.frame as usize != i {
+            return Err(field(n("frame"), format!("{} (expected {i})", t.frame)));
+        }
+        in_range(&n("dx"), t.dx, -extent, extent)?;
+        in_range(&n("dy"), t.dy, -extent, extent)?;
+        in_range(&n("theta_deg"), t.theta_deg, -360.0, 360.0)?;
+        for (r, row) in t.affine.iter().enumerate() {
+            for (c, &v) in row.iter().enumerate() {
+                let lim = if c == 2 { 4.0 * extent } else { 1.0 };
+                in_range(&n(&format!("affine[{r}][{c}]")), v, -lim, lim)?;
+            }
+        }
+        let [[a, bb, _], [c, d, _]] = t.affine;
+        let det = a * d - bb * c;
+        if (det - 1.0).abs() > 1e-6 {
+            return Err(field(n("affine"), format!("not rigid (determinant {det})")));
+        }
+        if i == 0 && t.affine != IDENTITY {
+            return Err(field(n("affine"), "frame 00 must be the identity"));
+        }
+        let v = &t.valid;
+        if v.top + v.height > h || v.left + v.width > w {
+            return Err(field(n("valid"), "outside the active area"));
+        }
+    }
+    Ok(())
 }

@@ -34,6 +34,11 @@ pub struct RunReport {
     pub mean_white_balanced: Option<f64>,
     /// Active-area sites saturated in the input (linear value >= white).
     pub saturated_sites: u64,
+    /// Warnings about what the renders made (a target or network input that came out
+    /// constant, [`crate::isp::flat`]); absent when there is none, so other sidecars are
+    /// unchanged.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub warnings: Vec<String>,
 }
 
 struct Prepared {
@@ -146,6 +151,11 @@ impl<'a> CleanPass<'a> {
     fn new(img: &'a RawImage, plan: &'a Plan, crop: Crop) -> Result<CleanPass<'a>> {
         plan.check_against(img)?;
         let norm = Normalizer::new(img)?;
+        let norm = if plan.range_per_site {
+            norm.with_range_per_site()
+        } else {
+            norm
+        };
         let a = img.active_area();
         let (top, left, aw, ah) = (a.top as usize, a.left as usize, a.width(), a.height());
         let width = img.width;
@@ -271,6 +281,7 @@ impl<'a> CleanPass<'a> {
             dim_scale: self.s,
             mean_white_balanced: self.mean_wb,
             saturated_sites: saturated,
+            warnings: vec![],
         }
     }
 
@@ -584,9 +595,19 @@ mod tests {
                     for truncate in [false, true] {
                         let stored = Compat {
                             neutral_as_stored: true,
-                            truncate_noise: false,
+                            ..Compat::default()
                         };
-                        for compat in [Compat::default(), stored] {
+                        // the whole preset's switches (truncating the noise needs truncate)
+                        let release = Compat {
+                            truncate_noise: truncate,
+                            ..Compat::RELEASE
+                        };
+                        for compat in [Compat::default(), stored, release] {
+                            let norm = if compat.range_per_site {
+                                norm.clone().with_range_per_site()
+                            } else {
+                                norm.clone()
+                            };
                             let opts = SynthOptions {
                                 mode: Mode::Day,
                                 isos: vec![],
@@ -634,5 +655,70 @@ mod tests {
                 }
             }
         }
+    }
+
+    #[test]
+    fn range_per_site_puts_saturated_sites_at_white_on_every_black() {
+        for b in Bayer::ALL {
+            let img = frame(b, false, false);
+            let opts = SynthOptions {
+                isos: vec![],
+                bulbs: Some(1),
+                ..SynthOptions::default()
+            }
+            .release_compat()
+            .unwrap();
+            let cal = Calibration::embedded(&opts).unwrap();
+            let mut p = plan(&img, "s.dng", 1, 0, &opts, &cal).unwrap();
+            assert!(p.range_per_site);
+            // one bulb over the whole frame, bright enough to saturate every lit site
+            let bulb = p.lights.last_mut().unwrap();
+            bulb.center = [13.0, 20.0];
+            bulb.window = Some([27.0, 41.0]);
+            bulb.gain = 1e15;
+            let norm = Normalizer::new(&img).unwrap();
+            let (on, _) = run_clean(&img, &p).unwrap();
+            p.range_per_site = false;
+            let (off, _) = run_clean(&img, &p).unwrap();
+            let (mut lit, mut moved) = (0, 0);
+            for r in 0..img.height {
+                for c in 0..img.width {
+                    if norm.normalize(img.get(r, c), r, c) <= 0.0 {
+                        continue;
+                    }
+                    lit += 1;
+                    // the release: y = 1 is white on every site
+                    assert_eq!(on.get(r, c), 1023, "{b} ({r},{c})");
+                    // white - black_max as the unit: 1 is white - (black_max - black)
+                    let short = 70.0 - norm.black_at(r, c);
+                    assert_eq!(
+                        off.get(r, c) as f64,
+                        (1023.0 - short).trunc(),
+                        "{b} ({r},{c})"
+                    );
+                    moved += (short > 0.0) as u32;
+                }
+            }
+            assert!(lit > 500 && moved > 300, "{lit} {moved}");
+        }
+    }
+
+    #[test]
+    fn range_per_site_changes_nothing_with_one_black_level() {
+        let mut img = frame(Bayer::GBRG, false, false);
+        img.meta.levels.black = vec![64.0];
+        img.meta.levels.black_repeat = (1, 1);
+        let opts = SynthOptions {
+            isos: vec![],
+            ..SynthOptions::default()
+        }
+        .release_compat()
+        .unwrap();
+        let cal = Calibration::embedded(&opts).unwrap();
+        let mut p = plan(&img, "o.dng", 4, 0, &opts, &cal).unwrap();
+        let (on, _) = run_clean(&img, &p).unwrap();
+        p.range_per_site = false;
+        let (off, _) = run_clean(&img, &p).unwrap();
+        assert_eq!(on.data, off.data);
     }
 }

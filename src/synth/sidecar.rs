@@ -5,6 +5,7 @@
 //! Its content is deterministic (no timestamps), so a replay rewrites it identically.
 
 use super::illuminant::Gaussian2;
+use super::illuminant_choice::IlluminantProvenance;
 use super::plan::Plan;
 use super::relight::RunReport;
 use super::SynthOptions;
@@ -28,12 +29,29 @@ pub struct InputInfo {
 /// Calibration summary.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct CalibrationInfo {
-    /// The illuminant Gaussian sampled from.
+    /// The illuminant Gaussian sampled from (this input's: in its camera's `[r/g, b/g]`).
     pub illuminants: Gaussian2,
     /// Brightness dictionary (name, mean, std), if used.
     pub brightness: Option<super::dictionaries::BrightnessDict>,
     /// Noise model source.
     pub noise_model: String,
+    /// Where each calibration came from and which camera it belongs to (issue 24). Absent
+    /// in sidecars written before it existed (their replays write none, byte for byte).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub provenance: Option<Provenance>,
+}
+
+/// `calibration.provenance`: where each calibration of one input came from and which
+/// camera it belongs to, one entry per calibration.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+pub struct Provenance {
+    /// The night illuminant dictionary: embedded S20 FE, CIE lamps through this file's
+    /// matrices, a file's camera RGB or xy; and its camera.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub illuminants: Option<IlluminantProvenance>,
+    /// The noise model's (the plan's `noise_provenance`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub noise: Option<crate::noise::NoiseProvenance>,
 }
 
 /// Output settings and names (relative to the output directory).

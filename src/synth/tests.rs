@@ -298,8 +298,14 @@ fn stability_iso_25_and_204800_extrapolate_finite() {
     };
     let cal = Calibration::embedded(&o).unwrap();
     let p = plan(&img, "x", 0, 0, &o, &cal).unwrap();
-    assert_eq!(p.warnings.len(), 2, "{:?}", p.warnings);
-    assert!(p.warnings[0].contains("extrapolated"));
+    // The frame has no ISO: the embedded table, said first, then one warning per ISO.
+    assert_eq!(p.warnings.len(), 3, "{:?}", p.warnings);
+    assert!(
+        p.warnings[0].contains("ISO is unknown"),
+        "{}",
+        p.warnings[0]
+    );
+    assert!(p.warnings[1].contains("extrapolated"));
     for np in &p.noise {
         assert!(np.extrapolated);
         for q in np.params.positions {
@@ -319,9 +325,10 @@ fn stability_single_illuminant_dictionary() {
         name: "one".into(),
         source: String::new(),
         chromaticities: vec![[0.7, 0.35]],
+        weights: Vec::new(),
     };
     let cal = Calibration {
-        illuminants: Gaussian2::fit(&d, o.covariance).unwrap(),
+        illuminants: IlluminantChoice::Gaussian(Gaussian2::fit(&d, o.covariance).unwrap(), None),
         brightness: None,
         noise: None,
     };
@@ -344,11 +351,14 @@ fn no_nan_anywhere_in_plan_and_sidecar_values() {
         let p = plan(&img, "x", 9, 0, &o, &cal).unwrap();
         let j = serde_json::to_string(&p).unwrap();
         // serde_json writes non-finite floats as null: no null may appear except the
-        // ambient/global light's absent window.
+        // ambient/global light's absent window and the absent names of a camera.
         let v: serde_json::Value = serde_json::from_str(&j).unwrap();
         fn walk(v: &serde_json::Value, key: &str) {
             match v {
-                serde_json::Value::Null => assert_eq!(key, "window", "null (NaN?) at {key}"),
+                serde_json::Value::Null => assert!(
+                    ["window", "make", "model", "unique_camera_model"].contains(&key),
+                    "null (NaN?) at {key}"
+                ),
                 serde_json::Value::Number(n) => assert!(n.as_f64().unwrap().is_finite()),
                 serde_json::Value::Array(a) => a.iter().for_each(|x| walk(x, key)),
                 serde_json::Value::Object(o) => o.iter().for_each(|(k, x)| walk(x, k)),

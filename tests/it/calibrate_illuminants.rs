@@ -129,6 +129,79 @@ fn gray_cards_recovered_and_gaussian_matches_numpy() {
     }
 }
 
+/// A gray-card session records its camera and each card's xy; synth uses the camera
+/// neutrals for that camera and the xy through its own matrices for another.
+#[test]
+fn one_cameras_gray_cards_serve_another_through_xy() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut args = args!["calibrate", "illuminants"];
+    for (i, ill) in [[0.85, 1.0, 0.31], [0.56, 1.0, 0.44], [0.72, 1.0, 0.33]]
+        .iter()
+        .enumerate()
+    {
+        args.push(
+            gray_card(
+                dir.path(),
+                &format!("c{i}.dng"),
+                Bayer::RGGB,
+                *ill,
+                i as u64,
+            )
+            .into(),
+        );
+    }
+    let out = dir.path().join("ill.json");
+    args.extend(args!["-o", &out]);
+    let (code, _, err) = run_os(&args);
+    assert_eq!(code, 0, "{err}");
+    assert!(
+        err.contains("camera: day2night Synthetic: synth uses the camera neutrals"),
+        "{err}"
+    );
+    eprintln!("{err}");
+    let d = read_json(&out);
+    assert_eq!(d["camera"]["model"], "Synthetic");
+    assert_eq!(d["observer"], "CIE 1931 2 degree");
+    // each xy maps back to its card's neutral through the capture's matrices
+    let meta = day2night::raw::meta::RawMeta::new_bayer(Bayer::RGGB, 12, 256.0, 4095.0);
+    let cc = day2night::isp::color::CameraColor::new(&meta.color).unwrap();
+    for i in 0..3 {
+        let xy = [
+            d["xy"][i][0].as_f64().unwrap(),
+            d["xy"][i][1].as_f64().unwrap(),
+        ];
+        let n = cc.xy_to_neutral(xy).unwrap();
+        let c = &d["illuminants_rgb_over_g"][i];
+        assert!(
+            (n[0] - c[0].as_f64().unwrap()).abs() < 1e-9
+                && (n[2] - c[2].as_f64().unwrap()).abs() < 1e-9
+        );
+    }
+    // synth: the same camera uses the neutrals, the fixture camera the xy
+    let same_cam = gray_card(dir.path(), "scene.dng", Bayer::RGGB, [0.6, 1.0, 0.5], 9);
+    let day = common::fixtures().join("day.dng");
+    for (input, want) in [(&same_cam, "file_camera_rgb"), (&day, "file_xy")] {
+        let o = dir.path().join(want);
+        let r = common::bin()
+            .arg("synth")
+            .arg(input)
+            .args(["--iso", "none", "--target", "none", "--illuminants"])
+            .arg(&out)
+            .arg("-o")
+            .arg(&o)
+            .output()
+            .unwrap();
+        assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+        let stem = input.file_stem().unwrap().to_str().unwrap();
+        let sc = read_json(&o.join(format!("{stem}.json")));
+        assert_eq!(
+            sc["calibration"]["provenance"]["illuminants"]["source"],
+            want
+        );
+        assert!(!String::from_utf8_lossy(&r.stderr).contains("warning"));
+    }
+}
+
 /// The paper phone's 45 gray cards (shared data) refit to the spec's figures.
 #[test]
 fn shared_s20fe_dictionary_refits_to_spec() {

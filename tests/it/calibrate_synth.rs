@@ -98,8 +98,39 @@ fn synth_accepts_calibrated_files() {
     let ill_doc: Value = serde_json::from_slice(&std::fs::read(&ill).unwrap()).unwrap();
     let br_doc: Value = serde_json::from_slice(&std::fs::read(&br).unwrap()).unwrap();
     let cal = &side["calibration"];
-    assert_eq!(cal["illuminants"]["mean"], ill_doc["fit"]["mean"]);
-    assert_eq!(cal["illuminants"]["cov"], ill_doc["fit"]["covariance"]);
+    // The cards are another camera's (day2night Synthetic, not the fixture's): their xy go
+    // through the fixture's matrices (docs/calibration.md).
+    assert_eq!(cal["provenance"]["illuminants"]["source"], "file_xy");
+    assert_eq!(cal["illuminants"]["count"], ill_doc["count"]);
+    // Recorded as the fixture's own camera, the file's fit is what synth samples.
+    let mut own = ill_doc.clone();
+    own["camera"] = serde_json::json!({"make": "day2night", "model": "Fixture Camera",
+        "unique_camera_model": "day2night Fixture Camera"});
+    let own_path = d.join("own.json");
+    std::fs::write(&own_path, own.to_string()).unwrap();
+    let out2 = d.join("out2");
+    let (code, _, err) = run_os(&args![
+        "synth",
+        &day,
+        "-o",
+        &out2,
+        "--illuminants",
+        &own_path,
+        "--iso",
+        "none",
+        "--target",
+        "none"
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let side2: Value =
+        serde_json::from_slice(&std::fs::read(out2.join("day.json")).unwrap()).unwrap();
+    let cal2 = &side2["calibration"];
+    assert_eq!(
+        cal2["provenance"]["illuminants"]["source"],
+        "file_camera_rgb"
+    );
+    assert_eq!(cal2["illuminants"]["mean"], ill_doc["fit"]["mean"]);
+    assert_eq!(cal2["illuminants"]["cov"], ill_doc["fit"]["covariance"]);
     assert_eq!(cal["brightness"]["mean"], br_doc["fit"]["mean"]);
     assert_eq!(cal["brightness"]["std"], br_doc["fit"]["std"]);
     // The noisy DNG's NoiseProfile is the calibrated model (per colour plane).

@@ -71,6 +71,16 @@ impl Visuals for FakeVisuals {
                 .collect(),
         })
     }
+    fn illuminants_xy(&self, sc: &serde_json::Value, night: Option<&Path>) -> Result<Illuminants> {
+        assert!(night.is_some_and(|p| p.is_file()), "{night:?}");
+        let mut il = self.illuminants(sc)?;
+        for l in &mut il.lights {
+            l.chroma = [0.40 + l.chroma[0] / 10.0, 0.38 + l.chroma[1] / 50.0];
+        }
+        il.axes = ("x".into(), "y".into());
+        il.ellipse = None;
+        Ok(il)
+    }
     fn dim_factor(&self, sc: &serde_json::Value) -> Option<f64> {
         Some((sc["h"].as_u64()? % 97) as f64 / 970.0)
     }
@@ -106,6 +116,8 @@ fn report_builds_decodes_and_loads_headless() {
         "Night neutral b/g",
         "ISO",
         "Sampled illuminants",
+        "Lights in CIE xy",
+        "Planckian locus",
         "broken.dng",
         "Failures",
     ] {

@@ -166,3 +166,71 @@ fn the_command_finishes_an_interrupted_unit_run() {
     assert!(!b.path().join(JOURNAL_DIR).exists());
     assert_eq!(tree(a.path(), true), tree(b.path(), true));
 }
+
+#[test]
+fn write_units_loads_each_input_once_for_all_its_variants() {
+    let day = make_day_dir(4);
+    let (a, b) = (tempfile::tempdir().unwrap(), tempfile::tempdir().unwrap());
+    let mut uo = unit_opts(day.path(), a.path());
+    uo.variants = 3;
+    let w = |out: &Path| WriteOptions {
+        out_dir: out.to_path_buf(),
+        overwrite: false,
+        wait: false,
+    };
+    // One unit at a time: one load per unit.
+    let planned = units::units(&uo).unwrap();
+    let one = Fake::new("x");
+    let records_a = write_all(&planned, a.path(), &one);
+    assert_eq!(one.loads.load(Ordering::SeqCst), 12);
+    units::write_manifest(a.path(), records_a, Shard::ALL).unwrap();
+
+    // Grouped by input: one load per input, the same tree.
+    uo.out_dir = Some(b.path().to_path_buf());
+    let planned = units::units(&uo).unwrap();
+    let grouped = Fake::new("x");
+    let mut records = Vec::new();
+    for group in planned.chunk_by(|p, q| p.unit.path == q.unit.path) {
+        let g: Vec<_> = group
+            .iter()
+            .map(|p| (p.unit.clone(), p.previous.clone()))
+            .collect();
+        let done = units::write_units(&g, &w(b.path()), &grouped).unwrap();
+        assert_eq!(done.len(), 3);
+        assert!(done
+            .iter()
+            .all(|(r, why)| r.status == Status::Ok && why.is_some()));
+        records.extend(done.into_iter().map(|(r, _)| r));
+    }
+    assert_eq!(grouped.loads.load(Ordering::SeqCst), 4);
+    assert_eq!(grouped.units.load(Ordering::SeqCst), 12);
+    units::write_manifest(b.path(), records, Shard::ALL).unwrap();
+    assert_eq!(tree(a.path(), true), tree(b.path(), true));
+
+    // Up to date: nothing loaded. One variant's output deleted: one load, one unit.
+    std::fs::remove_file(b.path().join("train/meta/a__deep__img_001_v2.json")).unwrap();
+    let planned = units::units(&uo).unwrap();
+    let again = Fake::new("x");
+    for group in planned.chunk_by(|p, q| p.unit.path == q.unit.path) {
+        let g: Vec<_> = group
+            .iter()
+            .map(|p| (p.unit.clone(), p.previous.clone()))
+            .collect();
+        units::write_units(&g, &w(b.path()), &again).unwrap();
+    }
+    assert_eq!(
+        (
+            again.loads.load(Ordering::SeqCst),
+            again.units.load(Ordering::SeqCst)
+        ),
+        (1, 1)
+    );
+
+    // Units of two inputs in one call are refused.
+    let mixed = [
+        (planned[0].unit.clone(), None),
+        (planned[3].unit.clone(), None),
+    ];
+    let e = units::write_units(&mixed, &w(b.path()), &again).unwrap_err();
+    assert!(e.to_string().contains("group the units by input"), "{e}");
+}

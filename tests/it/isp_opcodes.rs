@@ -398,7 +398,8 @@ fn unknown_optional_opcodes_warn_and_mandatory_ones_fail() {
     // ignoring the lists renders it
     let r = common::cli("render", &f2, &out, &["--opcodes", "ignore"]);
     assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
-    // synth: the plan records the skipped one; a mandatory one fails unless ignored
+    // synth: the plan records the skipped one; a mandatory one fails a render unless
+    // ignored (without a render it only warns: tests/it/isp_opcode_checks.rs)
     let o = t.path().join("s");
     let r = common::cli("synth", &f1, &o, &["--iso", "none", "--target", "none"]);
     assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
@@ -411,7 +412,7 @@ fn unknown_optional_opcodes_warn_and_mandatory_ones_fail() {
         .arg(&f2)
         .arg("-o")
         .arg(t.path().join("s2"))
-        .args(["--iso", "none", "--target", "none"])
+        .args(["--iso", "none", "--target", "exr"])
         .output()
         .unwrap();
     assert!(!r.status.success());

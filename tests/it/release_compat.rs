@@ -1,8 +1,11 @@
 //! `--compat release` and its pieces (docs/synthesis.md, "Release compatibility"): the
 //! preset end to end (sidecar, replay, thread counts), the day neutral as stored on a real
 //! file whose AsShotNeutral has green 2.477, and `--mode day` returning every unclipped
-//! sample exactly on the fixtures and the real camera files, rounding and truncating.
+//! sample exactly on the fixtures and the real camera files, rounding and truncating; the
+//! release's per-site range with a 2x2 black level and bulbs on every CFA phase, against an
+//! independent numpy reference of the release's arithmetic.
 use crate::common;
+use crate::dngbuild;
 
 use day2night::dng::read_dng;
 use day2night::normalize::Normalizer;
@@ -97,6 +100,133 @@ fn preset_refuses_conflicting_flags() {
         "--target",
         "none",
     ]));
+}
+
+/// The black levels of the per-site test inputs (BlackLevelRepeatDim 2x2), white 1023.
+const SITE_BLACKS: [u32; 4] = [250, 256, 260, 254];
+
+/// A big-endian 10-bit DNG of 384x256 with CFA pattern `cfa` and [`SITE_BLACKS`]: smooth
+/// ramps, a band below black and a saturated patch (1023).
+fn per_site_black_dng(cfa: [u8; 4]) -> Vec<u8> {
+    use day2night::tiff::value::Value;
+    let (w, h) = (384usize, 256usize);
+    let mut b = dngbuild::Builder::new(w, h, 10);
+    b.big_endian = true;
+    b.layout = dngbuild::Pixels::Strips { rows: 32 };
+    b.pixels = (0..w * h)
+        .map(|i| {
+            let (r, c) = (i / w, i % w);
+            if (100..130).contains(&r) && (50..120).contains(&c) {
+                return 1023;
+            }
+            if r < 6 {
+                return 240 + (c % 20) as u16;
+            }
+            let (y, x) = (r as f64 / h as f64, c as f64 / w as f64);
+            (262.0 + 480.0 * y + 250.0 * x + 30.0 * (9.0 * x).sin()).min(1023.0) as u16
+        })
+        .collect();
+    b.set(33422, Value::Byte(cfa.to_vec()))
+        .set(50713, Value::Short(vec![2, 2]))
+        .set(50714, Value::Long(SITE_BLACKS.to_vec()))
+        .set(50717, Value::Long(vec![1023]))
+        .build()
+}
+
+/// `tests/validators/release_relight.py` on (day, sidecar, clean): its JSON report.
+fn release_reference(py: &Path, day: &Path, sidecar: &Path, clean: &Path) -> serde_json::Value {
+    let blacks = SITE_BLACKS.map(|b| b.to_string()).join(",");
+    let o = common::run_validator(
+        py,
+        "release_relight.py",
+        &[
+            day.as_os_str(),
+            sidecar.as_os_str(),
+            clean.as_os_str(),
+            "--black".as_ref(),
+            blacks.as_ref(),
+            "--white".as_ref(),
+            "1023".as_ref(),
+        ],
+    );
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    serde_json::from_slice(&o.stdout).unwrap()
+}
+
+/// With `D2N_RELEASE_INPUTS=DIR` the inputs and outputs are kept in DIR, to run the
+/// authors' release on them outside the repository (docs/synthesis.md, "Release
+/// compatibility", per-site black levels).
+#[test]
+fn release_bulbs_with_per_site_black_match_the_release_on_every_cfa_phase() {
+    let Some(py) = common::python() else { return };
+    let tmp = tempfile::tempdir().unwrap();
+    let keep = std::env::var_os("D2N_RELEASE_INPUTS").map(PathBuf::from);
+    if let Some(k) = &keep {
+        std::fs::create_dir_all(k).unwrap();
+    }
+    let t = keep.as_deref().unwrap_or(tmp.path());
+    for (name, cfa) in [
+        ("rggb", [0u8, 1, 1, 2]),
+        ("grbg", [1, 0, 2, 1]),
+        ("gbrg", [1, 2, 0, 1]),
+        ("bggr", [2, 1, 1, 0]),
+    ] {
+        let day = t.join(format!("{name}.dng"));
+        std::fs::write(&day, per_site_black_dng(cfa)).unwrap();
+        let out = t.join(name);
+        ok(&synth(&[
+            s(&day),
+            "-o",
+            s(&out),
+            "--overwrite",
+            "--compat",
+            "release",
+            "--iso",
+            "none",
+            "--target",
+            "none",
+            "--seed",
+            "7",
+        ]));
+        let sidecar = out.join(format!("{name}.json"));
+        let clean = out.join(format!("{name}_clean.dng"));
+        let sc = Sidecar::read(&sidecar).unwrap();
+        assert!(sc.plan.range_per_site && sc.options.compat.range_per_site);
+        let r = release_reference(&py, &day, &sidecar, &clean);
+        eprintln!("{name}: preset vs the release's arithmetic: {r}");
+        // the bulbs and the saturated patch put many sites at 1 (the path under test)
+        assert!(r["saturated"].as_u64().unwrap() > 1000, "{name}: {r}");
+        assert!(r["bulb_lit"].as_u64().unwrap() > 1000, "{name}: {r}");
+        assert!(r["max_abs_diff"].as_u64().unwrap() <= 1, "{name}: {r}");
+        // Control: the same plan with white - black_max as every site's range (the preset
+        // before the fix, and what a sidecar without the switch replays) is caught.
+        let mut v: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(&sidecar).unwrap()).unwrap();
+        v["options"]["compat"]["range_per_site"] = false.into();
+        v["plan"]["range_per_site"] = false.into();
+        let old = t.join(format!("{name}-old.json"));
+        std::fs::write(&old, serde_json::to_string(&v).unwrap()).unwrap();
+        let out_old = t.join(format!("{name}-old"));
+        ok(&synth(&[
+            s(&day),
+            "-o",
+            s(&out_old),
+            "--overwrite",
+            "--replay",
+            s(&old),
+        ]));
+        let r_old = release_reference(
+            &py,
+            &day,
+            &sidecar,
+            &out_old.join(format!("{name}_clean.dng")),
+        );
+        eprintln!("{name}: with white - black_max: {r_old}");
+        assert!(
+            r_old["max_abs_diff"].as_u64().unwrap() >= 4,
+            "{name}: {r_old}"
+        );
+    }
 }
 
 /// Clean night raw of `img` with `opts` (seed 3).

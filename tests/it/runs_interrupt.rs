@@ -193,3 +193,195 @@ fn a_second_signal_stops_synth_at_once_and_still_cleans_up() {
     assert!(err.contains("day2night: interrupted"), "{err}");
     no_temp_files(&out);
 }
+
+/// A `w` x `h` 16-bit RGGB DNG (uncompressed strips) at `path`, varied by `k`.
+fn big_dng(path: &Path, w: usize, h: usize, k: u16) {
+    let mut b = dngbuild::Builder::new(w, h, 16);
+    b.layout = dngbuild::Pixels::Strips { rows: 256 };
+    for (i, p) in b.pixels.iter_mut().enumerate() {
+        *p = (((i * 2654435761) >> 7) as u16 & 0x3fff).wrapping_add(k * 97) | 0x400;
+    }
+    std::fs::write(path, b.build()).unwrap();
+}
+
+/// Start `args` with stdout and stderr on pipes, then close both pipes (as when the reader
+/// of a pipeline dies), let it work 0.1 s (it must still be running then), send
+/// `sig`, and assert it exits with 128 + signal within a second, leaving no temporary or
+/// lock file under `watch`.
+fn stops_with_closed_pipes(what: &str, args: &[&std::ffi::OsStr], watch: &Path, sig: &str) {
+    let mut child = common::bin()
+        .args(args)
+        .stdin(Stdio::null())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    drop(child.stdout.take());
+    drop(child.stderr.take());
+    let t0 = Instant::now();
+    while t0.elapsed() < Duration::from_millis(100) {
+        std::thread::sleep(Duration::from_millis(10));
+    }
+    assert!(
+        child.try_wait().unwrap().is_none(),
+        "{what}: ended before the signal: the input is too small to test the interrupt"
+    );
+    kill(&child, sig);
+    let t1 = Instant::now();
+    let status = loop {
+        if let Some(s) = child.try_wait().unwrap() {
+            break s;
+        }
+        if t1.elapsed() > Duration::from_secs(10) {
+            let _ = child.kill();
+            let _ = child.wait();
+            panic!("{what}: still running 10 s after {sig}");
+        }
+        std::thread::sleep(Duration::from_millis(5));
+    };
+    let took = t1.elapsed();
+    let code = if sig == "-INT" { 130 } else { 143 };
+    eprintln!(
+        "{what} {sig}: exited {status} {:.3} s after the signal",
+        took.as_secs_f64()
+    );
+    assert_eq!(status.code(), Some(code), "{what} {sig}");
+    assert!(took < Duration::from_secs(1), "{what} {sig}: {took:?}");
+    no_temp_files(watch);
+}
+
+#[test]
+fn every_command_stops_within_a_second_with_closed_pipes() {
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path();
+    let (w, h) = (6000usize, 4000usize);
+    let day = d.join("day");
+    std::fs::create_dir_all(&day).unwrap();
+    let frames: Vec<PathBuf> = (0..4u16)
+        .map(|k| {
+            let p = day.join(format!("f{k}.dng"));
+            big_dng(&p, w, h, k);
+            p
+        })
+        .collect();
+    // two display images for eval
+    let img = |k: f32| day2night::isp::RgbImage {
+        width: w,
+        height: h,
+        data: (0..3 * w * h)
+            .map(|i| ((i % 997) as f32 / 997.0 * k).min(1.0))
+            .collect(),
+    };
+    let (pa, pb) = (d.join("a.png"), d.join("b.png"));
+    let png = day2night::encode::png::PngOptions::default();
+    let policy = day2night::output::OutputPolicy::default();
+    day2night::encode::png::write_png(&img(1.0), &pa, &png, &policy).unwrap();
+    day2night::encode::png::write_png(&img(0.9), &pb, &png, &policy).unwrap();
+    // a dataset for report (3 images of 3000x2000)
+    let rday = d.join("rday");
+    std::fs::create_dir_all(&rday).unwrap();
+    for k in 0..3u16 {
+        big_dng(&rday.join(format!("r{k}.dng")), 3000, 2000, k);
+    }
+    let rset = d.join("rset");
+    let made = common::bin()
+        .arg("dataset")
+        .arg(&rday)
+        .arg("-o")
+        .arg(&rset)
+        .args(["--iso", "1600", "-q"])
+        .output()
+        .unwrap();
+    assert!(
+        made.status.success(),
+        "{}",
+        String::from_utf8_lossy(&made.stderr)
+    );
+    // a lossless-JPEG DNG for convert (decoding and encoding it takes longer)
+    let lj = d.join("lj.dng");
+    let made = common::bin()
+        .arg("convert")
+        .arg(&frames[0])
+        .arg("-o")
+        .arg(&lj)
+        .args(["--compression", "ljpeg"])
+        .output()
+        .unwrap();
+    assert!(
+        made.status.success(),
+        "{}",
+        String::from_utf8_lossy(&made.stderr)
+    );
+    let o = |p: &Path| p.as_os_str().to_owned();
+    let f0 = o(&frames[0]);
+    for (i, sig) in ["-TERM", "-INT"].into_iter().enumerate() {
+        let out = d.join(format!("out{i}"));
+        std::fs::create_dir_all(&out).unwrap();
+        let os = |s: &str| std::ffi::OsString::from(s);
+        let runs: Vec<(&str, Vec<std::ffi::OsString>)> = vec![
+            (
+                "render",
+                vec![os("render"), f0.clone(), os("-o"), o(&out.join("r.exr"))],
+            ),
+            (
+                "synth",
+                vec![
+                    os("synth"),
+                    f0.clone(),
+                    os("-o"),
+                    o(&out),
+                    os("--target"),
+                    os("both"),
+                ],
+            ),
+            (
+                "dataset",
+                vec![os("dataset"), o(&day), os("-o"), o(&out.join("set"))],
+            ),
+            ("eval", vec![os("eval"), o(&pa), o(&pb)]),
+            (
+                "calibrate",
+                vec![
+                    os("calibrate"),
+                    os("brightness"),
+                    o(&frames[0]),
+                    o(&frames[1]),
+                    o(&frames[2]),
+                    o(&frames[3]),
+                    os("-o"),
+                    o(&out.join("b.json")),
+                ],
+            ),
+            (
+                "merge",
+                vec![
+                    os("merge"),
+                    o(&frames[0]),
+                    o(&frames[1]),
+                    o(&frames[2]),
+                    o(&frames[3]),
+                    os("-o"),
+                    o(&out.join("m.dng")),
+                ],
+            ),
+            (
+                "convert",
+                vec![
+                    os("convert"),
+                    o(&lj),
+                    os("-o"),
+                    o(&out.join("c.dng")),
+                    os("--compression"),
+                    os("ljpeg"),
+                ],
+            ),
+        ];
+        for (what, args) in &runs {
+            let a: Vec<&std::ffi::OsStr> = args.iter().map(|s| s.as_os_str()).collect();
+            stops_with_closed_pipes(what, &a, &out, sig);
+        }
+        let report = [os("report"), o(&rset), os("--day-dir"), o(&rday)];
+        let a: Vec<&std::ffi::OsStr> = report.iter().map(|s| s.as_os_str()).collect();
+        stops_with_closed_pipes("report", &a, &rset, sig);
+    }
+}

@@ -14,6 +14,11 @@ For every DNG listed in the sidecar's outputs:
                    its white balance equals the sidecar's night neutral within 1e-5.
   tifffile       : Exif ISOSpeedRatings = the clean ISO (clean) or the file's ISO (noisy);
                    NoiseProfile = the plan's model averaged per colour plane (rel. 1e-9).
+  OpenImageIO    : opens it; width and height equal the clean DNG's.
+A burst's frames (`_iso<ISO>_f<NN>.dng`) get the same checks; the noise-mean check compares
+a moved frame (non-identity transform in the plan's burst) inside its valid rectangle with
+the clean raw warped there by nothing else than the same motion: it is skipped for those
+(tests/validators/burst_check.py checks their geometry).
 Prints one line per check; exits 1 if any check failed.
 """
 import json
@@ -100,6 +105,24 @@ def exif_iso_and_profile(path):
         return iso, prof
 
 
+def moved(plan, frame):
+    burst = plan.get("burst")
+    if not burst or frame == 0:
+        return False
+    return burst["transforms"][frame]["affine"] != [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]
+
+
+def oiio_size(path):
+    import OpenImageIO as oiio
+
+    inp = oiio.ImageInput.open(path)
+    if inp is None:
+        return oiio.geterror()
+    spec = inp.spec()
+    inp.close()
+    return (spec.width, spec.height)
+
+
 def plane_profile(params, bayer):
     out = []
     for colour in range(3):
@@ -128,7 +151,12 @@ def main():
             want_iso = plan["clean_iso"]
             want_prof = plane_profile(plan["clean_noise"], bayer)
         else:
-            iso = int(name.rsplit("_iso", 1)[1][:-4])
+            tail = name.rsplit("_iso", 1)[1][:-4]
+            frame = 0
+            if "_f" in tail:
+                tail, f = tail.split("_f")
+                frame = int(f)
+            iso = int(tail)
             entry = [n for n in plan["noise"] if n["iso"] == iso]
             if not entry:
                 fail(f"{name}: ISO {iso} not in the plan")
@@ -158,6 +186,8 @@ def main():
                 fail(f"{name}: raw value {rp['visible'].max()} above white {rp['white']}")
             if is_clean:
                 clean = rp["visible"].astype(np.float64)
+            elif clean is not None and moved(plan, frame):
+                ok(f"{name}: a moved frame (noise mean not compared with the clean raw)")
             elif clean is not None:
                 # Away from white (saturated bulbs clip the noise there, biasing the mean).
                 keep = clean < 0.8 * rp["white"]
@@ -184,6 +214,14 @@ def main():
                 wb = wb / wb[1]
                 if np.max(np.abs(wb - neutral) / neutral) > 1e-5:
                     fail(f"{name}: DNG SDK neutral {wb} != sidecar {neutral}")
+        # OpenImageIO
+        oi = oiio_size(path)
+        if isinstance(oi, str):
+            fail(f"{name}: OpenImageIO cannot open it: {oi}")
+        elif oi != oiio_size(os.path.join(outdir, dngs[0])):
+            fail(f"{name}: OpenImageIO size {oi} != the clean DNG's")
+        else:
+            ok(f"{name}: OpenImageIO opens it ({oi[0]}x{oi[1]})")
         # tags
         iso, prof = exif_iso_and_profile(path)
         if iso != want_iso:

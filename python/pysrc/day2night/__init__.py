@@ -13,13 +13,16 @@ work, with the GIL released).
 ``NightPairs`` is a map-style dataset for ``torch.utils.data.DataLoader`` (no torch import
 here). Raws from other sources: ``Raw.from_array(data, meta, name=...)``, ``from_rawpy``
 (any camera raw rawpy reads) and ``write_dng``. See docs/python.md of the repository.
-``dataset_units``, ``write_unit`` and ``write_manifest`` run ``day2night dataset`` as
-independent units on a scheduler such as Ray Data (python/examples/ray_dataset.py).
+``dataset_units``, ``write_unit``/``write_units`` (``group_units``: one task per input) and
+``write_manifest`` run ``day2night dataset`` as independent units on a scheduler such as Ray
+Data (python/examples/ray_dataset.py).
 """
 
 from ._native import (  # noqa: F401
+    BOUNDS,
     Raw,
     Synthesis,
+    check_int,
     dataset_units,
     delta_e2000,
     psnr,
@@ -34,19 +37,24 @@ from ._native import (  # noqa: F401
     write_manifest,
     write_outputs,
     write_unit,
+    write_units,
 )
 from .pairs import NightPairs, pack_bayer  # noqa: F401
 from .rawpy_meta import from_rawpy  # noqa: F401
+from .units import group_units  # noqa: F401
 
 __version__ = version()
 
 __all__ = [
+    "BOUNDS",
     "NightPairs",
     "Raw",
     "Synthesis",
+    "check_int",
     "dataset_units",
     "delta_e2000",
     "from_rawpy",
+    "group_units",
     "pack_bayer",
     "psnr",
     "read_dng",
@@ -60,4 +68,5 @@ __all__ = [
     "write_manifest",
     "write_outputs",
     "write_unit",
+    "write_units",
 ]

@@ -8,13 +8,14 @@ are dicts of numpy arrays that ``torch.utils.data.default_collate`` stacks.
 """
 
 import hashlib
+import operator
 import os
 import random
 from collections import OrderedDict
 
 import numpy as np
 
-from ._native import night_pair, read_dng
+from ._native import check_int, night_pair, read_dng
 
 
 def pack_bayer(plane, meta, top=0, left=0):
@@ -88,15 +89,16 @@ class NightPairs:
         )
         if not self.files:
             raise ValueError(f"{self.day_dir}: no .dng file")
-        crop = int(crop)
+        crop = operator.index(crop)
         if crop <= 0 or crop % 2:
             raise ValueError(f"crop {crop} must be a positive even number of samples")
         self.crop = crop
-        self.isos = tuple(int(i) for i in isos)
-        if not self.isos or any(i <= 0 for i in self.isos):
-            raise ValueError(f"isos {isos!r}: give one or more positive ISOs")
-        self.seed = int(seed)
-        self.crops_per_image = int(crops_per_image)
+        # The command line's bounds (BOUNDS), checked here rather than at the first item.
+        self.isos = tuple(check_int("iso", i, f"isos[{k}]") for k, i in enumerate(isos))
+        if not self.isos:
+            raise ValueError(f"isos {isos!r}: give one or more ISOs")
+        self.seed = check_int("seed", seed)
+        self.crops_per_image = operator.index(crops_per_image)
         if self.crops_per_image < 1:
             raise ValueError("crops_per_image must be at least 1")
         self.mode = mode

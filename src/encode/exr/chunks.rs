@@ -4,6 +4,7 @@
 //! single-part scan-line files can be read a band of rows at a time, so memory grows with
 //! the band, not the image.
 
+use super::error::{chunk_err, compression_name, exr_err, guarded, ChunkPlace};
 use crate::error::{Error, Result};
 use exr::meta::attribute::SampleType;
 use exr::meta::{BlockDescription, MetaData};
@@ -13,7 +14,7 @@ use std::path::Path;
 
 fn io_eof(e: std::io::Error) -> Error {
     if e.kind() == std::io::ErrorKind::UnexpectedEof {
-        Error::malformed("EXR: file is truncated")
+        Error::malformed("EXR: the file ends early (truncated?)")
     } else {
         Error::Io(e)
     }
@@ -37,7 +38,7 @@ fn read_cstr(r: &mut impl Read) -> Result<usize> {
         n += 1;
         if n > 255 {
             return Err(Error::malformed(
-                "EXR: attribute name longer than 255 bytes",
+                "EXR: an attribute name of the header is longer than 255 bytes",
             ));
         }
     }
@@ -55,7 +56,9 @@ fn header_end(r: &mut (impl Read + Seek), multipart: bool) -> Result<u64> {
             read_cstr(r)?;
             let size = read_u32(r)? as i32;
             if size < 0 {
-                return Err(Error::malformed("EXR: negative attribute size"));
+                return Err(Error::malformed(
+                    "EXR: an attribute of the header has a negative size",
+                ));
             }
             r.seek(SeekFrom::Current(i64::from(size)))?;
             attributes += 1;
@@ -78,7 +81,9 @@ pub fn check_chunk_table(path: &Path, meta: &MetaData) -> Result<()> {
     let version = read_u32(&mut f)?;
     let multipart = version & 0x1000 != 0;
     if version & 0x800 != 0 {
-        return Err(Error::unsupported("EXR: deep data"));
+        return Err(Error::unsupported(
+            "EXR: the file holds deep data, which eval cannot read",
+        ));
     }
     let start = header_end(&mut f, multipart)?;
     let total: usize = meta.headers.iter().map(|h| h.chunk_count).sum();
@@ -98,7 +103,8 @@ pub fn check_chunk_table(path: &Path, meta: &MetaData) -> Result<()> {
         let off = u64::from_le_bytes(b);
         if off < table_end || off >= file_len {
             return Err(Error::malformed(format!(
-                "EXR: chunk {i} offset {off} is outside the data ({table_end}..{file_len})"
+                "EXR: chunk {i} starts at byte {off}, outside the chunk data (bytes \
+                 {table_end}..{file_len} of the file; truncated?)"
             )));
         }
         offsets.push((off, i));
@@ -135,7 +141,12 @@ pub fn check_chunk_table(path: &Path, meta: &MetaData) -> Result<()> {
         let size = read_u32(&mut f)? as i32;
         let end = off + prefix + 4 + u64::try_from(size).unwrap_or(u64::MAX / 2);
         let next = offsets.get(k + 1).map_or(file_len, |n| n.0);
-        if size < 0 || end > next {
+        if size < 0 {
+            return Err(Error::malformed(format!(
+                "EXR: chunk {i} at offset {off} says its data has a negative size ({size} bytes)"
+            )));
+        }
+        if end > next {
             return Err(Error::malformed(format!(
                 "EXR: chunk {i} ({size} bytes at offset {off}) overlaps the next chunk or \
                  runs past the end of the file"
@@ -143,6 +154,76 @@ pub fn check_chunk_table(path: &Path, meta: &MetaData) -> Result<()> {
         }
     }
     Ok(())
+}
+
+/// The first chunk of `path` that does not decode, as an error naming it (number, rows or
+/// tile, compression) in plain words; `None` when every chunk decodes. Run after a whole-file
+/// read failed, to say where.
+pub fn damaged_chunk(path: &Path) -> Option<Error> {
+    use exr::block::chunk::CompressedBlock;
+    use exr::block::UncompressedBlock;
+    let file = BufReader::new(File::open(path).ok()?);
+    let reader = exr::block::read(file, false).ok()?;
+    let chunks = reader.all_chunks(false).ok()?;
+    let meta = exr::block::reader::ChunksReader::meta_data(&chunks).clone();
+    for (n, chunk) in chunks.enumerate() {
+        let Ok(chunk) = chunk else {
+            return None;
+        };
+        let header = meta.headers.get(chunk.layer_index)?;
+        let lines = header.compression.scan_lines_per_block().max(1);
+        let (index, pixels) = match &chunk.compressed_block {
+            CompressedBlock::ScanLine(b) => {
+                let y =
+                    i64::from(b.y_coordinate) - i64::from(header.own_attributes.layer_position.y());
+                if (0..header.layer_size.1 as i64).contains(&y) {
+                    let first = y as usize / lines * lines;
+                    let last = (first + lines).min(header.layer_size.1);
+                    (Some(first / lines), format!("rows {first}..{last}"))
+                } else {
+                    (
+                        None,
+                        format!("first row {}, outside the data window", b.y_coordinate),
+                    )
+                }
+            }
+            CompressedBlock::Tile(t) => {
+                let c = &t.coordinates;
+                (
+                    Some(n),
+                    format!(
+                        "tile ({}, {}) of level ({}, {})",
+                        c.tile_index.0, c.tile_index.1, c.level_index.0, c.level_index.1
+                    ),
+                )
+            }
+            _ => (Some(n), "deep data".into()),
+        };
+        let place = ChunkPlace {
+            index,
+            count: header.chunk_count,
+            pixels,
+            compression: compression_name(header.compression),
+        };
+        let failed = || {
+            Error::malformed(format!(
+                "EXR: {} is damaged: the decoder failed on it",
+                place.describe()
+            ))
+        };
+        let r = guarded(
+            || {
+                UncompressedBlock::decompress_chunk(chunk, &meta, false)
+                    .map(|_| ())
+                    .map_err(|e| chunk_err(e, &place))
+            },
+            failed,
+        );
+        if let Err(e) = r {
+            return Some(e);
+        }
+    }
+    None
 }
 
 /// A single-part scan-line EXR read a band of rows at a time (RGB f32, as
@@ -194,14 +275,35 @@ impl ExrBands {
         }))
     }
 
-    /// Rows `y0..y1` of the data window as interleaved RGB f32 (`3 * width` per row).
+    /// The file read.
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+
+    /// Rows `y0..y1` of the data window as interleaved RGB f32 (`3 * width` per row). A
+    /// chunk that does not decode is an error naming it (number, rows, compression) in plain
+    /// words; a panic of the decoder on damaged data is one too.
     pub fn rows(&self, y0: usize, y1: usize) -> Result<Vec<f32>> {
-        use exr::block::reader::ChunksReader;
+        guarded(
+            || self.rows_unguarded(y0, y1),
+            || {
+                damaged_chunk(&self.path).unwrap_or_else(|| {
+                    Error::malformed(format!(
+                        "EXR: the decoder failed on damaged data in rows {y0}..{y1}"
+                    ))
+                })
+            },
+        )
+    }
+
+    fn rows_unguarded(&self, y0: usize, y1: usize) -> Result<Vec<f32>> {
+        use exr::block::chunk::CompressedBlock;
+        use exr::block::UncompressedBlock;
         let w = self.width;
         let n = (y1 - y0) * w * 3;
         let mut out = crate::limits::try_filled(0f32, n, "an EXR band")?;
         let file = BufReader::new(File::open(&self.path)?);
-        let reader = exr::block::read(file, false).map_err(super::error::exr_err)?;
+        let reader = exr::block::read(file, false).map_err(exr_err)?;
         let chunks = reader
             .filter_chunks(false, |_, _, b| {
                 b.layer == 0
@@ -209,8 +311,30 @@ impl ExrBands {
                     && b.pixel_position.1 < y1
                     && b.pixel_position.1 + b.pixel_size.1 > y0
             })
-            .map_err(super::error::exr_err)?;
-        let mut dec = chunks.sequential_decompressor(false);
+            .map_err(exr_err)?;
+        let meta = exr::block::reader::ChunksReader::meta_data(&chunks).clone();
+        let header = meta
+            .headers
+            .first()
+            .ok_or_else(|| Error::malformed("EXR: the file has no image part"))?;
+        let lines = header.compression.scan_lines_per_block().max(1);
+        let top = i64::from(header.own_attributes.layer_position.y());
+        let place = |y: i32| {
+            let first = i64::from(y) - top;
+            let inside = (0..self.height as i64).contains(&first);
+            let index = first.max(0) as usize / lines;
+            let last = (index * lines + lines).min(self.height);
+            ChunkPlace {
+                index: inside.then_some(index),
+                count: header.chunk_count,
+                pixels: if inside {
+                    format!("rows {}..{last}", index * lines)
+                } else {
+                    format!("first row {y}, outside the data window")
+                },
+                compression: compression_name(header.compression),
+            }
+        };
         let row_bytes: usize = self.channels.iter().map(|c| c.0 * w).sum();
         let mut starts = Vec::with_capacity(self.channels.len());
         let mut acc = 0;
@@ -219,14 +343,25 @@ impl ExrBands {
             acc += c.0 * w;
         }
         let mut seen = 0usize;
-        while let Some(block) = dec.decompress_next_block() {
-            let block = block.map_err(super::error::exr_err)?;
+        for chunk in chunks {
+            let chunk = chunk.map_err(exr_err)?;
+            let at = match &chunk.compressed_block {
+                CompressedBlock::ScanLine(b) => place(b.y_coordinate),
+                _ => {
+                    return Err(Error::malformed(
+                        "EXR: a chunk of the scan-line image is a tile",
+                    ))
+                }
+            };
+            let block = UncompressedBlock::decompress_chunk(chunk, &meta, false)
+                .map_err(|e| chunk_err(e, &at))?;
             let (bx, by) = (block.index.pixel_position.0, block.index.pixel_position.1);
             let (bw, bh) = (block.index.pixel_size.0, block.index.pixel_size.1);
             if bx != 0 || bw != w || block.data.len() != row_bytes * bh {
-                return Err(Error::malformed(
-                    "EXR: scan-line block does not match the data window",
-                ));
+                return Err(Error::malformed(format!(
+                    "EXR: {} does not match the data window",
+                    at.describe()
+                )));
             }
             for r in 0..bh {
                 let y = by + r;

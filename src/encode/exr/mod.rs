@@ -141,11 +141,12 @@ impl ExrOptions {
     /// Default [`ExrOptions::zip_level`].
     pub const DEFAULT_ZIP_LEVEL: u8 = 1;
 
-    /// Reject a zip level outside 1..=9.
+    /// Reject a zip level outside 1..=9 ([`crate::bounds::EXR_ZIP_LEVEL_RANGE`]).
     pub fn validate(&self) -> Result<()> {
-        if !(1..=9).contains(&self.zip_level) {
+        let (lo, hi) = crate::bounds::EXR_ZIP_LEVEL_RANGE;
+        if !(lo..=hi).contains(&self.zip_level) {
             return Err(Error::invalid(format!(
-                "EXR zip level {} is outside 1..=9",
+                "EXR zip level {} is outside {lo}..={hi}",
                 self.zip_level
             )));
         }

@@ -131,6 +131,12 @@ pub(crate) fn row_kernel(method: Demosaic) -> Option<RowKernel> {
     }
 }
 
+/// The Malvar-He-Cutler row kernel (keeps every measured sample: a site's own colour is
+/// its sample), for callers that demosaic rectangles ([`demosaic_rect`]).
+pub(crate) fn mhc_row_kernel() -> RowKernel {
+    mhc::rgb_row
+}
+
 /// Demosaic the rectangle `rows x cols` (image coordinates, non-empty, inside the image)
 /// of a `width x height` CFA with a row kernel. `fill(r, cs, out)` must set `out[k]` to
 /// the CFA sample at (r, cs[k]). The rectangle is read with a [`PAD`]-wide neighbourhood

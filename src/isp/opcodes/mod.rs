@@ -18,6 +18,7 @@ pub mod area;
 pub mod bad_pixels;
 pub(crate) mod banded;
 pub mod budget;
+pub mod check;
 pub mod gain_map;
 pub mod pipeline;
 pub mod trim;

@@ -110,6 +110,7 @@ pub fn illuminants() -> IlluminantDict {
         name: ILLUMINANTS_NAME.into(),
         source: ATTRIBUTION.into(),
         chromaticities: ILLUMINANTS.to_vec(),
+        weights: Vec::new(),
     }
 }
 

@@ -6,29 +6,38 @@
 //!   `[r/g, 1, b/g]` (or any `[r, g, b]`, divided by g) or `[r/g, b/g]` entries;
 //! - `"mean": [r/g, b/g]` with `"covariance": [[..],[..]]`: a fitted Gaussian directly.
 //!
+//! - an xy dictionary of lamp chromaticities (`"xy"` or `"lamps"`), camera-independent, and
+//!   the camera a file was measured on (`"camera"`): see [`xy`].
+//!
 //! Accepted brightness files: `"values"`, `"mean_intensities"` or `"brightness"`: a list of
 //! mean normalized intensities of real night raws (0..1], or `"mean"` with `"std"`.
 
+pub mod cie_lamps;
 pub mod embedded;
+pub mod xy;
 
 use crate::error::{Error, Result};
 use serde::{Deserialize, Serialize};
 use serde_json::Value;
 use std::path::Path;
 
-/// A night illuminant dictionary: chromaticities `[r/g, b/g]`, or a Gaussian given directly.
+/// A night illuminant dictionary: chromaticities `[r/g, b/g]` of one camera, optionally
+/// weighted.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct IlluminantDict {
     /// Name used in messages (file path or "embedded ...").
     pub name: String,
     /// Provenance / attribution.
     pub source: String,
-    /// The chromaticities (may be empty when `fitted` is given).
+    /// The chromaticities.
     pub chromaticities: Vec<[f64; 2]>,
+    /// One weight per chromaticity (a count of gray cards), or empty for weight 1 each.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub weights: Vec<f64>,
 }
 
-/// An illuminant file reduced to what the sampler needs.
-#[derive(Debug, Clone, PartialEq)]
+/// An illuminant file's camera-RGB part reduced to what the sampler needs.
+#[derive(Debug, Clone, PartialEq, Serialize)]
 pub enum IlluminantSource {
     /// Chromaticities to fit.
     Dict(IlluminantDict),
@@ -108,6 +117,7 @@ pub fn parse_illuminants(name: &str, v: &Value) -> Result<IlluminantSource> {
                 name: name.to_string(),
                 source,
                 chromaticities: out,
+                weights: Vec::new(),
             }));
         }
     }
@@ -141,7 +151,8 @@ pub fn parse_illuminants(name: &str, v: &Value) -> Result<IlluminantSource> {
         return Ok(IlluminantSource::Gaussian(name.to_string(), mean, cov));
     }
     Err(Error::malformed(
-        "no illuminant list (illuminants_rgb_over_g / illuminants / chromaticities) or mean+covariance",
+        "no illuminant list (illuminants_rgb_over_g / illuminants / chromaticities), \
+         mean+covariance, or xy dictionary (xy / lamps)",
     ))
 }
 

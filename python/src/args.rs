@@ -1,0 +1,286 @@
+//! Integer arguments: each has the range the command line accepts (`day2night::bounds`), and
+//! a value outside it (negative, too large, or beyond any machine integer) is a `ValueError`
+//! naming the argument and the range (`seed: -1 is outside 0..=18446744073709551615`),
+//! never an `OverflowError`. A value that is not an integer (a float, a string) is a
+//! `TypeError` naming the argument. Any object with `__index__` is an integer (numpy's
+//! integer scalars included).
+
+use crate::errors::value_err;
+use day2night::bounds::{
+    EXR_ZIP_LEVEL_RANGE, ISO_RANGE, JOBS_RANGE, MAX_LIGHTS, SEED_RANGE, VARIANTS_RANGE,
+};
+use day2night::raw::crop::Crop;
+use pyo3::exceptions::PyTypeError;
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+
+/// An integer argument: its name and its inclusive range.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct IntArg {
+    pub name: &'static str,
+    pub lo: u64,
+    pub hi: u64,
+}
+
+/// `seed` (`--seed`).
+pub(crate) const SEED: IntArg = IntArg {
+    name: "seed",
+    lo: SEED_RANGE.0,
+    hi: SEED_RANGE.1,
+};
+/// `variant` (0-based: variant k is the `_v{k+1}` variant of `--variants k+1`).
+pub(crate) const VARIANT: IntArg = IntArg {
+    name: "variant",
+    lo: VARIANTS_RANGE.0 as u64 - 1,
+    hi: VARIANTS_RANGE.1 as u64 - 1,
+};
+/// `variants` (`--variants`).
+pub(crate) const VARIANTS: IntArg = IntArg {
+    name: "variants",
+    lo: VARIANTS_RANGE.0 as u64,
+    hi: VARIANTS_RANGE.1 as u64,
+};
+/// An ISO (`--iso`).
+pub(crate) const ISO: IntArg = IntArg {
+    name: "iso",
+    lo: ISO_RANGE.0 as u64,
+    hi: ISO_RANGE.1 as u64,
+};
+/// `bulbs` (`--bulbs`).
+pub(crate) const BULBS: IntArg = IntArg {
+    name: "bulbs",
+    lo: 0,
+    hi: MAX_LIGHTS as u64,
+};
+/// `lights` (`--lights`).
+pub(crate) const LIGHTS: IntArg = IntArg {
+    name: "lights",
+    lo: 0,
+    hi: MAX_LIGHTS as u64,
+};
+/// `exr_zip_level` (`--exr-zip-level`).
+pub(crate) const EXR_ZIP_LEVEL: IntArg = IntArg {
+    name: "exr_zip_level",
+    lo: EXR_ZIP_LEVEL_RANGE.0 as u64,
+    hi: EXR_ZIP_LEVEL_RANGE.1 as u64,
+};
+/// `set_threads(n)`: 0 (one per core) or `--jobs`'s range.
+pub(crate) const THREADS: IntArg = IntArg {
+    name: "n",
+    lo: 0,
+    hi: JOBS_RANGE.1 as u64,
+};
+/// `val` (`--val`: the last N inputs go to val; more than there are inputs is refused when
+/// the inputs are listed).
+pub(crate) const VAL: IntArg = IntArg {
+    name: "val",
+    lo: 0,
+    hi: usize::MAX as u64,
+};
+
+/// Every argument of the table by its key in `day2night.BOUNDS`.
+const ALL: [(&str, IntArg); 9] = [
+    ("seed", SEED),
+    ("variant", VARIANT),
+    ("variants", VARIANTS),
+    ("iso", ISO),
+    ("bulbs", BULBS),
+    ("lights", LIGHTS),
+    ("exr_zip_level", EXR_ZIP_LEVEL),
+    ("threads", THREADS),
+    ("val", VAL),
+];
+
+impl IntArg {
+    /// The value of this argument.
+    pub fn get<T: TryFrom<u64>>(&self, v: &Bound<'_, PyAny>) -> PyResult<T> {
+        self.get_as(v, self.name)
+    }
+
+    /// The value of this argument, called `label` in errors (`isos[1]`, `crop[2] (height)`).
+    pub fn get_as<T: TryFrom<u64>>(&self, v: &Bound<'_, PyAny>, label: &str) -> PyResult<T> {
+        in_range(v, label, self.lo, self.hi)
+    }
+
+    /// An optional argument: None stays None.
+    pub fn opt<T: TryFrom<u64>>(&self, v: &Bound<'_, PyAny>) -> PyResult<Option<T>> {
+        if v.is_none() {
+            Ok(None)
+        } else {
+            self.get(v).map(Some)
+        }
+    }
+}
+
+/// `v` as an integer in `lo..=hi`, or the error naming `label` and the range.
+pub(crate) fn in_range<T: TryFrom<u64>>(
+    v: &Bound<'_, PyAny>,
+    label: &str,
+    lo: u64,
+    hi: u64,
+) -> PyResult<T> {
+    let py = v.py();
+    let int = py
+        .import("operator")?
+        .call_method1("index", (v,))
+        .map_err(|_| {
+            let ty = v
+                .get_type()
+                .name()
+                .map(|n| n.to_string())
+                .unwrap_or_else(|_| "?".into());
+            PyTypeError::new_err(format!("{label} must be an integer (got {ty})"))
+        })?;
+    // Beyond i128 is out of every range: such an int does not extract.
+    if let Ok(n) = int.extract::<i128>() {
+        if n >= i128::from(lo) && n <= i128::from(hi) {
+            if let Ok(t) = T::try_from(n as u64) {
+                return Ok(t);
+            }
+        }
+    }
+    let mut shown = int.str().map(|s| s.to_string()).unwrap_or_default();
+    if shown.len() > 40 {
+        shown = format!("{}... ({} digits)", &shown[..20], shown.len());
+    }
+    Err(value_err(format!(
+        "{label}: {shown} is outside {lo}..={hi}"
+    )))
+}
+
+/// ``value`` as an int within ``BOUNDS[key]``, else the ``ValueError`` (``TypeError`` for
+/// a non-integer) the native functions raise for that argument, called ``label`` (default:
+/// ``key``). For checks in Python code (``NightPairs``).
+///
+/// >>> day2night.check_int("seed", -1)
+/// ValueError: seed: -1 is outside 0..=18446744073709551615
+#[pyfunction]
+#[pyo3(signature = (key, value, label=None))]
+pub(crate) fn check_int(key: &str, value: &Bound<'_, PyAny>, label: Option<&str>) -> PyResult<u64> {
+    let (_, arg) = ALL.iter().find(|(k, _)| *k == key).ok_or_else(|| {
+        value_err(format!(
+            "unknown argument {key:?} (known: {})",
+            ALL.map(|(k, _)| k).join(", ")
+        ))
+    })?;
+    arg.get_as(value, label.unwrap_or(key))
+}
+
+/// `day2night.BOUNDS`: each integer argument's (lowest, highest) value.
+pub(crate) fn bounds_dict(py: Python<'_>) -> PyResult<Bound<'_, PyDict>> {
+    let d = PyDict::new(py);
+    for (key, a) in ALL {
+        d.set_item(key, (a.lo, a.hi))?;
+    }
+    Ok(d)
+}
+
+/// An argument type whose Python value is checked against an [`IntArg`] when the call's
+/// arguments are extracted (so a signature keeps its default, e.g. `seed=Seed(0)`).
+macro_rules! int_type {
+    ($(#[$doc:meta])* $ty:ident($inner:ty) = $arg:expr) => {
+        $(#[$doc])*
+        #[derive(Debug, Clone, Copy)]
+        pub(crate) struct $ty(pub $inner);
+
+        impl<'a, 'py> FromPyObject<'a, 'py> for $ty {
+            type Error = PyErr;
+            fn extract(obj: Borrowed<'a, 'py, PyAny>) -> PyResult<Self> {
+                $arg.get(&obj).map($ty)
+            }
+        }
+    };
+}
+
+int_type!(
+    /// A `seed` argument.
+    Seed(u64) = SEED
+);
+int_type!(
+    /// A 0-based `variant` argument.
+    Variant(u32) = VARIANT
+);
+int_type!(
+    /// A `variants` argument.
+    Variants(u32) = VARIANTS
+);
+int_type!(
+    /// One `iso` argument.
+    Iso(u32) = ISO
+);
+int_type!(
+    /// The `n` of `set_threads`.
+    Threads(usize) = THREADS
+);
+int_type!(
+    /// A `val` argument.
+    Val(usize) = VAL
+);
+
+/// An `isos` argument: a sequence of ISOs, each in [`ISO`]'s range (`isos[i]` in errors).
+#[derive(Debug, Clone)]
+pub(crate) struct Isos(pub Vec<u32>);
+
+impl<'a, 'py> FromPyObject<'a, 'py> for Isos {
+    type Error = PyErr;
+    fn extract(obj: Borrowed<'a, 'py, PyAny>) -> PyResult<Self> {
+        isos(&obj, "isos").map(Isos)
+    }
+}
+
+/// A sequence of ISOs called `label` (`label[i]` in errors).
+pub(crate) fn isos(v: &Bound<'_, PyAny>, label: &str) -> PyResult<Vec<u32>> {
+    if v.is_instance_of::<pyo3::types::PyString>() {
+        return Err(PyTypeError::new_err(format!(
+            "{label} must be a sequence of integers (got a string)"
+        )));
+    }
+    let items = v
+        .try_iter()
+        .map_err(|_| PyTypeError::new_err(format!("{label} must be a sequence of integers")))?;
+    let mut out = Vec::new();
+    for (i, item) in items.enumerate() {
+        out.push(ISO.get_as(&item?, &format!("{label}[{i}]"))?);
+    }
+    Ok(out)
+}
+
+/// A `crop=(top, left, height, width)` argument within an active area of `aw` x `ah`
+/// samples: top and left from 0 to the last even row and column, height and width from 1
+/// to what is left of the area. Odd offsets are refused by [`Crop::check`].
+pub(crate) fn crop(v: &Bound<'_, PyAny>, aw: usize, ah: usize) -> PyResult<Crop> {
+    let items: Vec<Bound<'_, PyAny>> = v
+        .try_iter()
+        .and_then(|it| it.collect::<PyResult<Vec<_>>>())
+        .map_err(|_| PyTypeError::new_err("crop must be (top, left, height, width)"))?;
+    if items.len() != 4 {
+        return Err(value_err(format!(
+            "crop must be (top, left, height, width): got {} values",
+            items.len()
+        )));
+    }
+    let at = |i: usize, what: &str, lo: usize, hi: usize| -> PyResult<usize> {
+        if hi < lo {
+            return Err(value_err(format!(
+                "crop[{i}] ({what}): no value fits a {aw}x{ah} active area"
+            )));
+        }
+        in_range(
+            &items[i],
+            &format!("crop[{i}] ({what})"),
+            lo as u64,
+            hi as u64,
+        )
+    };
+    // Offsets are even (they keep the CFA phase): the last even row and column.
+    let top = at(0, "top", 0, ah.saturating_sub(1) & !1)?;
+    let left = at(1, "left", 0, aw.saturating_sub(1) & !1)?;
+    let height = at(2, "height", 1, ah - top)?;
+    let width = at(3, "width", 1, aw - left)?;
+    Ok(Crop {
+        top,
+        left,
+        height,
+        width,
+    })
+}
