@@ -41,8 +41,9 @@ fn rectilinear(kr: [f64; 4], kt: [f64; 2], center: [f64; 2]) -> OpcodeKind {
     }
 }
 
-/// The list-3 cases: each warp kind, and two warps with in-place opcodes around them (on
-/// the 57 x 81 active area of `frame(61, 83)`).
+/// The list-3 cases: each warp kind (radial and tangential distortion, a zoom about an
+/// off-centre point, a tangential shift; DNG warps have no rotation), and two warps with
+/// in-place opcodes around them (on the 57 x 81 active area of `frame(61, 83)`).
 fn cases() -> Vec<(&'static str, Vec<Opcode>)> {
     let mut kr = [0.0; 15];
     (kr[0], kr[1], kr[2], kr[5]) = (1.0, 0.02, -0.05, 0.01);
@@ -78,6 +79,22 @@ fn cases() -> Vec<(&'static str, Vec<Opcode>)> {
                 [1.0, -0.08, 0.02, 0.0],
                 [0.003, -0.002],
                 [0.45, 0.6],
+            ))],
+        ),
+        (
+            "WarpRectilinear, a zoom about an off-centre point",
+            vec![op(rectilinear(
+                [1.06, 0.0, 0.0, 0.0],
+                [0.0, 0.0],
+                [0.2, 0.85],
+            ))],
+        ),
+        (
+            "WarpRectilinear, a strong tangential term (a shift that grows off the centre)",
+            vec![op(rectilinear(
+                [1.0, 0.0, 0.0, 0.0],
+                [0.02, -0.03],
+                [0.7, 0.3],
             ))],
         ),
         ("WarpRectilinear2, reciprocal", vec![op(rect2)]),
@@ -138,6 +155,17 @@ fn windowed_warps_equal_the_whole_frame_render() {
                         .unwrap();
                     let rows: Vec<f32> = bands.bands.into_iter().flatten().collect();
                     assert_eq!(rows, whole.data, "{what}, streamed, {threads} threads");
+                    // Bands of 3 lines: many strips shared and dropped across threads.
+                    let (got, stats) = p
+                        .install(|| render_linear_windowed(&img, &opts, 3, None))
+                        .unwrap()
+                        .unwrap();
+                    assert_eq!(
+                        bits(&got),
+                        bits(&whole),
+                        "{what}, bands of 3, {threads} threads"
+                    );
+                    assert!(!stats.fallback, "{what}, {threads} threads: {stats:?}");
                 }
             }
         }

@@ -190,7 +190,9 @@ impl<'a> Chain<'a> {
         };
         let n = c.lines().div_ceil(sb);
         let nl = c.warps.len();
-        // Readers and first/last time of use of every strip, top level down.
+        // Readers and first/last time of use of every strip, top level down (none past
+        // MAX_WARPS warps: the whole-image path runs anyway, unplanned).
+        let planned_finals = if nl > MAX_WARPS { &finals[..0] } else { finals };
         let mut users = vec![vec![0usize; n]; nl];
         let mut when = vec![vec![(usize::MAX, 0usize); n]; nl];
         let note = |users: &mut [usize], when: &mut [(usize, usize)], ks: Range<usize>, t| {
@@ -199,7 +201,7 @@ impl<'a> Chain<'a> {
                 when[k] = (when[k].0.min(t), when[k].1.max(t));
             }
         };
-        for (t, (rows, cols)) in finals.iter().enumerate() {
+        for (t, (rows, cols)) in planned_finals.iter().enumerate() {
             let ks = c.need(nl - 1, rows, cols);
             note(&mut users[nl - 1], &mut when[nl - 1], ks, t);
         }
