@@ -69,7 +69,10 @@ pub(crate) struct Synthesis {
 /// ``crop``, ``target_origin`` ((row, column) of the crop's target in the whole-frame
 /// target, None outside the DefaultCrop or without a crop), ``noise_provenance`` (where
 /// the noise model came from and whose camera it is: ``source``, ``camera``, ``note``; also
-/// in ``plan``) and ``synthesis`` (for ``write_outputs``).
+/// in ``plan``), ``illuminants_provenance`` (where the night illuminant dictionary came
+/// from and whose camera colours it is: ``source``, ``camera``, ``note``, ``file``, as the
+/// sidecar's ``calibration.provenance.illuminants``) and ``synthesis`` (for
+/// ``write_outputs``).
 ///
 /// The plan's warnings (e.g. another camera's noise table applied to this input) are
 /// raised as ``UserWarning``, as ``day2night synth`` prints them.
@@ -108,18 +111,20 @@ pub(crate) fn synthesize<'py>(
     };
     let day = r.cfa_day()?;
     let file_name = r.file_name.clone();
-    let (job, plan, night) = py
+    let (job, plan, night, ill) = py
         .detach(move || {
             on_pool(move || {
                 let job = job_for(&cfg)?;
                 let plan = job.plan(&day, &file_name, seed, variant)?;
+                // The dictionary as the sidecar records it (its provenance and camera).
+                let ill = job.illuminants(&day)?;
                 let req = Request {
                     target: want_target,
                     input: false,
                     crop,
                 };
                 let night = lib_synthesize(&day.raw, &plan, &req)?;
-                Ok((job, plan, night))
+                Ok((job, plan, night, ill))
             })
         })
         .map_err(py_err)?;
@@ -175,6 +180,7 @@ pub(crate) fn synthesize<'py>(
     d.set_item("neutral", plan.night_neutral.to_vec())?;
     d.set_item("plan", json_obj(py, &plan)?)?;
     d.set_item("noise_provenance", json_obj(py, &plan.noise_provenance)?)?;
+    d.set_item("illuminants_provenance", json_obj(py, &ill.provenance)?)?;
     d.set_item("report", json_obj(py, &report)?)?;
     d.set_item("stages", stages)?;
     d.set_item("crop", crop.map(|c| (c.top, c.left, c.height, c.width)))?;

@@ -3,6 +3,7 @@ use super::CmdResult;
 use day2night::dng::read::{inspect, DngInfo};
 use day2night::raw::camera::CameraId;
 use day2night::synth::{Covariance, IlluminantChoice, IlluminantProvenance};
+use day2night::RawImage;
 use std::fmt::Write as _;
 use std::path::PathBuf;
 
@@ -25,7 +26,7 @@ pub struct InfoArgs {
 /// an opcode that makes its samples constant and a TrimBounds that changes the target's
 /// size are warnings, a mandatory one they cannot apply makes the file unusable, so
 /// "ready" is said only when `synth` would run without a word.
-fn opcode_verdict(info: &mut DngInfo, path: &std::path::Path) {
+fn opcode_verdict(info: &mut DngInfo, file: &Decoded) {
     let has_lists = info
         .raw
         .as_ref()
@@ -33,23 +34,63 @@ fn opcode_verdict(info: &mut DngInfo, path: &std::path::Path) {
     if !info.synth_ready || !has_lists {
         return;
     }
-    let verdict = day2night::dng::read_dng(path).and_then(|img| {
+    let verdict = file.get().and_then(|img| {
         use day2night::isp::opcodes::{check::check_render, OpcodeMode};
-        check_render(&img, OpcodeMode::Apply, true, true)
+        check_render(img, OpcodeMode::Apply, true, true).map_err(|e| e.root().to_string())
     });
     match verdict {
         Ok(c) => info.warnings.extend(c.warnings),
         Err(e) => {
             info.synth_ready = false;
-            info.reason = Some(e.root().to_string());
+            info.reason = Some(e);
         }
     }
 }
 
+/// The file decoded once, on first need, for the verdicts that look past the tags.
+struct Decoded<'a> {
+    path: &'a std::path::Path,
+    img: std::cell::OnceCell<Result<RawImage, String>>,
+}
+
+impl<'a> Decoded<'a> {
+    fn new(path: &'a std::path::Path) -> Self {
+        Decoded {
+            path,
+            img: std::cell::OnceCell::new(),
+        }
+    }
+
+    fn get(&self) -> Result<&RawImage, String> {
+        self.img
+            .get_or_init(|| day2night::dng::read_dng(self.path).map_err(|e| e.root().to_string()))
+            .as_ref()
+            .map_err(Clone::clone)
+    }
+}
+
+/// `synth`'s own checks with default options ([`day2night::synth::readiness`]): every item
+/// that keeps the file from synthesis, listed at once, each with the flag that fixes it.
+fn readiness_verdict(info: &mut DngInfo, file: &Decoded) {
+    use day2night::synth::{readiness, Calibration, SynthOptions};
+    if !info.synth_ready {
+        return;
+    }
+    let opts = SynthOptions::default();
+    let verdict = file.get().and_then(|img| {
+        let cal = Calibration::embedded(&opts).map_err(|e| e.root().to_string())?;
+        readiness::check(&img.meta, &opts, &cal, true).map_err(|e| e.root().to_string())
+    });
+    if let Err(why) = verdict {
+        info.synth_ready = false;
+        info.reason = Some(why);
+    }
+}
+
 /// The night illuminant dictionary a default `synth` run samples for this file (its
-/// provenance), or why it cannot: then synthesis is not ready (docs/synthesis.md, "Night
-/// lamps in CIE xy").
-fn illuminant_verdict(info: &mut DngInfo) -> Option<Result<IlluminantProvenance, String>> {
+/// provenance), or why it cannot (docs/synthesis.md, "Night lamps in CIE xy"; the
+/// readiness verdict then says the file is not ready).
+fn illuminant_verdict(info: &DngInfo) -> Option<Result<IlluminantProvenance, String>> {
     let raw = info.raw.as_ref()?;
     let camera = CameraId::new(
         info.make.clone(),
@@ -57,37 +98,24 @@ fn illuminant_verdict(info: &mut DngInfo) -> Option<Result<IlluminantProvenance,
         info.unique_camera_model.clone(),
     );
     let r = IlluminantChoice::Auto.resolve(&camera, &raw.meta.color, Covariance::Unbiased);
-    Some(match r {
-        Ok(r) => Ok(r.provenance),
-        Err(e) => {
-            let why = e.root().to_string();
-            if info.synth_ready {
-                info.synth_ready = false;
-                info.reason = Some(why.clone());
-            }
-            Err(why)
-        }
-    })
+    Some(r.map(|r| r.provenance).map_err(|e| e.root().to_string()))
 }
 
 /// Where `synth` (no `--noise-model`, default options) would take this file's noise model
 /// from, and which camera's it is (issue 24): the noise chain of
 /// `day2night::synth::noise_source`, its warnings joining the file's. The pixels are read
 /// only when the chain gets to the estimate from the image.
-fn noise_verdict(
-    info: &mut DngInfo,
-    path: &std::path::Path,
-) -> Option<day2night::noise::NoiseProvenance> {
+fn noise_verdict(info: &mut DngInfo, file: &Decoded) -> Option<day2night::noise::NoiseProvenance> {
     use day2night::synth::{noise_source::choose_noise_model, Calibration, SynthOptions};
     if !info.synth_ready {
         return None;
     }
-    let img = day2night::dng::read_dng(path).ok()?;
+    let img = file.get().ok()?;
     let bayer = img.bayer().ok()?;
     let opts = SynthOptions::default();
     let cal = Calibration::embedded(&opts).ok()?;
-    let est = || day2night::noise::estimate(&img, &Default::default());
-    match choose_noise_model(&img, &cal, &opts, bayer, &est) {
+    let est = || day2night::noise::estimate(img, &Default::default());
+    match choose_noise_model(img, &cal, &opts, bayer, &est) {
         Ok(c) => {
             info.warnings.extend(c.warnings);
             Some(c.provenance)
@@ -107,9 +135,11 @@ pub fn run(args: InfoArgs) -> CmdResult {
     for f in &args.files {
         match inspect(f) {
             Ok(mut info) => {
-                opcode_verdict(&mut info, f);
-                let ill = illuminant_verdict(&mut info);
-                let noise = noise_verdict(&mut info, f);
+                let file = Decoded::new(f);
+                opcode_verdict(&mut info, &file);
+                readiness_verdict(&mut info, &file);
+                let ill = illuminant_verdict(&info);
+                let noise = noise_verdict(&mut info, &file);
                 for w in &info.warnings {
                     eprintln!("day2night: {}: warning: {w}", f.display());
                 }

@@ -476,13 +476,16 @@ impl Run<'_> {
     fn input(&self, input: &Path) -> day2night::Result<()> {
         let day = DayInput::read(input)?;
         if !self.quiet && matches!(self.job.options.mode, Mode::Global | Mode::Local) {
-            // Where this input's lamp colours come from (its warnings come with the plan).
-            let ill = self.job.illuminants(&day)?;
-            self.say(format!(
-                "day2night: {}: night illuminants: {}",
-                input.display(),
-                ill.provenance.summary()
-            ));
+            // Where this input's lamp colours come from (its warnings come with the plan;
+            // when there is no dictionary, the plan's error lists it with every other
+            // problem of the input).
+            if let Ok(ill) = self.job.illuminants(&day) {
+                self.say(format!(
+                    "day2night: {}: night illuminants: {}",
+                    input.display(),
+                    ill.provenance.summary()
+                ));
+            }
         }
         let name = input
             .file_name()

@@ -29,6 +29,7 @@ pub mod noise_source;
 pub mod outputs;
 pub mod plan;
 pub mod plan_bounds;
+pub mod readiness;
 pub mod relight;
 pub mod rng;
 pub mod sidecar;

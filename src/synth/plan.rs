@@ -186,6 +186,8 @@ pub fn plan_with_estimate(
     opts.validate()?;
     img.validate()?;
     let bayer = img.bayer()?;
+    // Everything this input lacks for these options, listed at once (docs/your-camera.md).
+    super::readiness::check(&img.meta, opts, cal, renders)?;
     let a = img.active_area();
     let (w, h) = (a.width(), a.height());
     let (dn, dn_src) = day_neutral_for(&img.meta, opts)?;

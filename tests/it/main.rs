@@ -59,3 +59,4 @@ mod runs_interrupt;
 mod synth_burst;
 mod synth_cli;
 mod synth_lamps;
+mod synth_readiness;

@@ -483,14 +483,20 @@ fn sidecars_without_provenance_replay_their_old_outputs() {
         "--iso",
         "800",
     ]));
-    // A sidecar as written before provenance existed.
+    // A sidecar as written before provenance existed (neither the illuminants' nor the
+    // noise model's: the plan's `noise_provenance` came with the latter).
     let mut v: serde_json::Value =
         serde_json::from_slice(&std::fs::read(a.join("day.json")).unwrap()).unwrap();
     assert!(v["calibration"]["provenance"]["illuminants"].is_object());
+    assert!(v["calibration"]["provenance"]["noise"].is_object());
     v["calibration"]
         .as_object_mut()
         .unwrap()
         .remove("provenance");
+    v["plan"]
+        .as_object_mut()
+        .unwrap()
+        .remove("noise_provenance");
     let old = t.path().join("old.json");
     std::fs::write(
         &old,
