@@ -7,6 +7,9 @@ usage: make_opcode_inputs.py OUT_DIR [--size WxH]
   plain96.dng     16-bit RGGB, 12000 x 8000 (96 MP), a smooth scene, no opcode
   warp96.dng      the same with one identity WarpRectilinear in OpcodeList3
   realwarp96.dng  the same with one WarpRectilinear of kr1 = -0.02 (a real distortion)
+  warp2_96.dng    the same with one WarpRectilinear2 (kr1 = 0.01, kr2 = -0.03)
+  fisheye96.dng   the same with one WarpFisheye (kr1 = -0.05)
+  realwarp96o6.dng  realwarp96.dng with Orientation 6 (bands are columns)
   warps4096.dng   2048 x 1536 with 4096 identity WarpRectilinear in OpcodeList3 (~350 KB)
   realwarps4096.dng  the same with kr1 = 0.01: over the opcode work budget
   fix4096.dng     512 x 384 with 4096 FixBadPixelsConstant (constant 0) in OpcodeList1
@@ -30,6 +33,17 @@ def warp(k1):
     return opcode(1, params + struct.pack(">2d", 0.5, 0.5))
 
 
+def warp2(k1, k2):
+    kr = [1.0, k1, k2] + [0.0] * 12
+    params = struct.pack(">I", 1) + struct.pack(">19d", *kr, 0.0, 0.0, 0.0, 1.0)
+    return opcode(14, params + struct.pack(">2dI", 0.5, 0.5, 0))
+
+
+def fisheye(k1):
+    params = struct.pack(">I", 1) + struct.pack(">4d", 1.0, k1, 0.0, 0.0)
+    return opcode(2, params + struct.pack(">2d", 0.5, 0.5))
+
+
 def fix_constant(constant):
     return opcode(4, struct.pack(">II", constant, 0))
 
@@ -45,7 +59,7 @@ def srational(vals):
     return out
 
 
-def tags(w, h, lists):
+def tags(w, h, lists, orientation=1):
     cm = [3.2404542, -1.5371385, -0.4985314, -0.9692660, 1.8760108, 0.0415560,
           0.0556434, -0.2040259, 1.0572252]
     t = [
@@ -59,7 +73,7 @@ def tags(w, h, lists):
         (50721, "2i", 9, tuple(srational(cm)), True),  # ColorMatrix1
         (50778, "H", 1, (21,), True),  # CalibrationIlluminant1 D65
         (50728, "2I", 3, tuple(srational([0.55, 1.0, 0.7])), True),  # AsShotNeutral
-        (274, "H", 1, (1,), True),  # Orientation
+        (274, "H", 1, (orientation,), True),  # Orientation
         (50829, "I", 4, (0, 0, h, w), True),  # ActiveArea
         (33421, "H", 2, (2, 2), True),  # CFARepeatPatternDim
         (33422, "B", 4, (0, 1, 1, 2), True),  # CFAPattern RGGB
@@ -83,11 +97,11 @@ def scene(w, h):
     return a
 
 
-def write(path, data, lists):
+def write(path, data, lists, orientation=1):
     h, w = data.shape
     tifffile.imwrite(path, data, photometric=32803, compression=52546,
                      compressionargs=dict(lossless=True, effort=3), tile=(512, 512),
-                     extratags=tags(w, h, lists), subfiletype=0, planarconfig="contig")
+                     extratags=tags(w, h, lists, orientation), subfiletype=0, planarconfig="contig")
     print(f"{path}: {w}x{h}, {os.path.getsize(path)} bytes")
 
 
@@ -102,6 +116,9 @@ def main():
     write(os.path.join(a.out, "plain96.dng"), big, {})
     write(os.path.join(a.out, "warp96.dng"), big, {3: op_list([warp(0.0)])})
     write(os.path.join(a.out, "realwarp96.dng"), big, {3: op_list([warp(-0.02)])})
+    write(os.path.join(a.out, "warp2_96.dng"), big, {3: op_list([warp2(0.01, -0.03)])})
+    write(os.path.join(a.out, "fisheye96.dng"), big, {3: op_list([fisheye(-0.05)])})
+    write(os.path.join(a.out, "realwarp96o6.dng"), big, {3: op_list([warp(-0.02)])}, 6)
     del big
     mid = scene(2048, 1536)
     write(os.path.join(a.out, "warps4096.dng"), mid, {3: op_list([warp(0.0)] * 4096)})

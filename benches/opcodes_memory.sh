@@ -2,7 +2,8 @@
 # The opcode-path measurements of issue 26 (docs/benchmarks.md, "DNG opcodes: work and
 # memory"): wall time and peak RSS (GNU time, median of RUNS) of `render` and `synth` on
 # the inputs of benches/make_opcode_inputs.py:
-#   96 MP plain, one identity warp, one real warp (render to EXR, synth default)
+#   96 MP plain, one identity warp, one real warp (WarpRectilinear; WarpRectilinear2;
+#   WarpFisheye; WarpRectilinear with Orientation 6) (render to EXR, synth default)
 #   4096 identity warps on 2048 x 1536 (render), 4096 real warps (refused), 4096
 #   FixBadPixelsConstant on 512 x 384 (render)
 #
@@ -24,7 +25,7 @@ if [ -z "${D2N_BIN:-}" ]; then
 fi
 BIN=${D2N_BIN:-$CARGO_TARGET_DIR/release/day2night}
 IN=$WORK/in
-[ -f "$IN/fix4096.dng" ] || "$PY" "$ROOT/benches/make_opcode_inputs.py" "$IN"
+[ -f "$IN/fix4096.dng" ] && [ -f "$IN/realwarp96o6.dng" ] || "$PY" "$ROOT/benches/make_opcode_inputs.py" "$IN"
 
 # one NAME CMD...: RUNS runs, prints "NAME median-wall median-rss-KiB exit-code"
 one() {
@@ -49,7 +50,7 @@ one() {
     echo "$name $wall $rss $(cut -d' ' -f3 "$t" | sort -u | tr '\n' ' ')"
 }
 uptime
-for f in plain96 warp96 realwarp96; do
+for f in plain96 warp96 realwarp96 warp2_96 fisheye96 realwarp96o6; do
     one "render-$f" "$BIN" render "$IN/$f.dng" -o "$WORK/out/r.exr"
     one "synth-$f" "$BIN" synth "$IN/$f.dng" -o "$WORK/out"
 done

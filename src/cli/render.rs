@@ -242,8 +242,8 @@ pub fn run(args: RenderArgs) -> CmdResult {
 }
 
 /// Render band by band into the files `open` makes once the output size is known (`synth`'s
-/// target writer); false when the render cannot be made in bands (Menon, several warps or a
-/// TrimBounds in OpcodeList3, a LinearRaw network input): nothing was written then. On an
+/// target writer); false when the render cannot be made in bands (Menon, a TrimBounds in
+/// OpcodeList3, a LinearRaw network input): nothing was written then. On an
 /// error the unfinished file is removed.
 fn stream<'p>(
     img: &day2night::raw::RawImage,

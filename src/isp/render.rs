@@ -3,6 +3,7 @@
 
 use super::color::normalize_neutral;
 use super::demosaic::{demosaic_rows, row_kernel, Demosaic, Post, RowKernel};
+use super::opcodes::warp_window::WindowStats;
 use super::opcodes::{self, pipeline, OpcodeMode};
 use super::RgbImage;
 use crate::error::Result;
@@ -214,6 +215,19 @@ pub fn render_linear_banded_by(
     opts: &RenderOptions,
     band: usize,
 ) -> Result<Option<RgbImage>> {
+    Ok(render_linear_windowed(img, opts, band, None)?.map(|(rgb, _)| rgb))
+}
+
+/// [`render_linear_banded_by`] whose warps' window may hold `limit` lines before the
+/// whole-image path runs (`None`: the renders' limit), with what the window did (all
+/// zero without a warp). For tests and benchmarks.
+#[doc(hidden)]
+pub fn render_linear_windowed(
+    img: &RawImage,
+    opts: &RenderOptions,
+    band: usize,
+    limit: Option<usize>,
+) -> Result<Option<(RgbImage, WindowStats)>> {
     let (Some(kernel), Some(p)) = (
         row_kernel(opts.demosaic),
         opcodes::active_image(img, opts.opcodes)?,
@@ -226,16 +240,23 @@ pub fn render_linear_banded_by(
     let post = move |row: &mut [f32]| matrix_row(row, &mf);
     let ends = (opts.crop, opts.orient);
     let band = band.max(1);
-    opcodes::banded::render(
+    let mut stats = WindowStats::default();
+    let tune = opcodes::banded::Tune {
+        band,
+        limit,
+        stats: Some(&mut stats),
+    };
+    let got = opcodes::banded::render(
         img,
         &p,
         n,
         kernel,
         &post,
         ends,
-        band,
+        tune,
         collect_bands_of(band),
-    )
+    )?;
+    Ok(got.map(|rgb| (rgb, stats)))
 }
 
 /// The whole-frame opcode render ([`pipeline::render_frame`]: every stage on whole

@@ -208,7 +208,7 @@ where
 }
 
 /// The banded render of `img` with `post`: the opcode path ([`opcodes::banded`]) when `p`
-/// is some (`None` when its opcodes cannot be banded: several warps, a TrimBounds), else
+/// is some (`None` when its opcodes cannot be banded: a TrimBounds), else
 /// the plain one.
 pub(crate) fn banded_any<R>(
     img: &RawImage,
@@ -220,7 +220,10 @@ pub(crate) fn banded_any<R>(
     run: impl FnOnce(usize, usize, &BandBody) -> Result<R>,
 ) -> Result<Option<R>> {
     match p {
-        Some(p) => opcodes::banded::render(img, p, n, kernel, post, (crop, orient), BAND, run),
+        Some(p) => {
+            let tune = opcodes::banded::Tune::default();
+            opcodes::banded::render(img, p, n, kernel, post, (crop, orient), tune, run)
+        }
         None => banded(img, n, kernel, post, crop, orient, run).map(Some),
     }
 }

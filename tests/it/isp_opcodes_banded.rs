@@ -35,13 +35,13 @@ fn area(bottom: u32, right: u32, planes: u32) -> AreaSpec {
     }
 }
 
-fn op(kind: OpcodeKind) -> Opcode {
+pub(crate) fn op(kind: OpcodeKind) -> Opcode {
     Opcode::new(kind, 0)
 }
 
 /// A `w x h` RGGB frame of hash noise with an inset active area; samples equal to 4000
 /// (a FixBadPixelsConstant marker) sprinkled in, a clump of them too.
-fn frame(w: usize, h: usize) -> RawImage {
+pub(crate) fn frame(w: usize, h: usize) -> RawImage {
     let mut meta = RawMeta::new_bayer(Bayer::RGGB, 16, 512.0, 65535.0);
     meta.as_shot_neutral = Some([0.5, 1.0, 0.6]);
     meta.active_area = Some(Rect {
@@ -72,7 +72,7 @@ fn frame(w: usize, h: usize) -> RawImage {
     }
 }
 
-fn with_lists(mut img: RawImage, lists: [Vec<Opcode>; 3]) -> RawImage {
+pub(crate) fn with_lists(mut img: RawImage, lists: [Vec<Opcode>; 3]) -> RawImage {
     for (i, l) in lists.into_iter().enumerate() {
         img.meta.opcode_lists[i] = (!l.is_empty()).then(|| encode_list(&OpcodeList { opcodes: l }));
     }
@@ -94,7 +94,7 @@ fn gain_map(planes: u32) -> GainMap {
     }
 }
 
-fn bits(img: &RgbImage) -> (usize, usize, Vec<u32>) {
+pub(crate) fn bits(img: &RgbImage) -> (usize, usize, Vec<u32>) {
     (
         img.width,
         img.height,

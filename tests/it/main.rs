@@ -40,6 +40,7 @@ mod isp_opcode_checks;
 mod isp_opcodes;
 mod isp_opcodes_banded;
 mod isp_render;
+mod isp_warp_window;
 mod layers;
 mod limits_bombs;
 mod limits_files;

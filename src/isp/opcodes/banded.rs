@@ -14,24 +14,27 @@
 //! * The rectangle is demosaiced ([`crate::isp::demosaic::demosaic_rect`]), the neutral
 //!   multiplied back in and OpcodeList3's in-place opcodes applied to it, the neutral divided
 //!   out, the caller's `post` applied.
-//! * With one warp in OpcodeList3, the image before the warp is made band by band (as
-//!   above) into one buffer of the active area, and each output band is warped from the
-//!   rows of it that its source positions reach ([`super::warp::apply_rows`]); for the
-//!   turning orientations 5-8, whose bands are columns of the image, it is warped whole
-//!   once. Several warps, or a TrimBounds, are not banded ([`render`] returns `None`; the
+//! * The warps of OpcodeList3 (with in-place opcodes before, between and after them) read
+//!   the image before them through a rolling window of strips ([`super::warp_window`]):
+//!   strips of rows (orientations 1-4), or of columns for the turning orientations 5-8,
+//!   whose bands are columns of the image, made on demand and dropped once no later band
+//!   reaches them; a pathological warp (or more than [`super::warp_window::MAX_WARPS`]) takes
+//!   the whole-image path. A TrimBounds is not banded ([`render`] returns `None`; the
 //!   whole-frame path runs).
 //!
-//! No whole stored copy and no whole normalized plane exist unless a list runs whole.
+//! No whole stored copy, no whole normalized plane and no whole image before a warp exist
+//! unless a list runs whole or a warp takes the whole-image path.
 
 use super::bad_pixels::REACH;
 use super::pipeline::{inverse_wb, moves_pixels, stage1};
-use super::warp::{apply, apply_rows, Warp};
+use super::warp::Warp;
+use super::warp_window::{Axis, Chain, WindowStats};
 use super::{apply_region, apply_region_seq, pin, Bounds, Prepared, Region};
 use crate::dng::opcodes::{ListId, Opcode, OpcodeKind};
 use crate::error::{Error, Result};
 use crate::isp::color::normalize_neutral;
 use crate::isp::demosaic::{demosaic_rect, Post, RowKernel, PAD};
-use crate::isp::place::{place, BandBody, RectFn};
+use crate::isp::place::{place, BandBody, Placement, RectFn};
 use crate::limits::try_filled;
 use crate::normalize::Normalizer;
 use crate::raw::{Bayer, RawImage};
@@ -334,11 +337,33 @@ impl<'a> Frame<'a> {
     }
 }
 
+/// How [`render`] cuts the work (tests vary it; the renders use [`Tune::default`]).
+#[derive(Debug)]
+pub(crate) struct Tune<'s> {
+    /// Output rows per band, and lines per strip of the image before a warp.
+    pub(crate) band: usize,
+    /// Lines a warp's window may hold before the whole-image path runs (default
+    /// [`warp_window::limit`]).
+    pub(crate) limit: Option<usize>,
+    /// Receives what the warp window did.
+    pub(crate) stats: Option<&'s mut WindowStats>,
+}
+
+impl Default for Tune<'_> {
+    fn default() -> Self {
+        Tune {
+            band: crate::isp::render_parts::BAND,
+            limit: None,
+            stats: None,
+        }
+    }
+}
+
 /// The banded render of `img` with the opcodes `p` (white balance by `neutral`, the row
 /// demosaicer `kernel`, `post` on every row, DefaultCrop and orientation if asked), handed
-/// to `run` as [`place`] does; `None` (and `run` not called) when OpcodeList3 has more than
-/// one warp or a TrimBounds. `band`: output rows per band ([`crate::isp::render_parts::BAND`] but
-/// in tests).
+/// to `run` as [`place`] does; `None` (and `run` not called) when OpcodeList3 has a
+/// TrimBounds. The warps of OpcodeList3 read the image before them through a rolling
+/// window of strips ([`warp_window::Chain`]).
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn render<R>(
     img: &RawImage,
@@ -347,22 +372,24 @@ pub(crate) fn render<R>(
     kernel: RowKernel,
     post: &Post,
     (crop, orient): (bool, bool),
-    band: usize,
+    tune: Tune,
     run: impl FnOnce(usize, usize, &BandBody) -> Result<R>,
 ) -> Result<Option<R>> {
     let l3 = p.list(ListId::List3);
-    let moving: Vec<usize> = (0..l3.len())
+    if l3
+        .iter()
+        .any(|o| matches!(o.kind, OpcodeKind::TrimBounds { .. }))
+    {
+        return Ok(None);
+    }
+    let at: Vec<usize> = (0..l3.len())
         .filter(|&i| moves_pixels(&l3[i].kind))
         .collect();
-    let warp_at = match moving.as_slice() {
-        [] => None,
-        [i] if !matches!(l3[*i].kind, OpcodeKind::TrimBounds { .. }) => Some(*i),
-        _ => return Ok(None),
-    };
     let n = normalize_neutral(neutral)?;
     let f = Frame::new(img, p, n, kernel)?;
     let dims = (f.aw, f.ah);
-    let Some(wi) = warp_at else {
+    let band = tune.band.max(1);
+    let Some(&first) = at.first() else {
         let rect =
             |rows: Range<usize>, cols: Range<usize>, emit: &mut dyn FnMut(usize, &mut [f32])| {
                 let w = cols.len();
@@ -372,52 +399,41 @@ pub(crate) fn render<R>(
             };
         return place(&img.meta, dims, crop, orient, band, &rect, run).map(Some);
     };
-    let (pre, after) = (&l3[..wi], &l3[wi + 1..]);
-    let (aw, ah) = dims;
-    let bounds = Bounds::of_size(aw, ah);
-    let warp = Warp::of_opcode(&l3[wi].kind, bounds, 3)
-        .unwrap_or_else(|| Err(Error::invalid("OpcodeList3: not a warp")))?;
-    // The image before the warp, made band by band.
-    let mut before = try_filled(0.0f32, 3 * aw * ah, "the image before the warp")?;
-    before
-        .par_chunks_mut(3 * aw * crate::isp::render_parts::BAND)
+    let bounds = Bounds::of_size(f.aw, f.ah);
+    let warps = at
+        .iter()
+        .map(|&i| {
+            Warp::of_opcode(&l3[i].kind, bounds, 3)
+                .unwrap_or_else(|| Err(Error::invalid("OpcodeList3: not a warp")))
+        })
+        .collect::<Result<Vec<_>>>()?;
+    // The in-place opcodes after warp j: up to the next warp.
+    let afters: Vec<&[Opcode]> = at
+        .iter()
         .enumerate()
-        .try_for_each(|(bi, band)| -> Result<()> {
-            let r0 = bi * crate::isp::render_parts::BAND;
-            let rgb = f.pre3(r0..r0 + band.len() / (3 * aw), 0..aw, pre)?;
-            band.copy_from_slice(&rgb);
-            Ok(())
-        })?;
-    let turned = orient && (5..=8).contains(&img.meta.orientation);
-    let warped = turned.then(|| apply(&warp, &before, aw, ah, 3, bounds));
+        .map(|(j, &i)| &l3[i + 1..at.get(j + 1).copied().unwrap_or(l3.len())])
+        .collect();
+    let pre_ops = &l3[..first];
+    let pre = |rows: Range<usize>, cols: Range<usize>| f.pre3(rows, cols, pre_ops);
+    let after = |j: usize, data: &mut [f32], rows: Range<usize>, cols: Range<usize>| {
+        f.list3_in_place(afters[j], data, rows.start, cols.start, cols.len())
+    };
+    let g = Placement::new(&img.meta, dims, crop, orient, band);
+    let axis = if g.turned() { Axis::Cols } else { Axis::Rows };
+    let finals: Vec<_> = (0..g.bands()).map(|bi| g.rect(bi)).collect();
+    let chain = Chain::new(
+        axis, dims, band, bounds, warps, &pre, &after, &finals, tune.limit,
+    )?;
     let rect = |rows: Range<usize>, cols: Range<usize>, emit: &mut dyn FnMut(usize, &mut [f32])| {
-        let (rw, rh) = (cols.len(), rows.len());
-        let mut rgb = try_filled(0.0f32, 3 * rw * rh, "a band of the render")?;
-        match &warped {
-            Some(all) => {
-                for (i, row) in rgb.chunks_exact_mut(3 * rw.max(1)).enumerate() {
-                    row.copy_from_slice(&all[3 * ((rows.start + i) * aw + cols.start)..][..3 * rw]);
-                }
-            }
-            None => {
-                let mut full = try_filled(0.0f32, 3 * aw * rh, "a band of the warp")?;
-                apply_rows(
-                    &warp,
-                    (aw, ah, 3),
-                    bounds,
-                    rows.clone(),
-                    |y0, y1| Ok(Cow::Borrowed(&before[3 * aw * y0..3 * aw * y1])),
-                    &mut full,
-                )?;
-                for (i, row) in rgb.chunks_exact_mut(3 * rw.max(1)).enumerate() {
-                    row.copy_from_slice(&full[3 * (i * aw + cols.start)..][..3 * rw]);
-                }
-            }
-        }
-        f.list3_in_place(after, &mut rgb, rows.start, cols.start, rw);
-        f.finish(rgb, rw, post, emit);
+        let w = cols.len();
+        let rgb = chain.render(rows, cols)?;
+        f.finish(rgb, w, post, emit);
         Ok(())
     };
     let rect: &RectFn = &rect;
-    place(&img.meta, dims, crop, orient, band, rect, run).map(Some)
+    let out = place(&img.meta, dims, crop, orient, band, rect, run)?;
+    if let Some(s) = tune.stats {
+        *s = chain.stats();
+    }
+    Ok(Some(out))
 }

@@ -24,6 +24,8 @@ pub mod pipeline;
 pub mod trim;
 pub mod vignette;
 pub mod warp;
+pub(crate) mod warp_bounds;
+pub mod warp_window;
 
 use crate::dng::opcodes::{ListId, Opcode, OpcodeKind, OpcodeList};
 use crate::error::{Error, Result};

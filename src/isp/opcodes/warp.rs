@@ -31,6 +31,7 @@ use super::Bounds;
 use crate::dng::opcodes::OpcodeKind;
 use crate::error::{Error, Result};
 use rayon::prelude::*;
+use std::ops::Range;
 
 /// The radial model of a warp.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -79,11 +80,11 @@ fn ratio2(kr: &[f64; 15], valid: [f64; 2], reciprocal: bool, rr: f64) -> f64 {
 /// A warp ready to map destination pixels to source positions.
 #[derive(Debug, Clone)]
 pub struct Warp {
-    planes: Vec<Model>,
-    cv: f64,
-    ch: f64,
-    norm: f64,
-    inv: f64,
+    pub(super) planes: Vec<Model>,
+    pub(super) cv: f64,
+    pub(super) ch: f64,
+    pub(super) norm: f64,
+    pub(super) inv: f64,
 }
 
 fn poly(k: &[f64; 4], x2: f64) -> f64 {
@@ -308,6 +309,147 @@ pub fn apply(
     out
 }
 
+/// The source positions of a rectangle of destination pixels and the window of the
+/// source their bicubic taps read ([`plan`]).
+pub(crate) struct Plan {
+    /// Destination rows and columns (image coordinates, 0 = `bounds.t` / `bounds.l`).
+    rows: Range<usize>,
+    cols: Range<usize>,
+    /// Source positions, `per` per pixel (1 when the planes share the model).
+    pos: Vec<(f64, f64)>,
+    per: usize,
+    /// The source rows and columns the taps read (clamped to the image).
+    pub(crate) win_rows: Range<usize>,
+    pub(crate) win_cols: Range<usize>,
+}
+
+/// Pass 1 of a windowed warp of a `w x h` image of `planes` samples per pixel: the source
+/// position of every pixel of the destination rectangle `rows x cols`, and the rows and
+/// columns of the source their taps reach (empty for an empty image or rectangle).
+pub(crate) fn plan(
+    warp: &Warp,
+    (w, h, planes): (usize, usize, usize),
+    bounds: Bounds,
+    rows: Range<usize>,
+    cols: Range<usize>,
+) -> Plan {
+    let per = if warp.shared() { 1 } else { planes.max(1) };
+    let mut pos = Vec::with_capacity(rows.len() * cols.len() * per);
+    let (mut lo, mut hi) = (i64::MAX, i64::MIN);
+    let (mut left, mut right) = (i64::MAX, i64::MIN);
+    if w > 0 && h > 0 && planes > 0 {
+        for y in rows.clone() {
+            let r = (bounds.t + y as i64) as f64;
+            for x in cols.clone() {
+                let c = (bounds.l + x as i64) as f64;
+                for p in 0..per {
+                    let s = warp.source(p, r, c);
+                    let ((y0, _), (x0, _)) = taps_of(s, bounds);
+                    lo = lo.min(y0);
+                    hi = hi.max(y0 + 3);
+                    left = left.min(x0);
+                    right = right.max(x0 + 3);
+                    pos.push(s);
+                }
+            }
+        }
+    }
+    let (win_rows, win_cols) = if pos.is_empty() {
+        (0..0, 0..0)
+    } else {
+        (
+            clampi(lo, h)..clampi(hi, h) + 1,
+            clampi(left, w)..clampi(right, w) + 1,
+        )
+    };
+    Plan {
+        rows,
+        cols,
+        pos,
+        per,
+        win_rows,
+        win_cols,
+    }
+}
+
+/// The source image a [`Plan`] reads, over (at least) its window.
+pub(crate) enum Src<'a> {
+    /// Whole rows: `rows[yy - first]` is image row `yy` (`w * planes` samples).
+    Rows {
+        /// Image row of `rows[0]`.
+        first: usize,
+        /// The rows.
+        rows: Vec<&'a [f32]>,
+    },
+    /// Whole columns, stored transposed: `cols[xx - first]` is image column `xx` (`h *
+    /// planes` samples, row by row).
+    Cols {
+        /// Image column of `cols[0]`.
+        first: usize,
+        /// The columns.
+        cols: Vec<&'a [f32]>,
+    },
+}
+
+/// The resample of plane `p` at `taps` from the image columns that `col(xx)` gives (each
+/// `h * planes` samples, transposed storage): the same sums in the same order as
+/// [`resample`].
+#[inline]
+fn resample_cols<'a>(
+    ((y0, wy), (x0, wx)): Taps,
+    p: usize,
+    (w, h, planes): (usize, usize, usize),
+    col: impl Fn(usize) -> &'a [f32],
+) -> f32 {
+    let cs: [&[f32]; 4] = std::array::from_fn(|j| col(clampi(x0 + j as i64, w)));
+    let mut total = 0.0f64;
+    for (i, wyi) in wy.iter().enumerate() {
+        let yy = clampi(y0 + i as i64, h) * planes + p;
+        let mut acc = 0.0f64;
+        for (wxj, c) in wx.iter().zip(&cs) {
+            acc += wxj * c[yy] as f64;
+        }
+        total += wyi * acc;
+    }
+    super::pin(total as f32, 1.0)
+}
+
+/// Pass 2: the destination rectangle of `plan` resampled from `src` into `out` (row by
+/// row, `cols.len() * planes` samples per row), equal bit for bit to [`apply`]'s pixels.
+pub(crate) fn resample_plan(
+    plan: &Plan,
+    (w, h, planes): (usize, usize, usize),
+    bounds: Bounds,
+    src: &Src,
+    out: &mut [f32],
+) {
+    let rw = plan.cols.len();
+    if plan.pos.is_empty() || rw == 0 {
+        return;
+    }
+    let (shared, per) = (plan.per == 1, plan.per);
+    let dims = (w, h, planes);
+    for (k, orow) in out
+        .chunks_exact_mut(rw * planes)
+        .take(plan.rows.len())
+        .enumerate()
+    {
+        for x in 0..rw {
+            let at = (k * rw + x) * per;
+            let mut t = taps_of(plan.pos[at], bounds);
+            for p in 0..planes {
+                if p > 0 && !shared {
+                    t = taps_of(plan.pos[at + p], bounds);
+                }
+                orow[x * planes + p] = match src {
+                    Src::Rows { first, rows } => resample(t, p, dims, |yy| rows[yy - first]),
+                    Src::Cols { first, cols } => resample_cols(t, p, dims, |xx| cols[xx - first]),
+                };
+            }
+        }
+    }
+}
+
 /// Output rows `rows` (image rows, 0 = `bounds.t`) of the warp of a `w x h` image of
 /// `planes` samples per pixel, reading only the source rows the taps reach: `source(y0,
 /// y1)` is asked once for image rows `[y0, y1)` (the window, from the source positions of
@@ -317,56 +459,25 @@ pub fn apply_rows<'s>(
     warp: &Warp,
     (w, h, planes): (usize, usize, usize),
     bounds: Bounds,
-    rows: std::ops::Range<usize>,
-    source: impl FnOnce(usize, usize) -> crate::error::Result<std::borrow::Cow<'s, [f32]>>,
+    rows: Range<usize>,
+    source: impl FnOnce(usize, usize) -> Result<std::borrow::Cow<'s, [f32]>>,
     out: &mut [f32],
-) -> crate::error::Result<()> {
+) -> Result<()> {
     if w == 0 || h == 0 || planes == 0 || rows.is_empty() {
         return Ok(());
     }
-    let shared = warp.shared();
-    let per = if shared { 1 } else { planes };
-    // Pass 1: every pixel's source position, and the rows their taps reach.
-    let mut pos = Vec::with_capacity(rows.len() * w * per);
-    let (mut lo, mut hi) = (i64::MAX, i64::MIN);
-    for y in rows.clone() {
-        let r = (bounds.t + y as i64) as f64;
-        for x in 0..w {
-            let c = (bounds.l + x as i64) as f64;
-            for p in 0..per {
-                let s = warp.source(p, r, c);
-                let (y0, _) = taps(s.0 - bounds.t as f64);
-                lo = lo.min(y0);
-                hi = hi.max(y0 + 3);
-                pos.push(s);
-            }
-        }
-    }
-    let (y0, y1) = (clampi(lo, h), clampi(hi, h) + 1);
+    let dims = (w, h, planes);
+    let plan = plan(warp, dims, bounds, rows, 0..w);
+    let (y0, y1) = (plan.win_rows.start, plan.win_rows.end);
     let src = source(y0, y1)?;
     if src.len() != (y1 - y0) * w * planes {
-        return Err(crate::error::Error::invalid(
-            "warp source window of the wrong size",
-        ));
+        return Err(Error::invalid("warp source window of the wrong size"));
     }
-    let row = |yy: usize| &src[(yy - y0) * w * planes..];
-    let dims = (w, h, planes);
-    for (k, orow) in out
-        .chunks_exact_mut(w * planes)
-        .take(rows.len())
-        .enumerate()
-    {
-        for x in 0..w {
-            let at = (k * w + x) * per;
-            let mut t = taps_of(pos[at], bounds);
-            for p in 0..planes {
-                if p > 0 && !shared {
-                    t = taps_of(pos[at + p], bounds);
-                }
-                orow[x * planes + p] = resample(t, p, dims, row);
-            }
-        }
-    }
+    let src = Src::Rows {
+        first: y0,
+        rows: src.chunks_exact(w * planes).collect(),
+    };
+    resample_plan(&plan, dims, bounds, &src, out);
     Ok(())
 }
 
