@@ -13,6 +13,10 @@ use crate::error::{Error, Result};
 /// Most lights in a plan: the ambient light plus [`MAX_LIGHTS`] local lights and
 /// [`MAX_LIGHTS`] bulbs.
 pub const MAX_PLAN_LIGHTS: usize = 1 + 2 * MAX_LIGHTS as usize;
+/// Most opcode entries (applied or skipped) and opcode warnings in a plan: every opcode
+/// the reader accepts, three lists of [`crate::limits::MAX_OPCODES_PER_LIST`] (a plan that
+/// `synth` samples for such a file must replay).
+pub const MAX_PLAN_OPCODES: usize = 3 * crate::limits::MAX_OPCODES_PER_LIST as usize;
 // The value bounds live in the one table, crate::bounds (re-exported here by their old names).
 pub use crate::bounds::{
     ISO_RANGE, MAX_EXTENT_FACTOR, MAX_GAIN, MAX_LIST, MAX_NOISE_ENTRIES, MAX_NOISE_PARAM, MAX_RATIO,
@@ -76,12 +80,22 @@ impl Plan {
                 format!("{} entries (at most {MAX_NOISE_ENTRIES})", self.noise.len()),
             ));
         }
-        if self.stages.len() > MAX_LIST || self.warnings.len() > MAX_LIST {
-            return Err(field("stages/warnings", format!("more than {MAX_LIST}")));
+        if self.stages.len() > MAX_LIST {
+            return Err(field("stages", format!("more than {MAX_LIST}")));
+        }
+        // One warning per opcode is possible, besides the others.
+        if self.warnings.len() > MAX_LIST + MAX_PLAN_OPCODES {
+            return Err(field(
+                "warnings",
+                format!("more than {}", MAX_LIST + MAX_PLAN_OPCODES),
+            ));
         }
         if let Some(o) = &self.opcodes {
-            if o.applied.len() > MAX_LIST || o.skipped.len() > MAX_LIST {
-                return Err(field("opcodes", format!("more than {MAX_LIST} entries")));
+            if o.applied.len() > MAX_PLAN_OPCODES || o.skipped.len() > MAX_PLAN_OPCODES {
+                return Err(field(
+                    "opcodes",
+                    format!("more than {MAX_PLAN_OPCODES} entries"),
+                ));
             }
         }
         ratio("day_neutral", &self.day_neutral)?;

@@ -636,3 +636,61 @@ fn a_trim_that_changes_the_target_size_is_said_and_recorded() {
         .get("target_size")
         .is_none());
 }
+
+/// A list as long as the reader accepts (4096 opcodes) is sampled, written and replayed:
+/// the plan's bounds on a replayed sidecar allow every opcode the reader does (they were
+/// 1000 entries, so `synth` refused such a file that `render` took).
+#[test]
+fn the_longest_lists_synthesize_and_replay() {
+    let t = tempfile::tempdir().unwrap();
+    let ops = (0..day2night::limits::MAX_OPCODES_PER_LIST)
+        .map(|i| OpcodeKind::FixBadPixelsConstant {
+            constant: 65535 - (i % 7),
+            bayer_phase: 0,
+        })
+        .collect();
+    let f = dng(t.path(), "long.dng", (32, 24), &[(1, list(ops))]);
+    let a = t.path().join("a");
+    let (r, err) = run(&os(&[
+        "synth",
+        f.to_str().unwrap(),
+        "-o",
+        a.to_str().unwrap(),
+        "--iso",
+        "800",
+    ]));
+    assert!(r.status.success(), "{err}");
+    let sc = sidecar(&a.join("long.json"));
+    let applied = sc["plan"]["opcodes"]["applied"].as_array().unwrap().len();
+    let dropped = sc["plan"]["opcodes"]["dropped"]
+        .as_array()
+        .map_or(0, |d| d.len());
+    // Every opcode is accounted for: applied, or dropped as a repeat that changes nothing.
+    assert_eq!(
+        applied + dropped,
+        4096,
+        "{applied} applied, {dropped} dropped"
+    );
+    let b = t.path().join("b");
+    let (r, err) = run(&os(&[
+        "synth",
+        f.to_str().unwrap(),
+        "-o",
+        b.to_str().unwrap(),
+        "--replay",
+        a.join("long.json").to_str().unwrap(),
+    ]));
+    assert!(r.status.success(), "{err}");
+    for n in [
+        "long_clean.dng",
+        "long_iso800.dng",
+        "long_target.exr",
+        "long.json",
+    ] {
+        assert_eq!(
+            std::fs::read(a.join(n)).unwrap(),
+            std::fs::read(b.join(n)).unwrap(),
+            "{n}"
+        );
+    }
+}
