@@ -159,17 +159,7 @@ pub(crate) fn meta_dict<'py>(py: Python<'py>, raw: &RawImage) -> PyResult<Bound<
 /// Raise each metadata correction of the reader (`day2night::dng::check`) as a Python
 /// `UserWarning`: `<file>: <message>`, as the command line says `day2night: <file>: warning:`.
 pub(crate) fn warn_meta(py: Python<'_>, path: &std::path::Path, meta: &RawMeta) -> PyResult<()> {
-    for w in &meta.warnings {
-        let msg = std::ffi::CString::new(format!("{}: {w}", path.display()))
-            .unwrap_or_else(|_| c"metadata corrected".into());
-        PyErr::warn(
-            py,
-            &py.get_type::<pyo3::exceptions::PyUserWarning>(),
-            &msg,
-            1,
-        )?;
-    }
-    Ok(())
+    warn_lines(py, &path.display().to_string(), &meta.warnings)
 }
 
 /// Raise each of `warnings` about the raw `name` as a `UserWarning` (`<name>: <message>`),

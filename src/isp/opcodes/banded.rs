@@ -26,7 +26,7 @@
 //! unless a list runs whole or a warp takes the whole-image path.
 
 use super::bad_pixels::REACH;
-use super::pipeline::{inverse_wb, moves_pixels, stage1};
+use super::pipeline::{checked_active, inverse_wb, moves_pixels, stage1};
 use super::warp::Warp;
 use super::warp_window::{Axis, Chain, WindowStats};
 use super::{apply_region, apply_region_seq, pin, Bounds, Prepared, Region};
@@ -111,14 +111,7 @@ struct Frame<'a> {
 impl<'a> Frame<'a> {
     fn new(img: &'a RawImage, p: &'a Prepared, n: [f64; 3], kernel: RowKernel) -> Result<Self> {
         let bayer = img.bayer()?;
-        let a = img.active_area();
-        let (aw, ah) = (a.width(), a.height());
-        let (top, left) = (a.top as usize, a.left as usize);
-        if aw == 0 || ah == 0 || (top + ah - 1) * img.width + left + aw > img.data.len() {
-            return Err(Error::invalid(
-                "the active area is empty or outside the pixel buffer",
-            ));
-        }
+        let (aw, ah, top, left) = checked_active(img)?;
         let (l1, l2) = (p.list(ListId::List1), p.list(ListId::List2));
         let (sw, sh) = (img.width, img.height);
         // A list whose margin would cover most of the image anyway runs once, whole.

@@ -21,7 +21,6 @@ use crate::dng::opcodes::{
     list_results, lists, AreaSpec, ListId, Opcode, OpcodeKind, OpcodeList, FLAG_OPTIONAL,
 };
 use crate::error::{Error, Result};
-use crate::isp::geometry::default_crop;
 use crate::raw::{RawImage, RawMeta};
 
 /// What a render of a file does with its opcode lists, and what it must say about them.
@@ -639,21 +638,20 @@ fn trimmed_size(
     if aw == 0 || ah == 0 {
         return Ok((None, None));
     }
-    let (x0, y0, cw, ch) = if crop {
-        default_crop(meta, aw, ah)
-    } else {
-        (0, 0, aw, ah)
-    };
-    let (t, l) = ((y0 as i64).max(b.t), (x0 as i64).max(b.l));
-    let (bt, r) = (((y0 + ch) as i64).min(b.b), ((x0 + cw) as i64).min(b.r));
-    if bt <= t || r <= l {
-        return Err(Error::malformed(
-            "OpcodeList3: TrimBounds leaves nothing of the DefaultCrop area",
-        ));
-    }
+    let (whole, kept) = (
+        Bounds::of_size(aw, ah).kept(meta, (aw, ah), crop)?,
+        b.kept(meta, (aw, ah), crop)?,
+    );
     let turned = orient && (5..=8).contains(&meta.orientation);
-    let size = |w: usize, h: usize| if turned { (h, w) } else { (w, h) };
-    let (before, after) = (size(cw, ch), size((r - l) as usize, (bt - t) as usize));
+    let size = |k: Bounds| {
+        let (w, h) = (k.w() as usize, k.h() as usize);
+        if turned {
+            (h, w)
+        } else {
+            (w, h)
+        }
+    };
+    let (before, after) = (size(whole), size(kept));
     if before == after {
         return Ok((None, None));
     }

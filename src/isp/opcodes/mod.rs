@@ -410,6 +410,34 @@ impl Bounds {
     pub fn w(&self) -> i64 {
         self.r - self.l
     }
+    /// What these (trimmed) bounds keep of the DefaultCrop (`crop`) or of the whole
+    /// `aw x ah` active area, in active-area coordinates: the render's output rectangle
+    /// before orientation, planned by [`check`] and cut by the render alike. An error when
+    /// nothing is kept.
+    pub(crate) fn kept(
+        &self,
+        meta: &RawMeta,
+        (aw, ah): (usize, usize),
+        crop: bool,
+    ) -> Result<Bounds> {
+        let (x0, y0, cw, ch) = if crop {
+            crate::isp::geometry::default_crop(meta, aw, ah)
+        } else {
+            (0, 0, aw, ah)
+        };
+        let k = Bounds {
+            t: (y0 as i64).max(self.t),
+            l: (x0 as i64).max(self.l),
+            b: ((y0 + ch) as i64).min(self.b),
+            r: ((x0 + cw) as i64).min(self.r),
+        };
+        if k.b <= k.t || k.r <= k.l {
+            return Err(Error::malformed(
+                "OpcodeList3: TrimBounds leaves nothing of the DefaultCrop area",
+            ));
+        }
+        Ok(k)
+    }
 }
 
 /// A rectangle of a stage image held in memory: `height` rows of `width` pixels of

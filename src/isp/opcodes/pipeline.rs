@@ -21,7 +21,7 @@ use crate::dng::opcodes::{ListId, Opcode, OpcodeKind};
 use crate::error::{Error, Result};
 use crate::isp::color::normalize_neutral;
 use crate::isp::demosaic::{demosaic_rect, demosaic_rows, row_kernel, Demosaic, Post};
-use crate::isp::geometry::{apply_geometry, default_crop, orient_image};
+use crate::isp::geometry::{apply_geometry, orient_image};
 use crate::isp::RgbImage;
 use crate::normalize::Normalizer;
 use crate::raw::crop::Crop;
@@ -301,10 +301,9 @@ pub(crate) fn inverse_wb(n: [f64; 3]) -> [f32; 3] {
     [(1.0 / n[0]) as f32, 1.0, (1.0 / n[2]) as f32]
 }
 
-/// The stage-3 image of the whole frame of `img` with the opcodes `p` (white balanced by
-/// the normalized neutral `n`), before `post`.
-fn frame_stage3(img: &RawImage, p: &Prepared, n: [f64; 3], method: Demosaic) -> Result<Stage3> {
-    let bayer = img.bayer()?;
+/// The active area of `img` as (width, height, top, left), checked to be non-empty and
+/// inside the pixel buffer (the opcode paths index the buffer directly).
+pub(crate) fn checked_active(img: &RawImage) -> Result<(usize, usize, usize, usize)> {
     let a = img.active_area();
     let (aw, ah) = (a.width(), a.height());
     let (top, left) = (a.top as usize, a.left as usize);
@@ -313,6 +312,14 @@ fn frame_stage3(img: &RawImage, p: &Prepared, n: [f64; 3], method: Demosaic) -> 
             "the active area is empty or outside the pixel buffer",
         ));
     }
+    Ok((aw, ah, top, left))
+}
+
+/// The stage-3 image of the whole frame of `img` with the opcodes `p` (white balanced by
+/// the normalized neutral `n`), before `post`.
+fn frame_stage3(img: &RawImage, p: &Prepared, n: [f64; 3], method: Demosaic) -> Result<Stage3> {
+    let bayer = img.bayer()?;
+    let (aw, ah, top, left) = checked_active(img)?;
     let l1 = p.list(ListId::List1);
     let stored: std::borrow::Cow<[u16]> = if l1.is_empty() {
         std::borrow::Cow::Borrowed(&img.data)
@@ -410,23 +417,12 @@ pub(crate) fn finish_geometry(
         return Ok(apply_geometry(rgb, meta, crop, orient));
     }
     // Trimmed: DefaultCrop (or the whole area) intersected with the trimmed bounds.
-    let (x0, y0, cw, ch) = if crop {
-        default_crop(meta, aw, ah)
-    } else {
-        (0, 0, aw, ah)
-    };
-    let (t, l) = ((y0 as i64).max(b.t), (x0 as i64).max(b.l));
-    let (bt, r) = (((y0 + ch) as i64).min(b.b), ((x0 + cw) as i64).min(b.r));
-    if bt <= t || r <= l {
-        return Err(Error::malformed(
-            "OpcodeList3: TrimBounds leaves nothing of the DefaultCrop area",
-        ));
-    }
+    let k = b.kept(meta, (aw, ah), crop)?;
     let cut = Crop {
-        top: (t - b.t) as usize,
-        left: (l - b.l) as usize,
-        height: (bt - t) as usize,
-        width: (r - l) as usize,
+        top: (k.t - b.t) as usize,
+        left: (k.l - b.l) as usize,
+        height: k.h() as usize,
+        width: k.w() as usize,
     };
     let sw = rgb.width;
     let mut data = Vec::with_capacity(3 * cut.width * cut.height);
