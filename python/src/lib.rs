@@ -48,6 +48,13 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(pool::threads, m)?)?;
     m.add_function(wrap_pyfunction!(raw::write_dng, m)?)?;
     m.add("BOUNDS", args::bounds_dict(m.py())?)?;
+    // XYZ (D65) -> linear sRGB, three rows: day2night::color::xyz::XYZ_TO_SRGB, the one
+    // definition (rawpy_meta.py undoes LibRaw's camera -> sRGB matrix with it).
+    let xyz_to_srgb: Vec<Vec<f64>> = day2night::color::xyz::XYZ_TO_SRGB
+        .chunks(3)
+        .map(<[f64]>::to_vec)
+        .collect();
+    m.add("XYZ_TO_SRGB", xyz_to_srgb)?;
     m.add_function(wrap_pyfunction!(args::check_int, m)?)?;
     m.add_function(wrap_pyfunction!(pairs::night_pair, m)?)?;
     m.add_function(wrap_pyfunction!(dataset_units::dataset_units, m)?)?;

@@ -323,7 +323,7 @@ fn run_illuminants(a: IlluminantsArgs) -> CmdResult {
             let m =
                 illuminants::measure_gray_card(&img, roi, &p.display().to_string()).in_file(p)?;
             let xy = m.xy.map_or(String::new(), |xy| {
-                let cct = day2night::isp::planck::cct_duv(xy)
+                let cct = day2night::color::planck::cct_duv(xy)
                     .map_or(String::new(), |(t, d)| format!(", {t:.0} K, Duv {d:+.4}"));
                 format!("  xy {:.4} {:.4}{cct}", xy[0], xy[1])
             });

@@ -7,6 +7,9 @@
 //! the inverse of ColorMatrix1 when it is invertible (otherwise the camera RGB is used);
 //! box downscale so that the longer side is at most `max_side`; sRGB gamma; 8 bits.
 
+use crate::color::matrix3::{self, diag, mul, Mat3, IDENTITY};
+use crate::color::srgb;
+use crate::color::xyz::XYZ_TO_SRGB;
 use crate::error::{Error, Result};
 use crate::raw::RawImage;
 
@@ -21,53 +24,21 @@ pub struct Thumbnail {
     pub rgb: Vec<u8>,
 }
 
-/// XYZ (D65) -> linear sRGB.
-const XYZ_TO_SRGB: [f64; 9] = [
-    3.2404542, -1.5371385, -0.4985314, -0.9692660, 1.8760108, 0.0415560, 0.0556434, -0.2040259,
-    1.0572252,
-];
-
-fn inv3(m: &[f64]) -> Option<[f64; 9]> {
-    if m.len() != 9 {
-        return None;
-    }
-    let det = m[0] * (m[4] * m[8] - m[5] * m[7]) - m[1] * (m[3] * m[8] - m[5] * m[6])
-        + m[2] * (m[3] * m[7] - m[4] * m[6]);
+/// Inverse of ColorMatrix1 when its determinant is at least 1e-12 in magnitude (an absolute
+/// test, unlike [`matrix3::inverse`]'s relative one: the thumbnails written so far keep
+/// their bytes).
+fn inverse_cm1(v: &[f64]) -> Option<Mat3> {
+    let m = matrix3::from_row_major(v)?;
+    let det = matrix3::determinant(&m);
     if !det.is_finite() || det.abs() < 1e-12 {
         return None;
     }
-    let d = 1.0 / det;
-    Some([
-        (m[4] * m[8] - m[5] * m[7]) * d,
-        (m[2] * m[7] - m[1] * m[8]) * d,
-        (m[1] * m[5] - m[2] * m[4]) * d,
-        (m[5] * m[6] - m[3] * m[8]) * d,
-        (m[0] * m[8] - m[2] * m[6]) * d,
-        (m[2] * m[3] - m[0] * m[5]) * d,
-        (m[3] * m[7] - m[4] * m[6]) * d,
-        (m[1] * m[6] - m[0] * m[7]) * d,
-        (m[0] * m[4] - m[1] * m[3]) * d,
-    ])
+    Some(matrix3::inverse_with_determinant(&m, det))
 }
 
-fn mul3(a: &[f64; 9], b: &[f64; 9]) -> [f64; 9] {
-    let mut r = [0.0; 9];
-    for i in 0..3 {
-        for j in 0..3 {
-            r[i * 3 + j] = (0..3).map(|k| a[i * 3 + k] * b[k * 3 + j]).sum();
-        }
-    }
-    r
-}
-
+/// A linear value as an 8-bit sRGB code (clipped to [0, 1]; NaN gives 0).
 fn srgb_gamma(x: f64) -> u8 {
-    let x = x.clamp(0.0, 1.0);
-    let y = if x <= 0.0031308 {
-        12.92 * x
-    } else {
-        1.055 * x.powf(1.0 / 2.4) - 0.055
-    };
-    (y * 255.0 + 0.5) as u8
+    (srgb::oetf_f64(x.clamp(0.0, 1.0)) * 255.0 + 0.5) as u8
 }
 
 /// Render a thumbnail whose longer side is at most `max_side` (>= 1).
@@ -87,30 +58,26 @@ pub fn render(img: &RawImage, max_side: usize) -> Result<Thumbnail> {
     let neutral = img.meta.as_shot_neutral.unwrap_or([1.0, 1.0, 1.0]);
     // camera (white balanced) -> sRGB: XYZ_TO_SRGB * inv(CM1) * diag(neutral), normalised so
     // that camera white (1,1,1 after balance) maps to sRGB white.
+    let xyz_to_srgb = matrix3::from_row_major(&XYZ_TO_SRGB).unwrap_or(IDENTITY);
     let cam_to_srgb = img
         .meta
         .color
         .color_matrix1
         .as_deref()
-        .and_then(inv3)
+        .and_then(inverse_cm1)
         .map(|ci| {
-            let diag = [
-                neutral[0], 0.0, 0.0, 0.0, neutral[1], 0.0, 0.0, 0.0, neutral[2],
-            ];
-            let m = mul3(&XYZ_TO_SRGB, &mul3(&ci, &diag));
-            let mut m = m;
-            for r in 0..3 {
-                let s: f64 = m[r * 3..r * 3 + 3].iter().sum();
+            let m = mul(&xyz_to_srgb, &mul(&ci, &diag(neutral)));
+            m.map(|row| {
+                let s: f64 = row.iter().sum();
                 if s.abs() > 1e-9 {
-                    for v in &mut m[r * 3..r * 3 + 3] {
-                        *v /= s;
-                    }
+                    row.map(|v| v / s)
+                } else {
+                    row
                 }
-            }
-            m
+            })
         })
-        .filter(|m| m.iter().all(|v| v.is_finite()))
-        .unwrap_or([1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0]);
+        .filter(|m| m.iter().flatten().all(|v| v.is_finite()))
+        .unwrap_or(IDENTITY);
     let top = a.top as usize;
     let left = a.left as usize;
     let value = |r: usize, c: usize| -> f64 {
@@ -152,8 +119,8 @@ pub fn render(img: &RawImage, max_side: usize) -> Result<Thumbnail> {
                     0.0
                 };
             }
-            for row in 0..3 {
-                let v: f64 = (0..3).map(|k| cam_to_srgb[row * 3 + k] * cam[k]).sum();
+            for row in &cam_to_srgb {
+                let v: f64 = (0..3).map(|k| row[k] * cam[k]).sum();
                 rgb.push(srgb_gamma(v));
             }
         }

@@ -414,7 +414,7 @@ mod tests {
                 f32::MAX,
                 f32::MIN,
                 0.5,
-                0.003_130_8,
+                crate::color::srgb::KNEE,
             ] {
                 assert_eq!(l.get(v), quantize_u8_slow(tone, v), "{tone:?} {v}");
             }

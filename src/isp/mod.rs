@@ -3,8 +3,9 @@
 //!
 //! Stages ([`render::render_linear`]): normalize (the shared [`crate::normalize`] path),
 //! white balance by the neutral, demosaic ([`demosaic`]), camera -> XYZ (D50) -> linear
-//! sRGB/Rec.709 (D65) per DNG chapter 6 ([`color`]), DefaultCrop and orientation. Display
-//! encodings (sRGB OETF, the release's gamma + smoothstep tone) are in [`tone`].
+//! sRGB/Rec.709 (D65) per DNG chapter 6 ([`color`], on the maths of [`crate::color`]),
+//! DefaultCrop and orientation. Display encodings (the sRGB OETF of
+//! [`crate::color::srgb`], the release's gamma + smoothstep tone) are in [`tone`].
 
 pub(crate) mod bands;
 pub mod color;
@@ -13,7 +14,6 @@ pub mod flat;
 pub mod geometry;
 pub mod opcodes;
 pub(crate) mod place;
-pub mod planck;
 pub mod render;
 pub mod render_bands;
 pub mod render_crop;

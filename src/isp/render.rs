@@ -405,7 +405,7 @@ mod tests {
         );
         img.meta.as_shot_neutral = None;
         assert!(resolve_neutral(&img.meta, None).is_err());
-        img.meta.as_shot_white_xy = Some(super::super::color::D65_XY);
+        img.meta.as_shot_white_xy = Some(crate::color::xyz::D65_XY);
         let n = resolve_neutral(&img.meta, None).unwrap();
         // the fixture matrix is Lindbloom's (white 0.31271, 0.32902): close to (1, 1, 1)
         assert!(n.iter().all(|v| (v - 1.0).abs() < 1e-3), "{n:?}");

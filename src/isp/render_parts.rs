@@ -4,10 +4,11 @@
 //! and the band size and result of the banded render. Kept apart so that those renders use
 //! it without using each other.
 
-use super::color::{normalize_neutral, CameraColor, Mat3};
+use super::color::{normalize_neutral, CameraColor};
 use super::demosaic::Demosaic;
 use super::opcodes::OpcodeMode;
 use super::RgbImage;
+use crate::color::matrix3::Mat3;
 use crate::error::{Error, Result};
 use crate::raw::meta::RawMeta;
 use rayon::prelude::*;

@@ -1,7 +1,9 @@
-//! Display encodings of linear RGB: the sRGB OETF (IEC 61966-2-1), a pure 2.2 gamma, and
-//! the tone of the authors' released pipeline (gamma 2.2, then the smoothstep tone curve
-//! `3x^2 - 2x^3`, in that stage order as in the simple camera pipeline the release uses).
+//! Display encodings of linear RGB: the sRGB OETF (IEC 61966-2-1, [`crate::color::srgb`]), a
+//! pure 2.2 gamma, and the tone of the authors' released pipeline (gamma 2.2, then the
+//! smoothstep tone curve `3x^2 - 2x^3`, in that stage order as in the simple camera pipeline
+//! the release uses).
 
+use crate::color::srgb;
 use crate::error::{Error, Result};
 use std::str::FromStr;
 
@@ -9,7 +11,7 @@ use std::str::FromStr;
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize)]
 #[serde(rename_all = "lowercase")]
 pub enum DisplayTone {
-    /// sRGB OETF (piecewise: 12.92 x below 0.0031308, else 1.055 x^(1/2.4) - 0.055).
+    /// The sRGB OETF of IEC 61966-2-1 ([`srgb::oetf`]).
     #[default]
     Srgb,
     /// x^(1/2.2).
@@ -32,26 +34,6 @@ impl FromStr for DisplayTone {
     }
 }
 
-/// sRGB OETF of a linear value (not clamped).
-#[inline]
-pub fn srgb_oetf(x: f32) -> f32 {
-    if x <= 0.003_130_8 {
-        12.92 * x
-    } else {
-        1.055 * x.powf(1.0 / 2.4) - 0.055
-    }
-}
-
-/// Inverse sRGB OETF (display value to linear).
-#[inline]
-pub fn srgb_eotf(v: f32) -> f32 {
-    if v <= 0.040_45 {
-        v / 12.92
-    } else {
-        ((v + 0.055) / 1.055).powf(2.4)
-    }
-}
-
 /// The smoothstep tone curve of the release, on [0, 1].
 #[inline]
 pub fn smoothstep(x: f32) -> f32 {
@@ -64,7 +46,7 @@ impl DisplayTone {
     pub fn encode(self, x: f32) -> f32 {
         let x = if x.is_nan() { 0.0 } else { x.clamp(0.0, 1.0) };
         match self {
-            DisplayTone::Srgb => srgb_oetf(x),
+            DisplayTone::Srgb => srgb::oetf(x),
             DisplayTone::Gamma22 => x.powf(1.0 / 2.2),
             DisplayTone::Release => smoothstep(x.powf(1.0 / 2.2)),
         }
@@ -75,20 +57,6 @@ impl DisplayTone {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn srgb_round_trip_and_known_points() {
-        assert_eq!(srgb_oetf(0.0), 0.0);
-        assert!((srgb_oetf(1.0) - 1.0).abs() < 1e-6);
-        assert!((srgb_oetf(0.18) - 0.4613561).abs() < 1e-5);
-        for i in 0..=100 {
-            let x = i as f32 / 100.0;
-            assert!((srgb_eotf(srgb_oetf(x)) - x).abs() < 1e-5);
-        }
-        // continuity at the knee
-        let k = 0.003_130_8f32;
-        assert!((12.92 * k - (1.055 * k.powf(1.0 / 2.4) - 0.055)).abs() < 1e-5);
-    }
 
     #[test]
     fn tones_are_monotone_and_bounded() {
@@ -109,5 +77,6 @@ mod tests {
         assert!(
             (DisplayTone::Release.encode(0.5) - smoothstep(0.5f32.powf(1.0 / 2.2))).abs() < 1e-7
         );
+        assert_eq!(DisplayTone::Srgb.encode(0.18), srgb::oetf(0.18));
     }
 }

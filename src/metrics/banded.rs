@@ -7,9 +7,9 @@
 
 use super::deltae::mean_delta_e_2000;
 use super::ssim::{check_ssim, plane, ssim_channel_sum, window_len, SsimOptions};
+use crate::color::srgb::oetf as srgb_oetf;
 use crate::encode::read::BandSource;
 use crate::error::{Error, Result};
-use crate::isp::tone::srgb_oetf;
 use crate::isp::RgbImage;
 
 /// Default rows per band.

@@ -8,26 +8,19 @@
 //! conversion as colour-science's `sRGB_to_XYZ` + `XYZ_to_Lab`.
 
 use super::check_same_size;
+use crate::color::matrix3::mul_vec;
+use crate::color::srgb::eotf as srgb_eotf;
+use crate::color::xyz::{xy_to_xyz, D65_XY, SRGB_TO_XYZ};
 use crate::error::Result;
-use crate::isp::color::{xy_to_xyz, D65_XY};
-use crate::isp::tone::srgb_eotf;
 use crate::isp::RgbImage;
 use rayon::prelude::*;
 
 /// A CIELAB colour.
 pub type Lab = [f64; 3];
 
-/// IEC 61966-2-1 linear sRGB -> XYZ (D65).
-const SRGB_TO_XYZ: [[f64; 3]; 3] = [
-    [0.4124, 0.3576, 0.1805],
-    [0.2126, 0.7152, 0.0722],
-    [0.0193, 0.1192, 0.9505],
-];
-
 /// CIELAB of linear sRGB (D65 white).
 pub fn linear_srgb_to_lab(rgb: [f64; 3]) -> Lab {
-    let m = &SRGB_TO_XYZ;
-    let xyz = [0, 1, 2].map(|i| m[i][0] * rgb[0] + m[i][1] * rgb[1] + m[i][2] * rgb[2]);
+    let xyz = mul_vec(&SRGB_TO_XYZ, rgb);
     let wn = xy_to_xyz(D65_XY);
     let f = |t: f64| {
         if t > 216.0 / 24389.0 {

@@ -13,14 +13,11 @@ use crate::error::{Error, Result};
 
 /// The XYZ (D65) -> linear sRGB matrix (IEC 61966-2-1), row-major: the default
 /// ColorMatrix1 of a raw without colour metadata (a camera whose raw RGB is linear sRGB).
-pub const SRGB_COLOR_MATRIX: [f64; 9] = [
-    3.2404542, -1.5371385, -0.4985314, -0.9692660, 1.8760108, 0.0415560, 0.0556434, -0.2040259,
-    1.0572252,
-];
+pub const SRGB_COLOR_MATRIX: [f64; 9] = crate::color::xyz::XYZ_TO_SRGB;
 /// EXIF LightSource code of D65: the default CalibrationIlluminant1.
 pub const D65_ILLUMINANT: u16 = 21;
 /// CIE 1931 xy of D65: the default white (AsShotWhiteXY) of a raw without a neutral.
-pub const D65_WHITE_XY: [f64; 2] = [0.3127, 0.3290];
+pub const D65_WHITE_XY: [f64; 2] = crate::color::xyz::D65_XY;
 
 /// Largest width or height (the DNG reader's limit, `dng::read::MAX_DIMENSION`).
 pub const MAX_SIDE: usize = 65535;

@@ -271,10 +271,7 @@ impl RawMeta {
             color: ColorInfo {
                 // A plausible sRGB-like camera: XYZ(D65) -> camera is the inverse of the
                 // sRGB primaries matrix; illuminant 21 = D65.
-                color_matrix1: Some(vec![
-                    3.2404542, -1.5371385, -0.4985314, -0.9692660, 1.8760108, 0.0415560, 0.0556434,
-                    -0.2040259, 1.0572252,
-                ]),
+                color_matrix1: Some(crate::color::xyz::XYZ_TO_SRGB.to_vec()),
                 calibration_illuminant1: Some(21),
                 ..ColorInfo::default()
             },

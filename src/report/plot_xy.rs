@@ -4,8 +4,8 @@
 //! lamp has) shows at a glance.
 
 use super::plot::{empty, perr, H, W};
+use crate::color::planck::{planck_uv, uv_to_xy, CCT_RANGE};
 use crate::error::Result;
-use crate::isp::planck::{planck_uv, uv_to_xy, CCT_RANGE};
 use plotters::prelude::*;
 
 /// Temperatures of the iso-CCT ticks, kelvin.
@@ -170,7 +170,7 @@ pub fn planckian(title: &str, points: &[(f64, f64, usize)], kinds: &[&str]) -> R
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::isp::planck::{cct_duv, planck_xy};
+    use crate::color::planck::{cct_duv, planck_xy};
 
     #[test]
     fn ticks_cross_the_locus_at_their_temperature() {

@@ -231,7 +231,7 @@ mod tests {
         assert_eq!(xy.axes.0, "x");
         let color = CameraColor::new(&day.raw.meta.color).unwrap();
         for (m, l) in xy.lights.iter().zip(&plan.lights) {
-            let (cct, duv) = crate::isp::planck::cct_duv(m.chroma).unwrap();
+            let (cct, duv) = crate::color::planck::cct_duv(m.chroma).unwrap();
             assert!(
                 (1500.0..8000.0).contains(&cct) && duv.abs() < 0.03,
                 "{cct} {duv}"

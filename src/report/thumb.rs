@@ -1,6 +1,7 @@
 //! Small 8-bit sRGB images for the report: box-filter downscaling, crops, markers, and PNG
 //! encoding through the `image` crate.
 
+use crate::color::srgb::encode8;
 use crate::error::{Error, Result};
 use crate::output::{write_atomic, OutputPolicy};
 use std::path::Path;
@@ -26,7 +27,8 @@ impl Rgb8 {
         }
     }
 
-    /// From linear floats in [0, 1] (any range; clipped), encoded with the sRGB curve.
+    /// From linear floats in [0, 1] (any range; clipped), encoded with the sRGB curve
+    /// ([`encode8`]).
     /// `get(r, c)` returns the linear RGB of a pixel.
     pub fn from_linear(
         width: usize,
@@ -37,7 +39,7 @@ impl Rgb8 {
         for r in 0..height {
             for c in 0..width {
                 let v = get(r, c);
-                img.put(r, c, [srgb8(v[0]), srgb8(v[1]), srgb8(v[2])]);
+                img.put(r, c, [encode8(v[0]), encode8(v[1]), encode8(v[2])]);
             }
         }
         img
@@ -99,21 +101,6 @@ impl Rgb8 {
     }
 }
 
-/// sRGB-encode a linear value to 8 bits.
-pub fn srgb8(v: f32) -> u8 {
-    let v = if v.is_finite() {
-        v.clamp(0.0, 1.0)
-    } else {
-        0.0
-    };
-    let e = if v <= 0.003_130_8 {
-        12.92 * v
-    } else {
-        1.055 * v.powf(1.0 / 2.4) - 0.055
-    };
-    (e * 255.0 + 0.5) as u8
-}
-
 /// Output size keeping the aspect ratio with the longer side at most `max`.
 pub fn fit(width: usize, height: usize, max: usize) -> (usize, usize) {
     let m = width.max(height).max(1);
@@ -173,10 +160,6 @@ mod tests {
 
     #[test]
     fn encode_decode_and_helpers() {
-        assert_eq!(srgb8(0.0), 0);
-        assert_eq!(srgb8(1.0), 255);
-        assert_eq!(srgb8(f32::NAN), 0);
-        assert_eq!(srgb8(0.2159), 128);
         assert_eq!(fit(4000, 3000, 320), (320, 240));
         assert_eq!(fit(10, 5, 320), (10, 5));
         let d = downscale(4, 2, 2, 1, |r, c| [(r * 4 + c) as f32, 0.0, 1.0]);

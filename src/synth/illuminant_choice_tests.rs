@@ -1,6 +1,6 @@
 use super::*;
-use crate::isp::color::D65_XY;
-use crate::isp::planck::cct_duv;
+use crate::color::planck::cct_duv;
+use crate::color::xyz::D65_XY;
 use crate::synth::dictionaries::xy::parse_illuminant_file;
 use crate::synth::dictionaries::{cie_lamps, embedded};
 use proptest::prelude::*;
@@ -248,13 +248,13 @@ proptest! {
     /// +0.011 (the 42 CIE lamps: 1,959-6,598 K, Duv -0.0029 to +0.0107).
     #[test]
     fn xy_neutral_xy_round_trip(mired in 143.0f64..513.0, duv in -0.005f64..0.011) {
-        let p = crate::isp::planck::planck_uv(1e6 / mired);
-        let q = crate::isp::planck::planck_uv(1e6 / (mired + 1.0));
+        let p = crate::color::planck::planck_uv(1e6 / mired);
+        let q = crate::color::planck::planck_uv(1e6 / (mired + 1.0));
         let (du, dv) = (q[0] - p[0], q[1] - p[1]);
         let n = (du * du + dv * dv).sqrt();
         // unit normal to the locus pointing up (v increasing: positive Duv)
         let (nu, nv) = if du > 0.0 { (-dv / n, du / n) } else { (dv / n, -du / n) };
-        let xy = crate::isp::planck::uv_to_xy([p[0] + duv * nu, p[1] + duv * nv]);
+        let xy = crate::color::planck::uv_to_xy([p[0] + duv * nu, p[1] + duv * nv]);
         let (_, d) = cct_duv(xy).unwrap();
         prop_assert!((d - duv).abs() < 1e-4, "{d} {duv}");
         for color in [canon_5d_mark_ii(), off_diagonal_camera()] {

@@ -15,6 +15,7 @@
 //! chapter 6); the white's CCT comes from McCamy's formula (no iteration is needed because
 //! the white is given in xy).
 
+use crate::color::matrix3::{from_row_major, mul_vec, Mat3};
 use crate::error::{Error, Result};
 use crate::raw::meta::RawMeta;
 
@@ -73,21 +74,6 @@ pub fn illuminant_cct(code: u16) -> Option<f64> {
     })
 }
 
-fn mat3(v: &[f64]) -> Option<[[f64; 3]; 3]> {
-    if v.len() != 9 {
-        return None;
-    }
-    Some([[v[0], v[1], v[2]], [v[3], v[4], v[5]], [v[6], v[7], v[8]]])
-}
-
-fn mul(a: &[[f64; 3]; 3], x: [f64; 3]) -> [f64; 3] {
-    let mut o = [0.0; 3];
-    for (i, oi) in o.iter_mut().enumerate() {
-        *oi = a[i][0] * x[0] + a[i][1] * x[1] + a[i][2] * x[2];
-    }
-    o
-}
-
 /// Camera neutral of a white given as CIE xy, through the metadata's colour matrices.
 pub fn neutral_from_white_xy(meta: &RawMeta, xy: [f64; 2]) -> Result<[f64; 3]> {
     let (x, y) = (xy[0], xy[1]);
@@ -99,10 +85,10 @@ pub fn neutral_from_white_xy(meta: &RawMeta, xy: [f64; 2]) -> Result<[f64; 3]> {
     }
     let xyz = [x / y, 1.0, (1.0 - x - y) / y];
     let c = &meta.color;
-    let m1 = c.color_matrix1.as_deref().and_then(mat3);
-    let m2 = c.color_matrix2.as_deref().and_then(mat3);
-    let cc1 = c.camera_calibration1.as_deref().and_then(mat3);
-    let cc2 = c.camera_calibration2.as_deref().and_then(mat3);
+    let m1 = c.color_matrix1.as_deref().and_then(from_row_major);
+    let m2 = c.color_matrix2.as_deref().and_then(from_row_major);
+    let cc1 = c.camera_calibration1.as_deref().and_then(from_row_major);
+    let cc2 = c.camera_calibration2.as_deref().and_then(from_row_major);
     let n = (x - 0.3320) / (0.1858 - y);
     let cct = 449.0 * n.powi(3) + 3525.0 * n.powi(2) + 6823.3 * n + 5520.33;
     let t1 = c.calibration_illuminant1.and_then(illuminant_cct);
@@ -121,12 +107,12 @@ pub fn neutral_from_white_xy(meta: &RawMeta, xy: [f64; 2]) -> Result<[f64; 3]> {
             ))
         }
     };
-    let apply = |m: Option<[[f64; 3]; 3]>, cc: Option<[[f64; 3]; 3]>| -> [f64; 3] {
+    let apply = |m: Option<Mat3>, cc: Option<Mat3>| -> [f64; 3] {
         match m {
             Some(m) => {
-                let v = mul(&m, xyz);
+                let v = mul_vec(&m, xyz);
                 match cc {
-                    Some(cc) => mul(&cc, v),
+                    Some(cc) => mul_vec(&cc, v),
                     None => v,
                 }
             }

@@ -82,7 +82,7 @@ fn banded_eval_equals_the_whole_image_metrics() {
             let enc = |img: &mut RgbImage| {
                 img.data
                     .iter_mut()
-                    .for_each(|v| *v = day2night::isp::tone::srgb_oetf(v.clamp(0.0, 1.0)))
+                    .for_each(|v| *v = day2night::color::srgb::oetf(v.clamp(0.0, 1.0)))
             };
             if x.linear {
                 enc(&mut xi)

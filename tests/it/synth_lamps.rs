@@ -7,10 +7,10 @@ use crate::common;
 use crate::dngbuild::Builder;
 use crate::synth_cli::{files, ok, same, synth};
 
+use day2night::color::planck::{cct_duv, planck_xy};
 use day2night::dng::read_dng;
 use day2night::dng::write::{encode_dng, WriteOptions};
 use day2night::isp::color::CameraColor;
-use day2night::isp::planck::{cct_duv, planck_xy};
 use day2night::raw::RawImage;
 use day2night::synth::dictionaries::cie_lamps;
 use day2night::synth::sidecar::Sidecar;

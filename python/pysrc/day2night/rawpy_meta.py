@@ -7,15 +7,11 @@ docs/python.md ("Raws from other sources").
 
 import numpy as np
 
-from ._native import Raw
+from ._native import XYZ_TO_SRGB, Raw
 
 # XYZ (D65) -> linear sRGB (IEC 61966-2-1), the matrix LibRaw's ``color_matrix`` (camera ->
-# sRGB) ends with.
-_XYZ_TO_SRGB = np.array([
-    [3.2404542, -1.5371385, -0.4985314],
-    [-0.9692660, 1.8760108, 0.0415560],
-    [0.0556434, -0.2040259, 1.0572252],
-])
+# sRGB) ends with: the library's one definition (day2night::color::xyz::XYZ_TO_SRGB).
+_XYZ_TO_SRGB = np.array(XYZ_TO_SRGB, dtype=np.float64)
 
 # LibRaw's ``sizes.flip`` -> EXIF/DNG Orientation.
 _FLIP_TO_ORIENTATION = {0: 1, 3: 3, 5: 8, 6: 6}

@@ -117,7 +117,7 @@ pub fn night_lamps() -> impl Iterator<Item = &'static Lamp> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::isp::planck::cct_duv;
+    use crate::color::planck::cct_duv;
 
     #[test]
     fn the_night_mix_is_a_45_card_session_of_night_lamps() {

@@ -10,7 +10,7 @@
 //!   section refinement; Duv is the signed distance to that point, positive above the locus
 //!   (towards green), negative below (towards magenta).
 //!
-//! [`super::color::xy_to_cct`] (Robertson's lines, as the DNG SDK uses them) stays the one
+//! [`super::cct::xy_to_cct`] (Robertson's lines, as the DNG SDK uses them) stays the one
 //! that picks colour matrices; this module measures.
 
 use crate::error::{Error, Result};
