@@ -41,11 +41,12 @@ def test_tiled_equals_untiled_and_padding():
     m = model()
     rng = np.random.default_rng(0)
     x = rng.random((300, 250, 3), dtype=np.float32)  # not multiples of 16
-    whole = infer.predict(m, x)
+    whole = infer.predict(m, x, tile=None)
     assert whole.dtype == np.uint8 and whole.shape == (300, 250, 3)
     for tile in (64, 128):
         assert np.array_equal(infer.predict(m, x, tile=tile), whole), tile
-    f = infer.predict_float(m, x)
+    assert np.array_equal(infer.predict(m, x), whole)  # "auto": whole at this size
+    f = infer.predict_float(m, x, tile=None)
     assert np.array_equal(whole, (255 * np.clip(f, 0, 1)).astype(np.uint8))
     with pytest.raises(ValueError, match="multiple of 16"):
         infer.predict(m, x, tile=100)

@@ -135,5 +135,8 @@ def test_torchrun_two_gloo_ranks(tmp_path, sets):
 def test_bad_config_is_refused(tmp_path, sets):
     with pytest.raises(ValueError, match="epochs"):
         run(config(tmp_path / "x", epochs=0), sets)
+    run(config(tmp_path / "r", epochs=1), sets)
+    with pytest.raises(ValueError, match=r"last\.pt.*init_features 4 -> 8"):
+        run(config(tmp_path / "r", epochs=1, init_features=8), sets)
     r = cli(["--train", tmp_path / "nowhere", "--val", sets[1], "-o", tmp_path / "y"])
     assert r.returncode == 2 and "nowhere" in r.stderr

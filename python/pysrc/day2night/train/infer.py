@@ -34,19 +34,30 @@ def _pad(x):
     return x
 
 
-def _run(model, x, device):
+def _run(model, x, device, exact):
     t = torch.from_numpy(np.ascontiguousarray(x.transpose(2, 0, 1)))[None].to(device)
-    # PyTorch's own CPU convolution (oneDNN off) and cuDNN without autotuning: oneDNN picks
-    # its kernels by tensor size, so a tile and the whole image would differ in the last
+    # exact: PyTorch's own CPU convolution (oneDNN off) and cuDNN without autotuning. oneDNN
+    # picks its kernels by tensor size, so a tile and the whole image can differ in the last
     # bit (and then in a truncated byte); the native path gives the same bits for both.
-    with torch.no_grad(), torch.backends.mkldnn.flags(enabled=False), \
-            torch.backends.cudnn.flags(enabled=True, benchmark=False, deterministic=True):
+    with torch.no_grad(), torch.backends.mkldnn.flags(enabled=not exact), \
+            torch.backends.cudnn.flags(enabled=True, benchmark=False, deterministic=exact):
         y = model(t)
     return y[0].permute(1, 2, 0).cpu().numpy()
 
 
-def predict_float(model, x, tile=None, halo=None, device=None):
-    """The network's float output (H x W x 3) for the network input ``x`` (H x W x 3)."""
+#: Images up to this many pixels run whole under ``tile="auto"``; larger ones in tiles of
+#: ``AUTO_TILE`` (the native convolution's im2col buffer grows with the tile: 64 channels x
+#: 9 x pixels x 4 bytes, 1.25 GB for a 512 tile with its halo at width 32).
+AUTO_WHOLE = 1 << 20
+AUTO_TILE = 512
+
+
+def predict_float(model, x, tile="auto", halo=None, device=None, exact=True):
+    """The network's float output (H x W x 3) for the network input ``x`` (H x W x 3).
+
+    ``tile``: ``"auto"`` (whole up to 1 MP, else 512), None (whole) or a multiple of 16.
+    ``exact=False`` lets PyTorch use oneDNN (faster on CPU; tiles may then differ from the
+    whole image in the last bit)."""
     x = np.asarray(x, dtype=np.float32)
     if x.ndim != 3 or x.shape[2] != 3:
         raise ValueError(f"the network input must be H x W x 3, got {x.shape}")
@@ -56,8 +67,10 @@ def predict_float(model, x, tile=None, halo=None, device=None):
     h, w = x.shape[:2]
     xp = _pad(x)
     H, W = xp.shape[:2]
+    if tile == "auto":
+        tile = None if H * W <= AUTO_WHOLE else AUTO_TILE
     if tile is None or (tile >= H and tile >= W):
-        return _run(model, xp, device)[:h, :w]
+        return _run(model, xp, device, exact)[:h, :w]
     if tile % M or tile < M:
         raise ValueError(f"tile {tile} must be a positive multiple of {M}")
     halo = default_halo() if halo is None else int(halo)
@@ -68,7 +81,7 @@ def predict_float(model, x, tile=None, halo=None, device=None):
         for left in range(0, W, tile):
             t0, l0 = max(0, top - halo), max(0, left - halo)
             t1, l1 = min(H, top + tile + halo), min(W, left + tile + halo)
-            y = _run(model, xp[t0:t1, l0:l1], device)
+            y = _run(model, xp[t0:t1, l0:l1], device, exact)
             bh, bw = min(tile, H - top), min(tile, W - left)
             out[top:top + bh, left:left + bw] = y[top - t0:top - t0 + bh, left - l0:left - l0 + bw]
     return out[:h, :w]
@@ -79,9 +92,10 @@ def to_u8(y):
     return (255 * np.clip(y, 0, 1)).astype(np.uint8)
 
 
-def predict(model, x, tile=None, halo=None, device=None):
-    """uint8 H x W x 3 sRGB prediction of the network input ``x`` (``preprocess``)."""
-    return to_u8(predict_float(model, x, tile, halo, device))
+def predict(model, x, tile="auto", halo=None, device=None, exact=True):
+    """uint8 H x W x 3 sRGB prediction of the network input ``x`` (``preprocess``): the
+    release's quantization of ``predict_float``."""
+    return to_u8(predict_float(model, x, tile, halo, device, exact))
 
 
 def write_png(path, img):

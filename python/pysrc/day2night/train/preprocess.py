@@ -63,14 +63,16 @@ def normalize(plane, black, white, top=0, left=0, repeat=None, linearization=Non
     if linearization is not None and len(linearization):
         lut = np.asarray(linearization, dtype=np.float64)
         x = lut[np.minimum(x.astype(np.int64), len(lut) - 1)]
-    x = x.astype(np.float32)
-    out = np.empty_like(x)
+    out = x.astype(np.float32)
     for k, b in enumerate(_site_values(black, repeat, top, left)):
         i, j = divmod(k, 2)
         scale = float(white) - b
         if not scale > 0:
             raise ValueError(f"black level {b} >= white level {white}")
-        out[i::2, j::2] = np.maximum(x[i::2, j::2] - np.float32(b), 0) / np.float32(scale)
+        site = out[i::2, j::2]
+        site -= np.float32(b)
+        np.maximum(site, 0, out=site)
+        site /= np.float32(scale)
     return out
 
 
@@ -79,10 +81,11 @@ def white_balance(norm, neutral, cfa):
     neutral = [float(v) for v in neutral]
     if len(neutral) != 3 or not all(v > 0 and np.isfinite(v) for v in neutral):
         raise ValueError(f"neutral {neutral}: need 3 positive finite components")
-    out = np.empty_like(norm)
+    out = np.array(norm, dtype=np.float32)
     for k, c in enumerate(cfa_indices(cfa)):
         i, j = divmod(k, 2)
-        out[i::2, j::2] = norm[i::2, j::2] / np.float32(neutral[c])
+        site = out[i::2, j::2]
+        site /= np.float32(neutral[c])
     return np.clip(out, 0.0, 1.0, out=out)
 
 
@@ -94,42 +97,43 @@ def demosaic_bilinear(mosaic, cfa):
     neighbours of that colour. The first and last rows and columns copy their inner
     neighbours. Returns H x W x 3 (R, G, B) of the input's dtype."""
     m = np.asarray(mosaic)
+    if m.ndim != 2:
+        raise ValueError(f"bilinear demosaic needs a 2-D mosaic, got shape {m.shape}")
     h, w = m.shape
     if h < 3 or w < 3:
         raise ValueError(f"bilinear demosaic needs at least 3x3 samples, got {w}x{h}")
     idx = cfa_indices(cfa)
-    v = m.astype(np.int64)
-    c = v[1:-1, 1:-1]
-    up, down, lt, rt = v[:-2, 1:-1], v[2:, 1:-1], v[1:-1, :-2], v[1:-1, 2:]
-    cross = (up + down + lt + rt + 2) >> 2
-    diag = (v[:-2, :-2] + v[:-2, 2:] + v[2:, :-2] + v[2:, 2:] + 2) >> 2
-    horiz = (lt + rt + 1) >> 1
-    vert = (up + down + 1) >> 1
-    out = np.empty((h, w, 3), dtype=np.int64)
-    inner = out[1:-1, 1:-1]
-    ys = (np.arange(1, h - 1) % 2)[:, None]
-    xs = (np.arange(1, w - 1) % 2)[None, :]
-    site = np.broadcast_to(ys * 2 + xs, c.shape)
-    colour = np.asarray(idx)[site]
-    # colour of the horizontal neighbour of each site: the other site of the same row
-    h_colour = np.asarray(idx)[ys * 2 + (1 - xs)]
-    h_colour = np.broadcast_to(h_colour, c.shape)
-    for k in range(3):
-        own = colour == k
-        at_green = colour == 1
-        val = np.where(own, c, 0)
-        # red/blue sites: green from the cross, the other chroma from the diagonals
-        val = np.where(~own & ~at_green & (k == 1), cross, val)
-        val = np.where(~own & ~at_green & (k != 1), diag, val)
-        # green sites: the colour of the horizontal neighbours from them, else vertical
-        val = np.where(at_green & ~own & (h_colour == k), horiz, val)
-        val = np.where(at_green & ~own & (h_colour != k), vert, val)
-        inner[..., k] = val
+    v = m.astype(np.int32)
+    out = np.empty((h, w, 3), dtype=m.dtype)
+    # the inner sites of each of the 4 CFA phases, as strided views
+    for pi in (0, 1):
+        y0 = pi if pi else 2
+        ny = len(range(y0, h - 1, 2))
+        for pj in (0, 1):
+            x0 = pj if pj else 2
+            nx = len(range(x0, w - 1, 2))
+            if ny == 0 or nx == 0:
+                continue
+
+            def at(dy, dx, y0=y0, x0=x0, ny=ny, nx=nx):
+                return v[y0 + dy:y0 + dy + 2 * ny:2, x0 + dx:x0 + dx + 2 * nx:2]
+
+            dst = out[y0:y0 + 2 * ny:2, x0:x0 + 2 * nx:2]
+            c = idx[pi * 2 + pj]
+            dst[..., c] = at(0, 0)
+            if c == 1:
+                # green site: the colour of the row's other site from the 2 horizontal
+                # neighbours, the column's from the 2 vertical ones
+                dst[..., idx[pi * 2 + 1 - pj]] = (at(0, -1) + at(0, 1) + 1) >> 1
+                dst[..., idx[(1 - pi) * 2 + pj]] = (at(-1, 0) + at(1, 0) + 1) >> 1
+            else:
+                dst[..., 1] = (at(-1, 0) + at(1, 0) + at(0, -1) + at(0, 1) + 2) >> 2
+                dst[..., 2 - c] = (at(-1, -1) + at(-1, 1) + at(1, -1) + at(1, 1) + 2) >> 2
     out[0] = out[1]
     out[-1] = out[-2]
     out[:, 0] = out[:, 1]
     out[:, -1] = out[:, -2]
-    return out.astype(m.dtype)
+    return out
 
 
 def network_input_array(plane, meta, neutral=None, top=0, left=0, gamma=GAMMA):
@@ -151,11 +155,25 @@ def network_input_array(plane, meta, neutral=None, top=0, left=0, gamma=GAMMA):
     norm = normalize(plane, meta["black_level"], meta["white_level"], top, left,
                      meta.get("black_level_repeat_dim"), meta.get("linearization_table"))
     wb = white_balance(norm, neutral, idx)
-    q = (wb * np.float32(DEMOSAIC_SCALE)).astype(np.uint16)
-    rgb = demosaic_bilinear(q, idx).astype(np.float32) / np.float32(DEMOSAIC_SCALE)
-    if gamma is not None:
-        rgb **= np.float32(gamma)
-    return rgb
+    wb *= np.float32(DEMOSAIC_SCALE)
+    q = wb.astype(np.uint16)  # truncated, as the release's astype
+    # the 14-bit codes through a table: code / 16383 in float32, then ** gamma (the same
+    # float32 operations per sample, once per code)
+    return _table(gamma)[demosaic_bilinear(q, idx)]
+
+
+_TABLES = {}
+
+
+def _table(gamma):
+    key = None if gamma is None else float(gamma)
+    t = _TABLES.get(key)
+    if t is None:
+        t = np.arange(DEMOSAIC_SCALE + 1, dtype=np.float32) / np.float32(DEMOSAIC_SCALE)
+        if key is not None:
+            t = t ** np.float32(key)
+        _TABLES[key] = t
+    return t
 
 
 def active_plane(raw):

@@ -211,6 +211,7 @@ def train(cfg, train_set, val_set):
     history, best_val, start = [], float("inf"), 0
     if os.path.isfile(last):
         ck = load_checkpoint(last, device)
+        _check_resume(last, ck, cfg)
         model.load_state_dict(ck["model"])
         optimizer.load_state_dict(ck["optimizer"])
         scheduler.load_state_dict(ck["scheduler"])
@@ -262,6 +263,20 @@ def train(cfg, train_set, val_set):
         os.replace(os.path.join(cfg.out_dir, "history.json.tmp"),
                    os.path.join(cfg.out_dir, "history.json"))
     return {"best": best, "last": last, "history": history}
+
+
+#: Settings a run cannot change when it resumes.
+RESUME_KEYS = ("epochs", "batch_size", "lr", "decay_at", "decay", "init_features", "seed")
+
+
+def _check_resume(path, ck, cfg):
+    """A checkpoint resumed with other settings would not give the run it claims: refuse."""
+    old = ck.get("config", {})
+    diff = [f"{k} {old.get(k)!r} -> {getattr(cfg, k)!r}" for k in RESUME_KEYS
+            if old.get(k) != getattr(cfg, k)]
+    if diff:
+        raise ValueError(f"{path}: written by a run with other settings ({'; '.join(diff)}); "
+                         "use another out_dir or the same settings")
 
 
 def finish():
