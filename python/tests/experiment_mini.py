@@ -83,3 +83,26 @@ def run_experiment(out, day, real, *extra, env=None, check=True):
     if check and r.returncode != 0:
         raise AssertionError(f"{' '.join(cmd)} failed ({r.returncode}):\n{r.stderr}")
     return r
+
+
+def main(argv=None):
+    """``python python/tests/experiment_mini.py OUT``: the miniature day images (OUT/days) and
+    night bursts (OUT/captures/release, OUT/captures/simple) of the tests, for a smoke run."""
+    import argparse
+
+    p = argparse.ArgumentParser(description=main.__doc__)
+    p.add_argument("out")
+    p.add_argument("--day-dng", default=str(pathlib.Path(__file__).parents[2] / "fixtures" / "day.dng"))
+    p.add_argument("--cli", default="day2night", help="the day2night binary")
+    a = p.parse_args(argv)
+
+    def cli(*args):
+        subprocess.run([a.cli, *map(str, args)], check=True)
+
+    out = pathlib.Path(a.out)
+    day_dir(out / "days", a.day_dng)
+    bursts(cli, out / "captures", a.day_dng)
+
+
+if __name__ == "__main__":
+    main()

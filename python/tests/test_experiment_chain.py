@@ -86,6 +86,8 @@ def test_chain_writes_every_row_of_both_tables(full_run, mini_set):
     assert labels == [("clean", w) for w in want] + [("noisy", w) for w in want]
     md = (out / "table.md").read_text()
     assert "Smoke run" in md and "Table 1" in md and "Table 2" in md
+    assert ("Differs from the paper's protocol: UNet width 4 (paper: 32); 3 epochs (paper: 500); "
+            "6 real scenes (paper: 105); 4 day images (paper: 70).") in md
     scenes = sorted(records(mini_set["real"]))
     for row in t["rows"]:
         keys = ["clean"] if row["task"] == "clean" else ["1600", "3200"]

@@ -74,9 +74,26 @@ def build(exp):
         "format": "day2night-experiment-table/1",
         "config": exp.cfg,
         "smoke": exp.smoke,
+        "not_the_paper": deviations(exp),
         "folds": exp.folds["splits"],
         "rows": rows_out,
     }
+
+
+def deviations(exp):
+    """How this run differs from the paper's protocol (said above its table)."""
+    d = []
+    if exp.cfg["width"] != 32:
+        d.append(f"UNet width {exp.cfg['width']} (paper: 32)")
+    if exp.cfg["epochs"] != 500:
+        d.append(f"{exp.cfg['epochs']} epochs (paper: 500)")
+    if len(exp.scenes) != 105:
+        d.append(f"{len(exp.scenes)} real scenes (paper: 105)")
+    if len(exp.days) != 70:
+        d.append(f"{len(exp.days)} day images (paper: 70)")
+    if exp.cfg["folds"] != 3:
+        d.append(f"{exp.cfg['folds']} folds (paper: 3)")
+    return d
 
 
 def _fmt(v, digits):
@@ -92,10 +109,12 @@ def markdown(t):
     lines = ["# day2night experiment: Tables 1 and 2", ""]
     if t["smoke"]:
         lines += [
-            f"**Smoke run**: network width {cfg['width']} (the paper's UNet: 32), "
-            f"{cfg['epochs']} epoch(s) (the paper: 500). These are not the paper's numbers.",
+            f"**Smoke run**: network width {cfg['width']} (the paper's UNet: 32). "
+            "These are not the paper's numbers.",
             "",
         ]
+    if t["not_the_paper"]:
+        lines += ["Differs from the paper's protocol: " + "; ".join(t["not_the_paper"]) + ".", ""]
     lines += [
         f"Options: task {cfg['task']}, epochs {cfg['epochs']}, seed {cfg['seed']}, "
         f"folds {cfg['folds']}, width {cfg['width']}, device {cfg['device']}.",
