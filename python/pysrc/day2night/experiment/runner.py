@@ -152,7 +152,11 @@ class Experiment:
         """(x_path, y_path) of day image ``name`` synthesized in ``mode`` for input ``key``."""
         folder = self.out / "data" / f"synth-{mode}"
         stem = name.replace("/", "__").rsplit(".", 1)[0]
-        names = {"clean": stem, 1600: f"{stem}_1600", 3200: f"{stem}_3200"}
+        names = {}
+        if "clean" in self.tasks:
+            names["clean"] = stem
+        if "noisy" in self.tasks:
+            names.update({1600: f"{stem}_1600", 3200: f"{stem}_3200"})
         seed = self.cfg["seed"]
 
         def make():
