@@ -40,10 +40,12 @@ def test_tiled_equals_untiled_and_padding():
     from day2night.train import infer
     m = model()
     rng = np.random.default_rng(0)
-    x = rng.random((300, 250, 3), dtype=np.float32)  # not multiples of 16
+    # not multiples of 16; taller than a tile and its two 112-pixel halos, so tiles see
+    # only part of the image
+    x = rng.random((410, 90, 3), dtype=np.float32)
     whole = infer.predict(m, x, tile=None)
-    assert whole.dtype == np.uint8 and whole.shape == (300, 250, 3)
-    for tile in (64, 128):
+    assert whole.dtype == np.uint8 and whole.shape == (410, 90, 3)
+    for tile in (64, 128):  # 7 x 2 tiles; 4 x 1 tiles
         assert np.array_equal(infer.predict(m, x, tile=tile), whole), tile
     assert np.array_equal(infer.predict(m, x), whole)  # "auto": whole at this size
     f = infer.predict_float(m, x, tile=None)
