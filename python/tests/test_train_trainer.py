@@ -140,3 +140,23 @@ def test_bad_config_is_refused(tmp_path, sets):
         run(config(tmp_path / "r", epochs=1, init_features=8), sets)
     r = cli(["--train", tmp_path / "nowhere", "--val", sets[1], "-o", tmp_path / "y"])
     assert r.returncode == 2 and "nowhere" in r.stderr
+
+
+def test_fresh_synthesis_source(tmp_path, sets, day_dir):
+    """The trainer on FreshPatches: items of 4 patches, new variants every epoch."""
+    from day2night.train import data, trainer
+    fresh = data.FreshPatches(day_dir, crop=128, patch=64, isos=(1600,), seed=1)
+    seen = []
+    fresh_getitem = fresh.__getitem__
+
+    class Spy(type(fresh)):
+        def __getitem__(self, i):
+            seen.append((self.epoch, i))
+            return fresh_getitem(i)
+
+    fresh.__class__ = Spy
+    out = trainer.train(config(tmp_path / "f", epochs=2), fresh,
+                        data.FixedPatches.from_dir(sets[1]))
+    assert len(out["history"]) == 2 and all(np.isfinite(h["loss"]) for h in out["history"])
+    # 2 items of 4 patches per epoch (one batch of 8 patches), each epoch its own draws
+    assert sorted(seen) == [(0, 0), (0, 1), (1, 0), (1, 1)]
