@@ -293,3 +293,12 @@ def test_mismatched_frames_are_a_clear_error(mini_set, cli):
     assert r.returncode != 0
     assert "scene05" in r.stderr
     assert not (out / "real" / "target" / "scene05.png").exists()
+
+
+def test_cuda_without_a_gpu_is_a_clear_error(mini_set):
+    import torch
+
+    if torch.cuda.is_available():
+        pytest.skip("this machine has a CUDA device")
+    err = run_bad(mini_set, "bad_cuda", "--device", "cuda")
+    assert "--device cuda: torch sees no CUDA device" in err

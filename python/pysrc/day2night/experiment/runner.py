@@ -91,6 +91,13 @@ class Experiment:
     def prepare(self):
         """Read and check every input, then write config, folds and mixes (nothing is
         written when an input is bad)."""
+        try:
+            import torch
+        except ImportError as e:
+            raise ExperimentError(f"training needs torch ({e}): pip install day2night[train]") \
+                from None
+        if self.cfg["device"] == "cuda" and not torch.cuda.is_available():
+            raise ExperimentError("--device cuda: torch sees no CUDA device (use --device cpu)")
         self.check_config()
         isos = (1600, 3200) if "noisy" in self.tasks else ()
         try:
