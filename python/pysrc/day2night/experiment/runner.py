@@ -13,7 +13,6 @@ A unit is done when its scores.json exists; a rerun skips done units and the tra
 an interrupted one from its last epoch, so a killed run finishes with the same table."""
 
 import json
-import os
 import pathlib
 import sys
 
@@ -245,9 +244,3 @@ class Experiment:
         report.write(self, t)
         log(f"wrote {self.out / 'table.md'}, table.json and index.html")
         return t
-
-
-def env_threads():
-    """Torch threads from D2N_TORCH_THREADS (tests pin 1 for reproducible CPU runs)."""
-    n = os.environ.get("D2N_TORCH_THREADS")
-    return int(n) if n else None
