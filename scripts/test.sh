@@ -54,6 +54,26 @@ if [ "$py_tests" = 1 ]; then
     export D2N_RAY_SKIP_REASON="ray[data] could not be installed from $ray_req (no wheel for this platform or Python, or no network): test_ray.py skipped"
     echo "scripts/test.sh: $D2N_RAY_SKIP_REASON" >&2
   fi
+  # PyTorch for the night ISP trainer's tests (python/tests/test_train_*.py; the package's
+  # [train] extra): torch from PyPI brings its CUDA libraries (see README.md for what that
+  # costs), installed once and stamped like the validators. Installed, the tests must run
+  # (D2N_REQUIRE_TORCH=1); not installable, they skip with the reason, unless the caller set
+  # D2N_REQUIRE_TORCH=1 (then that is an error).
+  torch_req=python/tests/requirements-train.txt
+  torch_stamp="$VENV/.train-requirements.sha"
+  torch_want=$(sha256sum "$torch_req" | cut -d' ' -f1)
+  if [ "$(cat "$torch_stamp" 2>/dev/null)" = "$torch_want" ]; then
+    export D2N_REQUIRE_TORCH=1
+  elif "$VENV/bin/python" -m pip install --quiet --disable-pip-version-check --only-binary=:all: -r "$torch_req"; then
+    echo "$torch_want" > "$torch_stamp"
+    export D2N_REQUIRE_TORCH=1
+  elif [ "${D2N_REQUIRE_TORCH:-}" = 1 ]; then
+    echo "scripts/test.sh: D2N_REQUIRE_TORCH=1 but $torch_req could not be installed" >&2
+    exit 1
+  else
+    export D2N_TORCH_SKIP_REASON="torch could not be installed from $torch_req (no wheel for this platform or Python, or no network): test_train_*.py tests that need it skipped"
+    echo "scripts/test.sh: $D2N_TORCH_SKIP_REASON" >&2
+  fi
   echo "scripts/test.sh: building the Python package (pip install ./python) into $VENV" >&2
   # maturin's build hook runs the `maturin` of PATH: the venv's
   PATH="$VENV/bin:$PATH" "$VENV/bin/python" -m pip install --quiet --disable-pip-version-check --no-build-isolation \

@@ -40,6 +40,7 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(synthesize::synthesize, m)?)?;
     m.add_function(wrap_pyfunction!(synthesize::write_outputs, m)?)?;
     m.add_function(wrap_pyfunction!(render::render, m)?)?;
+    m.add_function(wrap_pyfunction!(render::encode_u8, m)?)?;
     m.add_function(wrap_pyfunction!(metrics::psnr, m)?)?;
     m.add_function(wrap_pyfunction!(metrics::ssim, m)?)?;
     m.add_function(wrap_pyfunction!(metrics::delta_e2000, m)?)?;

@@ -55,3 +55,29 @@ pub(crate) fn render<'py>(
     warn_lines(py, &name, &warnings)?;
     rgb_array(py, rgb)
 }
+
+/// 8-bit display encoding of a linear RGB image (HxWx3, any float dtype): the bytes
+/// ``day2night render -o x.png`` and ``day2night synth --target png`` write for these
+/// samples (``tone``: ``"srgb"`` (default, the PNG targets'), ``"gamma22"`` or
+/// ``"release"``; each sample clamped to [0, 1], encoded, ``* 255 + 0.5`` truncated).
+/// Returns a uint8 HxWx3 array.
+///
+/// >>> day2night.encode_u8(day2night.render(raw)).dtype
+/// dtype('uint8')
+#[pyfunction]
+#[pyo3(signature = (rgb, tone="srgb"))]
+pub(crate) fn encode_u8<'py>(
+    py: Python<'py>,
+    rgb: &Bound<'py, PyAny>,
+    tone: &str,
+) -> PyResult<Bound<'py, PyAny>> {
+    let tone: day2night::isp::tone::DisplayTone = tone.parse().map_err(py_err)?;
+    let img = crate::convert::float_rgb(rgb, "rgb")?;
+    let (h, w) = (img.height, img.width);
+    let bytes = py
+        .detach(move || on_pool(move || Ok(day2night::encode::png::encode_u8(&img, tone))))
+        .map_err(py_err)?;
+    let arr = numpy::ndarray::Array3::from_shape_vec((h, w, 3), bytes)
+        .map_err(|e| crate::errors::value_err(e.to_string()))?;
+    Ok(numpy::IntoPyArray::into_pyarray(arr, py).into_any())
+}

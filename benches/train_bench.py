@@ -1,0 +1,199 @@
+"""Benchmarks of the night ISP trainer (day2night.train; issue 31), run by hand, not a test.
+
+    python benches/train_bench.py train  [--features 32] [--batch 128] [--steps 5] [--runs 3]
+    python benches/train_bench.py fresh  DAY.dng [--crop 512] [--items 6] [--runs 3]
+    python benches/train_bench.py noise  DAY.dng [--calls 200] [--runs 3]
+    python benches/train_bench.py infer  DAY.dng [--features 32] [--tile 512] [--check-features 4]
+
+- train: training steps/s and patches/s of the UNet on CPU (random 64 x 64 patches; the
+  first step, which builds the kernels, is not timed); the median over runs.
+- fresh: FreshPatches on one core (day2night.set_threads(1), torch.set_num_threads(1)):
+  items/s and 64 x 64 patches/s of whole items, and the share of each stage (synthesis,
+  network input, sRGB target, cutting).
+- noise: synthesize(raw, crop=64 px) calls/s on an input whose NoiseProfile is removed
+  (ISO known: the noise is estimated from the image) against the same input with it.
+- infer: peak RSS of a full-image inference (a child process per run, GNU-time-like
+  ru_maxrss) at --features, tiled; then, at the narrow --check-features width (whose whole
+  12 MP image fits in memory with the native convolution), the tiled bytes against the
+  untiled bytes of the same 12 MP input.
+
+Make a 12 MP input as benches/run.sh does: cargo build --release --example
+make_bench_input, then target/release/examples/make_bench_input /tmp/day.dng.
+Numbers: docs/benchmarks.md ("Night ISP training").
+"""
+
+import argparse
+import json
+import os
+import resource
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+
+import numpy as np
+
+
+def bench_train(a):
+    import torch
+    from day2night.train.unet import UNet
+    torch.manual_seed(0)
+    model = UNet(3, 3, a.features)
+    opt = torch.optim.Adam(model.parameters(), lr=1e-3)
+    x = torch.rand(a.batch, 3, 64, 64)
+    y = torch.rand(a.batch, 3, 64, 64)
+
+    def step():
+        opt.zero_grad(set_to_none=True)
+        loss = torch.nn.functional.l1_loss(model(x), y)
+        loss.backward()
+        opt.step()
+
+    step()
+    rates = []
+    for _ in range(a.runs):
+        t = time.perf_counter()
+        for _ in range(a.steps):
+            step()
+        rates.append(a.steps / (time.perf_counter() - t))
+    s = statistics.median(rates)
+    return {"bench": "train", "features": a.features, "batch": a.batch,
+            "threads": torch.get_num_threads(), "steps_per_s": s, "patches_per_s": s * a.batch,
+            "runs": rates}
+
+
+def bench_fresh(a):
+    import torch
+    import day2night
+    from day2night.train import data, preprocess, targets
+    day2night.set_threads(1)
+    torch.set_num_threads(1)
+    d = tempfile.mkdtemp()
+    os.symlink(os.path.abspath(a.dng), os.path.join(d, "day.dng"))
+    ds = data.FreshPatches(d, crop=a.crop, patch=64, isos=(1600, 3200), seed=0,
+                           crops_per_image=10**6)
+    ds[0]  # decode the image into the dataset's cache
+    rates, stages = [], {"synthesize": [], "input": [], "target": [], "cut": []}
+    k = 1
+    for _ in range(a.runs):
+        t = time.perf_counter()
+        for _ in range(a.items):
+            ds[k]
+            k += 1
+        rates.append(a.items / (time.perf_counter() - t))
+    for _ in range(a.items):   # the stages of the same work, timed apart
+        q = ds.pairs.place(k)
+        k += 1
+        t0 = time.perf_counter()
+        out = day2night.synthesize(q["raw"], seed=0, variant=q["variant"], isos=(q["iso"],),
+                                   crop=q["crop"])
+        t1 = time.perf_counter()
+        x = preprocess.network_input_array(out["noisy"][q["iso"]], q["raw"].meta,
+                                           out["neutral"], q["crop"][0], q["crop"][1])
+        t2 = time.perf_counter()
+        y = targets.srgb8(out["target"])
+        t3 = time.perf_counter()
+        torch.from_numpy(data.cut(x, 64)), torch.from_numpy(data.cut(y, 64).astype(np.float32) / 255)
+        t4 = time.perf_counter()
+        for name, dt in zip(stages, (t1 - t0, t2 - t1, t3 - t2, t4 - t3)):
+            stages[name].append(dt)
+    s = statistics.median(rates)
+    return {"bench": "fresh", "crop": a.crop, "items_per_s": s,
+            "patches_per_s_per_core": s * ds.patches_per_item, "runs": rates,
+            "stage_ms": {n: 1000 * statistics.median(v) for n, v in stages.items()}}
+
+
+def bench_noise(a):
+    import warnings
+    import day2night
+    day2night.set_threads(1)
+    warnings.simplefilter("ignore")
+    raw = day2night.read_dng(a.dng)
+    meta = dict(raw.meta)
+    if not meta.get("noise_profile"):
+        # an input without one (make_bench_input's): give the "with" case a NoiseProfile
+        meta["noise_profile"] = [[2e-5, 1e-7]]
+    without = dict(meta, noise_profile=None)
+    out = {"bench": "noise", "iso": meta["iso"], "threads": 1}
+    for label, m in (("with_noise_profile", meta), ("without_noise_profile", without)):
+        r = day2night.Raw.from_array(raw.data, m, name=raw.name)
+        day2night.synthesize(r, seed=0, isos=(1600,), crop=(0, 0, 64, 64))  # first call
+        rates = []
+        for run in range(a.runs):
+            t = time.perf_counter()
+            for i in range(a.calls):
+                day2night.synthesize(r, seed=0, variant=i, isos=(1600,),
+                                     crop=(64 * (i % 40), 64 * run, 64, 64))
+            rates.append(a.calls / (time.perf_counter() - t))
+        out[label + "_calls_per_s"] = statistics.median(rates)
+        out[label + "_runs"] = rates
+    return out
+
+
+def _infer_child(a):
+    """One inference in this process; prints JSON with the output's hash and peak RSS."""
+    import hashlib
+    import torch
+    import day2night
+    from day2night.train import infer, preprocess
+    from day2night.train.unet import UNet
+    x = preprocess.network_input(day2night.read_dng(a.dng))
+    torch.manual_seed(0)
+    m = UNet(3, 3, a.features).eval()
+    tile = None if a.tile == 0 else a.tile
+    t = time.perf_counter()
+    y = infer.predict(m, x, tile=tile)
+    secs = time.perf_counter() - t
+    rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024
+    print(json.dumps({"features": a.features, "tile": tile, "shape": list(y.shape),
+                      "seconds": secs, "peak_rss_bytes": rss,
+                      "sha256": hashlib.sha256(y.tobytes()).hexdigest()}))
+
+
+def _child(a, features, tile):
+    r = subprocess.run([sys.executable, __file__, "infer-child", a.dng, "--features",
+                        str(features), "--tile", str(tile)], capture_output=True, text=True)
+    if r.returncode != 0:
+        raise SystemExit(f"inference child failed: {r.stderr[-3000:]}")
+    return json.loads(r.stdout.strip().splitlines()[-1])
+
+
+def bench_infer(a):
+    runs = [_child(a, a.features, a.tile) for _ in range(a.runs)]
+    tiled = _child(a, a.check_features, a.tile)
+    whole = _child(a, a.check_features, 0)
+    return {"bench": "infer", "features": a.features, "tile": a.tile,
+            "peak_rss_gib": statistics.median(r["peak_rss_bytes"] for r in runs) / 2**30,
+            "seconds": statistics.median(r["seconds"] for r in runs),
+            "runs": runs, "check_features": a.check_features,
+            "check_tiled": tiled, "check_untiled": whole,
+            "identical": tiled["sha256"] == whole["sha256"]}
+
+
+def main():
+    p = argparse.ArgumentParser(description=__doc__,
+                                formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("what", choices=("train", "fresh", "noise", "infer", "infer-child"))
+    p.add_argument("dng", nargs="?")
+    p.add_argument("--features", type=int, default=32)
+    p.add_argument("--check-features", type=int, default=4)
+    p.add_argument("--batch", type=int, default=128)
+    p.add_argument("--steps", type=int, default=5)
+    p.add_argument("--runs", type=int, default=3)
+    p.add_argument("--crop", type=int, default=512)
+    p.add_argument("--items", type=int, default=6)
+    p.add_argument("--calls", type=int, default=200)
+    p.add_argument("--tile", type=int, default=512)
+    a = p.parse_args()
+    if a.what != "train" and not a.dng:
+        p.error(f"{a.what} needs a DNG")
+    if a.what == "infer-child":
+        return _infer_child(a)
+    res = {"train": bench_train, "fresh": bench_fresh, "noise": bench_noise,
+           "infer": bench_infer}[a.what](a)
+    print(json.dumps(res, indent=1))
+
+
+if __name__ == "__main__":
+    main()

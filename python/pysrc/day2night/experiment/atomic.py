@@ -1,0 +1,35 @@
+"""Files written whole or not at all: a temporary file in the same folder, flushed, synced,
+then renamed over the final name (the Python side of the crate's ``output`` module)."""
+
+import json
+import os
+import pathlib
+import tempfile
+
+
+def write_bytes(path, data: bytes):
+    """Write ``data`` to ``path`` through a temporary file + rename (never half-written)."""
+    path = pathlib.Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    try:
+        with os.fdopen(fd, "wb") as f:
+            f.write(data)
+            f.flush()
+            os.fsync(f.fileno())
+        os.replace(tmp, path)
+    except BaseException:
+        try:
+            os.unlink(tmp)
+        except FileNotFoundError:
+            pass
+        raise
+
+
+def write_text(path, text: str):
+    write_bytes(path, text.encode("utf-8"))
+
+
+def write_json(path, obj):
+    """JSON with sorted keys and a final newline (byte-identical for equal objects)."""
+    write_text(path, json.dumps(obj, indent=1, sort_keys=True, allow_nan=True) + "\n")

@@ -1,0 +1,60 @@
+"""The rows of the paper's Tables 1 and 2 and the training units each one needs.
+
+A row trained on synthesis only (Day, Day dimmed, Global relight, Ours, Ours on fresh
+synthesis) is one model per task, validated on the synthetic validation images and tested on
+every real scene (the paper: "the 105 test images"). A row with real data (Ours + 5 % or
+10 % real, Supervised) is one model per fold and task, validated on the fold's real
+validation scenes and tested on its test scenes; its score is the mean over the folds."""
+
+import dataclasses
+
+
+@dataclasses.dataclass(frozen=True)
+class Row:
+    id: str
+    label: str
+    source: str  # "synthetic" | "mix" | "fresh"
+    mode: str = "local"  # synthesis mode of its synthetic data
+    percent: float = 0.0  # real share of the training slots ("mix")
+
+    @property
+    def per_fold(self):
+        return self.source == "mix"
+
+
+ROWS = (
+    Row("day", "Day", "synthetic", mode="day"),
+    Row("dimmed", "Day dimmed", "synthetic", mode="dimmed"),
+    Row("global", "Global relight", "synthetic", mode="global"),
+    Row("ours", "Ours", "synthetic", mode="local"),
+    Row("mix5", "Ours 95 % + Real 5 %", "mix", percent=5),
+    Row("mix10", "Ours 90 % + Real 10 %", "mix", percent=10),
+    Row("supervised", "Supervised (k-fold)", "mix", percent=100),
+    Row("fresh", "Ours, fresh synthesis", "fresh"),
+)
+BY_ID = {r.id: r for r in ROWS}
+
+
+def select(ids):
+    """Rows by id, in the table's order; unknown ids are an error naming them."""
+    if not ids:
+        return list(ROWS)
+    unknown = [i for i in ids if i not in BY_ID]
+    if unknown:
+        raise ValueError(
+            f"unknown row {unknown[0]!r} (rows: {', '.join(r.id for r in ROWS)})"
+        )
+    return [r for r in ROWS if r.id in set(ids)]
+
+
+def tasks_of(task):
+    if task == "both":
+        return ["clean", "noisy"]
+    if task in ("clean", "noisy"):
+        return [task]
+    raise ValueError(f"task {task!r}: use clean, noisy or both")
+
+
+def test_keys(task):
+    """The inputs each test scene is scored on: the merged raw, or each noisy ISO."""
+    return ["clean"] if task == "clean" else [1600, 3200]

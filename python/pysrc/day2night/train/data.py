@@ -1,0 +1,178 @@
+"""Training patches for the night ISP (torch map-style datasets).
+
+- ``FixedPatches``: the release's fixed training set, every non-overlapping ``patch`` x
+  ``patch`` crop on a stride grid of fixed (input, target) pairs (no augmentation). The
+  images are kept once (per-image arrays or memory-mapped ``.npy`` files, see
+  ``save_pair``/``FixedPatches.from_dir``) and a patch is cut when it is asked for: memory is
+  the images' size, not the patches' (the release materializes every patch in RAM). The
+  release also drops the first ``len % batch`` patches so that the count is a multiple of
+  the batch; here the loader's last batch is simply smaller (``drop_last`` is not used).
+- ``FreshPatches``: beyond the release, fresh synthesis every epoch. An item is one
+  ``crop`` x ``crop`` synthesis of a ``NightPairs`` draw (a new night variant, crop position
+  and ISO per epoch and index) cut into (crop/patch)^2 patches: input = the release's
+  network input of the noisy (or clean) crop white-balanced by the image's average night
+  illuminant, target = ``srgb8`` of the synthesized linear target / 255.
+
+Both shard with ``torch.utils.data.DistributedSampler`` (``trainer`` does it under
+torchrun): an item is a function of its index (and of the epoch for ``FreshPatches``).
+Items: ``(x, y)`` float32 tensors, 3 x patch x patch for ``FixedPatches`` and
+k x 3 x patch x patch for ``FreshPatches`` (``patches_per_item`` = k); ``collate`` stacks
+either.
+"""
+
+import os
+
+import numpy as np
+
+from . import preprocess, targets
+from ._torch import torch
+
+
+def _load(a, mmap):
+    if isinstance(a, (str, os.PathLike)):
+        return np.load(os.fspath(a), mmap_mode="r" if mmap else None)
+    return np.asarray(a)
+
+
+def save_pair(folder, name, x, y):
+    """Store one fixed pair for ``FixedPatches.from_dir``: ``<name>_x.npy`` (the network
+    input, H x W x 3 float32) and ``<name>_y.npy`` (the target, H x W x 3 uint8)."""
+    os.makedirs(folder, exist_ok=True)
+    x, y = np.asarray(x, dtype=np.float32), np.asarray(y)
+    if y.dtype != np.uint8 or x.shape != y.shape or x.ndim != 3 or x.shape[2] != 3:
+        raise ValueError(f"{name}: need x float32 H x W x 3 and y uint8 of the same shape, "
+                         f"got {x.dtype} {x.shape} and {y.dtype} {y.shape}")
+    for suffix, a in (("_x.npy", x), ("_y.npy", y)):
+        path = os.path.join(folder, name + suffix)
+        tmp = path + ".tmp.npy"
+        np.save(tmp, a)
+        os.replace(tmp, path)
+
+
+class FixedPatches(torch.utils.data.Dataset):
+    """Every non-overlapping ``patch`` x ``patch`` crop (top-left on a ``stride`` grid) of
+    fixed pairs. ``inputs``: H x W x 3 float32 network inputs (arrays or ``.npy`` paths);
+    ``targets``: H x W x 3 uint8 sRGB targets (arrays or paths), same sizes. Paths are
+    memory-mapped (``mmap=True``). Item i: (x, y) float32 3 x patch x patch, y = target/255."""
+
+    patches_per_item = 1
+
+    def __init__(self, inputs, targets, patch=64, stride=64, mmap=True, names=None):
+        if len(inputs) != len(targets):
+            raise ValueError(f"{len(inputs)} inputs but {len(targets)} targets")
+        if patch < 1 or stride < 1:
+            raise ValueError(f"patch {patch} and stride {stride} must be positive")
+        self.patch, self.stride = int(patch), int(stride)
+        self.inputs = [_load(a, mmap) for a in inputs]
+        self.targets = [_load(a, mmap) for a in targets]
+        self.names = list(names) if names is not None else [str(i) for i in range(len(inputs))]
+        counts = []
+        for k, (x, y) in enumerate(zip(self.inputs, self.targets)):
+            if x.shape != y.shape or x.ndim != 3 or x.shape[2] != 3:
+                raise ValueError(f"pair {self.names[k]}: input {x.shape} and target {y.shape} "
+                                 "must both be H x W x 3 of the same size")
+            if y.dtype != np.uint8:
+                raise ValueError(f"pair {self.names[k]}: the target must be uint8 sRGB, got {y.dtype}")
+            rows = (x.shape[0] - self.patch) // self.stride + 1 if x.shape[0] >= self.patch else 0
+            cols = (x.shape[1] - self.patch) // self.stride + 1 if x.shape[1] >= self.patch else 0
+            counts.append((rows, cols))
+        self.grid = counts
+        self.offsets = np.concatenate([[0], np.cumsum([r * c for r, c in counts])]).astype(np.int64)
+        if self.offsets[-1] == 0:
+            raise ValueError(f"no {patch}x{patch} patch fits in any of the {len(inputs)} images")
+
+    @classmethod
+    def from_dir(cls, folder, patch=64, stride=64, mmap=True):
+        """The pairs ``save_pair`` wrote to ``folder`` (sorted by name)."""
+        names = sorted(f[:-6] for f in os.listdir(folder) if f.endswith("_x.npy"))
+        if not names:
+            raise ValueError(f"{folder}: no <name>_x.npy pair")
+        xs = [os.path.join(folder, n + "_x.npy") for n in names]
+        ys = [os.path.join(folder, n + "_y.npy") for n in names]
+        for y in ys:
+            if not os.path.isfile(y):
+                raise ValueError(f"{y}: missing (its input {y[:-6]}_x.npy exists)")
+        return cls(xs, ys, patch, stride, mmap, names)
+
+    def __len__(self):
+        return int(self.offsets[-1])
+
+    def locate(self, index):
+        """(image index, top, left) of patch ``index``."""
+        if not 0 <= index < len(self):
+            raise IndexError(f"patch {index} out of range for {len(self)} patches")
+        k = int(np.searchsorted(self.offsets, index, side="right") - 1)
+        r, c = divmod(int(index - self.offsets[k]), self.grid[k][1])
+        return k, r * self.stride, c * self.stride
+
+    def __getitem__(self, index):
+        k, top, left = self.locate(int(index))
+        p = self.patch
+        x = np.asarray(self.inputs[k][top:top + p, left:left + p], dtype=np.float32)
+        y = np.asarray(self.targets[k][top:top + p, left:left + p], dtype=np.float32) / np.float32(255)
+        return (torch.from_numpy(np.ascontiguousarray(x.transpose(2, 0, 1))),
+                torch.from_numpy(np.ascontiguousarray(y.transpose(2, 0, 1))))
+
+
+def cut(a, patch):
+    """H x W x 3 -> (H/patch * W/patch) x 3 x patch x patch (row-major grid, remainder dropped)."""
+    h, w = a.shape[0] // patch, a.shape[1] // patch
+    a = a[:h * patch, :w * patch]
+    return np.ascontiguousarray(
+        a.reshape(h, patch, w, patch, 3).transpose(0, 2, 4, 1, 3).reshape(h * w, 3, patch, patch))
+
+
+class FreshPatches(torch.utils.data.Dataset):
+    """Fresh synthesis: item i of epoch e is the ``crop`` x ``crop`` night synthesis
+    ``NightPairs(day_dir, crop, isos, seed, crops_per_image)`` draws for (e, i), cut into
+    (crop/patch)^2 patches. ``task``: "noisy" (input = the noisy raw of the drawn ISO) or
+    "clean" (the clean night raw). ``gamma`` as ``preprocess.network_input``. Other keyword
+    arguments are ``synthesize`` options (bulbs, noise_model, ...)."""
+
+    def __init__(self, day_dir, crop=512, patch=64, isos=(1600, 3200), seed=0,
+                 crops_per_image=1, task="noisy", gamma=preprocess.GAMMA, mode="local",
+                 **options):
+        from ..pairs import NightPairs
+        if task not in ("noisy", "clean"):
+            raise ValueError(f"task {task!r}: use 'noisy' or 'clean'")
+        if crop % patch or crop < patch:
+            raise ValueError(f"crop {crop} must be a multiple of the patch {patch}")
+        self.pairs = NightPairs(day_dir, crop=crop, isos=isos, seed=seed,
+                                crops_per_image=crops_per_image, mode=mode, **options)
+        self.task, self.patch, self.gamma = task, int(patch), gamma
+        self.mode, self.options, self.seed = mode, dict(options), seed
+        self.patches_per_item = (crop // patch) ** 2
+
+    def __len__(self):
+        return len(self.pairs)
+
+    def set_epoch(self, epoch):
+        self.pairs.set_epoch(epoch)
+
+    @property
+    def epoch(self):
+        return self.pairs.epoch
+
+    def arrays(self, index):
+        """(input H x W x 3 float32, target H x W x 3 uint8) of item ``index``."""
+        from .._native import synthesize
+        q = self.pairs.place(index)
+        raw, (top, left, h, w) = q["raw"], q["crop"]
+        out = synthesize(raw, seed=self.seed, variant=q["variant"], mode=self.mode,
+                         isos=(q["iso"],), crop=q["crop"], **self.options)
+        plane = out["noisy"][q["iso"]] if self.task == "noisy" else out["clean"]
+        x = preprocess.network_input_array(plane, raw.meta, out["neutral"], top, left, self.gamma)
+        return x, targets.srgb8(out["target"])
+
+    def __getitem__(self, index):
+        x, y = self.arrays(int(index))
+        xs = cut(x, self.patch)
+        ys = cut(y, self.patch).astype(np.float32) / np.float32(255)
+        return torch.from_numpy(xs), torch.from_numpy(ys)
+
+
+def collate(batch):
+    """Stack items of either dataset into (N x 3 x p x p, N x 3 x p x p)."""
+    xs = [b[0] if b[0].dim() == 4 else b[0].unsqueeze(0) for b in batch]
+    ys = [b[1] if b[1].dim() == 4 else b[1].unsqueeze(0) for b in batch]
+    return torch.cat(xs), torch.cat(ys)

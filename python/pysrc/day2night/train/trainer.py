@@ -1,0 +1,292 @@
+"""Training of the night ISP as the paper does it (Sec. 4.1; the release's train.py):
+L1 loss, Adam at lr 1e-3, the rate multiplied by 0.1 at 80 % of the epochs, batches of 128
+patches of 64 x 64, the checkpoint of the lowest validation loss kept.
+
+Small pure pieces: ``make_model``, ``make_loader``, ``train_epoch``, ``evaluate``,
+``save_checkpoint``/``load_checkpoint``, and ``train`` which strings them together.
+
+- Seeded: the model's initial weights come from ``torch.manual_seed(seed)``; the order of
+  the patches of epoch e from ``DistributedSampler(seed=seed)`` at epoch e (also with one
+  process), so a run on CPU with the same seed gives the same weights and scores.
+- Resumable: ``out_dir/last.pt`` is written (atomically) after every epoch with the
+  model, optimizer, scheduler, history and best score; ``train`` continues from it, and a
+  run killed at any point finishes with the weights of an uninterrupted run.
+- Data parallel: under ``torchrun --nproc-per-node N`` (WORLD_SIZE > 1) each rank trains on
+  its ``DistributedSampler`` shard inside ``DistributedDataParallel`` (gloo on CPU, nccl on
+  CUDA), ``batch_size`` is the global batch (each rank takes batch_size / N), the
+  validation sums are all-reduced, and only rank 0 writes checkpoints.
+"""
+
+import dataclasses
+import json
+import math
+import os
+import sys
+import time
+
+from ._torch import torch
+from .data import collate
+from .unet import UNet
+
+
+@dataclasses.dataclass
+class TrainConfig:
+    """The trainer's settings (``python -m day2night.train --help`` lists them as flags)."""
+
+    out_dir: str
+    epochs: int = 500
+    batch_size: int = 128
+    lr: float = 1e-3
+    decay_at: float = 0.8
+    decay: float = 0.1
+    init_features: int = 32
+    seed: int = 0
+    device: str = "cpu"
+    workers: int = 0
+    progress: bool = True
+    #: Write the sample indices each rank trained on (out_dir/shards/), for checks.
+    record_shards: bool = False
+
+    def check(self):
+        if self.epochs < 1:
+            raise ValueError(f"epochs {self.epochs} must be at least 1")
+        if self.batch_size < 1:
+            raise ValueError(f"batch_size {self.batch_size} must be at least 1")
+        if not self.lr > 0:
+            raise ValueError(f"lr {self.lr} must be positive")
+        if not 0 <= self.decay_at <= 1:
+            raise ValueError(f"decay_at {self.decay_at} must be in [0, 1]")
+        if self.device not in ("cpu", "cuda") and not self.device.startswith("cuda:"):
+            raise ValueError(f"device {self.device!r}: use cpu or cuda")
+        if self.device.startswith("cuda") and not torch.cuda.is_available():
+            raise ValueError(f"device {self.device!r}: torch sees no CUDA device")
+
+    def milestone(self):
+        """The epoch (0-based) from which the rate is multiplied by ``decay``."""
+        return int(round(self.decay_at * self.epochs))
+
+
+def dist_info():
+    """(rank, world size, local rank) from torchrun's environment; (0, 1, 0) without it."""
+    world = int(os.environ.get("WORLD_SIZE", "1"))
+    return int(os.environ.get("RANK", "0")), world, int(os.environ.get("LOCAL_RANK", "0"))
+
+
+def make_model(cfg):
+    """The UNet, its weights drawn from ``torch.manual_seed(cfg.seed)``."""
+    torch.manual_seed(cfg.seed)
+    return UNet(in_channels=3, out_channels=3, init_features=cfg.init_features)
+
+
+def make_loader(dataset, cfg, rank, world, shuffle):
+    """A DataLoader over this rank's ``DistributedSampler`` shard; a batch holds
+    ``batch_size / world`` patches (items of several patches count as that many)."""
+    sampler = torch.utils.data.DistributedSampler(
+        dataset, num_replicas=world, rank=rank, shuffle=shuffle, seed=cfg.seed, drop_last=False)
+    per_rank = max(1, cfg.batch_size // world)
+    items = max(1, per_rank // getattr(dataset, "patches_per_item", 1))
+    loader = torch.utils.data.DataLoader(
+        dataset, batch_size=items, sampler=sampler, num_workers=cfg.workers,
+        collate_fn=collate, pin_memory=cfg.device.startswith("cuda"))
+    return loader, sampler
+
+
+def _kill_hook(epoch, step):
+    """Test hook: D2N_TRAIN_KILL_AT="E:S" SIGKILLs the process at step S of epoch E (a real
+    kill mid-training, for the resume test)."""
+    at = os.environ.get("D2N_TRAIN_KILL_AT")
+    if at and at == f"{epoch}:{step}":
+        import signal
+        os.kill(os.getpid(), signal.SIGKILL)
+
+
+def train_epoch(model, loader, optimizer, device, epoch, progress=None):
+    """One pass of L1 training; returns the mean loss over this rank's patches."""
+    model.train()
+    total, count = 0.0, 0
+    for step, (x, y) in enumerate(loader):
+        _kill_hook(epoch, step)
+        x, y = x.to(device, non_blocking=True), y.to(device, non_blocking=True)
+        optimizer.zero_grad(set_to_none=True)
+        loss = torch.nn.functional.l1_loss(model(x), y)
+        loss.backward()
+        optimizer.step()
+        total += float(loss.detach()) * x.shape[0]
+        count += x.shape[0]
+        if progress:
+            progress(step + 1, len(loader), total / count)
+    return total / max(count, 1), count
+
+
+@torch.no_grad()
+def evaluate(model, loader, device, world):
+    """(mean L1, PSNR in dB of the mean squared error) over the validation patches, summed
+    over all ranks."""
+    model.eval()
+    sums = torch.zeros(3, dtype=torch.float64, device=device)
+    for x, y in loader:
+        x, y = x.to(device), y.to(device)
+        p = model(x)
+        sums[0] += torch.nn.functional.l1_loss(p, y, reduction="sum").double()
+        sums[1] += torch.nn.functional.mse_loss(p, y, reduction="sum").double()
+        sums[2] += y.numel()
+    if world > 1:
+        torch.distributed.all_reduce(sums)
+    n = max(float(sums[2]), 1.0)
+    mse = float(sums[1]) / n
+    return float(sums[0]) / n, (10 * math.log10(1 / mse) if mse > 0 else float("inf"))
+
+
+def _state(model):
+    m = model.module if hasattr(model, "module") else model
+    return {k: v.detach().cpu() for k, v in m.state_dict().items()}
+
+
+def save_checkpoint(path, **state):
+    """torch.save to a temporary file, then rename: never a half-written checkpoint."""
+    tmp = f"{path}.tmp"
+    torch.save(state, tmp)
+    os.replace(tmp, path)
+
+
+def load_checkpoint(path, device="cpu"):
+    return torch.load(path, map_location=device, weights_only=False)
+
+
+def load_model(path, device="cpu"):
+    """The UNet of a checkpoint (``best.pt``/``last.pt``), in eval mode on ``device``."""
+    ck = load_checkpoint(path, "cpu")
+    model = UNet(3, 3, ck["config"]["init_features"])
+    model.load_state_dict(ck["model"])
+    return model.to(device).eval()
+
+
+class _Bar:
+    """A one-line progress report on stderr (rank 0): epoch, step, loss, validation PSNR."""
+
+    def __init__(self, enabled, epochs):
+        self.enabled, self.epochs, self.last = enabled, epochs, 0.0
+        self.val = None
+
+    def step(self, epoch, step, steps, loss):
+        now = time.monotonic()
+        if self.enabled and (now - self.last > 0.5 or step == steps):
+            self.last = now
+            val = "" if self.val is None else f"  val PSNR {self.val:.2f} dB"
+            sys.stderr.write(f"\repoch {epoch + 1}/{self.epochs}  step {step}/{steps}  "
+                             f"loss {loss:.5f}{val}   ")
+            sys.stderr.flush()
+
+    def end(self, epoch, loss, val_loss, val_psnr, secs):
+        self.val = val_psnr
+        if self.enabled:
+            sys.stderr.write(f"\repoch {epoch + 1}/{self.epochs}  loss {loss:.5f}  "
+                             f"val loss {val_loss:.5f}  val PSNR {val_psnr:.2f} dB  "
+                             f"({secs:.1f} s)\n")
+            sys.stderr.flush()
+
+
+def _setup(cfg):
+    rank, world, local = dist_info()
+    device = torch.device(cfg.device)
+    if world > 1 and not torch.distributed.is_initialized():
+        if cfg.device.startswith("cuda"):
+            device = torch.device("cuda", local)
+            torch.cuda.set_device(device)
+        torch.distributed.init_process_group("nccl" if device.type == "cuda" else "gloo")
+    return rank, world, device
+
+
+def train(cfg, train_set, val_set):
+    """Train (or resume from ``cfg.out_dir/last.pt``) and return ``{"best", "last",
+    "history"}``: the paths of the best-validation and last checkpoints and one dict per
+    epoch (``epoch``, ``loss``, ``val_loss``, ``val_psnr``, ``lr``, ``seconds``)."""
+    cfg.check()
+    rank, world, device = _setup(cfg)
+    os.makedirs(cfg.out_dir, exist_ok=True)
+    last, best = os.path.join(cfg.out_dir, "last.pt"), os.path.join(cfg.out_dir, "best.pt")
+    model = make_model(cfg).to(device)
+    optimizer = torch.optim.Adam(model.parameters(), lr=cfg.lr)
+    scheduler = torch.optim.lr_scheduler.MultiStepLR(optimizer, [cfg.milestone()], cfg.decay)
+    history, best_val, start = [], float("inf"), 0
+    if os.path.isfile(last):
+        ck = load_checkpoint(last, device)
+        _check_resume(last, ck, cfg)
+        model.load_state_dict(ck["model"])
+        optimizer.load_state_dict(ck["optimizer"])
+        scheduler.load_state_dict(ck["scheduler"])
+        history, best_val, start = ck["history"], ck["best_val"], ck["epoch"] + 1
+    if world > 1:
+        model = torch.nn.parallel.DistributedDataParallel(
+            model, device_ids=[device.index] if device.type == "cuda" else None)
+    loader, sampler = make_loader(train_set, cfg, rank, world, shuffle=True)
+    val_loader, _ = make_loader(val_set, cfg, rank, world, shuffle=False)
+    bar = _Bar(cfg.progress and rank == 0, cfg.epochs)
+    if history:
+        bar.val = history[-1]["val_psnr"]
+    for epoch in range(start, cfg.epochs):
+        t0 = time.monotonic()
+        sampler.set_epoch(epoch)
+        for ds in (train_set, val_set):
+            if hasattr(ds, "set_epoch"):
+                ds.set_epoch(epoch)
+        if cfg.record_shards:
+            _record(cfg, rank, epoch, list(iter(sampler)))
+        lr = optimizer.param_groups[0]["lr"]
+        loss, n = train_epoch(model, loader, optimizer, device, epoch,
+                              lambda s, S, lo, e=epoch: bar.step(e, s, S, lo))
+        if world > 1:
+            t = torch.tensor([loss * n, n], dtype=torch.float64, device=device)
+            torch.distributed.all_reduce(t)
+            loss = float(t[0] / max(float(t[1]), 1.0))
+        scheduler.step()
+        val_loss, val_psnr = evaluate(model, val_loader, device, world)
+        row = {"epoch": epoch, "loss": loss, "val_loss": val_loss, "val_psnr": val_psnr,
+               "lr": lr, "seconds": time.monotonic() - t0}
+        history.append(row)
+        improved = val_loss < best_val
+        best_val = min(best_val, val_loss)
+        if rank == 0:
+            state = _state(model)
+            meta = {"config": dataclasses.asdict(cfg), "epoch": epoch, "history": history,
+                    "best_val": best_val, "writer_rank": rank, "world_size": world}
+            if improved:
+                save_checkpoint(best, model=state, **meta)
+            save_checkpoint(last, model=state, optimizer=optimizer.state_dict(),
+                            scheduler=scheduler.state_dict(), **meta)
+        bar.end(epoch, loss, val_loss, val_psnr, row["seconds"])
+        if world > 1:
+            torch.distributed.barrier()
+    if rank == 0:
+        with open(os.path.join(cfg.out_dir, "history.json.tmp"), "w") as f:
+            json.dump(history, f, indent=1)
+        os.replace(os.path.join(cfg.out_dir, "history.json.tmp"),
+                   os.path.join(cfg.out_dir, "history.json"))
+    return {"best": best, "last": last, "history": history}
+
+
+#: Settings a run cannot change when it resumes.
+RESUME_KEYS = ("epochs", "batch_size", "lr", "decay_at", "decay", "init_features", "seed")
+
+
+def _check_resume(path, ck, cfg):
+    """A checkpoint resumed with other settings would not give the run it claims: refuse."""
+    old = ck.get("config", {})
+    diff = [f"{k} {old.get(k)!r} -> {getattr(cfg, k)!r}" for k in RESUME_KEYS
+            if old.get(k) != getattr(cfg, k)]
+    if diff:
+        raise ValueError(f"{path}: written by a run with other settings ({'; '.join(diff)}); "
+                         "use another out_dir or the same settings")
+
+
+def finish():
+    """End the process group torchrun's ranks joined (nothing without one)."""
+    if torch.distributed.is_available() and torch.distributed.is_initialized():
+        torch.distributed.destroy_process_group()
+
+
+def _record(cfg, rank, epoch, indices):
+    d = os.path.join(cfg.out_dir, "shards")
+    os.makedirs(d, exist_ok=True)
+    with open(os.path.join(d, f"rank{rank}_epoch{epoch}.json"), "w") as f:
+        json.dump(indices, f)

@@ -1,0 +1,304 @@
+"""The paper's experiment in miniature, the whole way (issue 31, "Done when"): tripod night
+bursts of day tiles the training set never sees -> ``day2night real-pairs`` (the authors'
+burst layout and the simple one) -> folds -> mixes -> training (UNet width 4, 3 epochs, CPU)
+-> scoring -> table. A rerun with the same seed gives the same table.json; a run killed
+during training resumes to the same table.json; bad input is a clear error with nothing
+written. Needs torch (``pip install day2night[train]``) and the CLI (D2N_BIN)."""
+
+import json
+import os
+import pathlib
+import shutil
+import signal
+import subprocess
+import sys
+import time
+
+import numpy as np
+import pytest
+
+try:
+    import torch  # noqa: F401
+except ImportError as e:  # the trainer's tests skip the same way (scripts/test.sh)
+    if os.environ.get("D2N_REQUIRE_TORCH") == "1":
+        pytest.fail(f"D2N_REQUIRE_TORCH=1 but torch cannot be imported: {e}", pytrace=False)
+    pytest.skip(os.environ.get("D2N_TORCH_SKIP_REASON") or f"torch is not installed ({e})",
+                allow_module_level=True)
+
+import experiment_mini as mini  # noqa: E402
+from conftest import FIXTURES, cli_path  # noqa: E402
+
+from day2night.experiment.png import read_png  # noqa: E402
+
+EPOCHS = 3
+WIDTH = 4
+SMALL = ["--rows", "ours", "supervised", "--task", "both"]
+
+
+def env():
+    e = dict(os.environ)
+    # one torch thread: fast on a shared 2-core machine, and the same sums every run
+    e.setdefault("OMP_NUM_THREADS", "1")
+    return e
+
+
+@pytest.fixture(scope="session")
+def mini_set(tmp_path_factory, cli):
+    root = tmp_path_factory.mktemp("mini")
+    day = mini.day_dir(root / "days", FIXTURES / "day.dng")
+    release, simple = mini.bursts(cli, root / "captures", FIXTURES / "day.dng")
+    real, real_simple = root / "real", root / "real_simple"
+    cli("real-pairs", release, "-o", real)
+    cli("real-pairs", simple, "-o", real_simple)
+    return {"root": root, "day": day, "real": real, "real_simple": real_simple,
+            "release": release, "simple": simple}
+
+
+def records(real):
+    lines = (pathlib.Path(real) / "manifest.jsonl").read_text().splitlines()
+    recs = [json.loads(line) for line in lines if line.strip()]
+    return {r["scene"]: r for r in recs}
+
+
+def test_both_layouts_give_the_same_real_pairs(mini_set):
+    a, b = records(mini_set["real"]), records(mini_set["real_simple"])
+    assert sorted(a) == [f"scene{i:02d}" for i in range(len(mini.SCENE_TILES))]
+    assert sorted(a) == sorted(b)
+    for sid in a:
+        assert a[sid]["status"] == "ok" and a[sid]["kind"] == "real"
+        ha = {o["kind"] + o["path"].rsplit("/", 1)[-1]: o["sha256"] for o in a[sid]["outputs"]}
+        hb = {o["kind"] + o["path"].rsplit("/", 1)[-1]: o["sha256"] for o in b[sid]["outputs"]}
+        for k in ha:
+            if k.startswith(("clean_raw", "noisy_raw", "target")):
+                assert ha[k] == hb.get(k), f"{sid}: {k} differs between the two layouts"
+
+
+@pytest.fixture(scope="session")
+def full_run(mini_set):
+    out = mini_set["root"] / "run_full"
+    r = mini.run_experiment(out, mini_set["day"], mini_set["real"], "--epochs", EPOCHS,
+                            "--width", WIDTH, "--seed", 3, env=env())
+    return out, r
+
+
+def test_chain_writes_every_row_of_both_tables(full_run, mini_set):
+    out, r = full_run
+    assert "SMOKE RUN: network width 4 < 32" in r.stderr
+    t = json.loads((out / "table.json").read_text())
+    assert t["smoke"] is True
+    labels = [(x["task"], x["label"]) for x in t["rows"]]
+    want = ["Day", "Day dimmed", "Global relight", "Ours", "Ours 95 % + Real 5 %",
+            "Ours 90 % + Real 10 %", "Supervised (k-fold)", "Ours, fresh synthesis"]
+    assert labels == [("clean", w) for w in want] + [("noisy", w) for w in want]
+    md = (out / "table.md").read_text()
+    assert "Smoke run" in md and "Table 1" in md and "Table 2" in md
+    assert ("Differs from the paper's protocol: UNet width 4 (paper: 32); 3 epochs (paper: 500); "
+            "6 real scenes (paper: 105); 4 day images (paper: 70).") in md
+    scenes = sorted(records(mini_set["real"]))
+    for row in t["rows"]:
+        keys = ["clean"] if row["task"] == "clean" else ["1600", "3200"]
+        tested = []
+        for u in row["units"]:
+            tested += u["test_scenes"]
+            assert sorted({i["input"] for i in u["images"]}) == sorted(keys)
+            assert len(u["images"]) == len(u["test_scenes"]) * len(keys)
+            assert len(u["history"]) == EPOCHS
+        # synthetic rows test every scene once; fold rows cover every scene across folds
+        assert sorted(tested) == scenes
+        for k in keys:
+            per_unit = [np.mean([i["psnr"] for i in u["images"] if i["input"] == k])
+                        for u in row["units"]]
+            assert row["mean"][k]["psnr"] == pytest.approx(np.mean(per_unit), rel=1e-12)
+
+
+def test_folds_are_disjoint_covering_and_mixes_exact(full_run):
+    out, _ = full_run
+    f = json.loads((out / "folds.json").read_text())
+    tests = [s for sp in f["splits"] for s in sp["test"]]
+    assert sorted(tests) == f["scenes"] and len(set(tests)) == len(tests)
+    for sp in f["splits"]:
+        assert not set(sp["train"]) & set(sp["val"])
+        assert not (set(sp["train"]) | set(sp["val"])) & set(sp["test"])
+    mixes = json.loads((out / "mixes.json").read_text())
+    for row, pct in (("mix5", 5), ("mix10", 10), ("supervised", 100)):
+        for sp, slots in zip(f["splits"], mixes[row]):
+            n = len(sp["train"])
+            assert len(slots) == n
+            assert sum(s["kind"] == "real" for s in slots) == round(pct * n / 100)
+            assert {s["id"] for s in slots if s["kind"] == "real"} <= set(sp["train"])
+
+
+def test_training_loss_falls(full_run):
+    out, _ = full_run
+    t = json.loads((out / "table.json").read_text())
+    for row in t["rows"]:
+        for u in row["units"]:
+            h = u["history"]
+            assert h[-1]["loss"] < h[0]["loss"], (row["task"], row["row"], u["fold"], h)
+
+
+def test_scores_equal_scikit_image_and_day2night_eval(full_run):
+    from skimage.metrics import peak_signal_noise_ratio, structural_similarity
+
+    out, _ = full_run
+    t = json.loads((out / "table.json").read_text())
+    checked = 0
+    for row in t["rows"]:
+        for u in row["units"]:
+            for i in u["images"]:
+                stem = f"{i['scene']}_{i['input']}"
+                pred_png = out / "img" / row["task"] / row["row"] / f"{stem}_pred.png"
+                if not pred_png.is_file():
+                    continue
+                target_png = out / "img" / row["task"] / "scenes" / f"{stem}_target.png"
+                pred, target = read_png(pred_png), read_png(target_png)
+                p = peak_signal_noise_ratio(target, pred, data_range=255)
+                s = structural_similarity(target, pred, channel_axis=-1, data_range=255)
+                assert i["psnr"] == pytest.approx(p, rel=1e-6)
+                assert i["ssim"] == pytest.approx(s, rel=1e-6, abs=1e-9)
+                r = subprocess.run([cli_path(), "eval", pred_png, target_png, "--json"],
+                                   capture_output=True, text=True, check=True)
+                e = json.loads(r.stdout)
+                assert i["psnr"] == pytest.approx(e["psnr"], rel=1e-9)
+                assert i["ssim"] == pytest.approx(e["ssim"], rel=1e-9)
+                assert i["delta_e"] == pytest.approx(e["delta_e_2000"], rel=1e-9)
+                checked += 1
+    assert checked >= 8
+
+
+def test_report_page_shows_test_scenes(full_run):
+    out, _ = full_run
+    page = (out / "index.html").read_text()
+    srcs = [s.split('"')[0] for s in page.split('src="')[1:]]
+    assert len(srcs) >= 16 * 4  # every row of both tasks: input, prediction, target, Delta E
+    for s in srcs:
+        assert (out / s).is_file(), s
+    assert not list(out.rglob("*.tmp"))
+
+
+@pytest.fixture(scope="session")
+def small_run(mini_set):
+    out = mini_set["root"] / "run_small"
+    mini.run_experiment(out, mini_set["day"], mini_set["real"], "--epochs", EPOCHS,
+                        "--width", WIDTH, *SMALL, env=env())
+    return out
+
+
+def test_same_seed_rerun_gives_the_same_table(small_run, mini_set):
+    again = mini_set["root"] / "run_small_again"
+    mini.run_experiment(again, mini_set["day"], mini_set["real"], "--epochs", EPOCHS,
+                        "--width", WIDTH, *SMALL, env=env())
+    assert (again / "table.json").read_bytes() == (small_run / "table.json").read_bytes()
+    assert (again / "table.md").read_bytes() == (small_run / "table.md").read_bytes()
+
+
+def test_killed_run_resumes_to_the_same_table(small_run, mini_set):
+    out = mini_set["root"] / "run_killed"
+    cmd = [sys.executable, "-m", "day2night.experiment", "--day", str(mini_set["day"]),
+           "--real", str(mini_set["real"]), "-o", str(out), "--epochs", str(EPOCHS),
+           "--width", str(WIDTH), *SMALL]
+    # the 3rd unit (clean, supervised, fold 1): killed once its first epoch is checkpointed
+    last = out / "units" / "clean" / "supervised" / "1" / "model" / "last.pt"
+    p = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, env=env())
+    deadline = time.monotonic() + 300
+    while not last.is_file() and p.poll() is None and time.monotonic() < deadline:
+        time.sleep(0.005)
+    p.send_signal(signal.SIGKILL)
+    p.wait()
+    assert last.is_file(), "the run ended before its 3rd unit checkpointed an epoch"
+    mid_unit = not (last.parent.parent / "scores.json").exists()
+    assert not (out / "table.json").exists()
+    r = subprocess.run(cmd, capture_output=True, text=True, env=env())
+    assert r.returncode == 0, r.stderr
+    assert "unit 1/8: task clean, row ours (Ours), fold all: done (scores.json), skipped" in r.stderr
+    assert "unit 2/8" in r.stderr and "skipped" in r.stderr
+    unit3 = "unit 3/8: task clean, row supervised (Supervised (k-fold)), fold 1: "
+    if mid_unit:  # killed inside the unit: the trainer resumes after its last epoch
+        assert unit3 + "resuming after epoch" in r.stderr, r.stderr
+    else:
+        assert unit3 + "done (scores.json), skipped" in r.stderr, r.stderr
+    assert (out / "table.json").read_bytes() == (small_run / "table.json").read_bytes()
+
+
+def run_bad(mini_set, name, *args, real=None, day=None):
+    out = mini_set["root"] / name
+    r = mini.run_experiment(out, day or mini_set["day"], real or mini_set["real"], "--epochs", 1,
+                            "--width", WIDTH, *args, env=env(), check=False)
+    assert r.returncode == 2, r.stderr
+    written = sorted(p.name for p in out.rglob("*")) if out.exists() else []
+    assert written == [], f"{name}: files written despite the error: {written}"
+    return r.stderr
+
+
+def test_more_folds_than_scenes_is_a_clear_error(mini_set):
+    err = run_bad(mini_set, "bad_folds", "--folds", 7)
+    assert "7 folds need at least 7 scenes" in err and "has 6" in err
+
+
+def test_real_set_too_small_for_the_folds(mini_set):
+    small = mini_set["root"] / "real_three"
+    small.mkdir()
+    (small / "real").symlink_to(mini_set["real"] / "real")
+    lines = (mini_set["real"] / "manifest.jsonl").read_text().splitlines()[:3]
+    (small / "manifest.jsonl").write_text("\n".join(lines) + "\n")
+    err = run_bad(mini_set, "bad_small", "--folds", 2, real=small)
+    assert "too small for 2 folds" in err
+
+
+def test_missing_real_file_names_the_scene(mini_set):
+    broken = mini_set["root"] / "real_broken"
+    shutil.copytree(mini_set["real"], broken)
+    victim = sorted((broken / "real" / "noisy_raw").glob("scene02_iso3200*"))[0]
+    victim.unlink()
+    err = run_bad(mini_set, "bad_missing", real=broken)
+    assert "scene02" in err and "missing" in err
+
+
+def test_percentage_outside_0_100_is_refused():
+    from day2night.experiment import mix
+
+    for bad in (-5, 100.01, 250):
+        with pytest.raises(mix.MixError, match="outside 0-100"):
+            mix.mix(["a", "b"], ["d.dng"], bad)
+
+
+def burst_copy(mini_set, name):
+    d = mini_set["root"] / name
+    shutil.copytree(mini_set["release"], d)
+    return d
+
+
+def test_scene_with_one_frame_is_a_clear_error(mini_set, cli):
+    scenes = burst_copy(mini_set, "one_frame")
+    bad = scenes / "scene03"
+    for f in sorted(bad.glob("RAW_0_000050_*.dng"))[1:]:
+        f.unlink()
+    out = mini_set["root"] / "one_frame_out"
+    r = cli("real-pairs", scenes, "-o", out, check=False)
+    assert r.returncode != 0
+    assert "scene03" in r.stderr
+    assert not (out / "real" / "target" / "scene03.png").exists()
+
+
+def test_mismatched_frames_are_a_clear_error(mini_set, cli):
+    import day2night
+
+    scenes = burst_copy(mini_set, "mismatch")
+    # a frame of another size and CFA in scene05's ISO 1600 burst
+    raw = day2night.read_dng(str(FIXTURES / "rggb_16bit_le_strips.dng"))
+    day2night.write_dng(raw, str(sorted((scenes / "scene05").glob("RAW_0_001600_*.dng"))[0]),
+                        overwrite=True)
+    out = mini_set["root"] / "mismatch_out"
+    r = cli("real-pairs", scenes, "-o", out, check=False)
+    assert r.returncode != 0
+    assert "scene05" in r.stderr
+    assert not (out / "real" / "target" / "scene05.png").exists()
+
+
+def test_cuda_without_a_gpu_is_a_clear_error(mini_set):
+    import torch
+
+    if torch.cuda.is_available():
+        pytest.skip("this machine has a CUDA device")
+    err = run_bad(mini_set, "bad_cuda", "--device", "cuda")
+    assert "--device cuda: torch sees no CUDA device" in err

@@ -1,0 +1,120 @@
+"""day2night.train.data: fixed patch sets (every 64x64 crop on the stride grid, indexed
+lazily), fresh-synthesis patches, sharding; and the image noise estimate computed once per
+raw (synthesize on an input without NoiseProfile)."""
+
+import os
+
+import numpy as np
+import pytest
+
+import day2night
+
+
+def need_torch():
+    try:
+        import torch
+    except ImportError as e:
+        if os.environ.get("D2N_REQUIRE_TORCH") == "1":
+            pytest.fail(f"D2N_REQUIRE_TORCH=1 but torch cannot be imported: {e}")
+        pytest.skip(os.environ.get("D2N_TORCH_SKIP_REASON") or f"torch is not installed ({e})")
+    return torch
+
+
+def pairs(rng, sizes):
+    xs = [rng.random((h, w, 3), dtype=np.float32) for h, w in sizes]
+    ys = [rng.integers(0, 256, (h, w, 3)).astype(np.uint8) for h, w in sizes]
+    return xs, ys
+
+
+def test_fixed_patches_cover_the_grid(tmp_path):
+    need_torch()
+    from day2night.train import data
+    rng = np.random.default_rng(0)
+    xs, ys = pairs(rng, [(130, 200), (64, 64), (63, 500)])
+    ds = data.FixedPatches(xs, ys, patch=64, stride=64)
+    # 2 x 3 + 1 + 0 (63 rows hold no patch)
+    assert len(ds) == 7
+    seen = []
+    for i in range(len(ds)):
+        k, top, left = ds.locate(i)
+        x, y = ds[i]
+        assert x.shape == (3, 64, 64) and y.shape == (3, 64, 64)
+        assert np.array_equal(x.numpy(), xs[k][top:top + 64, left:left + 64].transpose(2, 0, 1))
+        want = ys[k][top:top + 64, left:left + 64].transpose(2, 0, 1).astype(np.float32) / 255
+        assert np.array_equal(y.numpy(), want)
+        seen.append((k, top, left))
+    assert seen == [(0, 0, 0), (0, 0, 64), (0, 0, 128), (0, 64, 0), (0, 64, 64), (0, 64, 128),
+                    (1, 0, 0)]
+    with pytest.raises(IndexError):
+        ds[7]
+    # stored as .npy and memory-mapped: the same items
+    for n, (x, y) in enumerate(zip(xs, ys)):
+        data.save_pair(tmp_path, f"im{n}", x, y)
+    mm = data.FixedPatches.from_dir(tmp_path)
+    assert isinstance(mm.inputs[0], np.memmap)
+    assert len(mm) == 7 and all(np.array_equal(mm[i][0], ds[i][0]) for i in range(7))
+
+
+def test_fixed_patches_refuse_bad_pairs():
+    need_torch()
+    from day2night.train import data
+    x = np.zeros((64, 64, 3), np.float32)
+    with pytest.raises(ValueError, match="uint8"):
+        data.FixedPatches([x], [x])
+    with pytest.raises(ValueError, match="same size"):
+        data.FixedPatches([x], [np.zeros((64, 65, 3), np.uint8)])
+    with pytest.raises(ValueError, match="no 64x64 patch"):
+        data.FixedPatches([x[:10]], [np.zeros((10, 64, 3), np.uint8)])
+
+
+def test_shards_are_disjoint_and_cover():
+    torch = need_torch()
+    from day2night.train import data
+    rng = np.random.default_rng(0)
+    ds = data.FixedPatches(*pairs(rng, [(256, 320)]))
+    shards = [list(torch.utils.data.DistributedSampler(ds, 2, r, shuffle=True, seed=5))
+              for r in (0, 1)]
+    assert not set(shards[0]) & set(shards[1])
+    assert sorted(shards[0] + shards[1]) == list(range(len(ds)))
+
+
+def test_fresh_patches(day_dir):
+    need_torch()
+    from day2night.train import data, preprocess, targets
+    ds = data.FreshPatches(day_dir, crop=128, patch=64, isos=(1600,), seed=2)
+    assert len(ds) == 2 and ds.patches_per_item == 4
+    x, y = ds[0]
+    assert x.shape == (4, 3, 64, 64) and y.shape == (4, 3, 64, 64)
+    assert x.dtype == y.dtype
+    # the item is the release's input of the synthesized noisy crop, by the night neutral
+    q = ds.pairs.place(0)
+    out = day2night.synthesize(q["raw"], seed=2, variant=q["variant"], isos=(1600,),
+                               crop=q["crop"])
+    top, left = q["crop"][:2]
+    xin = preprocess.network_input_array(out["noisy"][1600], q["raw"].meta, out["neutral"],
+                                         top, left)
+    assert np.array_equal(x[1].numpy(), xin[:64, 64:128].transpose(2, 0, 1))
+    t8 = targets.srgb8(out["target"])
+    assert np.array_equal(y[2].numpy(), t8[64:, :64].transpose(2, 0, 1).astype(np.float32) / 255)
+    # deterministic; a new epoch draws new variants
+    assert np.array_equal(ds[0][0].numpy(), x.numpy())
+    ds.set_epoch(1)
+    assert not np.array_equal(ds[0][0].numpy(), x.numpy())
+    with pytest.raises(ValueError, match="multiple"):
+        data.FreshPatches(day_dir, crop=100, patch=64)
+
+
+def test_noise_estimate_is_made_once_per_raw_with_the_same_numbers(day_dng):
+    raw = day2night.read_dng(day_dng)
+    meta = dict(raw.meta)
+    meta["noise_profile"] = None
+    assert meta["iso"]
+    crops = [(0, 0, 64, 64), (64, 128, 64, 64), (0, 0, 64, 64)]
+    kept = day2night.Raw.from_array(raw.data, meta, name=raw.name)
+    repeated = [day2night.synthesize(kept, seed=1, isos=(1600,), crop=c) for c in crops]
+    for c, out in zip(crops, repeated):
+        fresh = day2night.Raw.from_array(raw.data, meta, name=raw.name)
+        ref = day2night.synthesize(fresh, seed=1, isos=(1600,), crop=c)
+        assert ref["noise_provenance"]["source"] == "image_estimate"
+        assert ref["noise_profile"] == out["noise_profile"]
+        assert np.array_equal(ref["noisy"][1600], out["noisy"][1600])
