@@ -47,7 +47,8 @@ wheel=$(ls -t "$out"/day2night-"$version"-*manylinux*.whl | head -1)
 # build, so that maturin needs no data folder, which the sdist and `pip install ./python`
 # would then need too).
 "$py" scripts/wheel_add_script.py "$wheel" "$bin" >&2
-if ! "$py" -m zipfile -l "$wheel" | grep -q "day2night-$version.data/scripts/day2night "; then
+if ! "$py" -c 'import sys, zipfile; sys.exit(sys.argv[2] not in zipfile.ZipFile(sys.argv[1]).namelist())' \
+  "$wheel" "day2night-$version.data/scripts/day2night"; then
   echo "scripts/wheel.sh: $wheel has no day2night-$version.data/scripts/day2night" >&2
   exit 1
 fi
