@@ -5,9 +5,11 @@
 #      maturin and pytest;
 #   2. cargo test (unit, integration, doc tests); tests find the validators through
 #      D2N_PYTHON and fail (instead of skipping) when D2N_REQUIRE_VALIDATORS=1;
-#   3. the Python package (python/) built with maturin and installed into the same venv
-#      (with ray[data] from python/tests/requirements-ray.txt where it has wheels), then its
-#      pytest suite (python/tests), which compares it with the CLI built in 2.
+#   3. the wheel users install (scripts/wheel.sh: the Python extension and the release
+#      binary, manylinux2014), built once and installed into the same venv (with ray[data]
+#      from python/tests/requirements-ray.txt where it has wheels); scripts/wheel-check.sh
+#      runs that wheel in a fresh venv without cargo/rustc against the CLI built in 2; then
+#      the pytest suite (python/tests), which compares the package with the CLI built in 2.
 # exiftool is used when installed (.ci/run installs it). Slow suites: D2N_SLOW=1.
 # Tests that need the real-camera files of ../shared/data (or $D2N_SHARED_DATA) skip with
 # the reason when they are absent; D2N_REQUIRE_SHARED_DATA=1 (set by .ci/run when
@@ -28,6 +30,23 @@ if [ ! -x "$VENV/bin/python" ] || [ "$(cat "$stamp" 2>/dev/null)" != "$want" ]; 
 fi
 export D2N_PYTHON="$VENV/bin/python"
 export D2N_REQUIRE_VALIDATORS="${D2N_REQUIRE_VALIDATORS:-1}"
+
+# ---- packaging tools and docs (issue 29) ------------------------------------------------
+# zig, cargo-zigbuild, auditwheel and actionlint (scripts/wheel-requirements.txt), stamped
+# like the validators; then the crate's docs with rustdoc's warnings denied (about 1 min).
+wheel_req=scripts/wheel-requirements.txt
+wheel_stamp="$VENV/.wheel-requirements.sha"
+wheel_want=$(sha256sum "$wheel_req" | cut -d' ' -f1)
+if [ "$(cat "$wheel_stamp" 2>/dev/null)" != "$wheel_want" ]; then
+  "$VENV/bin/python" -m pip install --quiet --disable-pip-version-check --only-binary=:all: -r "$wheel_req"
+  echo "$wheel_want" > "$wheel_stamp"
+fi
+if [ "$#" -eq 0 ]; then
+  echo "scripts/test.sh: cargo doc --no-deps with rustdoc's warnings denied" >&2
+  RUSTDOCFLAGS="-D warnings" cargo doc --quiet --no-deps --locked
+fi
+# ---- end of packaging tools and docs ----------------------------------------------------
+
 cargo test "$@"
 
 py_tests="${D2N_PYTHON_TESTS:-}"
@@ -74,10 +93,17 @@ if [ "$py_tests" = 1 ]; then
     export D2N_TORCH_SKIP_REASON="torch could not be installed from $torch_req (no wheel for this platform or Python, or no network): test_train_*.py tests that need it skipped"
     echo "scripts/test.sh: $D2N_TORCH_SKIP_REASON" >&2
   fi
-  echo "scripts/test.sh: building the Python package (pip install ./python) into $VENV" >&2
-  # maturin's build hook runs the `maturin` of PATH: the venv's
-  PATH="$VENV/bin:$PATH" "$VENV/bin/python" -m pip install --quiet --disable-pip-version-check --no-build-isolation \
-    --force-reinstall --no-deps ./python
   export D2N_BIN="${CARGO_TARGET_DIR:-$PWD/target}/debug/day2night"
+  # ---- the wheel (issue 29) -------------------------------------------------------------
+  # Built once (scripts/wheel.sh), installed here in place of `pip install ./python`, and
+  # checked in a fresh venv without cargo/rustc against the cargo-built CLI.
+  echo "scripts/test.sh: building the wheel (scripts/wheel.sh) and installing it into $VENV" >&2
+  wheel=$(D2N_WHEEL_PYTHON="$VENV/bin/python" scripts/wheel.sh | tail -1)
+  "$VENV/bin/python" -m pip install --quiet --disable-pip-version-check --force-reinstall --no-deps "$wheel"
+  D2N_WHEEL_PYTHON="$VENV/bin/python" scripts/wheel-check.sh "$wheel" "$D2N_BIN"
+  if [ "${D2N_PACKAGE_CHECK:-0}" = 1 ]; then
+    D2N_WHEEL_PYTHON="$VENV/bin/python" scripts/package-check.sh
+  fi
+  # ---- end of the wheel -----------------------------------------------------------------
   "$VENV/bin/python" -m pytest -q python/tests
 fi

@@ -8,7 +8,7 @@
 //! -> [`noise`] -> [`dng::write`], plus the software ISP in [`isp`] for EXR/PNG targets,
 //! [`metrics`] for evaluation and [`calibrate`] for new cameras.
 #![forbid(unsafe_code)]
-#![warn(missing_docs)]
+#![deny(missing_docs)]
 
 pub mod bounds;
 pub mod calibrate;
@@ -25,6 +25,8 @@ pub mod noise;
 pub mod normalize;
 pub mod output;
 pub mod raw;
+/// The HTML report of a dataset (needs the `cli` feature: its plots are drawn with plotters).
+#[cfg(feature = "cli")]
 pub mod report;
 pub mod synth;
 pub mod tiff;

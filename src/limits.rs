@@ -2,8 +2,11 @@
 //! accept, and fallible allocation of large buffers (an allocation the system refuses is an
 //! [`Error::Limits`] naming the size asked, never an abort). See docs/limits.md.
 //!
-//! The pixel limit is process-wide: [`DEFAULT_MAX_PIXELS`], or the `D2N_MAX_PIXELS`
-//! environment variable, or what [`Limits::install`] (the CLI's `--max-pixels`) set.
+//! The limits in force are process-wide: the defaults ([`DEFAULT_MAX_PIXELS`],
+//! [`DEFAULT_OPCODE_BUDGET`]), or what the caller passed to [`Limits::install`]. The library
+//! reads no environment variable: the CLI builds its [`Limits`] from `--max-pixels`,
+//! `D2N_MAX_PIXELS` and `D2N_OPCODE_BUDGET` (src/cli/limits.rs) and installs them; a program
+//! using the library installs its own.
 
 use crate::error::{Error, Result};
 use std::sync::atomic::{AtomicU64, Ordering};
@@ -13,27 +16,33 @@ use std::sync::atomic::{AtomicU64, Ordering};
 /// 14204 x 10652), and its raw plane alone is 512 MiB of `u16`.
 pub const DEFAULT_MAX_PIXELS: u64 = 1 << 28;
 
-/// Environment variable that sets the pixel limit when no option does.
+/// Environment variable from which the CLI sets the pixel limit when no option does (named in
+/// the limit's error messages; the library does not read it).
 pub const MAX_PIXELS_ENV: &str = "D2N_MAX_PIXELS";
 
 /// Highest value the pixel limit can be raised to (65535 x 65535, the largest TIFF image the
 /// readers accept per side).
 pub const MAX_PIXELS_CEILING: u64 = 65535 * 65535;
 
-/// 0 = not installed: the environment variable or the default applies.
+/// 0 = not installed: the default applies.
 static INSTALLED_MAX_PIXELS: AtomicU64 = AtomicU64::new(0);
+/// 0 = not installed: the default applies.
+static INSTALLED_OPCODE_BUDGET: AtomicU64 = AtomicU64::new(0);
 
 /// Resource limits.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Limits {
     /// Largest image accepted, in pixels.
     pub max_pixels: u64,
+    /// Budget of opcode work for one render, in pixel-passes ([`check_opcode_work`]).
+    pub opcode_budget: u64,
 }
 
 impl Default for Limits {
     fn default() -> Self {
         Limits {
             max_pixels: DEFAULT_MAX_PIXELS,
+            opcode_budget: DEFAULT_OPCODE_BUDGET,
         }
     }
 }
@@ -46,7 +55,33 @@ impl Limits {
                 "pixel limit {max_pixels} must be in 1..={MAX_PIXELS_CEILING}"
             )));
         }
-        Ok(Limits { max_pixels })
+        Ok(Limits {
+            max_pixels,
+            ..Limits::default()
+        })
+    }
+
+    /// These limits with the opcode work budget `budget` (pixel-passes, at least 1).
+    pub fn with_opcode_budget(self, budget: u64) -> Result<Limits> {
+        if budget == 0 {
+            return Err(Error::invalid(
+                "opcode work budget must be a positive number of pixel-passes",
+            ));
+        }
+        Ok(Limits {
+            opcode_budget: budget,
+            ..self
+        })
+    }
+
+    /// Parse an opcode work budget: a positive integer of pixel-passes.
+    pub fn parse_opcode_budget(s: &str) -> Result<u64> {
+        match s.trim().parse::<u64>() {
+            Ok(n) if n > 0 => Ok(n),
+            _ => Err(Error::invalid(format!(
+                "{s:?} is not a positive number of pixel-passes"
+            ))),
+        }
     }
 
     /// Parse a pixel count: digits, optionally with a `M` (10^6) or `G` (10^9) suffix
@@ -70,26 +105,24 @@ impl Limits {
         Ok(px.round() as u64)
     }
 
-    /// The limits in force: installed ones, else `D2N_MAX_PIXELS`, else the default. An
-    /// unparseable environment variable is an error (rather than silently ignored).
+    /// The limits in force: the installed ones ([`Limits::install`]), else the defaults.
+    /// (A `Result` for the callers that once read the environment here; it is always `Ok`.)
     pub fn current() -> Result<Limits> {
-        let installed = INSTALLED_MAX_PIXELS.load(Ordering::Relaxed);
-        if installed != 0 {
-            return Ok(Limits {
-                max_pixels: installed,
-            });
-        }
-        match std::env::var(MAX_PIXELS_ENV) {
-            Ok(v) => Limits::parse_pixels(&v)
-                .map(|max_pixels| Limits { max_pixels })
-                .map_err(|e| Error::invalid(format!("{MAX_PIXELS_ENV}: {e}"))),
-            Err(_) => Ok(Limits::default()),
-        }
+        let d = Limits::default();
+        let or = |v: u64, default: u64| if v == 0 { default } else { v };
+        Ok(Limits {
+            max_pixels: or(INSTALLED_MAX_PIXELS.load(Ordering::Relaxed), d.max_pixels),
+            opcode_budget: or(
+                INSTALLED_OPCODE_BUDGET.load(Ordering::Relaxed),
+                d.opcode_budget,
+            ),
+        })
     }
 
-    /// Make these the process-wide limits (overrides `D2N_MAX_PIXELS`).
+    /// Make these the process-wide limits.
     pub fn install(self) {
         INSTALLED_MAX_PIXELS.store(self.max_pixels, Ordering::Relaxed);
+        INSTALLED_OPCODE_BUDGET.store(self.opcode_budget, Ordering::Relaxed);
     }
 
     /// Error unless a `width` x `height` image (`what`: "raw image", "EXR data window", ...)
@@ -185,7 +218,8 @@ pub const MAX_POLYNOMIAL_DEGREE: u32 = 8;
 /// Default budget of opcode work, in pixel-passes: 2^34 (about a minute of opcode work on the
 /// benchmark machine). A 150 MP frame with four GainMaps and a warp costs about 2^32.7.
 pub const DEFAULT_OPCODE_BUDGET: u64 = 1 << 34;
-/// Environment variable that sets the opcode work budget (pixel-passes).
+/// Environment variable from which the CLI sets the opcode work budget (pixel-passes; named
+/// in the budget's error messages, the library does not read it).
 pub const OPCODE_BUDGET_ENV: &str = "D2N_OPCODE_BUDGET";
 /// Weight of a per-sample area opcode (MapTable, MapPolynomial, Delta/Scale per row/column).
 pub const COST_POINTWISE: u64 = 1;
@@ -202,18 +236,10 @@ pub const COST_WARP_FISHEYE: u64 = 40;
 /// Weight of a TrimBounds (one copy).
 pub const COST_TRIM: u64 = 1;
 
-/// The opcode work budget in force: `D2N_OPCODE_BUDGET`, else [`DEFAULT_OPCODE_BUDGET`]. A
-/// value that is not a positive integer is an error.
+/// The opcode work budget in force: the installed one ([`Limits::install`]), else
+/// [`DEFAULT_OPCODE_BUDGET`].
 pub fn opcode_budget() -> Result<u64> {
-    match std::env::var(OPCODE_BUDGET_ENV) {
-        Ok(v) => match v.trim().parse::<u64>() {
-            Ok(n) if n > 0 => Ok(n),
-            _ => Err(Error::invalid(format!(
-                "{OPCODE_BUDGET_ENV}: {v:?} is not a positive number of pixel-passes"
-            ))),
-        },
-        Err(_) => Ok(DEFAULT_OPCODE_BUDGET),
-    }
+    Ok(Limits::current()?.opcode_budget)
 }
 
 /// The cost of one opcode: its list's tag name, its description ("WarpRectilinear (opcode
@@ -277,6 +303,13 @@ mod tests {
         assert!(e.contains("--max-pixels"), "{e}");
         assert!(l.check_pixels("x", u64::MAX, u64::MAX).is_err());
         assert!(Limits::with_max_pixels(0).is_err());
+        assert_eq!(l.opcode_budget, DEFAULT_OPCODE_BUDGET);
+        assert_eq!(l.with_opcode_budget(7).unwrap().opcode_budget, 7);
+        assert!(l.with_opcode_budget(0).is_err());
+        assert_eq!(Limits::parse_opcode_budget(" 1000 ").unwrap(), 1000);
+        for bad in ["", "0", "-1", "1.5", "lots"] {
+            assert!(Limits::parse_opcode_budget(bad).is_err(), "{bad}");
+        }
     }
 
     #[test]

@@ -18,6 +18,26 @@ use day2night::synth::job::Target;
 use day2night::synth::{Covariance, MaskEval, Mode, RelightFormula};
 use day2night::Error;
 use pyo3::prelude::*;
+
+/// The per-input warnings of a unit's decode (metadata corrections) on stderr, as
+/// `day2night dataset` prints them: the library itself prints nothing.
+struct StderrWarnings;
+
+impl day2night::dataset::Progress for StderrWarnings {
+    fn warning(&self, path: &std::path::Path, message: &str) {
+        use std::io::Write as _;
+        // a closed stderr must not fail the unit: the line is dropped
+        let _ = writeln!(
+            std::io::stderr(),
+            "day2night: {}: warning: {message}",
+            path.display()
+        );
+    }
+}
+
+fn stderr_warnings() -> day2night::dataset::ProgressSink {
+    day2night::dataset::ProgressSink::new(StderrWarnings)
+}
 use pyo3::types::{PyDict, PyList};
 use std::collections::HashMap;
 use std::path::PathBuf;
@@ -327,6 +347,7 @@ pub fn write_unit<'py>(
         out_dir,
         overwrite,
         wait,
+        progress: stderr_warnings(),
     };
     let (rec, why) = py
         .detach(move || {
@@ -394,6 +415,7 @@ pub fn write_units<'py>(
         out_dir,
         overwrite,
         wait,
+        progress: stderr_warnings(),
     };
     let n = parsed.len();
     let done = py

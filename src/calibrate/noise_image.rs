@@ -1,6 +1,6 @@
 //! `calibrate noise --from-image`: noise models from ordinary day images, one ISO point per
 //! input ISO, by the single-image Poisson-Gaussian estimate synth itself falls back on
-//! ([`crate::noise::estimate`], docs/noise.md). Images at the same ISO are combined per
+//! ([`crate::noise::estimate`](mod@crate::noise::estimate), docs/noise.md). Images at the same ISO are combined per
 //! position by inverse-variance weights of their fits; an image whose fit cannot be trusted
 //! is left out with a warning (an ISO none of whose images can be trusted is an error).
 

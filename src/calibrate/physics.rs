@@ -428,7 +428,8 @@ pub fn fit_physics(darks: &[Named], flats: &[Named], source: &str) -> Result<Phy
 }
 
 /// SVG plot of the fit: flat-pair variance against mean per ISO with the fitted lines
-/// (`K mu + v0`), and the dark points at `mu = 0`.
+/// (`K mu + v0`), and the dark points at `mu = 0`. Needs the `cli` feature (plotters).
+#[cfg(feature = "cli")]
 pub fn plot_svg(cal: &PhysicsCalibration) -> Result<String> {
     use plotters::prelude::*;
     let perr = |e: &dyn std::fmt::Display| Error::invalid(format!("plot: {e}"));

@@ -1,7 +1,6 @@
 //! `day2night dataset`: a whole dataset from a folder of day DNGs (see docs/dataset.md).
 use super::synth::SynthOpts;
 use super::{usage, CmdResult, Failure};
-use day2night::dataset::run::ProgressMode;
 use day2night::dataset::synthesis::SynthProcessor;
 use day2night::dataset::{self, RunOptions, Shard, SplitRule};
 use std::path::PathBuf;
@@ -116,11 +115,7 @@ pub fn run(args: DatasetArgs) -> CmdResult {
         jobs,
         overwrite: args.overwrite,
         wait: args.wait,
-        progress: if args.quiet {
-            ProgressMode::Quiet
-        } else {
-            ProgressMode::Auto
-        },
+        progress: super::progress::dataset_progress(args.quiet),
     };
     let summary = match dataset::run(&opts, &proc) {
         Ok(s) => s,

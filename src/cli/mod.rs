@@ -11,7 +11,9 @@ mod dataset;
 mod eval;
 mod info;
 mod interrupt;
+mod limits;
 mod merge;
+mod progress;
 mod render;
 mod report;
 mod synth;
@@ -91,11 +93,7 @@ pub type CmdResult = Result<(), Failure>;
 /// Entry point used by `main`.
 pub fn main() -> ExitCode {
     let cli = Cli::parse();
-    let limits = match cli.max_pixels {
-        Some(n) => day2night::limits::Limits::with_max_pixels(n),
-        None => day2night::limits::Limits::current(),
-    };
-    match limits {
+    match limits::from_args_and_env(cli.max_pixels) {
         Ok(l) => l.install(),
         Err(e) => {
             eprintln!("day2night: {e}");

@@ -1,6 +1,6 @@
 //! The dataset journal: one record file per unit computed since the last manifest, in
 //! `OUT_DIR/.day2night-units/`, written by [`super::units::write_unit`] (units run by an
-//! external scheduler) and folded into a manifest by `dataset` ([`super::run`]) or
+//! external scheduler) and folded into a manifest by `dataset` ([`super::run()`]) or
 //! [`super::units::write_manifest`], which then clear it.
 
 use super::discover::sample_stem;

@@ -22,6 +22,7 @@
 pub mod discover;
 pub mod journal;
 pub mod manifest;
+pub mod progress;
 pub mod resume;
 pub mod run;
 pub mod shard;
@@ -39,6 +40,7 @@ use std::sync::Mutex;
 
 pub use discover::{discover, Input};
 pub use manifest::{OutputFile, Record, Status};
+pub use progress::{InputDone, Progress, ProgressSink};
 pub use run::{run, RunOptions, Summary};
 pub use shard::Shard;
 pub use split::{Split, SplitRule};
@@ -295,4 +297,10 @@ pub trait Processor: Sync {
     fn load(&self, path: &Path, bytes: &[u8]) -> Result<Self::Loaded>;
     /// Make every output of one unit through `sink`.
     fn process(&self, input: &Self::Loaded, unit: &Unit, sink: &Sink) -> Result<UnitInfo>;
+    /// Warnings about a decoded input (metadata corrections), said once per input through
+    /// the run's [`Progress`]. None by default.
+    fn warnings(&self, input: &Self::Loaded) -> Vec<String> {
+        let _ = input;
+        Vec::new()
+    }
 }

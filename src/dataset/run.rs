@@ -5,6 +5,7 @@
 
 use super::discover::{discover, sample_stem, Input};
 use super::manifest::{self, Appender, Record, Status};
+use super::progress::{InputDone, ProgressSink};
 use super::resume::{decide, Decision, Reason, Want};
 use super::split::{assign, Split, SplitRule};
 use super::{sha256_hex, Processor, Shard, Sink, Unit};
@@ -12,22 +13,10 @@ use crate::error::{Error, Result, ResultExt};
 use crate::output::{stop_requested, OutputPolicy, OutputSetLock};
 use serde::Serialize;
 use std::collections::{BTreeMap, HashMap};
-use std::io::{IsTerminal, Write as _};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::Mutex;
 use std::time::Instant;
-
-/// How progress is shown on stderr.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum ProgressMode {
-    /// A bar with ETA when stderr is a terminal, plain lines otherwise.
-    Auto,
-    /// One plain line per input.
-    Plain,
-    /// Nothing.
-    Quiet,
-}
 
 /// Everything a run needs besides the processor.
 #[derive(Debug, Clone)]
@@ -49,8 +38,8 @@ pub struct RunOptions {
     /// Recompute everything, ignoring the manifest, and allow a non-empty OUT_DIR without
     /// a manifest.
     pub overwrite: bool,
-    /// Progress display.
-    pub progress: ProgressMode,
+    /// Receiver of the run's progress and per-input warnings (the library prints nothing).
+    pub progress: ProgressSink,
     /// When another process is writing a unit's outputs (holds its
     /// [`OutputSetLock`]): wait for it (`true`) or fail the unit (`false`).
     pub wait: bool,
@@ -259,7 +248,9 @@ pub fn run<P: Processor>(opts: &RunOptions, processor: &P) -> Result<Summary> {
     let n_units = tasks.len() * opts.variants as usize;
     let final_records: Mutex<Vec<Record>> = Mutex::new(Vec::with_capacity(n_units));
     let stats = Mutex::new(Summary::default());
-    let progress = Progress::new(opts.progress, tasks.len());
+    let progress = &opts.progress;
+    progress.start(tasks.len());
+    let finished = AtomicUsize::new(0);
     let next = AtomicUsize::new(0);
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(jobs)
@@ -315,7 +306,16 @@ pub fn run<P: Processor>(opts: &RunOptions, processor: &P) -> Result<Summary> {
                         }
                     }
                 }
-                progress.input_done(task, done, skipped, failed, t0.elapsed().as_secs_f64());
+                progress.input_done(&InputDone {
+                    index: finished.fetch_add(1, Ordering::SeqCst) + 1,
+                    total: tasks.len(),
+                    split: task.split.name(),
+                    input: &task.input.rel,
+                    done,
+                    skipped,
+                    failed,
+                    secs: t0.elapsed().as_secs_f64(),
+                });
                 final_records
                     .lock()
                     .unwrap_or_else(|e| e.into_inner())
@@ -498,6 +498,11 @@ fn process_input<P: Processor>(
         };
         if loaded.is_none() {
             loaded = Some(load_input(processor, &task.input.path, &bytes));
+            if let Some(Ok(input)) = &loaded {
+                for w in processor.warnings(input) {
+                    opts.progress.warning(&task.input.path, &w);
+                }
+            }
         }
         let prev = previous.get(&(u.rel.clone(), u.variant));
         let rec = match loaded.as_ref() {
@@ -627,72 +632,6 @@ pub(super) fn want<'a>(u: &Unit, input_sha: &'a str, options_sha: &'a str) -> Wa
         input_sha256: input_sha,
         seed: u.seed,
         options_sha256: options_sha,
-    }
-}
-
-/// Progress on stderr: indicatif bar on a terminal, plain lines otherwise.
-struct Progress {
-    bar: Option<indicatif::ProgressBar>,
-    plain: bool,
-    total: usize,
-    count: AtomicUsize,
-}
-
-impl Progress {
-    fn new(mode: ProgressMode, total: usize) -> Progress {
-        let terminal = std::io::stderr().is_terminal();
-        let (bar, plain) = match mode {
-            ProgressMode::Quiet => (None, false),
-            ProgressMode::Plain => (None, true),
-            ProgressMode::Auto if terminal => {
-                let b = indicatif::ProgressBar::new(total as u64);
-                if let Ok(style) = indicatif::ProgressStyle::with_template(
-                    "{spinner} [{elapsed_precise}] {bar:40} {pos}/{len} images, ETA {eta} {msg}",
-                ) {
-                    b.set_style(style);
-                }
-                (Some(b), false)
-            }
-            ProgressMode::Auto => (None, true),
-        };
-        Progress {
-            bar,
-            plain,
-            total,
-            count: AtomicUsize::new(0),
-        }
-    }
-
-    fn input_done(&self, task: &Task, done: usize, skipped: usize, failed: usize, secs: f64) {
-        let k = self.count.fetch_add(1, Ordering::SeqCst) + 1;
-        if let Some(b) = &self.bar {
-            b.inc(1);
-            if failed > 0 {
-                b.println(format!("dataset: {} failed", task.input.rel));
-            }
-        } else if self.plain {
-            let state = if failed > 0 {
-                format!("{done} done, {failed} FAILED")
-            } else if done == 0 {
-                format!("up to date ({skipped} skipped)")
-            } else {
-                format!("{done} done, {skipped} skipped")
-            };
-            // a closed stderr (EPIPE) must not panic the run: the line is dropped
-            let _ = writeln!(
-                std::io::stderr(),
-                "dataset: [{k}/{}] {} {}: {state} ({secs:.1} s)",
-                self.total,
-                task.split.name(),
-                task.input.rel
-            );
-        }
-    }
-
-    fn finish(&self) {
-        if let Some(b) = &self.bar {
-            b.finish_and_clear();
-        }
     }
 }
 

@@ -13,7 +13,6 @@ use crate::error::Result;
 use crate::output::OutputPolicy;
 use crate::synth::job::{compression_name, DayInput, OutputKind, OutputSink, SynthJob};
 use std::borrow::Cow;
-use std::io::Write as _;
 use std::path::{Path, PathBuf};
 
 pub use crate::synth::job::Target;
@@ -56,17 +55,13 @@ impl Processor for SynthProcessor {
     }
 
     fn load(&self, path: &Path, bytes: &[u8]) -> Result<DayInput> {
-        let day = DayInput::from_bytes(path, bytes)?;
-        // Metadata corrections: said once per input here, and recorded in every sidecar.
-        for w in &day.raw.meta.warnings {
-            // a closed stderr (EPIPE) must not panic the run: the line is dropped
-            let _ = writeln!(
-                std::io::stderr(),
-                "day2night: {}: warning: {w}",
-                path.display()
-            );
-        }
-        Ok(day)
+        DayInput::from_bytes(path, bytes)
+    }
+
+    /// Metadata corrections: said once per input (through the run's progress), and
+    /// recorded in every sidecar.
+    fn warnings(&self, input: &DayInput) -> Vec<String> {
+        input.raw.meta.warnings.clone()
     }
 
     fn process(&self, input: &DayInput, unit: &Unit, sink: &Sink) -> Result<UnitInfo> {

@@ -17,6 +17,7 @@
 
 use super::discover::sample_stem;
 use super::manifest::{self, Record};
+use super::progress::ProgressSink;
 use super::resume::{decide, Decision, Reason};
 use super::run::{
     blank_record, check_out_dir, compute_unit, load_input, plan_tasks, remove_stale_temp_files,
@@ -131,6 +132,9 @@ pub struct WriteOptions {
     pub overwrite: bool,
     /// Wait for another process writing the unit instead of failing it.
     pub wait: bool,
+    /// Receiver of the per-input warnings (metadata corrections), said once per decode;
+    /// the library prints nothing.
+    pub progress: ProgressSink,
 }
 
 /// Make one unit's outputs in OUT_DIR (every file atomic, under the unit's lock) unless its
@@ -214,7 +218,15 @@ pub fn write_units<P: Processor>(
                     .map_err(Error::Io)
                     .in_file(out_dir)?;
                 let blank = blank_record(unit, &input_sha, &options_sha);
-                let input = loaded.get_or_insert_with(|| load_input(processor, &unit.path, bytes));
+                let input = loaded.get_or_insert_with(|| {
+                    let l = load_input(processor, &unit.path, bytes);
+                    if let Ok(input) = &l {
+                        for w in processor.warnings(input) {
+                            o.progress.warning(&unit.path, &w);
+                        }
+                    }
+                    l
+                });
                 let rec = match input {
                     Ok(input) => compute_unit(
                         processor, input, unit, prev, blank, out_dir, &policy, o.wait,

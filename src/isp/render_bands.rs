@@ -1,10 +1,10 @@
-//! The banded render: the output geometry cut into bands ([`place`]: DefaultCrop and
+//! The banded render: the output geometry cut into bands (`place`: DefaultCrop and
 //! orientation, each band asking for the active-area rectangle it shows), the plain path's
-//! rectangle renderer ([`banded`]: normalize, white balance, demosaic, `post`), and the
+//! rectangle renderer (`banded`: normalize, white balance, demosaic, `post`), and the
 //! band-wise consumers of the render ([`render_linear_bands_sized`],
 //! [`render_input_bands_sized`]) that `synth` and `render` write their targets from. Files
-//! with opcodes take [`super::opcodes::banded`]'s rectangle renderer through the same
-//! [`place`].
+//! with opcodes take `super::opcodes::banded`'s rectangle renderer through the same
+//! `place`.
 
 use super::color::normalize_neutral;
 use super::demosaic::{demosaic_rect, row_kernel, Post, RowKernel};

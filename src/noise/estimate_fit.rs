@@ -1,4 +1,4 @@
-//! The fitting half of the single-image noise estimate ([`super::estimate`]): the pilot
+//! The fitting half of the single-image noise estimate ([`super::estimate`](mod@super::estimate)): the pilot
 //! variance line, the robust clip-aware weighted line through a position's level sets, the
 //! verdict on whether it can be trusted, and the per-position result types. The
 //! algorithm and its accuracy: docs/noise.md, "Estimated from the day image".

@@ -2,7 +2,7 @@
 //! and ISO ([`model`]), and applying it to a clean night raw ([`apply`]); the physics-based
 //! model (shot, Tukey-lambda read, row noise; [`physics`], [`physics_apply`], [`tukey`],
 //! and the sampler's tables [`poisson_table`], [`tukey_table`]); the single-image estimate
-//! of an input's own noise ([`estimate`]) and where a plan's model came from
+//! of an input's own noise ([`estimate`](mod@estimate)) and where a plan's model came from
 //! ([`provenance`]).
 //! See docs/noise.md.
 

@@ -19,7 +19,7 @@
 //! inside theirs, so at most one is in memory); every output's bytes are the same whatever
 //! the thread count or the order in which the tasks finish. Errors are reported in a fixed
 //! order (clean, noisy, target), whatever failed first. Every file goes through
-//! [`crate::output`] (temporary file, sync, rename) under the sink's [`OutputPolicy`]; the
+//! [`crate::output`] (temporary file, sync, rename) under the sink's [`OutputPolicy`](crate::output::OutputPolicy); the
 //! syncs of steps 1-4 run on background threads ([`crate::output::DeferredSyncs`]) and their
 //! files are renamed into place together before the sidecar is written, so a failed variant
 //! leaves none of its outputs behind (and [`OutputSink::written`] is called for them then).

@@ -6,7 +6,7 @@
 //! 3. the embedded table when it is this camera's own (the paper's phone, the Samsung
 //!    Galaxy S20 FE: [`CameraId::is_s20_fe`]), or under `--compat release` (the release
 //!    applies it to every input; a warning unless the input is the S20 FE);
-//! 4. an estimate from the day image itself at its Exif ISO ([`crate::noise::estimate`]),
+//! 4. an estimate from the day image itself at its Exif ISO ([`crate::noise::estimate`](mod@crate::noise::estimate)),
 //!    when it can be trusted;
 //! 5. the embedded table, with a warning that names it as another camera's noise, says why
 //!    (unknown ISO, or a fit that cannot be trusted and why) and how to calibrate.

@@ -27,6 +27,7 @@ fn write_all(planned: &[Planned], out: &Path, fake: &Fake) -> Vec<Record> {
         out_dir: out.to_path_buf(),
         overwrite: false,
         wait: false,
+        progress: Default::default(),
     };
     planned
         .iter()
@@ -94,6 +95,7 @@ fn a_killed_run_resumes_skipping_completed_units() {
         out_dir: b.path().to_path_buf(),
         overwrite: false,
         wait: false,
+        progress: Default::default(),
     };
     let mut records = Vec::new();
     let mut skipped = 0;
@@ -177,6 +179,7 @@ fn write_units_loads_each_input_once_for_all_its_variants() {
         out_dir: out.to_path_buf(),
         overwrite: false,
         wait: false,
+        progress: Default::default(),
     };
     // One unit at a time: one load per unit.
     let planned = units::units(&uo).unwrap();

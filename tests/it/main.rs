@@ -54,6 +54,8 @@ mod noise_estimate;
 mod noise_physics;
 mod png_rows;
 mod release_compat;
+mod release_version;
+mod release_workflow;
 mod runs_concurrent;
 mod runs_interrupt;
 mod synth_burst;

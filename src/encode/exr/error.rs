@@ -1,13 +1,13 @@
 //! The errors of the EXR reading path (`eval`'s inputs) in plain words, shared by the chunk
 //! checks ([`super::chunks`]) and the image reader ([`crate::encode::read`]). The `exr`
 //! crate's messages are terse and name its internals ("compressed DWAB(None) data
-//! (invalid: truncated DWA header)", "invalid: line order attribute value"); [`exr_err`]
+//! (invalid: truncated DWA header)", "invalid: line order attribute value"); `exr_err`
 //! turns each of them into a sentence that says what is wrong with the file, and
-//! [`chunk_err`] says which chunk (number, rows, compression) a decoding error comes from.
-//! [`guarded`] runs the decoder so that a panic on damaged data is an error (and prints
+//! `chunk_err` says which chunk (number, rows, compression) a decoding error comes from.
+//! `guarded` runs the decoder so that a panic on damaged data is an error (and prints
 //! nothing).
 //!
-//! Every message the crate (1.74) can give while reading is listed in [`MESSAGES`] with its
+//! Every message the crate (1.74) can give while reading is listed in `MESSAGES` with its
 //! sentence; the unit tests check that each is mapped and that no sentence carries an
 //! internal name. A message the table does not know (a newer crate) is passed on only when
 //! it is made of plain words.

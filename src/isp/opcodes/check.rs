@@ -3,7 +3,7 @@
 //!
 //! * [`check_render`]: what a render does with the lists ([`super::prepare`]'s decision and
 //!   report) plus the warnings it owes the user: optional opcodes it skips, opcodes whose
-//!   parameters make every sample they touch one value ([`flat_opcodes`]: a GainMap whose
+//!   parameters make every sample they touch one value (`flat_opcodes`: a GainMap whose
 //!   gains are all <= 0, a MapPolynomial <= 0 over the whole value range, a MapTable of one
 //!   value, a scale <= 0, a delta past the range, a vignette gain <= 0), and an OpcodeList3
 //!   TrimBounds that changes the size of the rendered image;

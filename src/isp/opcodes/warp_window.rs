@@ -7,19 +7,19 @@
 //!   `pre`), level `j` the image after warp `j - 1` and the in-place opcodes that follow it
 //!   (`after`). The output bands are warped by the last warp from the last level.
 //! * Planning, before any pixel: the lines of a level that each band (or strip of the next
-//!   level) reaches come from the warp's bounds ([`super::warp_bounds::window`]), so every
+//!   level) reaches come from the warp's bounds (`super::warp_bounds::window`), so every
 //!   strip knows how many readers it has; a strip is computed by the first reader that
 //!   needs it and dropped when the last one has read it. Strips no reader reaches are never
 //!   computed.
 //! * The same planning simulates the bands in order and counts the lines held at once. Past
-//!   [`limit`] (a pathological warp, whose bands reach far across the image, or fold it), or
-//!   with more than [`MAX_WARPS`] warps, the chain falls back to the whole-image path: each
+//!   `limit` (a pathological warp, whose bands reach far across the image, or fold it), or
+//!   with more than `MAX_WARPS` warps, the chain falls back to the whole-image path: each
 //!   level is made whole, in parallel, from the whole level below, which is then dropped
 //!   (12 bytes per pixel for the image before the last warp, 24 while a level is made, as
 //!   the whole-frame warps).
 //!
 //! Each strip is made by the same expressions whatever the strip height, and each band's
-//! exact window ([`super::warp::plan`]) decides what it reads, so the output equals the
+//! exact window (`super::warp::plan`) decides what it reads, so the output equals the
 //! whole-frame warp bit for bit. A reader that reaches a strip outside its planned bound
 //! (never seen; the bound is proved by a property test) gets it computed again, unshared.
 

@@ -2,7 +2,7 @@
 //! raw itself for an identity frame, else its warp: [`super::warp`]) plus that ISO's noise
 //! drawn from the frame's own seed ([`super::motion::frame_noise_seed`]). Whole frames are
 //! made row by row on demand ([`FrameRows`], a [`RowSource`] the DNG writer packs strip by
-//! strip), crops as planes ([`frame_crop`]).
+//! strip), crops as planes (`frame_crop`).
 
 use super::motion::{frame_noise_seed, FrameTransform};
 use super::warp::{CleanSource, WarpLevels, Warper, TILE};

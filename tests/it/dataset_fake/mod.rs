@@ -2,7 +2,7 @@
 #![allow(dead_code)]
 
 use day2night::dataset::{
-    self, run::ProgressMode, Kind, Processor, RunOptions, Shard, Sink, SplitRule, Unit, UnitInfo,
+    self, Kind, Processor, RunOptions, Shard, Sink, SplitRule, Unit, UnitInfo,
 };
 use day2night::{Error, Result};
 use std::collections::BTreeMap;
@@ -100,7 +100,7 @@ pub fn opts(day: &Path, out: &Path) -> RunOptions {
         shard: Shard::ALL,
         jobs: 2,
         overwrite: false,
-        progress: ProgressMode::Quiet,
+        progress: dataset::ProgressSink::silent(),
         wait: false,
     }
 }
