@@ -131,20 +131,6 @@ pub fn tree(dir: &Path, with_manifests: bool) -> BTreeMap<String, Vec<u8>> {
     m
 }
 
-/// Debian `chromium` (or another Chromium) on PATH; prints why when absent.
-pub fn chromium() -> Option<PathBuf> {
-    for name in ["chromium", "chromium-browser", "google-chrome"] {
-        for dir in std::env::var("PATH").unwrap_or_default().split(':') {
-            let p = Path::new(dir).join(name);
-            if p.is_file() {
-                return Some(p);
-            }
-        }
-    }
-    eprintln!("SKIP: headless browser check: chromium not installed (Debian: apt-get install -y chromium; .ci/run installs it)");
-    None
-}
-
 /// Load `page` headless; returns (console lines, screenshot bytes).
 pub fn load_in_browser(chromium: &Path, page: &Path) -> (Vec<String>, Vec<u8>) {
     let profile = tempfile::tempdir().unwrap();
