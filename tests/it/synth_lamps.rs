@@ -188,7 +188,7 @@ fn sampled_lights_are_lamp_colours_through_each_cameras_own_matrices() {
     if cfg!(d2n_missing = "shared-data") {
         eprintln!("no real Canon row: the real-camera files were absent at build time");
     } else {
-        cams.insert(1, ("real Canon (../shared/data/dng)", canon()));
+        cams.insert(1, ("real Canon (real-camera test data)", canon()));
     }
     let opts = SynthOptions::default();
     let cie = Calibration::embedded(&opts).unwrap();
