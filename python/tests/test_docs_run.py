@@ -123,8 +123,9 @@ def workdirs(tmp_path_factory):
     fixtures/, `day2night` and `python` on PATH, and one Python namespace."""
     bindir = tmp_path_factory.mktemp("bin")
     (bindir / "day2night").symlink_to(cli_path())
-    (bindir / "python").symlink_to(sys.executable)
-    (bindir / "python3").symlink_to(sys.executable)
+    for name in ("python", "python3"):  # a wrapper, not a link: a venv is found by its path
+        (bindir / name).write_text(f'#!/bin/sh\nexec "{sys.executable}" "$@"\n')
+        (bindir / name).chmod(0o755)
     dirs = {}
 
     def get(doc):
