@@ -64,7 +64,6 @@ fn peak_rss_kib(day: &Path, out: &Path, jobs: usize) -> (u64, f64) {
 
 #[test]
 #[ignore = "slow: peak memory of dataset on 12 MP inputs (scripts/test.sh --slow)"]
-#[cfg_attr(d2n_missing = "time", ignore = "needs GNU time (D2N_ALLOW_MISSING)")]
 fn slow_peak_memory_on_12mp_inputs() {
     let day = tempfile::tempdir().unwrap();
     make_12mp(day.path(), 4);

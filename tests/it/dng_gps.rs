@@ -70,6 +70,7 @@ fn validate(src: &Path, files: &[&Path]) {
     ignore = "needs exiftool (D2N_ALLOW_MISSING)"
 )]
 fn gps_ifd_is_carried_by_convert_and_synth() {
+    let et = common::exiftool();
     let t = tempfile::tempdir().unwrap();
     let mut img = read_dng(&common::fixtures().join("day.dng")).unwrap();
     assert!(img.meta.gps.is_empty(), "the fixture has no GPS IFD");
@@ -158,7 +159,6 @@ fn gps_ifd_is_carried_by_convert_and_synth() {
 
     // exiftool -validate: the GPS IFD adds no warning
     {
-        let et = common::exiftool();
         let warnings = |f: &Path| -> Vec<String> {
             let o = std::process::Command::new(&et)
                 .args(["-validate", "-warning", "-a", "-s3"])

@@ -37,10 +37,6 @@ fn demosaic_accuracy_on_one_sample_photo() {
 
 #[test]
 #[ignore = "slow: every sample photo in every phase (scripts/test.sh --slow)"]
-#[cfg_attr(
-    d2n_missing = "validators",
-    ignore = "needs the validators (D2N_ALLOW_MISSING)"
-)]
 fn slow_demosaic_accuracy_on_every_sample_photo() {
     accuracy(true);
 }

@@ -433,7 +433,6 @@ fn new_neutrals_never_round_to_zero() {
 /// itself never holds an image.
 #[test]
 #[ignore = "slow: 134 MP eval memory measurement (scripts/test.sh --slow)"]
-#[cfg_attr(d2n_missing = "time", ignore = "needs GNU time (D2N_ALLOW_MISSING)")]
 fn slow_eval_of_two_134_megapixel_exrs_stays_under_2_gib() {
     let time = common::gnu_time();
     let dir = tempfile::tempdir().unwrap();

@@ -326,7 +326,7 @@ fn the_paper_phone_keeps_the_paper_dictionary_byte_for_byte() {
         "{:?}",
         sc.plan.warnings
     );
-    // The Gaussian is the embedded fit itself (SYNTHESIS.md 4's figures).
+    // The Gaussian is the embedded fit itself (docs/synthesis.md, "4. Night illuminants").
     let g = &sc.calibration.illuminants;
     assert!((g.mean[0] - 0.766125).abs() < 1e-6 && (g.cov[1][1] - 0.00489429).abs() < 1e-8);
     // The CIE lamps on the phone are an explicit choice, and give other pixels.
