@@ -1,4 +1,4 @@
-//! Normalization of stored raw values to [0, 1] and back (DNG chapter 5; SYNTHESIS.md 1 and 6).
+//! Normalization of stored raw values to [0, 1] and back (DNG chapter 5; docs/synthesis.md, "1. Normalize", "6. Denormalize").
 //! The one code path shared by synthesis, the ISP, calibration and merging.
 //!
 //! `y = (lin(x) - black(site)) / (white - black_max)`, where `lin` is the LinearizationTable
@@ -144,7 +144,7 @@ impl Normalizer {
     pub fn normalize(&self, x: u16, row: usize, col: usize) -> f64 {
         self.normalize_with_black(x, self.black_at(row, col))
     }
-    /// Denormalize (SYNTHESIS.md 6): `y * scale + black(site)`, rounded (or truncated),
+    /// Denormalize (docs/synthesis.md, "6. Denormalize"): `y * scale + black(site)`, rounded (or truncated),
     /// clipped to [0, white], as a linear (post-LinearizationTable) value.
     #[inline]
     pub fn denormalize(&self, y: f64, row: usize, col: usize, truncate: bool) -> u16 {

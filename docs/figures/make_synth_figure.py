@@ -3,7 +3,7 @@
 
 usage: make_synth_figure.py DAY.dng OUTDIR_OF_SYNTH STEM OUT.png
 Renders the day DNG with rawpy (camera white balance, sRGB), reads <STEM>_target.exr
-(linear sRGB) and draws each light's mask from <STEM>.json exactly as SYNTHESIS.md 5
+(linear sRGB) and draws each light's mask from <STEM>.json exactly as docs/synthesis.md, "5. Relight",
 defines it (separable Gaussian, window, floor), ambient excluded; bulbs dashed outline.
 """
 import json

@@ -32,6 +32,19 @@ def missing(why):
     pytest.skip(why)
 
 
+def require_tool(name, package):
+    """The path of the system tool NAME. Absent, the test fails under D2N_REQUIRE_TOOLS=1
+    (scripts/test.sh sets it unless D2N_REQUIRE_TOOLS=0) and is reported as skipped, with
+    the reason, otherwise (never as passed)."""
+    exe = shutil.which(name)
+    if exe is not None:
+        return exe
+    why = f"{name} not installed (Debian {package}; .ci/run installs it)"
+    if os.environ.get("D2N_REQUIRE_TOOLS") == "1":
+        pytest.fail(f"{why} but D2N_REQUIRE_TOOLS=1")
+    pytest.skip(why)
+
+
 def cli_path():
     p = os.environ.get("D2N_BIN") or str(ROOT / "target" / "debug" / "day2night")
     if not os.access(p, os.X_OK):

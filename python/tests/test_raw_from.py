@@ -3,7 +3,6 @@
 DNG SDK, rawpy, OpenImageIO, tifffile and exiftool accept what it writes)."""
 
 import json
-import shutil
 import subprocess
 import sys
 import warnings
@@ -13,7 +12,7 @@ import pytest
 import rawpy
 
 import day2night
-from conftest import FIXTURES, ROOT, shared_file
+from conftest import FIXTURES, ROOT, require_tool, shared_file
 
 # Fixtures synthesis accepts: strips and tiles, 10 to 16 bits, IFD0 and SubIFD, LJ92,
 # a 2x2 black pattern, black deltas, a linearization table.
@@ -186,12 +185,10 @@ def exiftool_warnings(exe, path):
 
 
 def exiftool_validate(source, path):
-    """`exiftool -validate` (when installed) finds nothing in PATH it does not find in
-    SOURCE (as tests/it/dng_roundtrip.rs)."""
-    exe = shutil.which("exiftool")
-    if exe is None:
-        print("SKIP: exiftool not installed (Debian libimage-exiftool-perl; .ci/run installs it)")
-        return
+    """`exiftool -validate` finds nothing in PATH it does not find in SOURCE (as
+    tests/it/dng_roundtrip.rs); without exiftool the test fails or is skipped
+    (conftest.require_tool)."""
+    exe = require_tool("exiftool", "libimage-exiftool-perl")
     new = exiftool_warnings(exe, path) - exiftool_warnings(exe, source)
     assert not new, f"{path}: exiftool -validate warnings the source lacks: {sorted(new)}"
 

@@ -1,4 +1,4 @@
-//! Night brightness dictionary (SYNTHESIS.md 3, the paper's dictionary D): the normalized
+//! Night brightness dictionary (docs/synthesis.md, "3. Dim": the paper's dictionary D): the normalized
 //! mean intensity of each real night raw (active area, the shared normalize path, negatives
 //! clipped at 0 as in step 1), and the normal fit `N(mean, std^2)` (unbiased std) that
 //! `synth --brightness` samples target means from (draws outside (0, 1] are redrawn), computed

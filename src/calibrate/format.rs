@@ -107,7 +107,7 @@ pub struct BrightnessFit {
 pub struct BrightnessMeasurement {
     /// Input file.
     pub file: String,
-    /// Normalized mean intensity over the active area (SYNTHESIS.md 1, negatives clipped).
+    /// Normalized mean intensity over the active area (docs/synthesis.md, "1. Normalize"; negatives clipped).
     pub mean: f64,
     /// Exif ISO, if known.
     pub iso: Option<u32>,
@@ -186,7 +186,7 @@ pub struct IsoModel {
     pub fits: Vec<PositionFit>,
 }
 
-/// Cross-ISO laws (SYNTHESIS.md 7): `S = c * ISO`, `O = a + b * ISO^2`, per position.
+/// Cross-ISO laws (docs/calibration.md, "ISO laws"): `S = c * ISO`, `O = a + b * ISO^2`, per position.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct IsoLaws {
     /// `c` per 2x2 position.

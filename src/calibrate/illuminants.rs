@@ -1,4 +1,4 @@
-//! Night illuminant dictionary from gray-card shots (SYNTHESIS.md 4).
+//! Night illuminant dictionary from gray-card shots (docs/synthesis.md, "4. Night illuminants").
 //!
 //! Per gray-card DNG: over a region of interest (default: the central quarter-by-quarter of
 //! the active area, i.e. `x = 3W/8, y = 3H/8, w = W/4, h = H/4`), the black-subtracted,

@@ -1,4 +1,4 @@
-//! Calibration of a new camera from real captures (issue 5, SYNTHESIS.md 3, 4, 7):
+//! Calibration of a new camera from real captures (issue 5; docs/calibration.md):
 //! night-illuminant dictionaries from gray cards ([`illuminants`]), night-brightness
 //! dictionaries ([`brightness`]), per-ISO noise models from bursts, pairs or NoiseProfile
 //! tags ([`noise`]) or estimated from day images ([`noise_image`]), and burst merging for low-noise ground truth ([`merge`]).

@@ -1,4 +1,4 @@
-//! Noise model calibration (SYNTHESIS.md 7): per ISO and per 2x2 CFA position, the
+//! Noise model calibration (docs/synthesis.md, "7. Noise"; docs/calibration.md): per ISO and per 2x2 CFA position, the
 //! heteroscedastic model `var(y) = S * y + O` on normalized data.
 //!
 //! - From a burst (aligned frames of a static scene, same ISO and exposure): per pixel the

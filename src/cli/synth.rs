@@ -1,5 +1,5 @@
 //! `day2night synth`: clean and noisy night DNGs, targets and a sidecar per input and
-//! variant (CLI.md), made by the library's [`SynthJob`] (the same code as `dataset`).
+//! variant (docs/cli.md), made by the library's [`SynthJob`] (the same code as `dataset`).
 //! Inputs are processed one after another (each with rayon inside); an input that cannot
 //! be used is reported and skipped, and the exit code is 1 at the end.
 

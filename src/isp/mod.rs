@@ -1,5 +1,5 @@
 //! Software ISP: the renders of raw images that serve as training targets, network inputs
-//! and previews (SYNTHESIS.md section 8).
+//! and previews (docs/synthesis.md, "Targets"; docs/isp.md).
 //!
 //! Stages ([`render::render_linear`]): normalize (the shared [`crate::normalize`] path),
 //! white balance by the neutral, demosaic ([`demosaic`]), camera -> XYZ (D50) -> linear

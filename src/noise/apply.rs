@@ -1,4 +1,4 @@
-//! Adding heteroscedastic Gaussian noise to a clean raw mosaic (SYNTHESIS.md 7):
+//! Adding heteroscedastic Gaussian noise to a clean raw mosaic (docs/synthesis.md, "7. Noise"):
 //! `x_noisy = clip(round(x + N(0, max(0, var(x)))), 0, white)` in DN, where
 //! `var(x) = (S * y + O) * (white - black_max)^2` and `y = (x - black(site)) / (white - black_max)`.
 //!

@@ -1,4 +1,4 @@
-//! Single-image Poisson-Gaussian noise estimate (issue 24; SYNTHESIS.md 7): per 2x2 CFA
+//! Single-image Poisson-Gaussian noise estimate (issue 24; docs/noise.md): per 2x2 CFA
 //! position, `var(y) = S * y + O` on normalized data, measured on the day raw itself, in the
 //! spirit of Foi, Trimeche, Katkovnik and Egiazarian, "Practical Poissonian-Gaussian noise
 //! modeling and fitting for single-image raw-data", IEEE TIP 17(10), 2008.

@@ -1,4 +1,4 @@
-//! Heteroscedastic Gaussian noise model per 2x2 CFA position and ISO (SYNTHESIS.md 7).
+//! Heteroscedastic Gaussian noise model per 2x2 CFA position and ISO (docs/synthesis.md, "7. Noise").
 //!
 //! The portable form is the DNG NoiseProfile form on normalized data,
 //! `var(y) = S * y + O` with `y = (x - black(site)) / (white - black_max)`. A table in DN
@@ -319,7 +319,7 @@ mod tests {
         let m = embedded::noise_model();
         let e = m.at(1600).unwrap();
         assert!(!e.extrapolated);
-        // O at ISO 1600 about 1.03e-5, at 3200 about 4.33e-5 (SYNTHESIS.md 7).
+        // O at ISO 1600 about 1.03e-5, at 3200 about 4.33e-5 (docs/synthesis.md, "7. Noise").
         let o1600 = e.params.positions[0][1];
         let o3200 = m.at(3200).unwrap().params.positions[0][1];
         assert!((o1600 - 1.03e-5).abs() < 0.01e-5, "{o1600}");

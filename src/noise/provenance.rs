@@ -5,7 +5,7 @@
 use crate::raw::camera::CameraId;
 use serde::{Deserialize, Deserializer, Serialize};
 
-/// The source of the noise model a plan uses (SYNTHESIS.md 7, in the chain's order).
+/// The source of the noise model a plan uses (docs/noise.md, "Where the model comes from", in the chain's order).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum NoiseSource {

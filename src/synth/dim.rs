@@ -1,4 +1,6 @@
-//! Dimming (SYNTHESIS.md 3): `y_e = y_w * s`.
+//! Dimming (docs/synthesis.md, "3. Dim"): `y_e = y_w * s`. This file draws `s` (the plan's
+//! [`DimPlan`]); the multiplication runs in the fused row pass of synth/relight.rs (the
+//! stage `dim` of the sidecar).
 //!
 //! Default (released code): `s ~ U(0.55, 0.90)`. With a brightness dictionary: a target mean
 //! intensity is drawn from the dictionary's fitted normal distribution (redrawn until it lies

@@ -1,4 +1,4 @@
-//! Night illuminants (SYNTHESIS.md 4): a 2-D Gaussian fitted to a dictionary of gray-card
+//! Night illuminants (docs/synthesis.md, "4. Night illuminants"): a 2-D Gaussian fitted to a dictionary of gray-card
 //! chromaticities `[r/g, b/g]`, and sampling with rejection.
 //!
 //! The covariance is the unbiased `1/(M-1)` estimate by default (released code), the

@@ -1,5 +1,5 @@
 //! Which night-illuminant dictionary an input is sampled from, and where it came from
-//! (SYNTHESIS.md 4; docs/synthesis.md, "Night lamps in CIE xy").
+//! (docs/synthesis.md, "4. Night illuminants", "Night lamps in CIE xy").
 //!
 //! A dictionary of `[r/g, b/g]` gray-card neutrals is in one camera's raw colours. The
 //! default therefore depends on the input:

@@ -1,4 +1,4 @@
-//! Light masks (SYNTHESIS.md 5): separable Gaussians evaluated per row and per column.
+//! Light masks (docs/synthesis.md, "5. Relight"): separable Gaussians evaluated per row and per column.
 //!
 //! A light has a centre `(row, col)` in active-area pixel coordinates (pixel centres at
 //! integer coordinates), per-axis sigmas and optionally a window `(h, w)`: a pixel is inside

@@ -1,4 +1,4 @@
-//! Day-to-night synthesis (SYNTHESIS.md): a seeded [`Plan`] sampled up front by [`plan()`],
+//! Day-to-night synthesis (docs/synthesis.md): a seeded [`Plan`] sampled up front by [`plan()`],
 //! then a pure [`run`].
 //!
 //! ```no_run
@@ -48,7 +48,7 @@ use crate::raw::RawImage;
 use dictionaries::BrightnessDict;
 use serde::{Deserialize, Serialize};
 
-/// Relighting mode (SYNTHESIS.md 5).
+/// Relighting mode (docs/synthesis.md, "5. Relight").
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Mode {

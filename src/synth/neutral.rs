@@ -1,4 +1,4 @@
-//! The day neutral (SYNTHESIS.md 2): AsShotNeutral, or AsShotWhiteXY converted through the
+//! The day neutral (docs/synthesis.md, "2. Remove the day illuminant"): AsShotNeutral, or AsShotWhiteXY converted through the
 //! colour matrices, or the user's `--day-neutral`; normalized so that green = 1 and
 //! refused when a component is tiny, zero, negative or not finite.
 //!

@@ -1,4 +1,4 @@
-//! The noise model a plan uses, and where it came from (SYNTHESIS.md 7; issue 24 points 2
+//! The noise model a plan uses, and where it came from (docs/noise.md, "Where the model comes from"; issue 24 points 2
 //! and 3). The first of these that applies:
 //!
 //! 1. `--noise-model FILE` (a warning when the file records another camera);
@@ -122,7 +122,11 @@ pub fn choose_noise_model(
     }
     let profile_words = profile_problem
         .clone()
-        .unwrap_or_else(|| "the input has no NoiseProfile".into());
+        .unwrap_or_else(|| match img.meta.noise_profile {
+            // a usable profile is skipped only for want of the ISO it is scaled from
+            Some(_) => "the input has a NoiseProfile (unused: it needs the ISO)".into(),
+            None => "the input has no NoiseProfile".into(),
+        });
     if cam.is_s20_fe() {
         let model = embedded::noise_model();
         return Ok(NoiseChoice {
@@ -387,6 +391,21 @@ mod tests {
             );
             assert!(w.contains("--assume-iso N"), "{w}");
         }
+    }
+
+    #[test]
+    fn unknown_iso_with_a_noise_profile_says_the_profile_needs_the_iso() {
+        let i = img(None, true, "Canon", "EOS Kiss X4");
+        let r = choose(&i, None, false, trusted_estimate());
+        assert_eq!(r.choice.provenance.source, NoiseSource::EmbeddedS20Fe);
+        let w = &r.choice.warnings[0];
+        assert!(
+            w.starts_with(
+                "noise: the input has a NoiseProfile (unused: it needs the ISO) and its ISO is \
+                 unknown"
+            ),
+            "{w}"
+        );
     }
 
     #[test]

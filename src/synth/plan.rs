@@ -194,6 +194,8 @@ pub fn plan_with_estimate(
     let mut rng = SynthRng::new(seed, input_name, variant);
     // What the metadata checks corrected on reading (dng::check) comes first.
     let mut warnings = img.meta.warnings.clone();
+    // The stage names of the sidecar's `stages`: from normalize to denormalize they run in
+    // one fused row pass (synth/relight.rs, `run_clean`), not in functions of those names.
     let mut stages: Vec<String> = vec!["normalize".into(), "remove_day_illuminant".into()];
 
     let dim = if opts.mode == Mode::Day {

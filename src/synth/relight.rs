@@ -1,6 +1,11 @@
 //! Running a plan's deterministic part: one fused pass per active-area row doing normalize
-//! (SYNTHESIS.md 1), remove the day illuminant (2), dim (3), relight (5) and denormalize (6),
-//! with rayon over rows and per-thread row buffers (no whole-image temporaries per light).
+//! (docs/synthesis.md, "1. Normalize"), remove the day illuminant (2), dim (3), relight (5)
+//! and denormalize (6), with rayon over rows and per-thread row buffers (no whole-image
+//! temporaries per light). The plan's stage names `normalize`, `remove_day_illuminant`,
+//! `dim`, `masks`, `relight_*`, `bulbs` and `denormalize` (listed by `synth::plan`) all run
+//! here, in this one pass, not in functions of those names: `dim.rs` only draws the
+//! factor, `masks.rs` evaluates the masks this pass asks for, and the normalize and
+//! denormalize arithmetic is [`crate::normalize::Normalizer`]'s.
 //!
 //! Local relighting per row: `num = w0 * R0`, `den = w0` for the ambient light (mask 1);
 //! each local light whose window covers the row adds `m * w * R_k` to `num` and `m * w` to

@@ -1,4 +1,4 @@
-//! Seeded random streams (SYNTHESIS.md 9).
+//! Seeded random streams (docs/synthesis.md, "Plan, then run").
 //!
 //! Each (master seed, input file name, variant) gets its own ChaCha20 stream whose key is
 //! `SHA-256("day2night synth v1\0" || seed (u64 LE) || name (UTF-8) || "\0" || variant (u32 LE))`.

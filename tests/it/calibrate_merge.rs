@@ -11,7 +11,7 @@ use std::ffi::OsString;
 use std::path::PathBuf;
 
 fn validate(merged: &std::path::Path, frames: &[PathBuf]) {
-    let Some(py) = common::python() else { return };
+    let py = common::python();
     let mut a: Vec<&std::ffi::OsStr> = vec![merged.as_os_str()];
     a.extend(frames.iter().map(|p| p.as_os_str()));
     let o = common::run_validator(&py, "calibrate_merge_check.py", &a);
@@ -25,6 +25,10 @@ fn validate(merged: &std::path::Path, frames: &[PathBuf]) {
 }
 
 #[test]
+#[cfg_attr(
+    d2n_missing = "validators",
+    ignore = "needs the validators (D2N_ALLOW_MISSING)"
+)]
 fn exact_sums_for_a_10_bit_burst() {
     let dir = tempfile::tempdir().unwrap();
     let lv = (64.0, 1023.0);
@@ -80,6 +84,10 @@ fn exact_sums_for_a_10_bit_burst() {
 }
 
 #[test]
+#[cfg_attr(
+    d2n_missing = "validators",
+    ignore = "needs the validators (D2N_ALLOW_MISSING)"
+)]
 fn rounded_mean_for_a_14_bit_burst() {
     let dir = tempfile::tempdir().unwrap();
     // 8 x 15000 > 65535: K = 4, the output is round(sum * 4 / 8).
@@ -166,10 +174,16 @@ fn mismatched_bursts_are_clear_errors() {
 /// white 15000, ISO unknown) merge to exact sums (K = 2) that rawpy and the DNG SDK read as
 /// the same image; brightness and a gray-card measurement run on it.
 #[test]
+#[cfg_attr(
+    d2n_missing = "shared-data",
+    ignore = "needs the real-camera files (absent at build time)"
+)]
+#[cfg_attr(
+    d2n_missing = "validators",
+    ignore = "needs the validators (D2N_ALLOW_MISSING)"
+)]
 fn real_canon_capture() {
-    let Some(data) = common::shared_data() else {
-        return;
-    };
+    let data = common::shared_data();
     let src = data.join("dng/canon_kissx4_magiclantern_rggb14_strips.dng");
     let dir = tempfile::tempdir().unwrap();
     let (a, b) = (dir.path().join("a.dng"), dir.path().join("b.dng"));

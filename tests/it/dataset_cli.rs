@@ -89,7 +89,7 @@ fn assert_same_tree(got: &BTreeMap<String, String>, want: &BTreeMap<String, Stri
 }
 
 fn validate_layout(out: &Path, ok_units: usize) {
-    let Some(py) = common::python() else { return };
+    let py = common::python();
     let o = common::run_validator(
         &py,
         "dataset_layout.py",
@@ -104,6 +104,10 @@ fn validate_layout(out: &Path, ok_units: usize) {
 }
 
 #[test]
+#[cfg_attr(
+    d2n_missing = "validators",
+    ignore = "needs the validators (D2N_ALLOW_MISSING)"
+)]
 fn bad_input_fails_the_run_but_not_the_others_then_resume_does_nothing() {
     let day = day_dir(4, true);
     let out = tempfile::tempdir().unwrap();
@@ -338,6 +342,10 @@ fn killed_run_then_rerun_equals_an_uninterrupted_run() {
 }
 
 #[test]
+#[cfg_attr(
+    d2n_missing = "chromium",
+    ignore = "needs chromium (D2N_ALLOW_MISSING)"
+)]
 fn report_of_a_real_dataset() {
     let day = day_dir(3, false);
     let out = tempfile::tempdir().unwrap();
@@ -368,7 +376,8 @@ fn report_of_a_real_dataset() {
     for p in &pngs {
         image::open(p).unwrap_or_else(|e| panic!("{}: {e}", p.display()));
     }
-    if let Some(chromium) = dataset_fake::chromium() {
+    {
+        let chromium = common::chromium();
         let (console, shot) = dataset_fake::load_in_browser(&chromium, &page);
         assert!(console.is_empty(), "console output: {console:#?}");
         image::load_from_memory(&shot).expect("screenshot is not a PNG");
@@ -563,12 +572,18 @@ fn every_synth_output_option_applies_to_dataset() {
 }
 
 #[test]
+#[cfg_attr(
+    d2n_missing = "shared-data",
+    ignore = "needs the real-camera files (absent at build time)"
+)]
+#[cfg_attr(
+    d2n_missing = "validators",
+    ignore = "needs the validators (D2N_ALLOW_MISSING)"
+)]
 fn real_camera_files_among_unusable_ones() {
     // A real Canon capture is synthesized; the LG LinearRaw DNG is refused with its reason
     // and recorded as failed; the GoPro .gpr (not a .dng name) is not an input at all.
-    let Some(shared) = common::shared_data() else {
-        return;
-    };
+    let shared = common::shared_data();
     let day = tempfile::tempdir().unwrap();
     for (dir, name) in [
         ("dng", "canon_kissx4_magiclantern_rggb14_strips.dng"),

@@ -1,5 +1,5 @@
-//! Peak memory of `day2night dataset` on 12 MP inputs for 1 and 2 jobs (slow: set
-//! D2N_SLOW=1). Inputs are 4000 x 3000 DNGs made by tiling the fixture day.dng (phase kept).
+//! Peak memory of `day2night dataset` on 12 MP inputs for 1 and 2 jobs (slow: ignored by
+//! default, run by `scripts/test.sh --slow`). Inputs are 4000 x 3000 DNGs made by tiling the fixture day.dng (phase kept).
 //! Measured with GNU time's "Maximum resident set size"; the numbers are printed and go into
 //! docs/dataset.md.
 
@@ -38,7 +38,7 @@ fn make_12mp(dir: &Path, n: usize) {
 
 fn peak_rss_kib(day: &Path, out: &Path, jobs: usize) -> (u64, f64) {
     let t0 = std::time::Instant::now();
-    let o = std::process::Command::new("/usr/bin/time")
+    let o = std::process::Command::new(common::gnu_time())
         .arg("-v")
         .arg(env!("CARGO_BIN_EXE_day2night"))
         .arg("dataset")
@@ -63,15 +63,8 @@ fn peak_rss_kib(day: &Path, out: &Path, jobs: usize) -> (u64, f64) {
 }
 
 #[test]
-fn peak_memory_on_12mp_inputs() {
-    if std::env::var("D2N_SLOW").as_deref() != Ok("1") {
-        eprintln!("SKIP: slow memory measurement (set D2N_SLOW=1)");
-        return;
-    }
-    if !Path::new("/usr/bin/time").exists() {
-        eprintln!("SKIP: GNU time not installed (apt-get install -y time)");
-        return;
-    }
+#[ignore = "slow: peak memory of dataset on 12 MP inputs (scripts/test.sh --slow)"]
+fn slow_peak_memory_on_12mp_inputs() {
     let day = tempfile::tempdir().unwrap();
     make_12mp(day.path(), 4);
     let mut results = Vec::new();

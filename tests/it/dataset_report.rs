@@ -1,10 +1,10 @@
-//! The HTML report: built over a fake dataset with fake visuals, its PNGs decode, and (when
-//! Debian `chromium` is installed) it loads in a real headless browser with no console
-//! errors and produces a screenshot.
+//! The HTML report: built over a fake dataset with fake visuals, its PNGs decode, and it
+//! loads in a real headless browser (Debian `chromium`, required) with no console errors
+//! and produces a screenshot.
 
-use crate::dataset_fake;
+use crate::{common, dataset_fake};
 
-use dataset_fake::{chromium, load_in_browser, make_day_dir, opts, Fake};
+use dataset_fake::{load_in_browser, make_day_dir, opts, Fake};
 use day2night::dataset;
 use day2night::report::{
     self, plot::Ellipse, thumb::Rgb8, Illuminants, LightMark, ReportOptions, Visuals,
@@ -87,6 +87,10 @@ impl Visuals for FakeVisuals {
 }
 
 #[test]
+#[cfg_attr(
+    d2n_missing = "chromium",
+    ignore = "needs chromium (D2N_ALLOW_MISSING)"
+)]
 fn report_builds_decodes_and_loads_headless() {
     let day = make_day_dir(14);
     std::fs::write(day.path().join("b/broken.dng"), b"bad").unwrap();
@@ -131,7 +135,7 @@ fn report_builds_decodes_and_loads_headless() {
     );
     assert!(!html.contains("https://"), "page refers to the network");
 
-    let Some(chromium) = chromium() else { return };
+    let chromium = common::chromium();
     let (console, shot) = load_in_browser(&chromium, &rep.page);
     assert!(console.is_empty(), "console output: {console:#?}");
     if let Some(keep) = std::env::var_os("D2N_REPORT_SCREENSHOT") {

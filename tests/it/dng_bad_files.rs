@@ -16,10 +16,12 @@ fn expect_err(bytes: &[u8], want: &str) {
 }
 
 #[test]
+#[cfg_attr(
+    d2n_missing = "shared-data",
+    ignore = "needs the real-camera files (absent at build time)"
+)]
 fn shared_bad_files_are_refused_with_reasons() {
-    let Some(d) = common::shared_data() else {
-        return;
-    };
+    let d = common::shared_data();
     let cases = [
         (
             "gopro_hero7_vc5_compression9.gpr",
@@ -52,10 +54,12 @@ fn shared_bad_files_are_refused_with_reasons() {
 /// The real LinearRaw file (lossy JPEG tiles in a SubIFD, Adobe lossy DNG): read, described
 /// in full and rendered; synthesis refuses it with the reason.
 #[test]
+#[cfg_attr(
+    d2n_missing = "shared-data",
+    ignore = "needs the real-camera files (absent at build time)"
+)]
 fn shared_linear_raw_file_is_read_described_and_refused_for_synthesis() {
-    let Some(d) = common::shared_data() else {
-        return;
-    };
+    let d = common::shared_data();
     let reason = "LinearRaw: already demosaiced; the night synthesis works on the CFA mosaic";
     let p = d.join("dng-bad/lg_g4_linearraw_lossyjpeg_subifd.dng");
     let img = read_dng(&p).unwrap();

@@ -29,7 +29,7 @@ fn gps_entries() -> Vec<Entry> {
 }
 
 fn validate(src: &Path, files: &[&Path]) {
-    let Some(py) = common::python() else { return };
+    let py = common::python();
     for f in files {
         let o = std::process::Command::new(&py)
             .arg(common::root().join("tests/validators/dng_gps.py"))
@@ -61,7 +61,16 @@ fn validate(src: &Path, files: &[&Path]) {
 }
 
 #[test]
+#[cfg_attr(
+    d2n_missing = "validators",
+    ignore = "needs the validators (D2N_ALLOW_MISSING)"
+)]
+#[cfg_attr(
+    d2n_missing = "exiftool",
+    ignore = "needs exiftool (D2N_ALLOW_MISSING)"
+)]
 fn gps_ifd_is_carried_by_convert_and_synth() {
+    let et = common::exiftool();
     let t = tempfile::tempdir().unwrap();
     let mut img = read_dng(&common::fixtures().join("day.dng")).unwrap();
     assert!(img.meta.gps.is_empty(), "the fixture has no GPS IFD");
@@ -125,7 +134,7 @@ fn gps_ifd_is_carried_by_convert_and_synth() {
     validate(&with_gps, &[&with_gps, &conv]);
     validate(&with_gps, &[]);
     // the night raws: GPS checked (their pixels differ from the source by design)
-    let Some(py) = common::python() else { return };
+    let py = common::python();
     for f in [&clean, &noisy] {
         let o = std::process::Command::new(&py)
             .arg(common::root().join("tests/validators/dng_gps.py"))
@@ -149,7 +158,7 @@ fn gps_ifd_is_carried_by_convert_and_synth() {
     assert!(read_dng(&plain).unwrap().meta.gps.is_empty());
 
     // exiftool -validate: the GPS IFD adds no warning
-    if let Some(et) = common::exiftool() {
+    {
         let warnings = |f: &Path| -> Vec<String> {
             let o = std::process::Command::new(&et)
                 .args(["-validate", "-warning", "-a", "-s3"])

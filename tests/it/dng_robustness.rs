@@ -104,13 +104,14 @@ fn mutated_dngs_never_panic() {
     assert!(errors > 0);
 }
 
-/// `D2N_WRITE_SEEDS=DIR cargo test --test it dng_robustness::write_seeds` writes the valid seed
-/// DNGs into DIR (a starting corpus for `cargo fuzz run read_dng`).
+/// `D2N_WRITE_SEEDS=DIR cargo test --test it dng_robustness::write_seeds -- --ignored` writes
+/// the valid seed DNGs into DIR (a starting corpus for `cargo fuzz run read_dng`). A tool, not
+/// a check: ignored by default.
 #[test]
+#[ignore = "tool: writes the fuzz seed corpus into $D2N_WRITE_SEEDS"]
 fn write_seeds() {
-    let Some(dir) = std::env::var_os("D2N_WRITE_SEEDS") else {
-        return;
-    };
+    let dir = std::env::var_os("D2N_WRITE_SEEDS")
+        .expect("D2N_WRITE_SEEDS=DIR names the folder for the seed corpus");
     let dir = std::path::Path::new(&dir);
     for (i, s) in seeds().iter().enumerate() {
         std::fs::write(dir.join(format!("seed{i}.dng")), s).unwrap();

@@ -1,7 +1,8 @@
 //! Demosaic accuracy on scikit-image's sample photographs, mosaicked in all four Bayer
 //! phases: CPSNR (all three channels, data range 1, an 8-pixel border excluded) per method.
-//! Slow: runs with `D2N_SLOW=1` (prints the markdown table of docs/isp.md); the default
-//! run checks one photo in one phase.
+//! The default run checks one photo in one phase; the slow test (ignored by default, run by
+//! `scripts/test.sh --slow`) checks all of them and prints the markdown table of
+//! docs/isp.md.
 use crate::common;
 
 use day2night::encode::read::read_image;
@@ -26,9 +27,23 @@ fn cpsnr(a: &RgbImage, b: &RgbImage, border: usize) -> f64 {
 }
 
 #[test]
-fn demosaic_accuracy_on_sample_photos() {
-    let Some(py) = common::python() else { return };
-    let slow = std::env::var("D2N_SLOW").as_deref() == Ok("1");
+#[cfg_attr(
+    d2n_missing = "validators",
+    ignore = "needs the validators (D2N_ALLOW_MISSING)"
+)]
+fn demosaic_accuracy_on_one_sample_photo() {
+    accuracy(false);
+}
+
+#[test]
+#[ignore = "slow: every sample photo in every phase (scripts/test.sh --slow)"]
+fn slow_demosaic_accuracy_on_every_sample_photo() {
+    accuracy(true);
+}
+
+/// CPSNR per method on the first photo in RGGB, or (`slow`) on every photo in every phase.
+fn accuracy(slow: bool) {
+    let py = common::python();
     let dir = tempfile::tempdir().unwrap();
     let out = common::run_validator(&py, "isp_skimage_photos.py", &[dir.path().as_os_str()]);
     assert!(

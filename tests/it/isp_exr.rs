@@ -66,8 +66,12 @@ fn expected(img: &RgbImage, half: bool) -> Vec<u8> {
 }
 
 #[test]
+#[cfg_attr(
+    d2n_missing = "validators",
+    ignore = "needs the validators (D2N_ALLOW_MISSING)"
+)]
 fn own_encoder_output_decodes_exactly_in_openexr_and_oiio() {
-    let Some(py) = common::python() else { return };
+    let py = common::python();
     let dir = tempfile::tempdir().unwrap();
     // 21 lines: one full ZIP block of 16 and a partial one
     let noisy = image(37, 21);

@@ -11,29 +11,25 @@ use std::path::Path;
 use std::process::Output;
 use std::time::{Duration, Instant};
 
-/// Run the binary with `args`; when /usr/bin/time exists, also return the peak RSS in KiB.
-fn run(args: &[&std::ffi::OsStr]) -> (Output, Duration, Option<u64>) {
-    let time = Path::new("/usr/bin/time");
+/// Run the binary with `args` under GNU time (required); returns the peak RSS in KiB too.
+fn run(args: &[&std::ffi::OsStr]) -> (Output, Duration, u64) {
+    let time = common::gnu_time();
     let t0 = Instant::now();
-    let (out, rss) = if time.is_file() {
-        let out = std::process::Command::new(time)
-            .arg("-v")
-            .arg(env!("CARGO_BIN_EXE_day2night"))
-            .args(args)
-            .output()
-            .unwrap();
-        let err = String::from_utf8_lossy(&out.stderr);
-        let rss = err
-            .lines()
-            .find_map(|l| {
-                l.trim()
-                    .strip_prefix("Maximum resident set size (kbytes): ")
-            })
-            .and_then(|v| v.trim().parse().ok());
-        (out, rss)
-    } else {
-        (common::bin().args(args).output().unwrap(), None)
-    };
+    let out = std::process::Command::new(time)
+        .arg("-v")
+        .arg(env!("CARGO_BIN_EXE_day2night"))
+        .args(args)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    let rss = err
+        .lines()
+        .find_map(|l| {
+            l.trim()
+                .strip_prefix("Maximum resident set size (kbytes): ")
+        })
+        .and_then(|v| v.trim().parse().ok())
+        .unwrap_or_else(|| panic!("no peak RSS line from GNU time: {err}"));
     (out, t0.elapsed(), rss)
 }
 
@@ -97,7 +93,7 @@ fn check_all_commands(bomb: &[u8], name: &str, expect: &str) {
         let err = String::from_utf8_lossy(&o.stderr);
         let stdout = String::from_utf8_lossy(&o.stdout);
         eprintln!(
-            "{name} {what}: {took:?}, peak RSS {rss:?} KiB, exit {:?}",
+            "{name} {what}: {took:?}, peak RSS {rss} KiB, exit {:?}",
             o.status.code()
         );
         assert_eq!(o.status.code(), Some(1), "{what}: {err}\n{stdout}");
@@ -106,15 +102,14 @@ fn check_all_commands(bomb: &[u8], name: &str, expect: &str) {
             "{what}: expected {expect:?} in\n{err}\n{stdout}"
         );
         assert!(took < Duration::from_secs(5), "{what} took {took:?}");
-        if let Some(kib) = rss {
-            assert!(kib < 400 * 1024, "{what}: peak RSS {kib} KiB");
-        }
+        assert!(rss < 400 * 1024, "{what}: peak RSS {rss} KiB");
         assert_eq!(leftovers(dir.path()), Vec::<String>::new(), "{what}");
         assert!(!conv.exists() && !rend.exists(), "{what} left an output");
     }
 }
 
 #[test]
+#[cfg_attr(d2n_missing = "time", ignore = "needs GNU time (D2N_ALLOW_MISSING)")]
 fn lj92_tile_bomb_is_refused_by_every_command() {
     let bomb = dngbuild::bomb_lj92_tiles();
     assert!(bomb.len() < 45_000, "{}", bomb.len());
@@ -122,6 +117,7 @@ fn lj92_tile_bomb_is_refused_by_every_command() {
 }
 
 #[test]
+#[cfg_attr(d2n_missing = "time", ignore = "needs GNU time (D2N_ALLOW_MISSING)")]
 fn strip_bomb_is_refused_by_every_command() {
     let bomb = dngbuild::bomb_strips();
     assert!(bomb.len() < 170_000, "{}", bomb.len());

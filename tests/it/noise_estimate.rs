@@ -212,10 +212,12 @@ fn fixture_day_dng_estimate_against_its_noise_profile() {
 }
 
 #[test]
+#[cfg_attr(
+    d2n_missing = "shared-data",
+    ignore = "needs the real-camera files (absent at build time)"
+)]
 fn real_canon_estimate_is_consistent_across_positions() {
-    let Some(path) = common::shared_file("dng/canon_kissx4_magiclantern_rggb14_strips.dng") else {
-        return;
-    };
+    let path = common::shared_file("dng/canon_kissx4_magiclantern_rggb14_strips.dng");
     let img = read_dng(&path).unwrap();
     let e = estimate(&img, &EstimateOptions::default()).unwrap();
     let p = e.trusted().unwrap();

@@ -15,14 +15,15 @@ For every OUT:
                      when the raw is in a SubIFD) and, for raw in IFD0, the SOURCE's. Known
                      limitation: the PyPI build's libtiff cannot decode lossless JPEG, so
                      LJ92 in IFD0 is reported as KNOWN, not checked.
-  iinfo            : Debian openimageio-tools (OpenImageIO through LibRaw), when installed:
-                     same decoded width/height/channels as the SOURCE.
+  iinfo            : Debian openimageio-tools (OpenImageIO through LibRaw) (required when
+                     D2N_REQUIRE_TOOLS=1): same decoded width/height/channels as the SOURCE.
   tifffile         : parses OUT; DNG tags present in IFD0/raw IFD; entries sorted and unique;
                      every strip/tile offset even; stale tags absent; uncompressed 16-bit raw
                      data decodes to the expected pixels.
 Prints one line per check; exits 1 if any check failed.
 """
 import json
+import os
 import subprocess
 import sys
 
@@ -200,6 +201,9 @@ def main():
     s_oiio, _ = oiio_probe(src)
     s_iinfo, s_iinfo_err = iinfo_probe(src)
     if s_iinfo_err == "not installed":
+        if os.environ.get("D2N_REQUIRE_TOOLS") == "1":
+            fail("iinfo (Debian openimageio-tools) not installed but D2N_REQUIRE_TOOLS=1 "
+                 "(scripts/test.sh sets it; .ci/run installs iinfo)")
         print("SKIP Debian OpenImageIO (iinfo, LibRaw) checks: /usr/bin/iinfo not installed "
               "(Debian openimageio-tools)")
 

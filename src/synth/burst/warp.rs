@@ -8,7 +8,7 @@
 //!    edge sample (the edge is repeated), and [`super::motion::FrameTransform::valid`] is the
 //!    rectangle of sites none of whose taps is outside;
 //! 3. the value is un-white-balanced, clipped to the clean pass's range and denormalized as
-//!    the clean pass denormalizes (SYNTHESIS.md 6).
+//!    the clean pass denormalizes (docs/synthesis.md, "6. Denormalize").
 //!
 //! The image is processed in tiles of [`TILE`] x [`TILE`] frame-k sites: each tile
 //! demosaics only the source window its taps read (plus the demosaicer's 2-sample

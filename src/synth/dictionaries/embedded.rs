@@ -18,9 +18,9 @@ pub const ATTRIBUTION: &str = "CVPR 2022 day-to-night release, CC BY-NC 4.0";
 /// Name of the embedded illuminant dictionary (used in messages and sidecars).
 pub const ILLUMINANTS_NAME: &str = "embedded paper phone (S20 FE) night gray-card dictionary";
 
-/// Fitted mean [r/g, b/g] of [`ILLUMINANTS`] (SYNTHESIS.md 4).
+/// Fitted mean [r/g, b/g] of [`ILLUMINANTS`] (docs/synthesis.md, "4. Night illuminants").
 pub const FIT_MEAN: [f64; 2] = [0.766125, 0.328891];
-/// Unbiased (1/(M-1)) covariance of [`ILLUMINANTS`] (SYNTHESIS.md 4).
+/// Unbiased (1/(M-1)) covariance of [`ILLUMINANTS`] (docs/synthesis.md, "4. Night illuminants").
 pub const FIT_COV_UNBIASED: [[f64; 2]; 2] = [[0.0288803, -0.0109222], [-0.0109222, 0.00489429]];
 
 /// The 45 night gray-card chromaticities [r/g, b/g] of the paper's phone.

@@ -15,64 +15,69 @@ pub fn fixtures() -> PathBuf {
     root().join("fixtures")
 }
 
-/// `../shared/data` (or `$D2N_SHARED_DATA`), if present. Prints why when absent (the
-/// calling test then skips), or fails when `D2N_REQUIRE_SHARED_DATA=1` (`.ci/run` sets it
-/// when `../shared/data` exists, so that a test silently skipping there is a failure).
-pub fn shared_data() -> Option<PathBuf> {
+/// Fail the calling test: `what` is missing. A test needing a requirement never returns
+/// early as passed; it fails naming the requirement, or, when the developer declared it
+/// absent at build time (`D2N_ALLOW_MISSING=NAME`, see build.rs and tests/README.md), it
+/// carries `#[cfg_attr(d2n_missing = "NAME", ignore = "...")]` and is reported as ignored.
+pub fn missing(what: &str, name: &str, how: &str) -> ! {
+    panic!(
+        "needs {what}: {how}; or declare it absent with D2N_ALLOW_MISSING={name} \
+         (the tests needing it are then reported as ignored; tests/README.md)"
+    )
+}
+
+/// `../shared/data` (or `$D2N_SHARED_DATA`). Tests that need it carry
+/// `#[cfg_attr(d2n_missing = "shared-data", ignore = ...)]`: build.rs declares the data
+/// absent when it is not found at build time (a fresh clone), so those tests are reported
+/// as ignored there; found at build time but missing now, the test fails.
+pub fn shared_data() -> PathBuf {
     let p = std::env::var_os("D2N_SHARED_DATA")
         .map(PathBuf::from)
         .unwrap_or_else(|| root().join("../shared/data"));
-    if p.is_dir() {
-        Some(p)
-    } else {
-        skip_shared(&format!(
-            "shared real-camera data not found at {} (set D2N_SHARED_DATA)",
-            p.display()
-        ));
-        None
+    if !p.is_dir() {
+        missing(
+            &format!("the real-camera files at {}", p.display()),
+            "shared-data",
+            "set D2N_SHARED_DATA to their folder",
+        );
     }
+    p
 }
 
-/// A file of the shared data (`rel` inside [`shared_data`]), if present; like
-/// [`shared_data`], prints why when absent, or fails under `D2N_REQUIRE_SHARED_DATA=1`.
-pub fn shared_file(rel: &str) -> Option<PathBuf> {
-    let p = shared_data()?.join(rel);
-    if p.is_file() {
-        Some(p)
-    } else {
-        skip_shared(&format!("shared file {} not found", p.display()));
-        None
-    }
-}
-
-fn skip_shared(why: &str) {
-    if std::env::var("D2N_REQUIRE_SHARED_DATA").as_deref() == Ok("1") {
-        panic!("{why} but D2N_REQUIRE_SHARED_DATA=1");
-    }
-    eprintln!("SKIP: {why}");
-}
-
-/// The Python interpreter of the validator virtualenv, if any. When
-/// `D2N_REQUIRE_VALIDATORS=1` (set by scripts/test.sh) a missing interpreter is a failure,
-/// otherwise the test prints why it skips.
-pub fn python() -> Option<PathBuf> {
-    let p = std::env::var_os("D2N_PYTHON")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| root().join(".venv/bin/python"));
-    if p.exists() {
-        return Some(p);
-    }
-    if std::env::var("D2N_REQUIRE_VALIDATORS").as_deref() == Ok("1") {
+/// A file of the shared data (`rel` inside [`shared_data`]); fails when absent.
+pub fn shared_file(rel: &str) -> PathBuf {
+    let p = shared_data().join(rel);
+    if !p.is_file() {
         panic!(
-            "validator Python {} missing but D2N_REQUIRE_VALIDATORS=1",
+            "shared file {} not found (the real-camera data is incomplete)",
             p.display()
         );
     }
-    eprintln!(
-        "SKIP: validator Python not found at {} (run scripts/test.sh to set it up)",
-        p.display()
-    );
-    None
+    p
+}
+
+/// The Python interpreter of the validator virtualenv (`$D2N_PYTHON`, else `.venv` of the
+/// checkout, which scripts/test.sh makes); fails when absent.
+pub fn python() -> PathBuf {
+    let p = std::env::var_os("D2N_PYTHON")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| root().join(".venv/bin/python"));
+    if !p.exists() {
+        missing(
+            &format!("the validators (no Python at {})", p.display()),
+            "validators",
+            "run scripts/test.sh or set D2N_PYTHON to a venv with tests/validators/requirements.txt",
+        );
+    }
+    p
+}
+
+/// `name` on PATH, if any.
+pub fn on_path(name: &str) -> Option<PathBuf> {
+    let path = std::env::var("PATH").unwrap_or_default();
+    path.split(':')
+        .map(|dir| Path::new(dir).join(name))
+        .find(|p| p.is_file())
 }
 
 /// Run `tests/validators/<script>` with the validator Python; returns its output.
@@ -84,16 +89,42 @@ pub fn run_validator(py: &Path, script: &str, args: &[&std::ffi::OsStr]) -> Outp
         .expect("failed to start validator python")
 }
 
-/// exiftool, if installed (prints why when not).
-pub fn exiftool() -> Option<PathBuf> {
-    for dir in std::env::var("PATH").unwrap_or_default().split(':') {
-        let p = Path::new(dir).join("exiftool");
-        if p.is_file() {
-            return Some(p);
-        }
+/// exiftool; fails when absent.
+pub fn exiftool() -> PathBuf {
+    on_path("exiftool").unwrap_or_else(|| {
+        missing(
+            "exiftool",
+            "exiftool",
+            "install it (Debian libimage-exiftool-perl; .ci/run installs it)",
+        )
+    })
+}
+
+/// Debian `chromium` (or another Chromium) on PATH; fails when absent.
+pub fn chromium() -> PathBuf {
+    ["chromium", "chromium-browser", "google-chrome"]
+        .into_iter()
+        .find_map(on_path)
+        .unwrap_or_else(|| {
+            missing(
+                "chromium (headless page-load check)",
+                "chromium",
+                "install it (Debian chromium; .ci/run installs it)",
+            )
+        })
+}
+
+/// GNU time (`/usr/bin/time`, for peak RSS); fails when absent.
+pub fn gnu_time() -> PathBuf {
+    let p = PathBuf::from("/usr/bin/time");
+    if !p.is_file() {
+        missing(
+            "GNU time at /usr/bin/time",
+            "time",
+            "install it (Debian time; .ci/run installs it)",
+        );
     }
-    eprintln!("SKIP: exiftool not installed (Debian libimage-exiftool-perl; .ci/run installs it)");
-    None
+    p
 }
 
 /// The built `day2night` binary.

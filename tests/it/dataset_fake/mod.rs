@@ -6,7 +6,7 @@ use day2night::dataset::{
 };
 use day2night::{Error, Result};
 use std::collections::BTreeMap;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::Command;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
@@ -129,20 +129,6 @@ pub fn tree(dir: &Path, with_manifests: bool) -> BTreeMap<String, Vec<u8>> {
         m.retain(|k, _| !k.starts_with("manifest"));
     }
     m
-}
-
-/// Debian `chromium` (or another Chromium) on PATH; prints why when absent.
-pub fn chromium() -> Option<PathBuf> {
-    for name in ["chromium", "chromium-browser", "google-chrome"] {
-        for dir in std::env::var("PATH").unwrap_or_default().split(':') {
-            let p = Path::new(dir).join(name);
-            if p.is_file() {
-                return Some(p);
-            }
-        }
-    }
-    eprintln!("SKIP: headless browser check: chromium not installed (Debian: apt-get install -y chromium; .ci/run installs it)");
-    None
 }
 
 /// Load `page` headless; returns (console lines, screenshot bytes).
