@@ -415,6 +415,10 @@ pub fn plan_with_estimate(
     // The burst's motion from its own stream (nothing drawn for a single frame).
     let burst = super::burst::motion::plan_burst(&opts.burst, (w, h), (seed, input_name, variant))?;
     if let Some(b) = &burst {
+        warnings.extend(super::burst::checks::valid_area_warnings(
+            &b.transforms,
+            (w, h),
+        ));
         stages.push("burst_frames".into());
         if b.transforms.iter().any(|t| !t.is_identity()) {
             stages.push("burst_warp".into());

@@ -102,28 +102,10 @@ impl BurstOptions {
         self.frames <= 1
     }
 
-    /// Error on out-of-range values.
+    /// Error on out-of-range values ([`BurstOptions::check`], naming both the flag and the
+    /// Python argument).
     pub fn validate(&self) -> Result<()> {
-        if !(1..=MAX_FRAMES).contains(&self.frames) {
-            return Err(Error::invalid(format!(
-                "burst of {} frames (1 to {MAX_FRAMES})",
-                self.frames
-            )));
-        }
-        let s = &self.shake;
-        if !(s.step_px.is_finite() && (0.0..=MAX_STEP_PX).contains(&s.step_px)) {
-            return Err(Error::invalid(format!(
-                "shake step {} px (0 to {MAX_STEP_PX})",
-                s.step_px
-            )));
-        }
-        if !(s.roll_deg.is_finite() && (0.0..=MAX_ROLL_DEG).contains(&s.roll_deg)) {
-            return Err(Error::invalid(format!(
-                "shake roll {} degrees (0 to {MAX_ROLL_DEG})",
-                s.roll_deg
-            )));
-        }
-        Ok(())
+        self.check(&super::checks::Names::EITHER)
     }
 }
 
@@ -260,6 +242,8 @@ pub fn plan_burst(
     if opts.is_single() {
         return Ok(None);
     }
+    // Before any draw: a step the image cannot hold is refused with the image's size.
+    super::checks::check_step_fits(opts, (w, h))?;
     let centre = [(w as f64 - 1.0) / 2.0, (h as f64 - 1.0) / 2.0];
     let mut rng = SynthRng::from_key(burst_key(seed, input_name, variant));
     let (mut dx, mut dy, mut th) = (0.0f64, 0.0f64, 0.0f64);
