@@ -164,6 +164,12 @@ impl BurstRequest {
 }
 
 impl BurstOptions {
+    /// Error on out-of-range values ([`BurstOptions::check`], naming both the flag and the
+    /// Python argument).
+    pub fn validate(&self) -> Result<()> {
+        self.check(&Names::EITHER)
+    }
+
     /// Error unless every value is in its range, naming the option in `n`'s spelling with
     /// the value rounded.
     pub fn check(&self, n: &Names) -> Result<()> {
@@ -189,10 +195,12 @@ impl BurstOptions {
     }
 }
 
-/// Error when the shake step of `opts` is too large for a `w x h` active area: above
-/// [`MAX_STEP_FRACTION`] of its smaller side (checked before any draw, for a burst that
-/// shakes).
+/// Error when a value of `opts` is out of its range, or its shake step is too large for a
+/// `w x h` active area: above
+/// [`MAX_STEP_FRACTION`] of its smaller side (for a burst that shakes). Called by the planner
+/// before [`super::motion::plan_burst`] draws anything.
 pub fn check_step_fits(opts: &BurstOptions, (w, h): (usize, usize)) -> Result<()> {
+    opts.validate()?;
     if opts.is_single() || opts.motion != Motion::Shake {
         return Ok(());
     }

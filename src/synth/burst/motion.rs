@@ -101,12 +101,6 @@ impl BurstOptions {
     pub fn is_single(&self) -> bool {
         self.frames <= 1
     }
-
-    /// Error on out-of-range values ([`BurstOptions::check`], naming both the flag and the
-    /// Python argument).
-    pub fn validate(&self) -> Result<()> {
-        self.check(&super::checks::Names::EITHER)
-    }
 }
 
 /// A rectangle of a frame's active area: `top..top + height` x `left..left + width`.
@@ -232,18 +226,17 @@ pub fn frame_noise_seed(seed: u64, frame: u32) -> u64 {
     u64::from_le_bytes(b)
 }
 
-/// Plan the burst of a `w x h` active area: `None` for a single frame.
+/// Plan the burst of a `w x h` active area: `None` for a single frame. The caller checks
+/// `opts` first ([`super::checks::check_step_fits`]: the ranges and the step against the
+/// image).
 pub fn plan_burst(
     opts: &BurstOptions,
     (w, h): (usize, usize),
     (seed, input_name, variant): (u64, &str, u32),
 ) -> Result<Option<BurstPlan>> {
-    opts.validate()?;
     if opts.is_single() {
         return Ok(None);
     }
-    // Before any draw: a step the image cannot hold is refused with the image's size.
-    super::checks::check_step_fits(opts, (w, h))?;
     let centre = [(w as f64 - 1.0) / 2.0, (h as f64 - 1.0) / 2.0];
     let mut rng = SynthRng::from_key(burst_key(seed, input_name, variant));
     let (mut dx, mut dy, mut th) = (0.0f64, 0.0f64, 0.0f64);
