@@ -70,6 +70,14 @@ pub const MIN_XYZ_CHROMATICITY: f64 = 1e-3;
 /// [`MAX_DICT_ENTRIES`]).
 pub const MAX_LAMP_WEIGHT: f64 = 1e6;
 
+/// The EXIF LightSource codes (EXIF 2.32 table; DNG CalibrationIlluminant1/2 use them):
+/// 0 unknown, 1-4 daylight, fluorescent, tungsten, flash, 9-24 the named weathers, standard
+/// lights and D50-D75, 255 other. A code outside it has no colour temperature: matrices
+/// tagged with it are not interpolated (ColorMatrix1 alone is used).
+pub const EXIF_LIGHT_SOURCES: [u16; 22] = [
+    0, 1, 2, 3, 4, 9, 10, 11, 12, 13, 14, 15, 16, 17, 18, 19, 20, 21, 22, 23, 24, 255,
+];
+
 // ---------------------------------------------------------------------------------------
 // Lights and plans.
 
@@ -172,11 +180,15 @@ pub fn in_range(field: &str, v: f64, lo: f64, hi: f64) -> Result<()> {
     if v.is_finite() && v >= lo && v <= hi {
         return Ok(());
     }
+    let (l, h) = (short(lo), short(hi));
+    // A value just past a bound is printed with every digit it needs: "1 is outside
+    // [-1, 1]" would not say what is wrong with 1 + 1e-15.
+    let mut shown = short(v);
+    if shown == l || shown == h {
+        shown = format!("{v}");
+    }
     Err(Error::invalid(format!(
-        "{field}: {} is outside [{}, {}]",
-        short(v),
-        short(lo),
-        short(hi)
+        "{field}: {shown} is outside [{l}, {h}]"
     )))
 }
 
@@ -321,6 +333,16 @@ mod tests {
         assert_eq!(short(0.5), "0.5");
         assert_eq!(short(1.0 / 3.0), "0.333333");
         assert_eq!(short(0.0), "0");
+    }
+
+    #[test]
+    fn a_value_just_past_a_bound_shows_its_digits() {
+        let e = in_range("x", 1.0 + 1e-15, -1.0, 1.0)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("x: 1.000000000000001 is outside [-1, 1]"), "{e}");
+        let e = in_range("x", 1e308, 0.0, 1000.0).unwrap_err().to_string();
+        assert!(e.contains("x: 1e308 is outside [0, 1000]"), "{e}");
     }
 
     #[test]

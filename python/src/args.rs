@@ -120,6 +120,7 @@ pub(crate) fn in_range<T: TryFrom<u64>>(
     hi: u64,
 ) -> PyResult<T> {
     let py = v.py();
+    not_bool(v, label, "an integer")?;
     let int = py
         .import("operator")?
         .call_method1("index", (v,))
@@ -146,6 +147,51 @@ pub(crate) fn in_range<T: TryFrom<u64>>(
     Err(value_err(format!(
         "{label}: {shown} is outside {lo}..={hi}"
     )))
+}
+
+/// A `TypeError` for a bool given as `label` (`True` is an `int` to Python, but
+/// `burst=True` is a mistake, not one frame).
+fn not_bool(v: &Bound<'_, PyAny>, label: &str, want: &str) -> PyResult<()> {
+    if v.is_instance_of::<pyo3::types::PyBool>() {
+        return Err(PyTypeError::new_err(format!(
+            "{label} must be {want} (got bool)"
+        )));
+    }
+    Ok(())
+}
+
+/// An integer argument `label` whose range the library checks (it names `lo..=hi` only for
+/// values beyond any machine integer): a bool or a non-integer is a `TypeError`.
+pub(crate) fn integer(v: &Bound<'_, PyAny>, label: &str, lo: u64, hi: u64) -> PyResult<i128> {
+    not_bool(v, label, "an integer")?;
+    let int = v.py().import("operator")?.call_method1("index", (v,));
+    match int.and_then(|i| i.extract::<i128>()) {
+        Ok(n) => Ok(n),
+        // Not an integer (TypeError) or beyond i128 (ValueError naming the range).
+        Err(_) => in_range::<u64>(v, label, lo, hi).map(i128::from),
+    }
+}
+
+/// A float argument `label` (an int is taken as a float; a bool or anything else is a
+/// `TypeError`). Its range is the library's check.
+pub(crate) fn float(v: &Bound<'_, PyAny>, label: &str) -> PyResult<f64> {
+    not_bool(v, label, "a number")?;
+    v.extract::<f64>().map_err(|_| {
+        PyTypeError::new_err(format!("{label} must be a number (got {})", type_name(v)))
+    })
+}
+
+/// A str argument `label` (anything else is a `TypeError`).
+pub(crate) fn string(v: &Bound<'_, PyAny>, label: &str) -> PyResult<String> {
+    v.extract::<String>()
+        .map_err(|_| PyTypeError::new_err(format!("{label} must be a str (got {})", type_name(v))))
+}
+
+fn type_name(v: &Bound<'_, PyAny>) -> String {
+    v.get_type()
+        .name()
+        .map(|n| n.to_string())
+        .unwrap_or_else(|_| "?".into())
 }
 
 /// ``value`` as an int within ``BOUNDS[key]``, else the ``ValueError`` (``TypeError`` for

@@ -3,8 +3,10 @@
 //! (N, H, W) array, and the frames' transforms as Python values.
 
 use crate::convert::json_obj;
-use crate::errors::{py_err, value_err};
+use crate::errors::value_err;
 use day2night::raw::RawImage;
+use day2night::synth::burst::checks::{BurstRequest, Names};
+use day2night::synth::burst::motion::MAX_FRAMES;
 use day2night::synth::burst::BurstOptions;
 use day2night::synth::night::Night;
 use day2night::synth::Plan;
@@ -16,17 +18,26 @@ use pyo3::prelude::*;
 pub(crate) const OPTIONS: [&str; 5] =
     ["burst", "motion", "shake_step", "shake_roll", "warp_interp"];
 
-/// Set the burst option `key` (one of [`OPTIONS`]) from `v`.
-pub(crate) fn set_option(b: &mut BurstOptions, key: &str, v: &Bound<'_, PyAny>) -> PyResult<()> {
+/// Record the burst option `key` (one of [`OPTIONS`]) from `v` in `r`: only its Python type
+/// is checked here (an int that is not a bool, a float, a str; a `TypeError` naming the
+/// argument); the values are checked together by [`resolve`], the command line's check.
+pub(crate) fn set_option(r: &mut BurstRequest, key: &str, v: &Bound<'_, PyAny>) -> PyResult<()> {
     match key {
-        "burst" => b.frames = v.extract()?,
-        "motion" => b.motion = v.extract::<String>()?.parse().map_err(py_err)?,
-        "shake_step" => b.shake.step_px = v.extract()?,
-        "shake_roll" => b.shake.roll_deg = v.extract()?,
-        "warp_interp" => b.interp = v.extract::<String>()?.parse().map_err(py_err)?,
+        "burst" => r.frames = Some(crate::args::integer(v, key, 1, u64::from(MAX_FRAMES))?),
+        "motion" => r.motion = Some(crate::args::string(v, key)?),
+        "shake_step" => r.shake_step = Some(crate::args::float(v, key)?),
+        "shake_roll" => r.shake_roll = Some(crate::args::float(v, key)?),
+        "warp_interp" => r.warp_interp = Some(crate::args::string(v, key)?),
         other => return Err(value_err(format!("unknown burst option {other:?}"))),
     }
-    b.validate().map_err(py_err)
+    Ok(())
+}
+
+/// The burst `r` asks for, by the same rules and messages as the command line's flags
+/// (a `ValueError` naming the argument and its range).
+pub(crate) fn resolve(r: &BurstRequest) -> PyResult<BurstOptions> {
+    r.resolve(&Names::PYTHON)
+        .map_err(|e| value_err(crate::errors::text(&e)))
 }
 
 /// The frames of `iso` in `night` (frame 00 first) as raws.

@@ -42,6 +42,17 @@ pub(crate) fn arg_err(name: &str, e: Error) -> PyErr {
     value_err(format!("{name}: {}", e.root()))
 }
 
+/// An error's message without its kind (`invalid parameter: `, ...) or file context: the
+/// words a Python argument's error speaks.
+pub(crate) fn text(e: &Error) -> String {
+    match e.root() {
+        Error::InvalidParam(m) | Error::Malformed(m) | Error::Unsupported(m) | Error::Limits(m) => {
+            m.clone()
+        }
+        e => e.to_string(),
+    }
+}
+
 /// A `ValueError` with `msg`.
 pub(crate) fn value_err(msg: impl Into<String>) -> PyErr {
     PyValueError::new_err(msg.into())

@@ -72,6 +72,7 @@ const TAG_KEYS: &[(&str, &str)] = &[
     ("NoiseProfile", "noise_profile"),
     ("Orientation", "orientation"),
     ("ISO", "iso"),
+    ("ISOSpeedRatings", "iso"),
     ("ExposureTime", "exposure_time"),
     ("FNumber", "f_number"),
     ("LinearizationTable", "linearization_table"),
@@ -82,7 +83,10 @@ const TAG_KEYS: &[(&str, &str)] = &[
     ("BlackLevelDeltaV", "black_level_delta_v"),
     ("BlackLevel", "black_level"),
     ("black level", "black_level"),
+    ("WhiteLevel", "white_level"),
+    ("white level", "white_level"),
     ("CFA", "cfa_pattern"),
+    ("CFAPattern", "cfa_pattern"),
 ];
 
 /// The keys `meta_dict` adds to those of the first release (so that `Raw.meta` holds
@@ -410,13 +414,30 @@ fn parse_meta(
     Ok((meta, notes))
 }
 
-/// A library error about the metadata, as a ValueError naming the dict key too.
+/// A library error about the metadata, as a ValueError naming the dict keys too: every
+/// tag the message names as a whole word (`BlackLevel` is not `BlackLevelDeltaH`), in the
+/// message's order (`black level 5000 >= white level 4095 (BlackLevel against WhiteLevel)`
+/// names `meta["black_level"]` and `meta["white_level"]`).
 fn meta_err(e: day2night::Error) -> PyErr {
     let msg = e.to_string();
-    match TAG_KEYS.iter().find(|(tag, _)| msg.contains(tag)) {
-        Some((_, key)) => py_err_noting(e, &format!("(meta[{key:?}])")),
-        None => py_err(e),
+    let mut found: Vec<(usize, &str)> = Vec::new();
+    for (tag, key) in TAG_KEYS {
+        let at = msg.match_indices(tag).find(|(i, _)| {
+            let next = msg[i + tag.len()..].chars().next();
+            !next.is_some_and(|c| c.is_ascii_alphanumeric())
+        });
+        if let Some((i, _)) = at {
+            if !found.iter().any(|(_, k)| k == key) {
+                found.push((i, key));
+            }
+        }
     }
+    found.sort();
+    if found.is_empty() {
+        return py_err(e);
+    }
+    let keys: Vec<String> = found.iter().map(|(_, k)| format!("meta[{k:?}]")).collect();
+    py_err_noting(e, &format!("({})", keys.join(", ")))
 }
 
 /// The stem and file name of an in-memory raw called `name` (`day` or `day.dng`).

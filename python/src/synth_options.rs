@@ -32,6 +32,7 @@ pub(crate) fn job_config(
     }
     let mut release = false;
     let mut opcodes = None;
+    let mut burst = day2night::synth::burst::checks::BurstRequest::default();
     if let Some(opts) = options {
         for (k, v) in opts.iter() {
             let key: String = k.extract()?;
@@ -92,7 +93,7 @@ pub(crate) fn job_config(
                 "brightness" => cfg.brightness = path(&v)?,
                 "noise_model" => cfg.noise_model = path(&v)?,
                 k if crate::burst::OPTIONS.contains(&k) => {
-                    crate::burst::set_option(&mut o.burst, k, &v)?
+                    crate::burst::set_option(&mut burst, k, &v)?
                 }
                 other => {
                     return Err(value_err(format!(
@@ -104,6 +105,7 @@ motion, shake_step, shake_roll, warp_interp)"
             }
         }
     }
+    cfg.options.burst = crate::burst::resolve(&burst)?;
     if release {
         // Applied last, like --compat release: it checks the other options.
         cfg.options = cfg.options.clone().release_compat().map_err(py_err)?;

@@ -33,6 +33,8 @@ pub fn estimate_image(name: &str, img: &RawImage, opts: &EstimateOptions) -> Res
              --assume-iso N gives one)",
         )
     })?;
+    // The range every reader of the model takes (synth refuses a model at another ISO).
+    crate::bounds::iso("the image's ISO", iso)?;
     Ok(ImageEstimate {
         name: name.into(),
         iso,

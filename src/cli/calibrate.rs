@@ -195,7 +195,7 @@ impl clap::Args for NoiseArgs {
             .arg(
                 Arg::new("assume_iso")
                     .long("assume-iso")
-                    .value_parser(value_parser!(u32).range(1..))
+                    .value_parser(parse_iso)
                     .value_name("ISO")
                     .visible_alias("iso")
                     .help("ISO of input frames without an Exif ISO (missing or 0); frames with one keep theirs"),
@@ -398,6 +398,20 @@ fn run_brightness(a: BrightnessArgs) -> CmdResult {
         eprintln!("day2night: warning: one image: std = 0, synth will always use this brightness");
     }
     write_json(&a.out, &a.inputs, &dict)
+}
+
+/// An ISO within [`day2night::bounds::ISO_RANGE`], the range `synth` takes (a model at
+/// another ISO could not be used).
+fn parse_iso(s: &str) -> Result<u32, String> {
+    let iso: u32 = s
+        .trim()
+        .parse()
+        .map_err(|_| format!("{s:?} is not an ISO (a whole number)"))?;
+    day2night::bounds::iso("", iso).map_err(|e| match e {
+        day2night::Error::InvalidParam(m) => m,
+        e => e.to_string(),
+    })?;
+    Ok(iso)
 }
 
 fn run_noise(a: NoiseArgs) -> CmdResult {

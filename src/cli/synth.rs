@@ -9,6 +9,7 @@ use day2night::dng::write::Compression;
 use day2night::encode::exr::{ExrCompression, ExrOptions};
 use day2night::error::Error;
 use day2night::output::{stop_requested, OutputPolicy, OutputSetLock};
+use day2night::synth::burst::checks::{BurstRequest, Names};
 use day2night::synth::burst::BurstOptions;
 use day2night::synth::config::{parse_isos, parse_neutral, JobConfig};
 use day2night::synth::job::{DayInput, DirSink, SynthJob, Target};
@@ -236,36 +237,18 @@ pub struct ExtraArgs {
 }
 
 impl ExtraArgs {
-    /// The burst these flags ask for (the single-frame default for --burst 1; the motion
-    /// flags need a burst).
+    /// The burst these flags ask for (the library's one check of the burst options: the
+    /// motion flags need a burst, the shake flags need --motion shake).
     fn burst(&self) -> Result<BurstOptions, Failure> {
-        let mut b = BurstOptions {
-            frames: self.burst,
-            ..BurstOptions::default()
-        };
-        if let Some(m) = &self.motion {
-            b.motion = flag("--motion", m.parse())?;
+        BurstRequest {
+            frames: Some(i128::from(self.burst)),
+            motion: self.motion.clone(),
+            shake_step: self.shake_step,
+            shake_roll: self.shake_roll,
+            warp_interp: self.warp_interp.clone(),
         }
-        if let Some(v) = self.shake_step {
-            b.shake.step_px = v;
-        }
-        if let Some(v) = self.shake_roll {
-            b.shake.roll_deg = v;
-        }
-        if let Some(k) = &self.warp_interp {
-            b.interp = flag("--warp-interp", k.parse())?;
-        }
-        b.validate().map_err(usage)?;
-        let motion_flags = self.motion.is_some()
-            || self.shake_step.is_some()
-            || self.shake_roll.is_some()
-            || self.warp_interp.is_some();
-        if b.is_single() && motion_flags {
-            return Err(usage(
-                "--motion, --shake-step, --shake-roll and --warp-interp need --burst N with N > 1",
-            ));
-        }
-        Ok(b)
+        .resolve(&Names::CLI)
+        .map_err(usage)
     }
 }
 

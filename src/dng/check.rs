@@ -21,6 +21,7 @@ pub fn check_meta(meta: &mut RawMeta) -> Result<()> {
     black_level(meta)?;
     neutral(meta)?;
     matrices(meta)?;
+    calibration_illuminants(meta);
     noise_profile(meta);
     exif_iso(meta);
     Ok(())
@@ -159,6 +160,25 @@ fn matrices(meta: &RawMeta) -> Result<()> {
     Ok(())
 }
 
+/// A CalibrationIlluminant outside the EXIF LightSource table ([`bounds::EXIF_LIGHT_SOURCES`])
+/// is kept with a warning: it has no colour temperature, so two matrix sets are not
+/// interpolated (the DNG SDK does the same) and ColorMatrix1 is used alone.
+fn calibration_illuminants(meta: &mut RawMeta) {
+    let c = &meta.color;
+    for (name, code) in [
+        ("CalibrationIlluminant1", c.calibration_illuminant1),
+        ("CalibrationIlluminant2", c.calibration_illuminant2),
+    ] {
+        if let Some(v) = code.filter(|v| !bounds::EXIF_LIGHT_SOURCES.contains(v)) {
+            meta.warnings.push(format!(
+                "{name} {v} is not an EXIF LightSource code (0-4, 9-24 or 255): its colour \
+                 temperature is unknown, so the colour matrices are not interpolated \
+                 (ColorMatrix1 is used)"
+            ));
+        }
+    }
+}
+
 /// NoiseProfile pairs must have S > 0, O >= 0 (the DNG SDK ignores the tag otherwise, with
 /// "Invalid NoiseProfile") and both at most [`bounds::MAX_NOISE_PROFILE`]: otherwise the tag
 /// is dropped with a warning, so the built-in noise table (or `--noise-model`) is used and no
@@ -172,14 +192,18 @@ fn noise_profile(meta: &mut RawMeta) {
         !(s.is_finite() && o.is_finite() && s > 0.0 && o >= 0.0 && s <= max && o <= max)
     });
     if let Some((i, &(s, o))) = bad {
-        meta.warnings.push(format!(
+        let what = format!(
             "NoiseProfile pair {i} (S {}, O {}) is not a noise model (need 0 < S <= {}, \
-             0 <= O <= {}): ignored; noise from the built-in table unless --noise-model",
+             0 <= O <= {})",
             short(s),
             short(o),
             short(max),
             short(max)
+        );
+        meta.warnings.push(format!(
+            "{what}: ignored; noise from the built-in table unless --noise-model"
         ));
+        meta.noise_profile_problem = Some(format!("invalid {what}"));
         meta.noise_profile = None;
     }
 }
@@ -279,6 +303,22 @@ mod tests {
     }
 
     #[test]
+    fn a_calibration_illuminant_outside_the_exif_table_is_warned_about() {
+        let mut m = meta();
+        m.color.calibration_illuminant1 = Some(21);
+        check_meta(&mut m).unwrap();
+        assert!(m.warnings.is_empty(), "{:?}", m.warnings);
+        m.color.calibration_illuminant2 = Some(99);
+        check_meta(&mut m).unwrap();
+        assert_eq!(m.warnings.len(), 1);
+        assert!(
+            m.warnings[0].starts_with("CalibrationIlluminant2 99 is not an EXIF LightSource code"),
+            "{:?}",
+            m.warnings
+        );
+    }
+
+    #[test]
     fn bad_noise_profiles_are_dropped_with_a_warning() {
         for p in [
             (0.0, 0.0),
@@ -291,6 +331,8 @@ mod tests {
             m.noise_profile = Some(vec![(2e-4, 1e-6), p]);
             check_meta(&mut m).unwrap();
             assert_eq!(m.noise_profile, None, "{p:?}");
+            let why = m.noise_profile_problem.as_deref().unwrap_or_default();
+            assert!(why.starts_with("invalid NoiseProfile pair 1 (S "), "{why}");
             assert_eq!(m.warnings.len(), 1);
             assert!(
                 m.warnings[0].starts_with("NoiseProfile pair 1"),

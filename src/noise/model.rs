@@ -226,6 +226,26 @@ impl NoiseModel {
         serde_json::to_string_pretty(self).unwrap_or_default()
     }
 
+    /// The calibrated points with a negative S or O, as `ISO 100 position 0 (S 2e-5, O -1)`
+    /// (empty when none). A variance cannot be negative: [`NoiseModel::at`] clamps them to
+    /// 0, and the noise chain warns with this list (docs/noise.md, "Negative parameters").
+    pub fn negative_points(&self) -> Vec<String> {
+        let mut out = Vec::new();
+        for p in &self.isos {
+            for (pos, v) in p.positions.iter().enumerate() {
+                if v[0] < 0.0 || v[1] < 0.0 {
+                    out.push(format!(
+                        "ISO {} position {pos} (S {}, O {})",
+                        p.iso,
+                        crate::bounds::short(v[0]),
+                        crate::bounds::short(v[1])
+                    ));
+                }
+            }
+        }
+        out
+    }
+
     /// Lowest and highest calibrated ISO.
     pub fn iso_range(&self) -> (u32, u32) {
         let lo = self.isos.first().map(|p| p.iso).unwrap_or(0);

@@ -245,6 +245,11 @@ pub struct RawMeta {
     /// recorded in synth sidecars, raised as Python warnings). Not written to files.
     #[serde(skip)]
     pub warnings: Vec<String>,
+    /// Why [`crate::dng::check::check_meta`] dropped the NoiseProfile (its values and the
+    /// rule they break), so that the noise chain reports an invalid NoiseProfile as one,
+    /// not as a missing one. Not written to files.
+    #[serde(skip)]
+    pub noise_profile_problem: Option<String>,
 }
 
 impl RawMeta {
@@ -316,6 +321,7 @@ impl RawMeta {
             stored: Vec::new(),
             linear_raw: None,
             warnings: Vec::new(),
+            noise_profile_problem: None,
         }
     }
 

@@ -260,9 +260,22 @@ impl Levels {
         }
         let bmax = self.black_max();
         if bmax >= self.white {
+            // Name only the tags that make the black level: the deltas when present.
+            let deltas: Vec<&str> = [
+                ("BlackLevelDeltaH", &self.black_delta_h),
+                ("BlackLevelDeltaV", &self.black_delta_v),
+            ]
+            .iter()
+            .filter(|(_, d)| !d.is_empty())
+            .map(|(n, _)| *n)
+            .collect();
+            let with = if deltas.is_empty() {
+                String::new()
+            } else {
+                format!(" with {}", deltas.join(" and "))
+            };
             return Err(Error::malformed(format!(
-                "black level {} >= white level {} (BlackLevel with BlackLevelDeltaH/V \
-                 against WhiteLevel)",
+                "black level {} >= white level {} (BlackLevel{with} against WhiteLevel)",
                 bmax, self.white
             )));
         }

@@ -79,6 +79,15 @@ pub fn choose_noise_model(
                 ));
             }
         }
+        let negative = m.negative_points();
+        if !negative.is_empty() {
+            warnings.push(format!(
+                "noise: {file} has negative parameters at {}: a variance cannot be negative, \
+                 so synth clamps them to 0 (no noise from that term); recalibrate, or fix the \
+                 file (docs/noise.md, \"Negative parameters\")",
+                negative.join(", ")
+            ));
+        }
         let kind = if m.physics.is_some() {
             "physics noise model"
         } else {
@@ -120,13 +129,16 @@ pub fn choose_noise_model(
             Err(e) => profile_problem = Some(format!("its NoiseProfile is unusable ({e})")),
         }
     }
-    let profile_words = profile_problem
-        .clone()
-        .unwrap_or_else(|| match img.meta.noise_profile {
-            // a usable profile is skipped only for want of the ISO it is scaled from
-            Some(_) => "the input has a NoiseProfile (unused: it needs the ISO)".into(),
+    // What became of the input's NoiseProfile, in words: refused when read (its values
+    // given), present but unusable, present without an ISO to scale it by, or absent.
+    let profile_words = match (&profile_problem, &img.meta.noise_profile) {
+        (Some(p), _) => p.clone(),
+        (None, Some(_)) => "its NoiseProfile cannot be scaled without its ISO".into(),
+        (None, None) => match &img.meta.noise_profile_problem {
+            Some(why) => format!("the input's NoiseProfile is not used ({why})"),
             None => "the input has no NoiseProfile".into(),
-        });
+        },
+    };
     if cam.is_s20_fe() {
         let model = embedded::noise_model();
         return Ok(NoiseChoice {
@@ -284,6 +296,49 @@ mod tests {
     }
 
     #[test]
+    fn a_negative_parameter_in_a_model_file_is_said_not_clamped_in_silence() {
+        let i = img(Some(100), true, "Canon", "EOS 5D");
+        let mut m = file_model(Some(CameraId::of(&i.meta)));
+        m.isos[0].positions[2][1] = -1.0;
+        let r = choose(&i, Some(m), false, trusted_estimate());
+        assert_eq!(r.choice.warnings.len(), 1, "{:?}", r.choice.warnings);
+        let w = &r.choice.warnings[0];
+        assert!(
+            w.contains("cal.json has negative parameters at ISO 800 position 2 (S 3e-4, O -1)")
+                && w.contains("clamps them to 0"),
+            "{w}"
+        );
+    }
+
+    #[test]
+    fn an_invalid_noise_profile_is_reported_as_one() {
+        let mut i = img(Some(100), true, "Canon", "EOS 5D");
+        i.meta.noise_profile = Some(vec![(-1e-4, 1e-6)]);
+        crate::dng::check::check_meta(&mut i.meta).unwrap();
+        let mut est = trusted_estimate();
+        est.positions[0].problem = Some("too flat".into());
+        let r = choose(&i, None, false, est);
+        let w = &r.choice.warnings[0];
+        assert!(
+            w.contains("NoiseProfile is not used (invalid NoiseProfile pair 0 (S -1e-4, O 1e-6)"),
+            "{w}"
+        );
+        assert!(!w.contains("no NoiseProfile"), "{w}");
+        // A valid profile without an ISO is not "no NoiseProfile" either.
+        let r = choose(
+            &img(None, true, "Canon", "EOS 5D"),
+            None,
+            false,
+            trusted_estimate(),
+        );
+        let w = &r.choice.warnings[0];
+        assert!(
+            w.contains("NoiseProfile cannot be scaled without its ISO"),
+            "{w}"
+        );
+    }
+
+    #[test]
     fn a_model_file_comes_first_and_warns_only_for_another_camera() {
         let i = img(Some(100), true, "Canon", "EOS 5D");
         let same = CameraId::new(Some("canon".into()), Some("EOS 5D".into()), None);
@@ -401,8 +456,7 @@ mod tests {
         let w = &r.choice.warnings[0];
         assert!(
             w.starts_with(
-                "noise: the input has a NoiseProfile (unused: it needs the ISO) and its ISO is \
-                 unknown"
+                "noise: its NoiseProfile cannot be scaled without its ISO and its ISO is unknown"
             ),
             "{w}"
         );

@@ -415,8 +415,14 @@ pub fn plan_with_estimate(
         stages.push("noise".into());
     }
     // The burst's motion from its own stream (nothing drawn for a single frame).
+    // Before any draw: a step the image cannot hold is refused with the image's size.
+    super::burst::checks::check_step_fits(&opts.burst, (w, h))?;
     let burst = super::burst::motion::plan_burst(&opts.burst, (w, h), (seed, input_name, variant))?;
     if let Some(b) = &burst {
+        warnings.extend(super::burst::checks::valid_area_warnings(
+            &b.transforms,
+            (w, h),
+        ));
         stages.push("burst_frames".into());
         if b.transforms.iter().any(|t| !t.is_identity()) {
             stages.push("burst_warp".into());

@@ -157,10 +157,12 @@ impl Plan {
     }
 }
 
-/// The burst part: frame count, parameters, and every frame's transform finite, rigid,
-/// within `extent` pixels and consistent with its frame index; frame 00 the identity.
+/// The burst part: frame count, parameters, the centre, and every frame's transform as
+/// [`check_transform`](super::burst::checks::check_transform) checks it (the one check of a
+/// replayed transform: rigid, consistent with its pose, its valid rectangle allowed).
 fn burst(b: &BurstPlan, (w, h): (usize, usize), extent: f64) -> Result<()> {
-    use super::burst::motion::{BurstOptions, IDENTITY, MAX_FRAMES};
+    use super::burst::checks::{check_transform, Names, TRANSLATION_TOLERANCE};
+    use super::burst::motion::{BurstOptions, MAX_FRAMES};
     if !(2..=MAX_FRAMES).contains(&b.frames) || b.transforms.len() != b.frames as usize {
         return Err(field(
             "burst",
@@ -177,37 +179,23 @@ fn burst(b: &BurstPlan, (w, h): (usize, usize), extent: f64) -> Result<()> {
         shake: b.shake,
         interp: b.interp,
     }
-    .validate()
-    .map_err(|e| field("burst", e))?;
+    .check(&Names::SIDECAR)?;
+    let want = [(w as f64 - 1.0) / 2.0, (h as f64 - 1.0) / 2.0];
     for (k, &c) in b.centre.iter().enumerate() {
         in_range(&format!("burst.centre[{k}]"), c, -extent, extent)?;
+        if (c - want[k]).abs() > TRANSLATION_TOLERANCE * extent.max(1.0) {
+            return Err(field(
+                format!("burst.centre[{k}]"),
+                format!(
+                    "{} is not the centre of the {w}x{h} active area ({})",
+                    crate::bounds::short(c),
+                    crate::bounds::short(want[k])
+                ),
+            ));
+        }
     }
     for (i, t) in b.transforms.iter().enumerate() {
-        let n = |f: &str| format!("burst.transforms[{i}].{f}");
-        if t.frame as usize != i {
-            return Err(field(n("frame"), format!("{} (expected {i})", t.frame)));
-        }
-        in_range(&n("dx"), t.dx, -extent, extent)?;
-        in_range(&n("dy"), t.dy, -extent, extent)?;
-        in_range(&n("theta_deg"), t.theta_deg, -360.0, 360.0)?;
-        for (r, row) in t.affine.iter().enumerate() {
-            for (c, &v) in row.iter().enumerate() {
-                let lim = if c == 2 { 4.0 * extent } else { 1.0 };
-                in_range(&n(&format!("affine[{r}][{c}]")), v, -lim, lim)?;
-            }
-        }
-        let [[a, bb, _], [c, d, _]] = t.affine;
-        let det = a * d - bb * c;
-        if (det - 1.0).abs() > 1e-6 {
-            return Err(field(n("affine"), format!("not rigid (determinant {det})")));
-        }
-        if i == 0 && t.affine != IDENTITY {
-            return Err(field(n("affine"), "frame 00 must be the identity"));
-        }
-        let v = &t.valid;
-        if v.top + v.height > h || v.left + v.width > w {
-            return Err(field(n("valid"), "outside the active area"));
-        }
+        check_transform(i, t, (b.centre, b.interp), (w, h), extent)?;
     }
     Ok(())
 }

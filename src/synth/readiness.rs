@@ -18,19 +18,30 @@ pub fn problems(
     renders: bool,
 ) -> Vec<Error> {
     let mut out = Vec::new();
-    if let Err(e) = super::neutral::day_neutral_for(meta, opts) {
-        out.push(e);
-    }
+    let neutral = match super::neutral::day_neutral_for(meta, opts) {
+        Ok((n, _)) => Some(n),
+        Err(e) => {
+            out.push(e);
+            None
+        }
+    };
     if matches!(opts.mode, Mode::Global | Mode::Local) {
         if let Err(e) = cal.illuminants_for(meta, opts) {
             out.push(e);
         }
     }
     if renders {
-        if let Err(e) = crate::isp::color::CameraColor::new(&meta.color) {
+        // The render's own matrix ([`crate::isp::render::color_matrix`], what `render` and
+        // the target render build): the colour tags parse, and they map a neutral to a
+        // positive luminance (an all-zero or negated ForwardMatrix does not).
+        let color = match neutral {
+            Some(n) => crate::isp::render::color_matrix(meta, n).map(|_| ()),
+            None => crate::isp::color::CameraColor::new(&meta.color).map(|_| ()),
+        };
+        if let Err(e) = color {
             out.push(Error::unsupported(format!(
-                "the target render needs the colour matrices ({}): pass --target none \
-                 (and no --input-exr), or use a DNG with ColorMatrix1",
+                "the target render needs usable colour matrices ({}): pass --target none \
+                 (and no --input-exr), or use a DNG with valid ColorMatrix1/ForwardMatrix1",
                 text(&e)
             )));
         }
@@ -121,6 +132,26 @@ mod tests {
         let d = opts(Mode::Dimmed);
         let cal = Calibration::embedded(&d).unwrap();
         assert_eq!(problems(&m, &d, &cal, false).len(), 1);
+    }
+
+    #[test]
+    fn a_forward_matrix_mapping_white_to_no_light_is_a_problem() {
+        let fm = [0.6, 0.3, 0.1, 0.25, 0.7, 0.05, 0.0, 0.1, 0.75];
+        for bad in [vec![0.0; 9], fm.iter().map(|v| -v).collect()] {
+            let mut m = RawMeta::new_bayer(Bayer::RGGB, 12, 0.0, 4095.0);
+            m.as_shot_neutral = Some([0.5, 1.0, 0.6]);
+            m.color.color_matrix1 = Some(vec![1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0]);
+            m.color.forward_matrix1 = Some(fm.to_vec());
+            let o = opts(Mode::Dimmed);
+            let cal = Calibration::embedded(&o).unwrap();
+            assert!(problems(&m, &o, &cal, true).is_empty());
+            m.color.forward_matrix1 = Some(bad);
+            let e = check(&m, &o, &cal, true).unwrap_err().to_string();
+            assert!(e.contains("non-positive luminance"), "{e}");
+            assert!(e.contains("--target none"), "{e}");
+            // Without a render the matrices are not used.
+            assert!(problems(&m, &o, &cal, false).is_empty());
+        }
     }
 
     #[test]

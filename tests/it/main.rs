@@ -14,6 +14,8 @@ mod calibrate_illuminants;
 mod calibrate_merge;
 mod calibrate_noise;
 mod calibrate_synth;
+mod checks_burst;
+mod checks_inputs;
 mod cli_dialect;
 mod cli_docs;
 mod cli_smoke;

@@ -524,6 +524,7 @@ pub(super) fn build_meta(tiff: &Tiff, d: &Located<'_>, g: &Geometry) -> Result<R
             })
             .collect(),
         warnings: Vec::new(),
+        noise_profile_problem: None,
     })
 }
 

@@ -2,6 +2,7 @@
 //! still (`--motion none`) or hand-shaken (`--motion shake`), for burst denoisers and
 //! night-mode pipelines (docs/synthesis.md, "Bursts").
 //!
+//! - [`checks`]: every check of a burst's options and transforms, for every entry point;
 //! - [`motion`]: the options, the planned per-frame rigid transforms (their own random
 //!   stream, recorded in the sidecar's plan) and the frames' noise seeds;
 //! - [`interp`]: the warp's interpolants;
@@ -13,6 +14,7 @@
 //! frame 00 is the single-frame output (its clean raw is the clean DNG, its noisy raw the
 //! single-frame noisy raw), frames 01.. are handed to the same sink after it.
 
+pub mod checks;
 pub mod frames;
 pub mod interp;
 pub mod motion;

@@ -101,30 +101,6 @@ impl BurstOptions {
     pub fn is_single(&self) -> bool {
         self.frames <= 1
     }
-
-    /// Error on out-of-range values.
-    pub fn validate(&self) -> Result<()> {
-        if !(1..=MAX_FRAMES).contains(&self.frames) {
-            return Err(Error::invalid(format!(
-                "burst of {} frames (1 to {MAX_FRAMES})",
-                self.frames
-            )));
-        }
-        let s = &self.shake;
-        if !(s.step_px.is_finite() && (0.0..=MAX_STEP_PX).contains(&s.step_px)) {
-            return Err(Error::invalid(format!(
-                "shake step {} px (0 to {MAX_STEP_PX})",
-                s.step_px
-            )));
-        }
-        if !(s.roll_deg.is_finite() && (0.0..=MAX_ROLL_DEG).contains(&s.roll_deg)) {
-            return Err(Error::invalid(format!(
-                "shake roll {} degrees (0 to {MAX_ROLL_DEG})",
-                s.roll_deg
-            )));
-        }
-        Ok(())
-    }
 }
 
 /// A rectangle of a frame's active area: `top..top + height` x `left..left + width`.
@@ -250,13 +226,14 @@ pub fn frame_noise_seed(seed: u64, frame: u32) -> u64 {
     u64::from_le_bytes(b)
 }
 
-/// Plan the burst of a `w x h` active area: `None` for a single frame.
+/// Plan the burst of a `w x h` active area: `None` for a single frame. The caller checks
+/// `opts` first ([`super::checks::check_step_fits`]: the ranges and the step against the
+/// image).
 pub fn plan_burst(
     opts: &BurstOptions,
     (w, h): (usize, usize),
     (seed, input_name, variant): (u64, &str, u32),
 ) -> Result<Option<BurstPlan>> {
-    opts.validate()?;
     if opts.is_single() {
         return Ok(None);
     }
