@@ -24,6 +24,7 @@ pub mod noise;
 pub mod normalize;
 pub mod output;
 pub mod raw;
+pub mod realpairs;
 pub mod report;
 pub mod synth;
 pub mod tiff;
