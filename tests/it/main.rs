@@ -53,6 +53,7 @@ mod noise_chain;
 mod noise_estimate;
 mod noise_physics;
 mod png_rows;
+mod real_pairs;
 mod release_compat;
 mod runs_concurrent;
 mod runs_interrupt;
