@@ -28,7 +28,7 @@ Conventions of every command:
 
 Dataset layout and a PyTorch loader: docs/dataset.md. Calibration workflow: docs/calibration.md.
 HEAD
-for cmd in "" info convert synth render eval "calibrate" "calibrate illuminants" "calibrate brightness" "calibrate noise" merge dataset report; do
+for cmd in "" info convert synth render eval "calibrate" "calibrate illuminants" "calibrate brightness" "calibrate noise" merge dataset real-pairs report; do
   echo
   if [ -z "$cmd" ]; then echo "## day2night"; else echo "## day2night $cmd"; fi
   echo

@@ -25,6 +25,7 @@ pub mod noise;
 pub mod normalize;
 pub mod output;
 pub mod raw;
+pub mod realpairs;
 /// The HTML report of a dataset (needs the `cli` feature: its plots are drawn with plotters).
 #[cfg(feature = "cli")]
 pub mod report;

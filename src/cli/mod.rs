@@ -14,6 +14,7 @@ mod interrupt;
 mod limits;
 mod merge;
 mod progress;
+mod real_pairs;
 mod render;
 mod report;
 mod synth;
@@ -49,6 +50,8 @@ enum Command {
     Merge(merge::MergeArgs),
     /// Generate a whole dataset: split, manifest, resumable, shardable.
     Dataset(dataset::DatasetArgs),
+    /// Real night pairs from captures: merged clean raw, rendered target, noisy inputs.
+    RealPairs(real_pairs::RealPairsArgs),
     /// Write an HTML report of a dataset (renders, masks, illuminants, histograms).
     Report(report::ReportArgs),
 }
@@ -100,9 +103,12 @@ pub fn main() -> ExitCode {
             return ExitCode::from(2);
         }
     }
-    // synth and dataset stop gracefully on a first SIGINT/SIGTERM; the others at once.
-    let graceful = matches!(cli.command, Command::Synth(_) | Command::Dataset(_));
-    let resumable = matches!(cli.command, Command::Dataset(_));
+    // synth, dataset and real-pairs stop gracefully on a first SIGINT/SIGTERM; the others at once.
+    let graceful = matches!(
+        cli.command,
+        Command::Synth(_) | Command::Dataset(_) | Command::RealPairs(_)
+    );
+    let resumable = matches!(cli.command, Command::Dataset(_) | Command::RealPairs(_));
     interrupt::install(graceful, resumable);
     let result = match cli.command {
         Command::Info(a) => info::run(a),
@@ -113,6 +119,7 @@ pub fn main() -> ExitCode {
         Command::Calibrate(c) => calibrate::run(c),
         Command::Merge(a) => merge::run(a),
         Command::Dataset(a) => dataset::run(a),
+        Command::RealPairs(a) => real_pairs::run(a),
         Command::Report(a) => report::run(a),
     };
     if let Some(sig) = day2night::output::stop_requested() {

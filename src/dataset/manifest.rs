@@ -65,6 +65,15 @@ pub struct Record {
     /// Why the unit failed.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub error: Option<String>,
+    /// `"real"` for a record of `real-pairs` (absent in synthetic datasets).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub kind: Option<String>,
+    /// Real pairs: the scene id (the output file stem).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub scene: Option<String>,
+    /// Real pairs: frames read per ISO (`{"50": 30, "1600": 1, ...}`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub frames: Option<std::collections::BTreeMap<String, u32>>,
 }
 
 impl Record {
@@ -231,6 +240,9 @@ mod tests {
             night_neutral: Some([0.5, 1.0, 0.7]),
             stages: vec!["relight".into()],
             error: None,
+            kind: None,
+            scene: None,
+            frames: None,
         }
     }
 

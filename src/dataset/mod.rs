@@ -239,7 +239,7 @@ impl Sink {
 }
 
 /// Size and SHA-256 (hex) of a file, read in pieces.
-fn hash_file(path: &Path) -> Result<(u64, String)> {
+pub fn hash_file(path: &Path) -> Result<(u64, String)> {
     use std::io::Read;
     let mut f = std::fs::File::open(path).map_err(Error::Io)?;
     let mut hasher = Sha256::new();

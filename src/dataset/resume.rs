@@ -129,6 +129,9 @@ mod tests {
             night_neutral: None,
             stages: vec![],
             error: None,
+            kind: None,
+            scene: None,
+            frames: None,
         };
         let w = Want {
             split: Split::Train,

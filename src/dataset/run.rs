@@ -190,7 +190,7 @@ pub(super) fn plan_tasks(
 
 /// Only reuse an OUT_DIR that is empty or already a dataset (it holds a manifest, or
 /// `extra_marker` when given), unless `overwrite`.
-pub(super) fn check_out_dir(
+pub fn check_out_dir(
     out_dir: &Path,
     manifests: &[PathBuf],
     extra_marker: Option<&Path>,
@@ -372,7 +372,17 @@ pub(super) fn remove_stale_temp_files(out_dir: &Path, tasks: &[Task], variants: 
             ids.insert(unit_id(&t.stem, v, variants));
         }
     }
-    for split in [Split::Train, Split::Val] {
+    remove_stale_temp_files_of(out_dir, &ids, &[Split::Train, Split::Val]);
+}
+
+/// [`remove_stale_temp_files`] for the output ids `ids` in the folders of `splits` (shared
+/// with `real-pairs`, whose units are scenes).
+pub fn remove_stale_temp_files_of(
+    out_dir: &Path,
+    ids: &std::collections::HashSet<String>,
+    splits: &[Split],
+) {
+    for &split in splits {
         for kind in super::ALL_KINDS {
             let dir = out_dir.join(split.name()).join(kind.dir());
             let Ok(rd) = std::fs::read_dir(&dir) else {
@@ -535,7 +545,7 @@ fn process_input<P: Processor>(
 }
 
 /// The record of a unit not (yet) made: status failed, no outputs.
-pub(super) fn blank_record(u: &Unit, input_sha256: &str, options_sha256: &str) -> Record {
+pub fn blank_record(u: &Unit, input_sha256: &str, options_sha256: &str) -> Record {
     Record {
         input: u.rel.clone(),
         variant: u.variant,
@@ -549,6 +559,9 @@ pub(super) fn blank_record(u: &Unit, input_sha256: &str, options_sha256: &str) -
         night_neutral: None,
         stages: vec![],
         error: None,
+        kind: None,
+        scene: None,
+        frames: None,
     }
 }
 
@@ -572,7 +585,7 @@ pub(super) fn load_input<P: Processor>(
 /// blank record, filled in): `ok` with the files written, or `failed` with the error (a
 /// panic is caught). Files the previous record listed that are no longer made are removed.
 #[allow(clippy::too_many_arguments)]
-pub(super) fn compute_unit<P: Processor>(
+pub fn compute_unit<P: Processor>(
     processor: &P,
     input: &P::Loaded,
     u: &Unit,
@@ -614,7 +627,7 @@ pub(super) fn compute_unit<P: Processor>(
 /// (e.g. `.exr` targets after switching to `--target png`, or outputs under the other split),
 /// so a recomputed unit leaves exactly its current files. Only plain relative paths inside
 /// OUT_DIR are touched.
-fn remove_replaced_outputs(out_dir: &Path, prev: &Record, now: &Record) {
+pub fn remove_replaced_outputs(out_dir: &Path, prev: &Record, now: &Record) {
     for o in &prev.outputs {
         let p = Path::new(&o.path);
         let plain = p

@@ -15,14 +15,17 @@ pub enum Split {
     Train,
     /// Validation set.
     Val,
+    /// Real captures (`real-pairs`, docs/real-pairs.md): neither split of a synthetic run.
+    Real,
 }
 
 impl Split {
-    /// Folder name: `train` or `val`.
+    /// Folder name: `train`, `val` or `real`.
     pub fn name(self) -> &'static str {
         match self {
             Split::Train => "train",
             Split::Val => "val",
+            Split::Real => "real",
         }
     }
 }

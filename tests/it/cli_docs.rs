@@ -18,6 +18,7 @@ fn docs_cli_md_matches_help_output() {
         &["calibrate", "noise"],
         &["merge"],
         &["dataset"],
+        &["real-pairs"],
         &["report"],
     ];
     for cmd in cmds {

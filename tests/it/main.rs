@@ -55,6 +55,7 @@ mod noise_chain;
 mod noise_estimate;
 mod noise_physics;
 mod png_rows;
+mod real_pairs;
 mod release_compat;
 mod release_version;
 mod release_workflow;
