@@ -375,7 +375,7 @@ pub(super) fn remove_stale_temp_files(out_dir: &Path, tasks: &[Task], variants: 
     remove_stale_temp_files_of(out_dir, &ids, &[Split::Train, Split::Val]);
 }
 
-/// [`remove_stale_temp_files`] for the output ids `ids` in the folders of `splits` (shared
+/// `remove_stale_temp_files` for the output ids `ids` in the folders of `splits` (shared
 /// with `real-pairs`, whose units are scenes).
 pub fn remove_stale_temp_files_of(
     out_dir: &Path,
