@@ -37,7 +37,7 @@ cargo publish --dry-run --allow-dirty --locked >/dev/null 2>"$work/publish.err" 
 echo "package-check: cargo publish --dry-run: the packaged crate builds"
 
 # 3. The sdist builds and installs where Rust is present.
-maturin sdist --quiet -m python/Cargo.toml -o "$work/sdist" >/dev/null
+maturin sdist -m python/Cargo.toml -o "$work/sdist" >/dev/null 2>&1
 sdist=$(ls "$work"/sdist/day2night-*.tar.gz)
 echo "package-check: $(basename "$sdist"): $(stat -c %s "$sdist") bytes"
 "$py" -m venv "$work/venv"
