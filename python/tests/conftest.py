@@ -85,3 +85,16 @@ def day_dir(tmp_path, day_dng):
     shutil.copy(day_dng, d / "a.dng")
     shutil.copy(day_dng, d / "b.dng")
     return d
+
+
+def need_torch():
+    """torch for the trainer's tests (python/tests/test_train_*.py): imported, or the test
+    skips with the reason scripts/test.sh gave, or fails when D2N_REQUIRE_TORCH=1 (set by
+    scripts/test.sh once torch is installed)."""
+    try:
+        import torch
+    except ImportError as e:
+        if os.environ.get("D2N_REQUIRE_TORCH") == "1":
+            pytest.fail(f"D2N_REQUIRE_TORCH=1 but torch cannot be imported: {e}")
+        pytest.skip(os.environ.get("D2N_TORCH_SKIP_REASON") or f"torch is not installed ({e})")
+    return torch

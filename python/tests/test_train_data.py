@@ -2,22 +2,11 @@
 lazily), fresh-synthesis patches, sharding; and the image noise estimate computed once per
 raw (synthesize on an input without NoiseProfile)."""
 
-import os
-
 import numpy as np
 import pytest
 
 import day2night
-
-
-def need_torch():
-    try:
-        import torch
-    except ImportError as e:
-        if os.environ.get("D2N_REQUIRE_TORCH") == "1":
-            pytest.fail(f"D2N_REQUIRE_TORCH=1 but torch cannot be imported: {e}")
-        pytest.skip(os.environ.get("D2N_TORCH_SKIP_REASON") or f"torch is not installed ({e})")
-    return torch
+from conftest import need_torch
 
 
 def pairs(rng, sizes):

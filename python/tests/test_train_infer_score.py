@@ -9,16 +9,7 @@ import pytest
 
 import day2night
 from day2night.train import scores
-
-
-def need_torch():
-    try:
-        import torch
-    except ImportError as e:
-        if os.environ.get("D2N_REQUIRE_TORCH") == "1":
-            pytest.fail(f"D2N_REQUIRE_TORCH=1 but torch cannot be imported: {e}")
-        pytest.skip(os.environ.get("D2N_TORCH_SKIP_REASON") or f"torch is not installed ({e})")
-    return torch
+from conftest import need_torch
 
 
 def model(f=4, seed=0):

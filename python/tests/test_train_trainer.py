@@ -9,16 +9,7 @@ import sys
 
 import numpy as np
 import pytest
-
-
-def need_torch():
-    try:
-        import torch
-    except ImportError as e:
-        if os.environ.get("D2N_REQUIRE_TORCH") == "1":
-            pytest.fail(f"D2N_REQUIRE_TORCH=1 but torch cannot be imported: {e}")
-        pytest.skip(os.environ.get("D2N_TORCH_SKIP_REASON") or f"torch is not installed ({e})")
-    return torch
+from conftest import need_torch
 
 
 @pytest.fixture()

@@ -1,19 +1,8 @@
 """day2night.train.unet: the release's UNet (utils/unet.py of SamsungLabs/day-to-night),
 checked layer by layer and by its parameter count, computed here from that architecture."""
 
-import os
-
 import pytest
-
-
-def need_torch():
-    try:
-        import torch
-    except ImportError as e:
-        if os.environ.get("D2N_REQUIRE_TORCH") == "1":
-            pytest.fail(f"D2N_REQUIRE_TORCH=1 but torch cannot be imported: {e}")
-        pytest.skip(os.environ.get("D2N_TORCH_SKIP_REASON") or f"torch is not installed ({e})")
-    return torch
+from conftest import need_torch
 
 
 def release_parameter_count(cin=3, cout=3, f=32):
