@@ -118,7 +118,7 @@ pub fn run(args: RealPairsArgs) -> CmdResult {
         out_dir: args.out_dir.clone(),
         jobs,
         overwrite: args.overwrite,
-        quiet: args.quiet,
+        on_scene: (!args.quiet).then_some(scene_line as fn(&realpairs::SceneDone<'_>)),
     };
     let summary = realpairs::run(&opts, &pairs)?;
     eprintln!("{}", summary.describe());
@@ -139,4 +139,18 @@ pub fn run(args: RealPairsArgs) -> CmdResult {
         });
     }
     Ok(())
+}
+
+/// One scene's progress lines on stderr (a closed stderr drops them: EPIPE must not panic).
+fn scene_line(d: &realpairs::SceneDone<'_>) {
+    use std::io::Write as _;
+    let mut err = std::io::stderr().lock();
+    for w in d.warnings {
+        let _ = writeln!(err, "real-pairs: {}: warning: {w}", d.scene);
+    }
+    let _ = writeln!(
+        err,
+        "real-pairs: [{}/{}] {}: {} ({:.1} s)",
+        d.index, d.total, d.scene, d.state, d.secs
+    );
 }

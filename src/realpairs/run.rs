@@ -19,7 +19,6 @@ use crate::error::{Error, Result, ResultExt};
 use crate::output::{stop_requested, OutputPolicy, OutputSetLock};
 use serde::Serialize;
 use std::collections::{BTreeMap, HashSet};
-use std::io::Write as _;
 use std::path::PathBuf;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::Mutex;
@@ -36,8 +35,26 @@ pub struct RunOptions {
     pub jobs: usize,
     /// Recompute every scene (and accept a non-empty OUT without a manifest).
     pub overwrite: bool,
-    /// No per-scene progress lines.
-    pub quiet: bool,
+    /// Called once per finished scene, for the caller's progress display (the library
+    /// itself prints nothing); `None`: no progress.
+    pub on_scene: Option<fn(&SceneDone<'_>)>,
+}
+
+/// One finished scene, as [`RunOptions::on_scene`] receives it.
+#[derive(Debug)]
+pub struct SceneDone<'a> {
+    /// 1-based count of scenes finished so far.
+    pub index: usize,
+    /// Scenes in the run.
+    pub total: usize,
+    /// The scene's folder, relative to SCENES.
+    pub scene: &'a str,
+    /// "up to date", "done" or "FAILED (see the summary)".
+    pub state: &'a str,
+    /// The scene's warnings.
+    pub warnings: &'a [String],
+    /// Seconds the scene took.
+    pub secs: f64,
 }
 
 /// What a run did.
@@ -151,8 +168,15 @@ pub fn run(opts: &RunOptions, pairs: &PairOptions) -> Result<Summary> {
                     }
                 }
                 let k = count.fetch_add(1, Ordering::SeqCst) + 1;
-                if !opts.quiet {
-                    progress(k, scenes.len(), scene, &o, t0.elapsed().as_secs_f64());
+                if let Some(on_scene) = opts.on_scene {
+                    on_scene(&SceneDone {
+                        index: k,
+                        total: scenes.len(),
+                        scene: &scene.rel,
+                        state: state(&o),
+                        warnings: &o.warnings,
+                        secs: t0.elapsed().as_secs_f64(),
+                    });
                 }
                 results.lock().unwrap_or_else(|e| e.into_inner()).push(o);
             });
@@ -197,22 +221,12 @@ pub fn run(opts: &RunOptions, pairs: &PairOptions) -> Result<Summary> {
     Ok(summary)
 }
 
-fn progress(k: usize, n: usize, scene: &SceneDir, o: &Outcome, secs: f64) {
-    let state = match (o.computed, o.record.status) {
-        (None, _) => "up to date".to_string(),
-        (Some(_), Status::Ok) => "done".to_string(),
-        (Some(_), Status::Failed) => "FAILED (see the summary)".to_string(),
-    };
-    let mut err = std::io::stderr().lock();
-    for w in &o.warnings {
-        let _ = writeln!(err, "real-pairs: {}: warning: {w}", scene.rel);
+fn state(o: &Outcome) -> &'static str {
+    match (o.computed, o.record.status) {
+        (None, _) => "up to date",
+        (Some(_), Status::Ok) => "done",
+        (Some(_), Status::Failed) => "FAILED (see the summary)",
     }
-    // a closed stderr (EPIPE) must not panic the run: the line is dropped
-    let _ = writeln!(
-        err,
-        "real-pairs: [{k}/{n}] {}: {state} ({secs:.1} s)",
-        scene.rel
-    );
 }
 
 /// Hash, decide, and make one scene if needed.
