@@ -15,7 +15,8 @@ pub enum NoiseSource {
     NoiseProfile,
     /// Estimated from the day image itself at its Exif ISO (`noise::estimate`).
     ImageEstimate,
-    /// The embedded table of the paper's phone, the Samsung Galaxy S20 FE.
+    /// An embedded table (`synth::dictionaries::embedded`): the paper's phone's, the
+    /// Samsung Galaxy S20 FE (the only one today, whence the name).
     #[serde(rename = "embedded_s20fe")]
     EmbeddedS20Fe,
 }
@@ -43,16 +44,6 @@ pub struct NoiseProvenance {
     pub camera: Option<CameraId>,
     /// In words: which file, ISO, fit, and why this source was taken.
     pub note: String,
-}
-
-/// The camera of the embedded table: the paper's phone, a Samsung Galaxy S20 FE (Make
-/// `samsung`, Model `SM-G780*` or `SM-G781*`: [`CameraId::is_s20_fe`]).
-pub fn s20_fe_camera() -> CameraId {
-    CameraId::new(
-        Some("samsung".into()),
-        Some("SM-G780/SM-G781 (Galaxy S20 FE)".into()),
-        None,
-    )
 }
 
 /// The `camera` of a model file: an object `{make, model, unique_camera_model}` (what
@@ -113,6 +104,5 @@ mod tests {
                 format!("\"{}\"", s.name())
             );
         }
-        assert!(s20_fe_camera().is_s20_fe());
     }
 }

@@ -94,14 +94,13 @@ impl CameraId {
         mixed(&u1, &m2).or_else(|| mixed(&u2, &m1))
     }
 
-    /// True for the paper's phone, the Samsung Galaxy S20 FE: Make `samsung` (any case) and
-    /// a Model beginning `SM-G780` (4G) or `SM-G781` (5G) (any case). The embedded
-    /// calibration (night illuminants, noise table) was measured on it.
-    pub fn is_s20_fe(&self) -> bool {
-        let make = self.make.as_deref().map(key);
+    /// True when the Make is `make` and the Model begins with one of `model_prefixes`,
+    /// both compared as names are (white space collapsed, ASCII case ignored): how an
+    /// embedded calibration recognizes its camera (`synth::dictionaries::embedded`).
+    pub fn make_and_model_prefix(&self, make: &str, model_prefixes: &[&str]) -> bool {
         let model = self.model.as_deref().map(key);
-        make.as_deref() == Some("samsung")
-            && model.is_some_and(|m| m.starts_with("sm-g780") || m.starts_with("sm-g781"))
+        self.make.as_deref().map(key) == Some(key(make))
+            && model.is_some_and(|m| model_prefixes.iter().any(|p| m.starts_with(&key(p))))
     }
 
     /// A name for messages: UniqueCameraModel, else `Make Model`, else `unknown camera`.
@@ -173,17 +172,15 @@ mod tests {
     }
 
     #[test]
-    fn the_paper_phone_rule() {
+    fn make_and_model_prefix_rule() {
+        let phone = |c: &CameraId| c.make_and_model_prefix("samsung", &["SM-G780", "SM-G781"]);
         for (make, model) in [
             ("samsung", "SM-G780F"),
             ("SAMSUNG", "SM-G781B"),
             ("Samsung", "sm-g780g"),
             (" samsung ", "SM-G781U1"),
         ] {
-            assert!(
-                id(Some(make), Some(model), None).is_s20_fe(),
-                "{make} {model}"
-            );
+            assert!(phone(&id(Some(make), Some(model), None)), "{make} {model}");
         }
         for (make, model) in [
             (Some("samsung"), Some("SM-G991B")),
@@ -192,7 +189,7 @@ mod tests {
             (Some("samsung"), None),
             (Some("samsung"), Some("G780")),
         ] {
-            assert!(!id(make, model, None).is_s20_fe(), "{make:?} {model:?}");
+            assert!(!phone(&id(make, model, None)), "{make:?} {model:?}");
         }
     }
 

@@ -4,8 +4,8 @@
 //! A dictionary of `[r/g, b/g]` gray-card neutrals is in one camera's raw colours. The
 //! default therefore depends on the input:
 //!
-//! * the paper's phone (Samsung Galaxy S20 FE, [`CameraId::is_s20_fe`]): the embedded
-//!   dictionary measured on it, as before;
+//! * a camera with an embedded calibration ([`embedded::for_camera`]: the paper's phone,
+//!   Samsung Galaxy S20 FE): the embedded dictionary measured on it, as before;
 //! * every other camera: the CIE 015:2018 night lamps ([`XyDict::cie_night`]), converted to
 //!   this camera's neutrals through the file's own colour matrices by the DNG specification's
 //!   chapter 6 ([`CameraColor::xy_to_neutral`]: xy -> XYZ -> ColorMatrix interpolated at the
@@ -18,8 +18,9 @@
 //! through the input's matrices for any other). A camera's neutrals applied to another camera
 //! are a warning naming both.
 
+use super::dictionaries::embedded::{self, CameraCalibration};
 use super::dictionaries::xy::{load_illuminant_file, IlluminantFile, XyDict, XyLamp};
-use super::dictionaries::{embedded, IlluminantDict, MAX_NEUTRAL_RATIO};
+use super::dictionaries::{IlluminantDict, MAX_NEUTRAL_RATIO};
 use super::illuminant::{Covariance, Gaussian2};
 use crate::error::{Error, Result, ResultExt};
 use crate::isp::color::CameraColor;
@@ -115,23 +116,13 @@ pub struct ResolvedIlluminants {
     pub warnings: Vec<String>,
 }
 
-/// The camera the embedded dictionary was measured on (descriptive; the rule that
-/// recognizes the phone is [`CameraId::is_s20_fe`]).
-pub fn s20_fe() -> CameraId {
-    CameraId {
-        make: Some("samsung".into()),
-        model: Some("SM-G780*/SM-G781* (Galaxy S20 FE)".into()),
-        unique_camera_model: None,
-    }
-}
-
 /// How to avoid another camera's colours (appended to warnings and errors).
 const FIXES: &str = "--illuminants cie (CIE lamps through this file's colour matrices) or \
 --illuminants FILE (this camera's gray cards, from `day2night calibrate illuminants`)";
 
-/// The embedded dictionary, fitted exactly as before this choice existed.
-fn paper(est: Covariance) -> Result<Gaussian2> {
-    Gaussian2::fit(&embedded::illuminants(), est)
+/// An embedded dictionary, fitted exactly as before this choice existed.
+fn fit_embedded(cal: &CameraCalibration, est: Covariance) -> Result<Gaussian2> {
+    Gaussian2::fit(&cal.illuminants, est)
 }
 
 /// A lamp's camera channel below this fraction of green is degenerate (an error); between
@@ -288,10 +279,14 @@ impl IlluminantChoice {
         est: Covariance,
     ) -> Result<ResolvedIlluminants> {
         let mut warnings = Vec::new();
-        let (gaussian, provenance) = match self {
-            IlluminantChoice::Auto if camera.is_s20_fe() => (paper(est)?, paper_provenance(camera)),
-            IlluminantChoice::Paper => {
-                if !camera.is_s20_fe() {
+        let own = embedded::for_camera(camera);
+        let (gaussian, provenance) = match (self, own) {
+            (IlluminantChoice::Auto, Some(own)) => {
+                (fit_embedded(own, est)?, embedded_provenance(own, camera))
+            }
+            (IlluminantChoice::Paper, _) => {
+                let paper = embedded::paper();
+                if own.map(|c| c.key) != Some(paper.key) {
                     warnings.push(format!(
                         "night illuminants: the paper phone's dictionary (Samsung Galaxy S20 FE \
                          camera RGB) applied to {camera}: its lamp colours are another camera's \
@@ -299,9 +294,12 @@ impl IlluminantChoice {
                          use {FIXES}"
                     ));
                 }
-                (paper(est)?, paper_provenance(camera))
+                (
+                    fit_embedded(paper, est)?,
+                    embedded_provenance(paper, camera),
+                )
             }
-            IlluminantChoice::Auto | IlluminantChoice::Cie => {
+            (IlluminantChoice::Auto, None) | (IlluminantChoice::Cie, _) => {
                 let cc = camera_color(color, "the CIE night lamps")?;
                 let xy = XyDict::cie_night();
                 let (dict, clamped) = xy_to_camera(&xy, &cc, camera)?;
@@ -321,8 +319,8 @@ impl IlluminantChoice {
                 };
                 (g, prov)
             }
-            IlluminantChoice::File(f) => file(f, camera, color, est, &mut warnings)?,
-            IlluminantChoice::Gaussian(g, p) => {
+            (IlluminantChoice::File(f), _) => file(f, camera, color, est, &mut warnings)?,
+            (IlluminantChoice::Gaussian(g, p), _) => {
                 let prov = p.clone().unwrap_or_else(|| IlluminantProvenance {
                     source: IlluminantOrigin::Given,
                     file: None,
@@ -342,7 +340,7 @@ impl IlluminantChoice {
     /// Whether this choice reads colour matrices for `camera` (for `info`'s readiness).
     pub fn needs_matrices(&self, camera: &CameraId) -> bool {
         match self {
-            IlluminantChoice::Auto => !camera.is_s20_fe(),
+            IlluminantChoice::Auto => embedded::for_camera(camera).is_none(),
             IlluminantChoice::Cie => true,
             IlluminantChoice::File(f) => {
                 f.xy.is_some()
@@ -365,17 +363,19 @@ fn clamped_note(clamped: &[String]) -> String {
     )
 }
 
-fn paper_provenance(camera: &CameraId) -> IlluminantProvenance {
-    let note = if camera.is_s20_fe() {
-        "the paper's 45 gray-card neutrals, measured on this camera model".to_string()
+/// The provenance of `cal`'s embedded dictionary sampled for `camera`.
+fn embedded_provenance(cal: &CameraCalibration, camera: &CameraId) -> IlluminantProvenance {
+    let n = cal.illuminants.chromaticities.len();
+    let note = if embedded::for_camera(camera).map(|c| c.key) == Some(cal.key) {
+        format!("the paper's {n} gray-card neutrals, measured on this camera model")
     } else {
-        format!("the paper's 45 gray-card neutrals, measured on another camera than this {camera}")
+        format!("the paper's {n} gray-card neutrals, measured on another camera than this {camera}")
     };
     IlluminantProvenance {
         source: IlluminantOrigin::EmbeddedS20fe,
         file: None,
-        camera: Some(s20_fe()),
-        note: format!("{note} ({})", embedded::ATTRIBUTION),
+        camera: Some(cal.illuminants_camera.clone()),
+        note: format!("{note} ({})", cal.illuminants.source),
     }
 }
 

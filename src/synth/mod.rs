@@ -339,7 +339,7 @@ impl Calibration {
         match self.illuminants_for(meta, opts) {
             Err(e) if matches!(opts.mode, Mode::Day | Mode::Dimmed) => {
                 let mut r = IlluminantChoice::Paper.resolve(
-                    &illuminant_choice::s20_fe(),
+                    &dictionaries::embedded::paper().illuminants_camera,
                     &meta.color,
                     opts.covariance,
                 )?;

@@ -4,7 +4,7 @@
 //! 1. `--noise-model FILE` (a warning when the file records another camera);
 //! 2. the input's own NoiseProfile, at its Exif ISO;
 //! 3. the embedded table when it is this camera's own (the paper's phone, the Samsung
-//!    Galaxy S20 FE: [`CameraId::is_s20_fe`]), or under `--compat release` (the release
+//!    Galaxy S20 FE: [`embedded::for_camera`]), or under `--compat release` (the release
 //!    applies it to every input; a warning unless the input is the S20 FE);
 //! 4. an estimate from the day image itself at its Exif ISO ([`crate::noise::estimate`](mod@crate::noise::estimate)),
 //!    when it can be trusted;
@@ -17,7 +17,6 @@
 use super::dictionaries::embedded;
 use super::{Calibration, SynthOptions};
 use crate::error::Result;
-use crate::noise::provenance::s20_fe_camera;
 use crate::noise::{IsoPoint, NoiseEstimate, NoiseModel, NoiseProvenance, NoiseSource};
 use crate::raw::camera::CameraId;
 use crate::raw::{Bayer, RawImage};
@@ -49,7 +48,7 @@ fn embedded_elsewhere(cam: &CameraId, why: &str, note: &str) -> NoiseChoice {
         )],
         provenance: NoiseProvenance {
             source: NoiseSource::EmbeddedS20Fe,
-            camera: Some(s20_fe_camera()),
+            camera: model.camera.clone(),
             note: format!("{note} ({})", model.source),
         },
         model,
@@ -139,12 +138,12 @@ pub fn choose_noise_model(
             None => "the input has no NoiseProfile".into(),
         },
     };
-    if cam.is_s20_fe() {
-        let model = embedded::noise_model();
+    if let Some(own) = embedded::for_camera(&cam) {
+        let model = own.noise.clone();
         return Ok(NoiseChoice {
             provenance: NoiseProvenance {
                 source: NoiseSource::EmbeddedS20Fe,
-                camera: Some(s20_fe_camera()),
+                camera: model.camera.clone(),
                 note: format!(
                     "{profile_words} and it is the paper's phone, the camera of the embedded \
                      table ({})",
@@ -399,7 +398,11 @@ mod tests {
             assert!(r.choice.warnings.is_empty(), "{:?}", r.choice.warnings);
             assert!(!r.estimated, "no estimate for the table's own camera");
             assert_eq!(r.choice.model.isos, embedded::noise_model().isos);
-            assert!(r.choice.provenance.camera.as_ref().unwrap().is_s20_fe());
+            assert_eq!(r.choice.provenance.camera, embedded::noise_model().camera);
+            assert_eq!(
+                r.choice.provenance.camera.unwrap().label(),
+                "samsung SM-G780/SM-G781 (Galaxy S20 FE)"
+            );
         }
     }
 

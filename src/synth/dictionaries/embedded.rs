@@ -1,160 +1,129 @@
-//! Embedded default calibration: the capture phone of the CVPR 2022 day-to-night paper
-//! (10-bit, black 64, white 1023).
+//! Embedded calibration: the cameras whose night illuminants and noise ship inside the
+//! binary, as data files read by the same readers as a user's calibration files
+//! (`synth --illuminants FILE`: [`super::xy::parse_illuminant_file`]; `--noise-model FILE`:
+//! [`NoiseModel::from_json`]).
 //!
-//! Figures derived from the public release of the paper's code and data ("CVPR 2022
-//! day-to-night release, CC BY-NC 4.0", Punnappurath, Abuolaim, Abdelhamed, Levinshtein,
-//! Brown; Samsung Electronics): `utils/gray_card_illum_dict.mat` (night_dict: 45 gray-card
-//! chromaticities) and `noise_profiler/h-gauss-s20-v1/model_params.npy` (heteroscedastic
-//! Gaussian betas in DN per ISO and 2x2 position, variance = beta1 * x + beta2 with x
-//! including the black level). The release is licensed CC BY-NC 4.0 by its authors: these
-//! figures carry that licence's attribution and non-commercial terms.
+//! One camera today: the capture phone of the CVPR 2022 day-to-night paper, a Samsung
+//! Galaxy S20 FE (10-bit, black 64, white 1023), `calibration/samsung-s20fe/` in the
+//! repository. Its figures derive from the public release of the paper's code and data
+//! ("CVPR 2022 day-to-night release, CC BY-NC 4.0", Punnappurath, Abuolaim, Abdelhamed,
+//! Levinshtein, Brown; Samsung Electronics): `utils/gray_card_illum_dict.mat` (night_dict:
+//! 45 gray-card chromaticities) and `noise_profiler/h-gauss-s20-v1/model_params.npy`
+//! (heteroscedastic Gaussian betas in DN per ISO and 2x2 position, kept in the noise file's
+//! `dn_table` beside their normalized form). The release is licensed CC BY-NC 4.0 by its
+//! authors: these figures carry that licence's attribution and non-commercial terms.
+//!
+//! Which camera an input is: [`for_camera`], the one lookup (Make, and a Model prefix,
+//! compared as [`CameraId::make_and_model_prefix`] does).
 
-use super::IlluminantDict;
+use super::xy::parse_illuminant_file;
+use super::{IlluminantDict, IlluminantSource};
+use crate::error::{Error, Result};
 use crate::noise::NoiseModel;
+use crate::raw::camera::CameraId;
+use std::sync::OnceLock;
 
-/// Attribution of the embedded figures.
-pub const ATTRIBUTION: &str = "CVPR 2022 day-to-night release, CC BY-NC 4.0";
-
-/// Name of the embedded illuminant dictionary (used in messages and sidecars).
-pub const ILLUMINANTS_NAME: &str = "embedded paper phone (S20 FE) night gray-card dictionary";
-
-/// Fitted mean [r/g, b/g] of [`ILLUMINANTS`] (docs/synthesis.md, "4. Night illuminants").
-pub const FIT_MEAN: [f64; 2] = [0.766125, 0.328891];
-/// Unbiased (1/(M-1)) covariance of [`ILLUMINANTS`] (docs/synthesis.md, "4. Night illuminants").
-pub const FIT_COV_UNBIASED: [[f64; 2]; 2] = [[0.0288803, -0.0109222], [-0.0109222, 0.00489429]];
-
-/// The 45 night gray-card chromaticities [r/g, b/g] of the paper's phone.
-pub const ILLUMINANTS: [[f64; 2]; 45] = [
-    [0.854492, 0.30957],
-    [0.766602, 0.316406],
-    [0.674805, 0.333008],
-    [0.628906, 0.37207],
-    [0.832031, 0.303711],
-    [0.557881, 0.443906],
-    [1.082051, 0.205791],
-    [0.72168, 0.333008],
-    [0.630893, 0.392225],
-    [0.87207, 0.293945],
-    [0.666016, 0.356445],
-    [0.583984, 0.381836],
-    [0.553924, 0.420325],
-    [0.761719, 0.329102],
-    [0.899414, 0.311523],
-    [0.821289, 0.295898],
-    [0.701172, 0.328125],
-    [0.610352, 0.368164],
-    [1.080346, 0.20415],
-    [0.560436, 0.470782],
-    [1.085083, 0.202093],
-    [0.770508, 0.288086],
-    [0.769531, 0.303711],
-    [0.803711, 0.289062],
-    [0.87207, 0.321289],
-    [0.623047, 0.353516],
-    [0.869141, 0.326172],
-    [0.630859, 0.366211],
-    [0.782227, 0.290039],
-    [0.583008, 0.413086],
-    [0.849609, 0.326172],
-    [1.213149, 0.202283],
-    [0.554904, 0.467324],
-    [0.743164, 0.288086],
-    [0.714844, 0.321289],
-    [0.553984, 0.467623],
-    [1.144439, 0.183128],
-    [0.704102, 0.319336],
-    [0.727539, 0.332031],
-    [0.924805, 0.291016],
-    [0.712146, 0.339185],
-    [0.575435, 0.426956],
-    [0.668945, 0.333984],
-    [0.733213, 0.342339],
-    [1.006081, 0.236071],
-];
-
-/// Noise table of the paper's phone: (ISO, 2x2 position, beta1, beta2), DN, x incl. black.
-pub const NOISE_TABLE_DN: [(u32, usize, f64, f64); 24] = [
-    (100, 0, 0.1419234149084682, -8.890307111076448),
-    (100, 1, 0.14010851348394535, -8.684474895126055),
-    (100, 2, 0.13982037914173523, -8.685826036688809),
-    (100, 3, 0.1418040808370286, -8.868374099147276),
-    (200, 0, 0.28459846397296595, -17.99830279350811),
-    (200, 1, 0.2842019999864774, -17.908969030282638),
-    (200, 2, 0.28228803918683115, -17.791730955968337),
-    (200, 3, 0.2840307985544278, -17.913387024217805),
-    (400, 0, 0.5645075071356364, -35.755209362962496),
-    (400, 1, 0.5623994898053915, -35.57701376873653),
-    (400, 2, 0.5584229215509176, -35.23834418320569),
-    (400, 3, 0.5631269260866636, -35.62237948220208),
-    (800, 0, 1.1212485582585008, -69.87470804123991),
-    (800, 1, 1.1213600816123324, -69.79704865646038),
-    (800, 2, 1.1139926392926753, -69.33176850507408),
-    (800, 3, 1.119083971640854, -69.49979993675758),
-    (1600, 0, 2.2435579560800636, -134.13813652456366),
-    (1600, 1, 2.2318542023898225, -132.79735744428996),
-    (1600, 2, 2.212563286375087, -131.45865250865327),
-    (1600, 3, 2.233160798965846, -132.7768160221999),
-    (3200, 0, 4.292001197640824, -234.9049461133207),
-    (3200, 1, 4.216130811900908, -228.34061839150064),
-    (3200, 2, 4.185857471741983, -226.2369996301509),
-    (3200, 3, 4.295593457145119, -235.7195457993698),
-];
-/// Black level of the noise table.
-pub const NOISE_BLACK: f64 = 64.0;
-/// White level of the noise table.
-pub const NOISE_WHITE: f64 = 1023.0;
-
-/// The embedded illuminant dictionary.
-pub fn illuminants() -> IlluminantDict {
-    IlluminantDict {
-        name: ILLUMINANTS_NAME.into(),
-        source: ATTRIBUTION.into(),
-        chromaticities: ILLUMINANTS.to_vec(),
-        weights: Vec::new(),
-    }
+/// One camera's embedded calibration, decoded.
+#[derive(Debug, Clone, PartialEq)]
+pub struct CameraCalibration {
+    /// Short name: the folder under `calibration/` (`samsung-s20fe`).
+    pub key: &'static str,
+    /// The night illuminant dictionary (camera RGB neutrals of this camera).
+    pub illuminants: IlluminantDict,
+    /// The camera the illuminant file names (its provenance's `camera`).
+    pub illuminants_camera: CameraId,
+    /// The noise model (its `camera` is the noise provenance's).
+    pub noise: NoiseModel,
 }
 
-/// The embedded noise model, converted to the portable normalized form.
+/// A registered camera: how to recognize it, and its files.
+struct Entry {
+    key: &'static str,
+    /// Make, compared as [`CameraId::make_and_model_prefix`] does.
+    make: &'static str,
+    /// Model prefixes (any one), compared the same way.
+    model_prefixes: &'static [&'static str],
+    illuminants_json: &'static str,
+    noise_json: &'static str,
+}
+
+/// The paper's phone: Make `samsung`, Model `SM-G780*` (4G) or `SM-G781*` (5G).
+const PAPER_PHONE: Entry = Entry {
+    key: "samsung-s20fe",
+    make: "samsung",
+    model_prefixes: &["SM-G780", "SM-G781"],
+    illuminants_json: include_str!("../../../calibration/samsung-s20fe/illuminants.json"),
+    noise_json: include_str!("../../../calibration/samsung-s20fe/noise.json"),
+};
+
+/// Every embedded camera; the first is the paper's phone ([`paper`]).
+const CAMERAS: [Entry; 1] = [PAPER_PHONE];
+
+fn decode(e: &Entry) -> Result<CameraCalibration> {
+    let what = |part: &str| format!("embedded calibration {}/{part}.json", e.key);
+    let v: serde_json::Value = serde_json::from_str(e.illuminants_json)
+        .map_err(|err| Error::malformed(format!("{}: {err}", what("illuminants"))))?;
+    let name = v.get("name").and_then(|n| n.as_str()).unwrap_or(e.key);
+    let file = parse_illuminant_file(name, &v)?;
+    let (Some(IlluminantSource::Dict(illuminants)), Some(camera)) = (file.rgb, file.camera) else {
+        return Err(Error::malformed(format!(
+            "{}: needs camera neutrals and a camera",
+            what("illuminants")
+        )));
+    };
+    let noise = NoiseModel::from_json(e.noise_json)?;
+    Ok(CameraCalibration {
+        key: e.key,
+        illuminants,
+        illuminants_camera: camera,
+        noise,
+    })
+}
+
+/// Every embedded camera's calibration, decoded once.
+fn all() -> &'static [CameraCalibration] {
+    static DECODED: OnceLock<Vec<CameraCalibration>> = OnceLock::new();
+    DECODED.get_or_init(|| {
+        CAMERAS
+            .iter()
+            .map(|e| match decode(e) {
+                Ok(c) => c,
+                // Data compiled into the binary, decoded by a unit test on every build.
+                Err(err) => unreachable!("embedded calibration {} invalid: {err}", e.key),
+            })
+            .collect()
+    })
+}
+
+/// The embedded calibration measured on `camera`'s model, if any.
+pub fn for_camera(camera: &CameraId) -> Option<&'static CameraCalibration> {
+    CAMERAS
+        .iter()
+        .position(|e| camera.make_and_model_prefix(e.make, e.model_prefixes))
+        .map(|i| &all()[i])
+}
+
+/// The paper's phone's calibration: `--illuminants paper`, `--compat release`, and the noise
+/// table of last resort.
+pub fn paper() -> &'static CameraCalibration {
+    &all()[0]
+}
+
+/// Attribution of the paper phone's figures (the illuminant file's `source`).
+pub fn attribution() -> &'static str {
+    &paper().illuminants.source
+}
+
+/// The paper phone's illuminant dictionary.
+pub fn illuminants() -> IlluminantDict {
+    paper().illuminants.clone()
+}
+
+/// The paper phone's noise model, in the portable normalized form.
 pub fn noise_model() -> NoiseModel {
-    // The table is a compile-time constant known to be valid (tested below).
-    match NoiseModel::from_dn_table(
-        format!("embedded paper phone (S20 FE) table, {}", ATTRIBUTION),
-        &NOISE_TABLE_DN,
-        NOISE_BLACK,
-        NOISE_WHITE,
-    ) {
-        Ok(m) => m,
-        Err(e) => unreachable!("embedded noise table invalid: {e}"),
-    }
+    paper().noise.clone()
 }
 
 #[cfg(test)]
-#[allow(clippy::needless_range_loop)]
-mod tests {
-    use super::*;
-    use crate::synth::illuminant::{Covariance, Gaussian2};
-
-    #[test]
-    fn fit_matches_spec_figures() {
-        let g = Gaussian2::fit(&illuminants(), Covariance::Unbiased).unwrap();
-        for i in 0..2 {
-            assert!((g.mean[i] - FIT_MEAN[i]).abs() < 1e-6, "{:?}", g.mean);
-            for j in 0..2 {
-                assert!(
-                    (g.cov[i][j] - FIT_COV_UNBIASED[i][j]).abs() < 1e-7,
-                    "{:?}",
-                    g.cov
-                );
-            }
-        }
-        let ml = Gaussian2::fit(&illuminants(), Covariance::MaximumLikelihood).unwrap();
-        assert!((ml.cov[0][0] * 45.0 / 44.0 - g.cov[0][0]).abs() < 1e-12);
-    }
-
-    #[test]
-    fn noise_table_loads() {
-        let m = noise_model();
-        assert_eq!(m.iso_range(), (100, 3200));
-        assert_eq!(m.isos.len(), 6);
-    }
-}
+#[path = "embedded_tests.rs"]
+mod tests;
