@@ -516,16 +516,14 @@ fn process_input<P: Processor>(
         }
         let prev = previous.get(&(u.rel.clone(), u.variant));
         let rec = match loaded.as_ref() {
-            Some(Ok(input)) => compute_unit(
-                processor,
-                input,
-                u,
-                prev,
-                blank(u, &input_sha),
-                &opts.out_dir,
-                policy,
-                opts.wait,
-            ),
+            Some(Ok(input)) => {
+                let to = UnitOutput {
+                    out_dir: &opts.out_dir,
+                    policy,
+                    wait: opts.wait,
+                };
+                compute_unit(processor, input, u, prev, blank(u, &input_sha), to)
+            }
             Some(Err(msg)) => Record {
                 error: Some(msg.clone()),
                 ..blank(u, &input_sha)
@@ -581,20 +579,34 @@ pub(super) fn load_input<P: Processor>(
     }
 }
 
+/// Where and how a unit's outputs are written: the output directory, the write policy, and
+/// whether to wait for another process's lock on the unit (`--wait`).
+#[derive(Debug, Clone, Copy)]
+pub struct UnitOutput<'a> {
+    /// The output directory.
+    pub out_dir: &'a Path,
+    /// How files are written.
+    pub policy: &'a OutputPolicy,
+    /// Wait for a lock another process holds, instead of failing.
+    pub wait: bool,
+}
+
 /// Make one unit's outputs under its [`OutputSetLock`] and return its record (`rec`, the
 /// blank record, filled in): `ok` with the files written, or `failed` with the error (a
 /// panic is caught). Files the previous record listed that are no longer made are removed.
-#[allow(clippy::too_many_arguments)]
 pub fn compute_unit<P: Processor>(
     processor: &P,
     input: &P::Loaded,
     u: &Unit,
     prev: Option<&Record>,
     mut rec: Record,
-    out_dir: &Path,
-    policy: &OutputPolicy,
-    wait: bool,
+    to: UnitOutput,
 ) -> Record {
+    let UnitOutput {
+        out_dir,
+        policy,
+        wait,
+    } = to;
     let sink = Sink::new(out_dir, u.split, &u.id, policy.clone());
     // One process at a time writes a unit's outputs (docs/concurrency.md).
     let res = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {

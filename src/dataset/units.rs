@@ -21,7 +21,7 @@ use super::progress::ProgressSink;
 use super::resume::{decide, Decision, Reason};
 use super::run::{
     blank_record, check_out_dir, compute_unit, load_input, plan_tasks, remove_stale_temp_files,
-    unit_id, want,
+    unit_id, want, UnitOutput,
 };
 use super::{sha256_hex, Processor, Shard, Split, SplitRule, Unit};
 use crate::error::{Error, Result, ResultExt};
@@ -228,9 +228,14 @@ pub fn write_units<P: Processor>(
                     l
                 });
                 let rec = match input {
-                    Ok(input) => compute_unit(
-                        processor, input, unit, prev, blank, out_dir, &policy, o.wait,
-                    ),
+                    Ok(input) => {
+                        let to = UnitOutput {
+                            out_dir,
+                            policy: &policy,
+                            wait: o.wait,
+                        };
+                        compute_unit(processor, input, unit, prev, blank, to)
+                    }
                     Err(msg) => Record {
                         error: Some(msg.clone()),
                         ..blank

@@ -664,19 +664,31 @@ fn scan_simple(
 mod tests {
     use super::*;
 
+    /// A stream for [`encode`]: `w x h` pixels of `nc` components of `p` bits, predictor
+    /// `pred`, point transform `pt`, restart interval `ri` (0 = none).
+    #[derive(Clone, Copy)]
+    pub(crate) struct Stream {
+        pub(crate) w: usize,
+        pub(crate) h: usize,
+        pub(crate) nc: usize,
+        pub(crate) p: u8,
+        pub(crate) pred: u8,
+        pub(crate) pt: u8,
+        pub(crate) ri: usize,
+    }
+
     /// Tiny reference encoder for tests: one Huffman table with categories 0..=16 all 5-bit
     /// codes, any predictor, optional restart interval.
-    #[allow(clippy::too_many_arguments)]
-    pub(crate) fn encode(
-        w: usize,
-        h: usize,
-        nc: usize,
-        p: u8,
-        pred: u8,
-        pt: u8,
-        ri: usize,
-        samples: &[u16],
-    ) -> Vec<u8> {
+    pub(crate) fn encode(stream: Stream, samples: &[u16]) -> Vec<u8> {
+        let Stream {
+            w,
+            h,
+            nc,
+            p,
+            pred,
+            pt,
+            ri,
+        } = stream;
         let mut o = vec![0xFF, 0xD8];
         // SOF3
         o.extend_from_slice(&[0xFF, 0xC3]);
@@ -825,7 +837,18 @@ mod tests {
                 for &p in &[8u8, 12, 14, 16] {
                     let (w, h) = (13, 7);
                     let s = pseudo(w * h * nc, p, pred as u32 + nc as u32);
-                    let enc = encode(w, h, nc, p, pred, 0, 0, &s);
+                    let enc = encode(
+                        Stream {
+                            w,
+                            h,
+                            nc,
+                            p,
+                            pred,
+                            pt: 0,
+                            ri: 0,
+                        },
+                        &s,
+                    );
                     let d = decode(&enc).unwrap();
                     assert_eq!((d.width, d.height, d.components), (w, h, nc));
                     assert_eq!(d.data, s, "nc {nc} pred {pred} p {p}");
@@ -842,7 +865,18 @@ mod tests {
                 .into_iter()
                 .map(|v| v & !3)
                 .collect();
-            let enc = encode(w, h, nc, 12, 6, 2, ri, &s);
+            let enc = encode(
+                Stream {
+                    w,
+                    h,
+                    nc,
+                    p: 12,
+                    pred: 6,
+                    pt: 2,
+                    ri,
+                },
+                &s,
+            );
             let d = decode(&enc).unwrap();
             assert_eq!(d.data, s, "ri {ri}");
         }
@@ -851,7 +885,18 @@ mod tests {
     #[test]
     fn truncated_and_garbage_streams_fail_cleanly() {
         let s = pseudo(64 * 8, 14, 3);
-        let enc = encode(64, 8, 1, 14, 1, 0, 0, &s);
+        let enc = encode(
+            Stream {
+                w: 64,
+                h: 8,
+                nc: 1,
+                p: 14,
+                pred: 1,
+                pt: 0,
+                ri: 0,
+            },
+            &s,
+        );
         for cut in [0, 1, 2, 10, 30, enc.len() / 2, enc.len() - 3] {
             assert!(decode(&enc[..cut]).is_err(), "cut {cut}");
         }
@@ -864,7 +909,18 @@ mod tests {
 
     #[test]
     fn huge_frame_header_is_refused_before_allocation() {
-        let mut enc = encode(4, 4, 1, 12, 1, 0, 0, &[0; 16]);
+        let mut enc = encode(
+            Stream {
+                w: 4,
+                h: 4,
+                nc: 1,
+                p: 12,
+                pred: 1,
+                pt: 0,
+                ri: 0,
+            },
+            &[0; 16],
+        );
         // SOF3 height/width at bytes 7..11.
         enc[7..11].copy_from_slice(&[0xFF, 0xFF, 0xFF, 0xFF]);
         assert!(decode(&enc).is_err());

@@ -246,16 +246,12 @@ pub fn render_linear_windowed(
         limit,
         stats: Some(&mut stats),
     };
-    let got = opcodes::banded::render(
-        img,
-        &p,
-        n,
+    let rows = opcodes::banded::RowRender {
+        neutral: n,
         kernel,
-        &post,
-        ends,
-        tune,
-        collect_bands_of(band),
-    )?;
+        post: &post,
+    };
+    let got = opcodes::banded::render(img, &p, rows, ends, tune, collect_bands_of(band))?;
     Ok(got.map(|rgb| (rgb, stats)))
 }
 

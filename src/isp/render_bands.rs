@@ -7,7 +7,7 @@
 //! `place`.
 
 use super::color::normalize_neutral;
-use super::demosaic::{demosaic_rect, row_kernel, Post, RowKernel};
+use super::demosaic::{demosaic_rect, row_kernel, Post, RowDemosaic, RowKernel};
 use super::opcodes;
 use super::place::{place, BandBody};
 use super::render_parts::{
@@ -85,7 +85,13 @@ pub(crate) fn banded<R>(
                 emit: &mut dyn FnMut(usize, &mut [f32])| {
         let mut blacks = Vec::new();
         let fill = |r: usize, cs: &[usize], out: &mut [f32]| fill(&mut blacks, r, cs, out);
-        demosaic_rect(w, h, bayer, kernel, rows, cols, fill, post, emit);
+        let cfa = RowDemosaic {
+            width: w,
+            height: h,
+            bayer,
+            kernel,
+        };
+        demosaic_rect(cfa, rows, cols, fill, post, emit);
         Ok(())
     };
     place(&img.meta, (w, h), crop, orient, BAND, &rect, run)
@@ -222,7 +228,12 @@ pub(crate) fn banded_any<R>(
     match p {
         Some(p) => {
             let tune = opcodes::banded::Tune::default();
-            opcodes::banded::render(img, p, n, kernel, post, (crop, orient), tune, run)
+            let rows = opcodes::banded::RowRender {
+                neutral: n,
+                kernel,
+                post,
+            };
+            opcodes::banded::render(img, p, rows, (crop, orient), tune, run)
         }
         None => banded(img, n, kernel, post, crop, orient, run).map(Some),
     }

@@ -10,7 +10,7 @@
 //! matrix. The result equals the frame render's region bit for bit.
 
 use super::color::normalize_neutral;
-use super::demosaic::{demosaic_rect, row_kernel, Demosaic, PAD};
+use super::demosaic::{demosaic_rect, row_kernel, Demosaic, RowDemosaic, PAD};
 use super::opcodes::{self, pipeline, OpcodeMode};
 use super::render_parts::{color_matrix, matrix_row, resolve_neutral};
 use super::RgbImage;
@@ -89,7 +89,8 @@ pub fn render_linear_crop_with(
     let mf = m.map(|r| r.map(|v| v as f32));
     let post = move |row: &mut [f32]| matrix_row(row, &mf);
     if let Some(p) = opcodes::active_image(frame, mode)? {
-        return pipeline::render_crop(frame, &p, n, method, outer, plane, crop, &post);
+        let stored = pipeline::StoredCrop { outer, plane };
+        return pipeline::render_crop(frame, &p, n, method, stored, crop, &post);
     }
     let norm = Normalizer::new(frame)?.without_linearization();
     let inv = [1.0 / n[0], 1.0, 1.0 / n[2]];
@@ -116,17 +117,15 @@ pub fn render_linear_crop_with(
         .for_each(|(bi, band)| {
             let r0 = crop.top + bi * BAND;
             let rows = r0..r0 + band.len() / (3 * crop.width);
-            demosaic_rect(
-                w,
-                h,
+            let cfa = RowDemosaic {
+                width: w,
+                height: h,
                 bayer,
                 kernel,
-                rows,
-                crop.cols(),
-                fill,
-                &post,
-                |i, rgb| band[3 * crop.width * i..][..3 * crop.width].copy_from_slice(rgb),
-            );
+            };
+            demosaic_rect(cfa, rows, crop.cols(), fill, &post, |i, rgb| {
+                band[3 * crop.width * i..][..3 * crop.width].copy_from_slice(rgb)
+            });
         });
     Ok(out)
 }

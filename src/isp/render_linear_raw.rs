@@ -14,7 +14,7 @@
 
 use super::color::normalize_neutral;
 use super::opcodes::pipeline::{apply_list3, finish_geometry, stage1_planes, Stage3};
-use super::opcodes::{self, apply_region, Bounds, OpcodeMode, Prepared, Region};
+use super::opcodes::{self, apply_region, OpcodeMode, Prepared, Region, StageRect};
 use super::render_parts::{color_matrix, matrix_row, resolve_neutral, Bands, RenderOptions, BAND};
 use super::RgbImage;
 use crate::dng::opcodes::ListId;
@@ -32,9 +32,9 @@ fn linear_raw(img: &RawImage) -> Result<&LinearRaw> {
 }
 
 /// Normalized camera RGB of the active area with the opcodes `p` applied (none: `None`),
-/// each sample in [0, 1], and its bounds in active-area coordinates (smaller than the
-/// active area after an OpcodeList3 TrimBounds; `rgb` covers exactly the bounds).
-fn stage_rgb(img: &RawImage, p: Option<&Prepared>) -> Result<(RgbImage, Bounds)> {
+/// each sample in [0, 1], and its extent in active-area coordinates (smaller than the
+/// active area after an OpcodeList3 TrimBounds; `rgb` covers exactly the extent).
+fn stage_rgb(img: &RawImage, p: Option<&Prepared>) -> Result<(RgbImage, StageRect)> {
     img.validate()?;
     let lr = linear_raw(img)?;
     let spp = usize::from(lr.samples_per_pixel);
@@ -108,7 +108,7 @@ fn stage_rgb(img: &RawImage, p: Option<&Prepared>) -> Result<(RgbImage, Bounds)>
                 }
             }
         });
-    let bounds = Bounds::of_size(w, h);
+    let extent = StageRect::of_size(w, h);
     // Stage 2: OpcodeList2 on the linear reference values (active-area coordinates).
     let l2 = list(ListId::List2);
     if !l2.is_empty() {
@@ -119,7 +119,7 @@ fn stage_rgb(img: &RawImage, p: Option<&Prepared>) -> Result<(RgbImage, Bounds)>
             width: w,
             height: h,
             planes: 3,
-            bounds,
+            extent,
             range: 1.0,
         };
         apply_region(l2, &mut reg);
@@ -127,16 +127,16 @@ fn stage_rgb(img: &RawImage, p: Option<&Prepared>) -> Result<(RgbImage, Bounds)>
     // Stage 3: OpcodeList3 on the same image (nothing to demosaic), before white balance.
     let l3 = list(ListId::List3);
     if l3.is_empty() {
-        return Ok((rgb, bounds));
+        return Ok((rgb, extent));
     }
     let mut s3 = Stage3 {
         rgb,
         top: 0,
         left: 0,
-        bounds,
+        extent,
     };
     apply_list3(l3, &mut s3)?;
-    Ok((s3.rgb, s3.bounds))
+    Ok((s3.rgb, s3.extent))
 }
 
 /// White balance by the normalized neutral `n`, clipped to [0, 1].
@@ -152,12 +152,12 @@ fn white_balance(rgb: &mut RgbImage, n: [f64; 3]) {
     });
 }
 
-/// White-balanced camera RGB before geometry, its bounds and the active area's size.
+/// White-balanced camera RGB before geometry, its extent and the active area's size.
 fn balanced(
     img: &RawImage,
     neutral: [f64; 3],
     mode: OpcodeMode,
-) -> Result<(RgbImage, Bounds, (usize, usize))> {
+) -> Result<(RgbImage, StageRect, (usize, usize))> {
     let n = normalize_neutral(neutral)?;
     let p = opcodes::active_image(img, mode)?;
     let (mut rgb, b) = stage_rgb(img, p.as_ref())?;

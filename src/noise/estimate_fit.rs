@@ -332,17 +332,17 @@ pub(super) fn fit_position(
         }
         None => (0.0, 0.0, f64::INFINITY, f64::INFINITY),
     };
-    let problem = verdict(
-        line.is_some(),
+    let problem = verdict(&LineFit {
+        fitted: line.is_some(),
         smooth_blocks,
-        fitted.len(),
+        bins: fitted.len(),
         span,
         s,
         s_se,
         intercept,
         o_se,
-        fitted.iter().all(|b| b.var == 0.0),
-    );
+        all_zero: fitted.iter().all(|b| b.var == 0.0),
+    });
     let finite = |v: f64| if v.is_finite() { v } else { 0.0 };
     PositionEstimate {
         position: pos,
@@ -362,19 +362,39 @@ pub(super) fn fit_position(
     }
 }
 
-/// Why a position's fit cannot be trusted (None when it can).
-#[allow(clippy::too_many_arguments)]
-fn verdict(
+/// What [`verdict`] judges of one position's line fit.
+struct LineFit {
+    /// A line could be fitted.
     fitted: bool,
+    /// Blocks in the bins the line was fitted to.
     smooth_blocks: u64,
+    /// Bins the line was fitted to.
     bins: usize,
+    /// Lowest and highest mean of those bins.
     span: [f64; 2],
+    /// Slope and its standard error.
     s: f64,
     s_se: f64,
+    /// Intercept (O before the quantization correction) and its standard error.
     intercept: f64,
     o_se: f64,
+    /// Every fitted bin has variance 0.
     all_zero: bool,
-) -> Option<String> {
+}
+
+/// Why a position's fit cannot be trusted (None when it can).
+fn verdict(fit: &LineFit) -> Option<String> {
+    let &LineFit {
+        fitted,
+        smooth_blocks,
+        bins,
+        span,
+        s,
+        s_se,
+        intercept,
+        o_se,
+        all_zero,
+    } = fit;
     if smooth_blocks < MIN_BLOCKS || bins < MIN_BINS {
         return Some(format!(
             "too few smooth samples: {smooth_blocks} smooth 2x2 blocks in {bins} intensity \

@@ -10,7 +10,7 @@ use day2night::dng::opcodes::{
     encode_list, AreaSpec, GainMap, Opcode, OpcodeKind, OpcodeList, WarpPlane, FLAG_OPTIONAL,
 };
 use day2night::dng::read_dng;
-use day2night::isp::opcodes::{gain_map, warp, Bounds, OpcodeMode};
+use day2night::isp::opcodes::{gain_map, warp, OpcodeMode, StageRect};
 use day2night::isp::render::{render_linear, RenderOptions};
 use day2night::isp::RgbImage;
 use day2night::raw::{Bayer, RawImage, RawMeta};
@@ -109,7 +109,7 @@ fn gain_map_undoes_a_falloff_divided_into_the_stored_values() {
     let (w, h) = (96usize, 64usize);
     let flat = scene(w, h);
     let map = falloff_map(w as u32, h as u32, 9, 11, 1.6); // 2.6x in the corners
-    let gm = gain_map::Prepared::new(&map, Bounds::of_size(w, h));
+    let gm = gain_map::Prepared::new(&map, StageRect::of_size(w, h));
     // stored' = black + (stored - black) / gain
     let mut shaded = flat.clone();
     for r in 0..h {
@@ -183,7 +183,7 @@ fn warp_rectilinear_moves_dots_where_the_formula_says() {
     let model = warp::Warp::new(
         vec![warp::Model::Rectilinear { kr, kt }],
         [0.5, 0.5],
-        Bounds::of_size(w, h),
+        StageRect::of_size(w, h),
         3,
     )
     .unwrap();
@@ -476,7 +476,7 @@ fn adobe_sdk_gain_map_renders_as_its_gains_say() {
         panic!("no GainMap")
     };
     let a = plain.active_area();
-    let gm = gain_map::Prepared::new(map, Bounds::of_size(a.width(), a.height()));
+    let gm = gain_map::Prepared::new(map, StageRect::of_size(a.width(), a.height()));
     let p = render_linear(&plain, &raw_opts(OpcodeMode::Apply)).unwrap();
     let s = render_linear(&shaded, &raw_opts(OpcodeMode::Apply)).unwrap();
     // shaded render / plain render = the gain, where neither clips

@@ -137,19 +137,28 @@ pub(crate) fn mhc_row_kernel() -> RowKernel {
     mhc::rgb_row
 }
 
+/// A `width x height` CFA of pattern `bayer`, demosaiced row by row with `kernel`
+/// ([`demosaic_rect`]).
+#[derive(Clone, Copy)]
+pub(crate) struct RowDemosaic {
+    /// Image width and height.
+    pub(crate) width: usize,
+    pub(crate) height: usize,
+    /// The CFA pattern.
+    pub(crate) bayer: Bayer,
+    /// The row demosaicer.
+    pub(crate) kernel: RowKernel,
+}
+
 /// Demosaic the rectangle `rows x cols` (image coordinates, non-empty, inside the image)
-/// of a `width x height` CFA with a row kernel. `fill(r, cs, out)` must set `out[k]` to
+/// of the CFA `cfa`. `fill(r, cs, out)` must set `out[k]` to
 /// the CFA sample at (r, cs[k]). The rectangle is read with a [`PAD`]-wide neighbourhood
 /// taken from the image, mirrored at the image edges exactly like [`Padded::mirror`]
 /// (sample (r, c) of the padded plane = sample (mirror(r), mirror(c))), so every output
 /// pixel equals the whole-image result bit for bit. `emit(i, rgb)` gets row `rows.start +
 /// i` (pixels of `cols`), after `post`, in increasing order.
-#[allow(clippy::too_many_arguments)]
 pub(crate) fn demosaic_rect<F, E>(
-    width: usize,
-    height: usize,
-    bayer: Bayer,
-    kernel: RowKernel,
+    cfa: RowDemosaic,
     rows: std::ops::Range<usize>,
     cols: std::ops::Range<usize>,
     mut fill: F,
@@ -159,6 +168,12 @@ pub(crate) fn demosaic_rect<F, E>(
     F: FnMut(usize, &[usize], &mut [f32]),
     E: FnMut(usize, &mut [f32]),
 {
+    let RowDemosaic {
+        width,
+        height,
+        bayer,
+        kernel,
+    } = cfa;
     let (rh, rw) = (rows.len(), cols.len());
     let s = rw + 2 * PAD;
     let cs: Vec<usize> = (0..s)

@@ -166,7 +166,7 @@ pub fn fix_list(reg: &mut Region, phase: u32, points: &[[u32; 2]], rects: &[[u32
 
 #[cfg(test)]
 mod tests {
-    use super::super::Bounds;
+    use super::super::StageRect;
     use super::*;
 
     fn region(data: &mut [f32], w: usize, h: usize, range: f32) -> Region<'_> {
@@ -177,7 +177,7 @@ mod tests {
             width: w,
             height: h,
             planes: 1,
-            bounds: Bounds::of_size(w, h),
+            extent: StageRect::of_size(w, h),
             range,
         }
     }

@@ -28,12 +28,12 @@
 use super::bad_pixels::REACH;
 use super::pipeline::{checked_active, inverse_wb, moves_pixels, stage1};
 use super::warp::Warp;
-use super::warp_window::{Axis, Chain, WindowStats};
-use super::{apply_region, apply_region_seq, pin, Bounds, Prepared, Region};
+use super::warp_window::{Axis, Chain, Strips, WindowStats};
+use super::{apply_region, apply_region_seq, pin, Prepared, Region, StageRect};
 use crate::dng::opcodes::{ListId, Opcode, OpcodeKind};
 use crate::error::{Error, Result};
 use crate::isp::color::normalize_neutral;
-use crate::isp::demosaic::{demosaic_rect, Post, RowKernel, PAD};
+use crate::isp::demosaic::{demosaic_rect, Post, RowDemosaic, RowKernel, PAD};
 use crate::isp::place::{place, BandBody, Placement, RectFn};
 use crate::limits::try_filled;
 use crate::normalize::Normalizer;
@@ -164,7 +164,7 @@ impl<'a> Frame<'a> {
             width: gw,
             height: gh,
             planes: 1,
-            bounds: Bounds::of_size(sw, sh),
+            extent: StageRect::of_size(sw, sh),
             range: 65535.0,
         };
         apply_region_seq(self.p.list(ListId::List1), &mut reg);
@@ -223,7 +223,7 @@ impl<'a> Frame<'a> {
             width: gw,
             height: gh,
             planes: 1,
-            bounds: Bounds::of_size(self.aw, self.ah),
+            extent: StageRect::of_size(self.aw, self.ah),
             range: 1.0,
         };
         let l2 = self.p.list(ListId::List2);
@@ -259,11 +259,14 @@ impl<'a> Frame<'a> {
         let site = |r: usize, c: usize| -> f32 {
             (s2.get(r, c) * inv[bayer.color_at(r, c) as usize]).clamp(0.0, 1.0)
         };
-        demosaic_rect(
-            self.aw,
-            self.ah,
+        let cfa = RowDemosaic {
+            width: self.aw,
+            height: self.ah,
             bayer,
-            self.kernel,
+            kernel: self.kernel,
+        };
+        demosaic_rect(
+            cfa,
             rows.clone(),
             cols.clone(),
             |r, cs, o| {
@@ -299,7 +302,7 @@ impl<'a> Frame<'a> {
             width: w,
             height,
             planes: 3,
-            bounds: Bounds::of_size(self.aw, self.ah),
+            extent: StageRect::of_size(self.aw, self.ah),
             range: 1.0,
         };
         apply_region_seq(ops, &mut reg);
@@ -330,6 +333,17 @@ impl<'a> Frame<'a> {
     }
 }
 
+/// How [`render`] makes a row: white balance by `neutral`, the row demosaicer `kernel`, and
+/// `post` on every output row.
+pub(crate) struct RowRender<'a> {
+    /// The neutral the white balance divides by.
+    pub(crate) neutral: [f64; 3],
+    /// The row demosaicer.
+    pub(crate) kernel: RowKernel,
+    /// Applied to every output row (e.g. the colour matrix).
+    pub(crate) post: &'a Post,
+}
+
 /// How [`render`] cuts the work (tests vary it; the renders use [`Tune::default`]).
 #[derive(Debug)]
 pub(crate) struct Tune<'s> {
@@ -352,18 +366,15 @@ impl Default for Tune<'_> {
     }
 }
 
-/// The banded render of `img` with the opcodes `p` (white balance by `neutral`, the row
-/// demosaicer `kernel`, `post` on every row, DefaultCrop and orientation if asked), handed
+/// The banded render of `img` with the opcodes `p` (rows made as `rows` says, DefaultCrop
+/// and orientation if asked), handed
 /// to `run` as [`place`] does; `None` (and `run` not called) when OpcodeList3 has a
 /// TrimBounds. The warps of OpcodeList3 read the image before them through a rolling
 /// window of strips ([`warp_window::Chain`]).
-#[allow(clippy::too_many_arguments)]
 pub(crate) fn render<R>(
     img: &RawImage,
     p: &Prepared,
-    neutral: [f64; 3],
-    kernel: RowKernel,
-    post: &Post,
+    rows: RowRender,
     (crop, orient): (bool, bool),
     tune: Tune,
     run: impl FnOnce(usize, usize, &BandBody) -> Result<R>,
@@ -378,6 +389,11 @@ pub(crate) fn render<R>(
     let at: Vec<usize> = (0..l3.len())
         .filter(|&i| moves_pixels(&l3[i].kind))
         .collect();
+    let RowRender {
+        neutral,
+        kernel,
+        post,
+    } = rows;
     let n = normalize_neutral(neutral)?;
     let f = Frame::new(img, p, n, kernel)?;
     let dims = (f.aw, f.ah);
@@ -392,11 +408,11 @@ pub(crate) fn render<R>(
             };
         return place(&img.meta, dims, crop, orient, band, &rect, run).map(Some);
     };
-    let bounds = Bounds::of_size(f.aw, f.ah);
+    let extent = StageRect::of_size(f.aw, f.ah);
     let warps = at
         .iter()
         .map(|&i| {
-            Warp::of_opcode(&l3[i].kind, bounds, 3)
+            Warp::of_opcode(&l3[i].kind, extent, 3)
                 .unwrap_or_else(|| Err(Error::invalid("OpcodeList3: not a warp")))
         })
         .collect::<Result<Vec<_>>>()?;
@@ -414,9 +430,13 @@ pub(crate) fn render<R>(
     let g = Placement::new(&img.meta, dims, crop, orient, band);
     let axis = if g.turned() { Axis::Cols } else { Axis::Rows };
     let finals: Vec<_> = (0..g.bands()).map(|bi| g.rect(bi)).collect();
-    let chain = Chain::new(
-        axis, dims, band, bounds, warps, &pre, &after, &finals, tune.limit,
-    )?;
+    let strips = Strips {
+        axis,
+        dims,
+        lines: band,
+        extent,
+    };
+    let chain = Chain::new(strips, warps, &pre, &after, &finals, tune.limit)?;
     let rect = |rows: Range<usize>, cols: Range<usize>, emit: &mut dyn FnMut(usize, &mut [f32])| {
         let w = cols.len();
         let rgb = chain.render(rows, cols)?;

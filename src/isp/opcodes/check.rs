@@ -16,7 +16,9 @@
 //! The checks read parameters only (no pixel), so they cost nothing next to a render.
 
 use super::area::plane_range;
-use super::{prepare, prepare_lists_for, Bounds, OpcodeEntry, OpcodeMode, OpcodeReport, Prepared};
+use super::{
+    prepare, prepare_lists_for, OpcodeEntry, OpcodeMode, OpcodeReport, Prepared, StageRect,
+};
 use crate::dng::opcodes::{
     list_results, lists, AreaSpec, ListId, Opcode, OpcodeKind, OpcodeList, FLAG_OPTIONAL,
 };
@@ -206,9 +208,9 @@ pub fn unrenderable_lists(img: &RawImage) -> Vec<(ListId, Error)> {
 #[derive(Debug, Clone, Copy)]
 struct StageGeometry {
     /// The stored image (OpcodeList1's stage).
-    stored: Bounds,
+    stored: StageRect,
     /// The active area, in stored coordinates.
-    active_in_stored: Bounds,
+    active_in_stored: StageRect,
     /// Active width and height (OpcodeList2 and 3 work in active-area coordinates).
     active: (usize, usize),
 }
@@ -218,8 +220,8 @@ impl StageGeometry {
         let a = img.active_area();
         let (t, l) = (a.top as i64, a.left as i64);
         StageGeometry {
-            stored: Bounds::of_size(img.width, img.height),
-            active_in_stored: Bounds {
+            stored: StageRect::of_size(img.width, img.height),
+            active_in_stored: StageRect {
                 t,
                 l,
                 b: t + a.height() as i64,
@@ -234,9 +236,9 @@ impl StageGeometry {
 #[derive(Debug, Clone, Copy)]
 struct Stage {
     /// The stage image (relative positions of gain maps and vignette centres refer to it).
-    bounds: Bounds,
+    extent: StageRect,
     /// The part of it that reaches the render (OpcodeList1: the active area).
-    relevant: Bounds,
+    relevant: StageRect,
     /// Samples per pixel.
     planes: usize,
     /// Largest sample value (65535 for stage 1, 1 for stages 2 and 3).
@@ -427,7 +429,7 @@ fn flat_kind(kind: &OpcodeKind, s: &Stage, t: &mut Touched) -> Option<(String, f
             })
         }
         OpcodeKind::FixVignetteRadial { k, center } => {
-            vignette_never_positive(*k, *center, s.bounds, s.relevant).then(|| {
+            vignette_never_positive(*k, *center, s.extent, s.relevant).then(|| {
                 (
                     "the gain 1 + k0 r^2 + ... + k4 r^10 is <= 0 at every pixel".into(),
                     0.0,
@@ -440,7 +442,7 @@ fn flat_kind(kind: &OpcodeKind, s: &Stage, t: &mut Touched) -> Option<(String, f
 
 /// True when the vignette gain is <= 0 over the whole of `rel` (sampled along r^2 between
 /// its smallest and largest value there, 4097 points and both ends).
-fn vignette_never_positive(k: [f64; 5], center: [f64; 2], b: Bounds, rel: Bounds) -> bool {
+fn vignette_never_positive(k: [f64; 5], center: [f64; 2], b: StageRect, rel: StageRect) -> bool {
     let lerp = |a: i64, z: i64, f: f64| a as f64 + (z - a) as f64 * f;
     let (cv, ch) = (lerp(b.t, b.b, center[1]), lerp(b.l, b.r, center[0]));
     let dv = (cv - b.t as f64).abs().max((cv - b.b as f64).abs());
@@ -526,24 +528,24 @@ fn flat_opcodes(parsed: &[OpcodeList; 3], g: &StageGeometry, linear_raw: bool) -
         super::unsupported_reason
     };
     let cfa_planes = if linear_raw { 3 } else { 1 };
-    let active = Bounds::of_size(g.active.0, g.active.1);
+    let active = StageRect::of_size(g.active.0, g.active.1);
     let mut out = vec![];
     for id in ListId::ALL {
         let mut stage = match id {
             ListId::List1 => Stage {
-                bounds: g.stored,
+                extent: g.stored,
                 relevant: g.active_in_stored,
                 planes: cfa_planes,
                 range: 65535.0,
             },
             ListId::List2 => Stage {
-                bounds: active,
+                extent: active,
                 relevant: active,
                 planes: cfa_planes,
                 range: 1.0,
             },
             ListId::List3 => Stage {
-                bounds: active,
+                extent: active,
                 relevant: active,
                 planes: 3,
                 range: 1.0,
@@ -555,8 +557,8 @@ fn flat_opcodes(parsed: &[OpcodeList; 3], g: &StageGeometry, linear_raw: bool) -
                 continue;
             }
             if let OpcodeKind::TrimBounds { bounds } = op.kind {
-                if let Some(b) = trimmed(stage.bounds, bounds) {
-                    stage.bounds = b;
+                if let Some(b) = trimmed(stage.extent, bounds) {
+                    stage.extent = b;
                     stage.relevant = b;
                 }
                 continue;
@@ -584,8 +586,8 @@ fn flat_one(id: ListId, i: usize, n: usize, op: &Opcode, s: &Stage) -> Option<St
 }
 
 /// `rect` (top, left, bottom, right) when it is a non-empty rectangle inside `b`.
-fn trimmed(b: Bounds, rect: [u32; 4]) -> Option<Bounds> {
-    let nb = Bounds {
+fn trimmed(b: StageRect, rect: [u32; 4]) -> Option<StageRect> {
+    let nb = StageRect {
         t: rect[0].into(),
         l: rect[1].into(),
         b: rect[2].into(),
@@ -615,7 +617,7 @@ fn trimmed_size(
         super::unsupported_reason
     };
     let (aw, ah) = g.active;
-    let mut b = Bounds::of_size(aw, ah);
+    let mut b = StageRect::of_size(aw, ah);
     let ops = &parsed[ListId::List3.index()].opcodes;
     let mut last = None;
     for (i, op) in ops.iter().enumerate() {
@@ -639,11 +641,11 @@ fn trimmed_size(
         return Ok((None, None));
     }
     let (whole, kept) = (
-        Bounds::of_size(aw, ah).kept(meta, (aw, ah), crop)?,
+        StageRect::of_size(aw, ah).kept(meta, (aw, ah), crop)?,
         b.kept(meta, (aw, ah), crop)?,
     );
     let turned = orient && (5..=8).contains(&meta.orientation);
-    let size = |k: Bounds| {
+    let size = |k: StageRect| {
         let (w, h) = (k.w() as usize, k.h() as usize);
         if turned {
             (h, w)

@@ -1,6 +1,6 @@
 //! GainMap (opcode 9): a grid of gains, bilinearly interpolated, multiplied into the area
 //! (lens shading). As the Adobe DNG SDK (`dng_gain_map_interpolator`): the position of
-//! pixel (r, c) relative to the stage image `bounds` is `v = (r + 0.5 - t) / H`,
+//! pixel (r, c) relative to the stage image `extent` is `v = (r + 0.5 - t) / H`,
 //! `h = (c + 0.5 - l) / W` (pixel centres); its map coordinates are
 //! `(v - origin_v) / spacing_v` and `(h - origin_h) / spacing_h`, clamped to the first and
 //! last map point (edges repeat); the gain is the bilinear mix of the four points around;
@@ -13,7 +13,7 @@
 //! as the whole image.
 
 use super::area::{col_span, plane_range, row_step};
-use super::{pin, Bounds};
+use super::{pin, StageRect};
 use crate::dng::opcodes::GainMap;
 
 /// A gain map ready for rows.
@@ -25,7 +25,7 @@ pub struct Prepared<'a> {
     planes: usize,
     spacing: [f64; 2],
     origin: [f64; 2],
-    bounds: Bounds,
+    extent: StageRect,
     valid: bool,
 }
 
@@ -44,8 +44,8 @@ fn locate(f: f64, n: usize) -> (usize, usize, f32) {
 }
 
 impl<'a> Prepared<'a> {
-    /// Prepare `map` for an image of `bounds`.
-    pub fn new(map: &'a GainMap, bounds: Bounds) -> Prepared<'a> {
+    /// Prepare `map` for an image of `extent`.
+    pub fn new(map: &'a GainMap, extent: StageRect) -> Prepared<'a> {
         let (pv, ph) = (map.points_v as usize, map.points_h as usize);
         let planes = map.map_planes as usize;
         let (sv, ov) = if pv == 1 {
@@ -69,8 +69,8 @@ impl<'a> Prepared<'a> {
             && sh.is_finite()
             && ov.is_finite()
             && oh.is_finite()
-            && bounds.h() > 0
-            && bounds.w() > 0;
+            && extent.h() > 0
+            && extent.w() > 0;
         Prepared {
             map,
             pv,
@@ -78,7 +78,7 @@ impl<'a> Prepared<'a> {
             planes,
             spacing: [sv, sh],
             origin: [ov, oh],
-            bounds,
+            extent,
             valid,
         }
     }
@@ -96,7 +96,7 @@ impl<'a> Prepared<'a> {
 
     #[inline]
     fn gain_in_row(&self, i0: usize, i1: usize, fr: f32, c: usize, mp: usize) -> f32 {
-        let fh = ((c as f64 + 0.5 - self.bounds.l as f64) / self.bounds.w() as f64
+        let fh = ((c as f64 + 0.5 - self.extent.l as f64) / self.extent.w() as f64
             - self.origin[1])
             / self.spacing[1];
         let (j0, j1, fc) = locate(fh, self.ph);
@@ -107,7 +107,7 @@ impl<'a> Prepared<'a> {
 
     #[inline]
     fn map_row(&self, r: usize) -> (usize, usize, f32) {
-        let fv = ((r as f64 + 0.5 - self.bounds.t as f64) / self.bounds.h() as f64
+        let fv = ((r as f64 + 0.5 - self.extent.t as f64) / self.extent.h() as f64
             - self.origin[0])
             / self.spacing[0];
         locate(fv, self.pv)
@@ -173,7 +173,7 @@ mod tests {
     fn bilinear_between_points_and_clamped_outside() {
         // 2x2 map over a 10x10 image: gains 1 (top-left), 2, 3, 4 (bottom-right)
         let m = map(2, 2, 1, vec![1.0, 2.0, 3.0, 4.0]);
-        let b = Bounds::of_size(10, 10);
+        let b = StageRect::of_size(10, 10);
         let p = Prepared::new(&m, b);
         // pixel (r, c): v = (r + 0.5) / 10 in [0.05, 0.95]
         let want = |r: usize, c: usize| {
@@ -200,7 +200,7 @@ mod tests {
     #[test]
     fn one_point_map_and_per_plane_maps_and_pinning() {
         let m = map(1, 1, 1, vec![2.5]);
-        let p = Prepared::new(&m, Bounds::of_size(4, 3));
+        let p = Prepared::new(&m, StageRect::of_size(4, 3));
         let mut row = vec![0.1, 0.2, 0.3, 0.5, 0.6, 0.7];
         p.row(1, 0, 3, 1.0, &mut row);
         let want = [0.25, 0.5, 0.75, 1.0, 1.0, 1.0];
@@ -209,29 +209,29 @@ mod tests {
         }
         // three map planes: plane p takes its own gains; zero gains give 0, never NaN
         let m = map(1, 1, 3, vec![0.0, 1.0, 2.0]);
-        let p = Prepared::new(&m, Bounds::of_size(4, 3));
+        let p = Prepared::new(&m, StageRect::of_size(4, 3));
         let mut row = vec![0.4; 6];
         p.row(0, 2, 3, 1.0, &mut row);
         assert_eq!(row, vec![0.0, 0.4, 0.8, 0.0, 0.4, 0.8]);
         // a map without enough gains is not applied (no panic)
         let bad = map(2, 2, 1, vec![1.0]);
         let mut row = vec![0.4; 3];
-        Prepared::new(&bad, Bounds::of_size(4, 3)).row(0, 0, 1, 1.0, &mut row);
+        Prepared::new(&bad, StageRect::of_size(4, 3)).row(0, 0, 1, 1.0, &mut row);
         assert_eq!(row, vec![0.4; 3]);
     }
 
     #[test]
     fn bounds_offset_moves_the_map() {
-        // stage image bounds starting at (2, 2): pixel (2, 2) is the image's first pixel
+        // stage image extent starting at (2, 2): pixel (2, 2) is the image's first pixel
         let m = map(2, 2, 1, vec![1.0, 2.0, 3.0, 4.0]);
-        let b = Bounds {
+        let b = StageRect {
             t: 2,
             l: 2,
             b: 12,
             r: 12,
         };
         let a = Prepared::new(&m, b).gain(2, 2, 0);
-        let z = Prepared::new(&m, Bounds::of_size(10, 10)).gain(0, 0, 0);
+        let z = Prepared::new(&m, StageRect::of_size(10, 10)).gain(0, 0, 0);
         assert_eq!(a, z);
     }
 }

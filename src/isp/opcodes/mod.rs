@@ -379,9 +379,11 @@ pub fn active_image(img: &RawImage, mode: OpcodeMode) -> Result<Option<Prepared>
     Ok(prepare_image(img, mode)?.filter(|p| !p.is_noop()))
 }
 
-/// A rectangle `[t, b) x [l, r)` in the coordinates of a stage image.
+/// A rectangle `[t, b) x [l, r)` in the coordinates of a stage image: the extent of a stage
+/// image (its `extent`) or a part of it. (Not a range of values: that is `crate::bounds`;
+/// the DNG opcode TrimBounds keeps the spec's name and cuts a stage image to one of these.)
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct Bounds {
+pub struct StageRect {
     /// Top.
     pub t: i64,
     /// Left.
@@ -392,10 +394,10 @@ pub struct Bounds {
     pub r: i64,
 }
 
-impl Bounds {
+impl StageRect {
     /// `[0, h) x [0, w)`.
-    pub fn of_size(w: usize, h: usize) -> Bounds {
-        Bounds {
+    pub fn of_size(w: usize, h: usize) -> StageRect {
+        StageRect {
             t: 0,
             l: 0,
             b: h as i64,
@@ -410,7 +412,7 @@ impl Bounds {
     pub fn w(&self) -> i64 {
         self.r - self.l
     }
-    /// What these (trimmed) bounds keep of the DefaultCrop (`crop`) or of the whole
+    /// What this (trimmed) extent keeps of the DefaultCrop (`crop`) or of the whole
     /// `aw x ah` active area, in active-area coordinates: the render's output rectangle
     /// before orientation, planned by [`check`] and cut by the render alike. An error when
     /// nothing is kept.
@@ -419,13 +421,13 @@ impl Bounds {
         meta: &RawMeta,
         (aw, ah): (usize, usize),
         crop: bool,
-    ) -> Result<Bounds> {
+    ) -> Result<StageRect> {
         let (x0, y0, cw, ch) = if crop {
             crate::isp::geometry::default_crop(meta, aw, ah)
         } else {
             (0, 0, aw, ah)
         };
-        let k = Bounds {
+        let k = StageRect {
             t: (y0 as i64).max(self.t),
             l: (x0 as i64).max(self.l),
             b: ((y0 + ch) as i64).min(self.b),
@@ -442,8 +444,8 @@ impl Bounds {
 
 /// A rectangle of a stage image held in memory: `height` rows of `width` pixels of
 /// `planes` interleaved samples from (`top`, `left`) (stage coordinates), inside the stage
-/// image `bounds` (relative positions of gain maps, optical centres and radii refer to
-/// `bounds`). Samples lie in `[0, range]` (65535 for stage 1, 1 for stages 2 and 3).
+/// image `extent` (relative positions of gain maps, optical centres and radii refer to
+/// `extent`). Samples lie in `[0, range]` (65535 for stage 1, 1 for stages 2 and 3).
 #[derive(Debug)]
 pub struct Region<'a> {
     /// Samples.
@@ -459,7 +461,7 @@ pub struct Region<'a> {
     /// Samples per pixel (1 for the CFA stages, 3 for stage 3).
     pub planes: usize,
     /// The whole stage image.
-    pub bounds: Bounds,
+    pub extent: StageRect,
     /// Largest sample value.
     pub range: f32,
 }
@@ -480,14 +482,14 @@ type RowFn<'a> = dyn Fn(usize, &mut [f32]) + Sync + 'a;
 /// Apply one pointwise opcode to every row of `reg` (in parallel over rows when `par`).
 fn apply_pointwise(kind: &OpcodeKind, reg: &mut Region, par: bool) {
     let (left, width, planes, top) = (reg.left, reg.width, reg.planes, reg.top);
-    let (bounds, range) = (reg.bounds, reg.range);
+    let (extent, range) = (reg.extent, reg.range);
     let row_fn: Box<RowFn<'_>> = match kind {
         OpcodeKind::GainMap(g) => {
-            let gm = gain_map::Prepared::new(g, bounds);
+            let gm = gain_map::Prepared::new(g, extent);
             Box::new(move |r, row| gm.row(r, left, planes, range, row))
         }
         OpcodeKind::FixVignetteRadial { k, center } => {
-            let v = vignette::Vignette::new(*k, *center, bounds);
+            let v = vignette::Vignette::new(*k, *center, extent);
             Box::new(move |r, row| v.row(r, left, planes, range, row))
         }
         other => match area::AreaOp::new(other, range) {

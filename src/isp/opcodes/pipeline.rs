@@ -16,11 +16,11 @@
 //! frame render's region bit for bit, when every applied opcode is pointwise
 //! ([`super::Prepared::needs_whole_frame`]).
 
-use super::{apply_region, pin, Bounds, Prepared, Region};
+use super::{apply_region, pin, Prepared, Region, StageRect};
 use crate::dng::opcodes::{ListId, Opcode, OpcodeKind};
 use crate::error::{Error, Result};
 use crate::isp::color::normalize_neutral;
-use crate::isp::demosaic::{demosaic_rect, demosaic_rows, row_kernel, Demosaic, Post};
+use crate::isp::demosaic::{demosaic_rect, demosaic_rows, row_kernel, Demosaic, Post, RowDemosaic};
 use crate::isp::geometry::{apply_geometry, orient_image};
 use crate::isp::RgbImage;
 use crate::normalize::Normalizer;
@@ -59,7 +59,7 @@ pub fn stage1_planes(
         width,
         height,
         planes,
-        bounds: Bounds::of_size(stored_w, stored_h),
+        extent: StageRect::of_size(stored_w, stored_h),
         range: 65535.0,
     };
     apply_region(ops, &mut reg);
@@ -109,7 +109,7 @@ fn stage2(
         width: rect.width,
         height: rect.height,
         planes: 1,
-        bounds: Bounds::of_size(aw, ah),
+        extent: StageRect::of_size(aw, ah),
         range: 1.0,
     };
     apply_region(ops, &mut reg);
@@ -162,11 +162,14 @@ fn demosaic_stage(
         .for_each(|(bi, band)| {
             let r0 = out.top + bi * BAND;
             let rows = r0..r0 + band.len() / (3 * w);
-            demosaic_rect(
-                aw,
-                ah,
+            let cfa = RowDemosaic {
+                width: aw,
+                height: ah,
                 bayer,
                 kernel,
+            };
+            demosaic_rect(
+                cfa,
                 rows,
                 out.cols(),
                 |r, cs, o| {
@@ -181,7 +184,7 @@ fn demosaic_stage(
     Ok(rgb)
 }
 
-/// The stage-3 image: `rgb` covers (`top`, `left`) .. of the image `bounds`.
+/// The stage-3 image: `rgb` covers (`top`, `left`) .. of the image `extent`.
 pub(crate) struct Stage3 {
     /// Samples (three planes, in [0, 1]).
     pub(crate) rgb: RgbImage,
@@ -190,11 +193,11 @@ pub(crate) struct Stage3 {
     /// Stage column of the first column.
     pub(crate) left: usize,
     /// The whole stage image (moved by a TrimBounds).
-    pub(crate) bounds: Bounds,
+    pub(crate) extent: StageRect,
 }
 
 /// OpcodeList3 on the white-balanced camera RGB `s3` (white balance `n` taken out and put
-/// back). Warps and TrimBounds need `s3` to cover its bounds (the whole frame).
+/// back). Warps and TrimBounds need `s3` to cover its extent (the whole frame).
 fn stage3(ops: &[Opcode], s3: &mut Stage3, n: [f64; 3]) -> Result<()> {
     if ops.is_empty() {
         return Ok(());
@@ -221,7 +224,7 @@ fn stage3(ops: &[Opcode], s3: &mut Stage3, n: [f64; 3]) -> Result<()> {
 
 /// OpcodeList3 `ops` on the camera RGB `s3` (values in [0, 1], no white balance): runs of
 /// in-place opcodes through [`apply_region`], warps and TrimBounds one by one (they need
-/// `s3` to cover its bounds).
+/// `s3` to cover its extent).
 pub(crate) fn apply_list3(ops: &[Opcode], s3: &mut Stage3) -> Result<()> {
     let mut i = 0;
     while i < ops.len() {
@@ -239,7 +242,7 @@ pub(crate) fn apply_list3(ops: &[Opcode], s3: &mut Stage3) -> Result<()> {
                 width: w,
                 height: h,
                 planes: 3,
-                bounds: s3.bounds,
+                extent: s3.extent,
                 range: 1.0,
             };
             apply_region(&ops[i..j], &mut reg);
@@ -247,10 +250,10 @@ pub(crate) fn apply_list3(ops: &[Opcode], s3: &mut Stage3) -> Result<()> {
         if j == ops.len() {
             break;
         }
-        let whole = s3.top as i64 == s3.bounds.t
-            && s3.left as i64 == s3.bounds.l
-            && s3.rgb.width as i64 == s3.bounds.w()
-            && s3.rgb.height as i64 == s3.bounds.h();
+        let whole = s3.top as i64 == s3.extent.t
+            && s3.left as i64 == s3.extent.l
+            && s3.rgb.width as i64 == s3.extent.w()
+            && s3.rgb.height as i64 == s3.extent.h();
         if !whole {
             return Err(Error::invalid(format!(
                 "OpcodeList3: {} needs the whole image, not a crop",
@@ -259,26 +262,26 @@ pub(crate) fn apply_list3(ops: &[Opcode], s3: &mut Stage3) -> Result<()> {
         }
         match &ops[j].kind {
             OpcodeKind::TrimBounds { bounds } => {
-                let (d, b) = super::trim::trim(&s3.rgb.data, 3, s3.bounds, *bounds)?;
+                let (d, b) = super::trim::trim(&s3.rgb.data, 3, s3.extent, *bounds)?;
                 s3.rgb = RgbImage {
                     width: b.w() as usize,
                     height: b.h() as usize,
                     data: d,
                 };
-                s3.bounds = b;
+                s3.extent = b;
                 s3.top = b.t as usize;
                 s3.left = b.l as usize;
             }
             kind => {
                 use super::warp::{apply, Warp};
-                let warp = Warp::of_opcode(kind, s3.bounds, 3).unwrap_or_else(|| {
+                let warp = Warp::of_opcode(kind, s3.extent, 3).unwrap_or_else(|| {
                     Err(Error::invalid(format!(
                         "OpcodeList3: {} is not a warp",
                         ops[j].name()
                     )))
                 })?;
                 let (w, h) = (s3.rgb.width, s3.rgb.height);
-                s3.rgb.data = apply(&warp, &s3.rgb.data, w, h, 3, s3.bounds);
+                s3.rgb.data = apply(&warp, &s3.rgb.data, w, h, 3, s3.extent);
             }
         }
         i = j + 1;
@@ -342,7 +345,7 @@ fn frame_stage3(img: &RawImage, p: &Prepared, n: [f64; 3], method: Demosaic) -> 
         rgb,
         top: 0,
         left: 0,
-        bounds: Bounds::of_size(aw, ah),
+        extent: StageRect::of_size(aw, ah),
     };
     stage3(p.list(ListId::List3), &mut s3, n)?;
     Ok(s3)
@@ -361,7 +364,7 @@ pub fn render_frame_region(
 ) -> Result<RgbImage> {
     let n = normalize_neutral(neutral)?;
     let s3 = frame_stage3(img, p, n, method)?;
-    let b = s3.bounds;
+    let b = s3.extent;
     let inside = region.top as i64 >= b.t
         && region.left as i64 >= b.l
         && (region.top + region.height) as i64 <= b.b
@@ -399,24 +402,24 @@ pub fn render_frame(
     let mut s3 = frame_stage3(img, p, n, method)?;
     let w = s3.rgb.width.max(1);
     s3.rgb.data.par_chunks_mut(3 * w).for_each(post);
-    finish_geometry(s3.rgb, s3.bounds, &img.meta, (aw, ah), crop, orient)
+    finish_geometry(s3.rgb, s3.extent, &img.meta, (aw, ah), crop, orient)
 }
 
 /// DefaultCrop (if `crop`) and orientation (if `orient`) of the stage-3 image `rgb` of the
-/// stage bounds `b` in an active area of `aw x ah`: after a TrimBounds, the DefaultCrop
+/// stage extent `b` in an active area of `aw x ah`: after a TrimBounds, the DefaultCrop
 /// (or the whole area) intersected with `b`.
 pub(crate) fn finish_geometry(
     rgb: RgbImage,
-    b: Bounds,
+    b: StageRect,
     meta: &crate::raw::meta::RawMeta,
     (aw, ah): (usize, usize),
     crop: bool,
     orient: bool,
 ) -> Result<RgbImage> {
-    if b == Bounds::of_size(aw, ah) {
+    if b == StageRect::of_size(aw, ah) {
         return Ok(apply_geometry(rgb, meta, crop, orient));
     }
-    // Trimmed: DefaultCrop (or the whole area) intersected with the trimmed bounds.
+    // Trimmed: DefaultCrop (or the whole area) intersected with the trimmed extent.
     let k = b.kept(meta, (aw, ah), crop)?;
     let cut = Crop {
         top: (k.t - b.t) as usize,
@@ -441,22 +444,30 @@ pub(crate) fn finish_geometry(
     })
 }
 
+/// The stored samples `plane` of the active-area rectangle `outer` (row by row).
+#[derive(Clone, Copy)]
+pub struct StoredCrop<'a> {
+    /// The rectangle the samples cover.
+    pub outer: &'a Crop,
+    /// Its samples.
+    pub plane: &'a [u16],
+}
+
 /// The render of the active-area rectangle `crop` of a frame (levels and colour from
 /// `frame`, LinearizationTable ignored as in [`crate::isp::render_crop`]) from the stored
-/// samples `plane` of the rectangle `outer` (which holds the crop and the demosaicer's
-/// margin), with the pointwise opcodes `p`: the same expressions as [`render_frame`], so
-/// the result equals the frame render's region (before DefaultCrop and orientation).
-#[allow(clippy::too_many_arguments)]
+/// samples `stored` (whose rectangle holds the crop and the demosaicer's margin), with the
+/// pointwise opcodes `p`: the same expressions as [`render_frame`], so the result equals
+/// the frame render's region (before DefaultCrop and orientation).
 pub fn render_crop(
     frame: &RawImage,
     p: &Prepared,
     neutral: [f64; 3],
     method: Demosaic,
-    outer: &Crop,
-    plane: &[u16],
+    stored: StoredCrop,
     crop: &Crop,
     post: &Post,
 ) -> Result<RgbImage> {
+    let StoredCrop { outer, plane } = stored;
     if p.needs_whole_frame() {
         return Err(Error::invalid(
             "the file's opcodes (bad pixels, warps, TrimBounds) need the whole frame: render it and cut the crop",
@@ -490,7 +501,7 @@ pub fn render_crop(
         rgb,
         top: crop.top,
         left: crop.left,
-        bounds: Bounds::of_size(aw, ah),
+        extent: StageRect::of_size(aw, ah),
     };
     stage3(p.list(ListId::List3), &mut s3, n)?;
     let w = s3.rgb.width.max(1);

@@ -1,13 +1,13 @@
 //! FixVignetteRadial (opcode 3): multiply every sample by `1 + k0 r^2 + k1 r^4 + k2 r^6 +
 //! k3 r^8 + k4 r^10`. As in the Adobe DNG SDK (`dng_opcode_FixVignetteRadial::Prepare`): the
-//! optical centre is `(l + cx (r - l), t + cy (b - t))` of the stage image bounds (pixel
+//! optical centre is `(l + cx (r - l), t + cy (b - t))` of the stage image extent (pixel
 //! edges), `r` is the distance of the pixel centre (`+ 0.5`) to it divided by the largest
-//! distance from the centre to a corner of the bounds, `r^2` is clamped to 1 (the SDK's
+//! distance from the centre to a corner of the extent, `r^2` is clamped to 1 (the SDK's
 //! table ends there), and results are `min(x * gain, range)` (pinned at 0). Square pixels
 //! (the SDK's PixelAspectRatio is taken as 1). The SDK evaluates the gain through a 16-bit
 //! table; day2night evaluates the polynomial in f64 (difference below 2^-15 of the gain).
 
-use super::{pin, Bounds};
+use super::{pin, StageRect};
 
 /// A vignette correction ready for rows.
 #[derive(Debug, Clone, Copy)]
@@ -20,8 +20,8 @@ pub struct Vignette {
 
 impl Vignette {
     /// The correction of coefficients `k` about the relative centre `center` (x, y) of an
-    /// image of `bounds`.
-    pub fn new(k: [f64; 5], center: [f64; 2], b: Bounds) -> Vignette {
+    /// image of `extent`.
+    pub fn new(k: [f64; 5], center: [f64; 2], b: StageRect) -> Vignette {
         let lerp = |a: i64, z: i64, f: f64| a as f64 + (z - a) as f64 * f;
         let cv = lerp(b.t, b.b, center[1]);
         let ch = lerp(b.l, b.r, center[0]);
@@ -66,7 +66,7 @@ mod tests {
 
     #[test]
     fn gain_follows_the_polynomial_of_the_normalized_radius() {
-        let b = Bounds::of_size(100, 50);
+        let b = StageRect::of_size(100, 50);
         let v = Vignette::new([0.5, 0.25, 0.0, 0.0, 0.0], [0.5, 0.5], b);
         // centre (25, 50) in pixel edges; corner distance hypot(25, 50)
         let rmax = 25f64.hypot(50.0);
@@ -85,7 +85,7 @@ mod tests {
 
     #[test]
     fn off_centre_and_degenerate() {
-        let b = Bounds::of_size(1, 1);
+        let b = StageRect::of_size(1, 1);
         let v = Vignette::new([f64::NAN; 5], [0.0, 0.0], b);
         let mut row = vec![0.5f32];
         v.row(0, 0, 1, 1.0, &mut row);
@@ -93,7 +93,7 @@ mod tests {
         let v = Vignette::new(
             [1.0, 0.0, 0.0, 0.0, 0.0],
             [0.0, 0.0],
-            Bounds::of_size(10, 10),
+            StageRect::of_size(10, 10),
         );
         // centre at the top-left corner: radius normalised by the far corner
         assert!((v.gain(9, 9) as f64 - (1.0 + (2.0 * 9.5f64 * 9.5) / 200.0)).abs() < 1e-6);

@@ -1,9 +1,9 @@
 //! WarpRectilinear (opcode 1) and WarpFisheye (opcode 2) on the stage-3 image (OpcodeList3),
 //! as the Adobe DNG SDK's `dng_filter_warp`:
-//! * the optical centre is `(l + cx (r - l), t + cy (b - t))` of the image bounds, in pixel
+//! * the optical centre is `(l + cx (r - l), t + cy (b - t))` of the image extent, in pixel
 //!   coordinates where pixel (row, col) sits at (row, col);
 //! * the normalising radius is the largest distance from the centre to a corner of the
-//!   bounds (`MaxDistancePointToRect`), so `r = 1` at the farthest corner;
+//!   extent (`MaxDistancePointToRect`), so `r = 1` at the farthest corner;
 //! * each destination (corrected) pixel `d` maps to the source (uncorrected) position
 //!   `s = c + R (n ratio + tan)` with `n = (d - c) / R`, `r^2 = min(|n|^2, 1)`,
 //!   rectilinear `ratio = kr0 + kr1 r^2 + kr2 r^4 + kr3 r^6`,
@@ -27,7 +27,7 @@
 //! reach (its source window, from the source positions of the band's pixels); [`apply`]
 //! warps the whole image. Both resample every pixel with the same expressions.
 
-use super::Bounds;
+use super::StageRect;
 use crate::dng::opcodes::OpcodeKind;
 use crate::error::{Error, Result};
 use rayon::prelude::*;
@@ -93,9 +93,9 @@ fn poly(k: &[f64; 4], x2: f64) -> f64 {
 
 impl Warp {
     /// A warp with `models` (one, or one per plane) about the relative centre (x, y) of an
-    /// image of `bounds` with `planes` planes. Errors when the number of coefficient sets
+    /// image of `extent` with `planes` planes. Errors when the number of coefficient sets
     /// is neither 1 nor `planes` (the SDK refuses such a file too).
-    pub fn new(models: Vec<Model>, center: [f64; 2], b: Bounds, planes: usize) -> Result<Warp> {
+    pub fn new(models: Vec<Model>, center: [f64; 2], b: StageRect, planes: usize) -> Result<Warp> {
         if models.is_empty() || (models.len() != 1 && models.len() != planes) {
             return Err(Error::malformed(format!(
                 "OpcodeList3: a warp with {} coefficient sets for a {planes}-plane image",
@@ -164,7 +164,7 @@ impl Warp {
 
     /// The warp of opcode `kind` (WarpRectilinear, WarpRectilinear2 or WarpFisheye) on an
     /// image of `b` with `planes` planes; `None` for other kinds.
-    pub fn of_opcode(kind: &OpcodeKind, b: Bounds, planes: usize) -> Option<Result<Warp>> {
+    pub fn of_opcode(kind: &OpcodeKind, b: StageRect, planes: usize) -> Option<Result<Warp>> {
         let (models, center): (Vec<Model>, [f64; 2]) = match kind {
             OpcodeKind::WarpRectilinear { planes, center } => (
                 planes
@@ -238,12 +238,12 @@ fn taps(s: f64) -> (i64, [f64; 4]) {
 }
 
 /// The tap origins and weights (rows, columns) of source position (`sv`, `sh`) in an image
-/// whose pixel (0, 0) sits at stage position (`bounds.t`, `bounds.l`).
+/// whose pixel (0, 0) sits at stage position (`extent.t`, `extent.l`).
 type Taps = ((i64, [f64; 4]), (i64, [f64; 4]));
 
 #[inline]
-fn taps_of((sv, sh): (f64, f64), bounds: Bounds) -> Taps {
-    (taps(sv - bounds.t as f64), taps(sh - bounds.l as f64))
+fn taps_of((sv, sh): (f64, f64), extent: StageRect) -> Taps {
+    (taps(sv - extent.t as f64), taps(sh - extent.l as f64))
 }
 
 #[inline]
@@ -274,7 +274,7 @@ fn resample<'a>(
 }
 
 /// Warp a stage-3 image (`w x h` pixels of `planes` interleaved samples in [0, 1], pixel
-/// (0, 0) at stage position (`bounds.t`, `bounds.l`)): every output pixel is the bicubic
+/// (0, 0) at stage position (`extent.t`, `extent.l`)): every output pixel is the bicubic
 /// resample of `data` at its source position.
 pub fn apply(
     warp: &Warp,
@@ -282,7 +282,7 @@ pub fn apply(
     w: usize,
     h: usize,
     planes: usize,
-    bounds: Bounds,
+    extent: StageRect,
 ) -> Vec<f32> {
     let mut out = vec![0.0f32; data.len()];
     if w == 0 || h == 0 || planes == 0 {
@@ -294,13 +294,13 @@ pub fn apply(
     out.par_chunks_mut(w * planes)
         .enumerate()
         .for_each(|(y, orow)| {
-            let r = (bounds.t + y as i64) as f64;
+            let r = (extent.t + y as i64) as f64;
             for x in 0..w {
-                let c = (bounds.l + x as i64) as f64;
-                let mut t = taps_of(warp.source(0, r, c), bounds);
+                let c = (extent.l + x as i64) as f64;
+                let mut t = taps_of(warp.source(0, r, c), extent);
                 for p in 0..planes {
                     if p > 0 && !shared {
-                        t = taps_of(warp.source(p, r, c), bounds);
+                        t = taps_of(warp.source(p, r, c), extent);
                     }
                     orow[x * planes + p] = resample(t, p, dims, row);
                 }
@@ -312,7 +312,7 @@ pub fn apply(
 /// The source positions of a rectangle of destination pixels and the window of the
 /// source their bicubic taps read ([`plan`]).
 pub(crate) struct Plan {
-    /// Destination rows and columns (image coordinates, 0 = `bounds.t` / `bounds.l`).
+    /// Destination rows and columns (image coordinates, 0 = `extent.t` / `extent.l`).
     rows: Range<usize>,
     cols: Range<usize>,
     /// Source positions, `per` per pixel (1 when the planes share the model).
@@ -329,7 +329,7 @@ pub(crate) struct Plan {
 pub(crate) fn plan(
     warp: &Warp,
     (w, h, planes): (usize, usize, usize),
-    bounds: Bounds,
+    extent: StageRect,
     rows: Range<usize>,
     cols: Range<usize>,
 ) -> Plan {
@@ -339,12 +339,12 @@ pub(crate) fn plan(
     let (mut left, mut right) = (i64::MAX, i64::MIN);
     if w > 0 && h > 0 && planes > 0 {
         for y in rows.clone() {
-            let r = (bounds.t + y as i64) as f64;
+            let r = (extent.t + y as i64) as f64;
             for x in cols.clone() {
-                let c = (bounds.l + x as i64) as f64;
+                let c = (extent.l + x as i64) as f64;
                 for p in 0..per {
                     let s = warp.source(p, r, c);
-                    let ((y0, _), (x0, _)) = taps_of(s, bounds);
+                    let ((y0, _), (x0, _)) = taps_of(s, extent);
                     lo = lo.min(y0);
                     hi = hi.max(y0 + 3);
                     left = left.min(x0);
@@ -419,7 +419,7 @@ fn resample_cols<'a>(
 pub(crate) fn resample_plan(
     plan: &Plan,
     (w, h, planes): (usize, usize, usize),
-    bounds: Bounds,
+    extent: StageRect,
     src: &Src,
     out: &mut [f32],
 ) {
@@ -436,10 +436,10 @@ pub(crate) fn resample_plan(
     {
         for x in 0..rw {
             let at = (k * rw + x) * per;
-            let mut t = taps_of(plan.pos[at], bounds);
+            let mut t = taps_of(plan.pos[at], extent);
             for p in 0..planes {
                 if p > 0 && !shared {
-                    t = taps_of(plan.pos[at + p], bounds);
+                    t = taps_of(plan.pos[at + p], extent);
                 }
                 orow[x * planes + p] = match src {
                     Src::Rows { first, rows } => resample(t, p, dims, |yy| rows[yy - first]),
@@ -450,7 +450,7 @@ pub(crate) fn resample_plan(
     }
 }
 
-/// Output rows `rows` (image rows, 0 = `bounds.t`) of the warp of a `w x h` image of
+/// Output rows `rows` (image rows, 0 = `extent.t`) of the warp of a `w x h` image of
 /// `planes` samples per pixel, reading only the source rows the taps reach: `source(y0,
 /// y1)` is asked once for image rows `[y0, y1)` (the window, from the source positions of
 /// these rows' pixels) and returns them (`(y1 - y0) * w * planes` samples). `out` receives
@@ -458,7 +458,7 @@ pub(crate) fn resample_plan(
 pub fn apply_rows<'s>(
     warp: &Warp,
     (w, h, planes): (usize, usize, usize),
-    bounds: Bounds,
+    extent: StageRect,
     rows: Range<usize>,
     source: impl FnOnce(usize, usize) -> Result<std::borrow::Cow<'s, [f32]>>,
     out: &mut [f32],
@@ -467,7 +467,7 @@ pub fn apply_rows<'s>(
         return Ok(());
     }
     let dims = (w, h, planes);
-    let plan = plan(warp, dims, bounds, rows, 0..w);
+    let plan = plan(warp, dims, extent, rows, 0..w);
     let (y0, y1) = (plan.win_rows.start, plan.win_rows.end);
     let src = source(y0, y1)?;
     if src.len() != (y1 - y0) * w * planes {
@@ -477,7 +477,7 @@ pub fn apply_rows<'s>(
         first: y0,
         rows: src.chunks_exact(w * planes).collect(),
     };
-    resample_plan(&plan, dims, bounds, &src, out);
+    resample_plan(&plan, dims, extent, &src, out);
     Ok(())
 }
 
@@ -495,11 +495,11 @@ mod tests {
                 kt: [0.0, 0.0],
             }],
             [0.5, 0.5],
-            Bounds::of_size(w, h),
+            StageRect::of_size(w, h),
             3,
         )
         .unwrap();
-        let out = apply(&warp, &data, w, h, 3, Bounds::of_size(w, h));
+        let out = apply(&warp, &data, w, h, 3, StageRect::of_size(w, h));
         for (a, b) in out.iter().zip(&data) {
             assert!((a - b).abs() < 1e-6);
         }
@@ -507,7 +507,7 @@ mod tests {
 
     #[test]
     fn radial_source_positions_follow_the_formula() {
-        let b = Bounds::of_size(200, 100);
+        let b = StageRect::of_size(200, 100);
         let warp = Warp::new(
             vec![Model::Rectilinear {
                 kr: [1.0, 0.1, 0.0, 0.0],
@@ -546,7 +546,7 @@ mod tests {
 
     #[test]
     fn rectilinear2_follows_the_dng_1_6_formula() {
-        let b = Bounds::of_size(200, 100);
+        let b = StageRect::of_size(200, 100);
         let r = 50f64.hypot(100.0);
         let (nv, nh) = ((10.0 - 50.0) / r, (180.0 - 100.0) / r);
         let rr = nv * nv + nh * nh;
@@ -622,7 +622,7 @@ mod tests {
         let data: Vec<f32> = (0..w * h * 3)
             .map(|i| ((i * 7919) % 1000) as f32 / 999.0)
             .collect();
-        let b = Bounds {
+        let b = StageRect {
             t: 4,
             l: 2,
             b: 4 + h as i64,
@@ -676,7 +676,7 @@ mod tests {
 
     #[test]
     fn fisheye_and_bad_inputs() {
-        let b = Bounds::of_size(10, 10);
+        let b = StageRect::of_size(10, 10);
         let f = Warp::new(
             vec![Model::Fisheye {
                 kr: [1.0, 0.0, 0.0, 0.0],
@@ -708,7 +708,7 @@ mod tests {
         let out = apply(&n, &[0.5; 100], 10, 10, 1, b);
         assert!(out.iter().all(|v| v.is_finite()));
         // a 1x1 image
-        let out = apply(&f, &[0.25], 1, 1, 1, Bounds::of_size(1, 1));
+        let out = apply(&f, &[0.25], 1, 1, 1, StageRect::of_size(1, 1));
         assert_eq!(out, vec![0.25]);
     }
 }

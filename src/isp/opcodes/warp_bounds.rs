@@ -12,7 +12,7 @@
 //! for random warps and rectangles.
 
 use super::warp::{Model, Warp};
-use super::Bounds;
+use super::StageRect;
 use std::ops::Range;
 
 /// Tile side (pixels) of the rectangle's interval evaluation.
@@ -216,12 +216,12 @@ fn lines(s: Iv, origin: i64, n: usize) -> Range<usize> {
 }
 
 /// The source rows and columns (image lines of a `w x h` image whose pixel (0, 0) sits at
-/// stage position (`bounds.t`, `bounds.l`)) that the taps of `warp` read for the
+/// stage position (`extent.t`, `extent.l`)) that the taps of `warp` read for the
 /// destination pixels `rows x cols`: a superset of [`super::warp::plan`]'s window. Empty
 /// ranges for an empty rectangle or image.
 pub(crate) fn window(
     warp: &Warp,
-    bounds: Bounds,
+    extent: StageRect,
     (w, h): (usize, usize),
     rows: Range<usize>,
     cols: Range<usize>,
@@ -240,13 +240,13 @@ pub(crate) fn window(
     let shared = warp.planes.windows(2).all(|p| p[0] == p[1]);
     for (r0, r1) in edges(&rows) {
         let dv = Iv::of(
-            (bounds.t + r0 as i64) as f64 - warp.cv,
-            (bounds.t + r1 as i64) as f64 - warp.cv,
+            (extent.t + r0 as i64) as f64 - warp.cv,
+            (extent.t + r1 as i64) as f64 - warp.cv,
         );
         for (c0, c1) in edges(&cols) {
             let dh = Iv::of(
-                (bounds.l + c0 as i64) as f64 - warp.ch,
-                (bounds.l + c1 as i64) as f64 - warp.ch,
+                (extent.l + c0 as i64) as f64 - warp.ch,
+                (extent.l + c1 as i64) as f64 - warp.ch,
             );
             for p in 0..if shared { 1 } else { planes } {
                 let (a, b) = source(warp, p, dv, dh);
@@ -256,8 +256,8 @@ pub(crate) fn window(
         }
     }
     (
-        lines(sv.unwrap_or(NAN), bounds.t, h),
-        lines(sh.unwrap_or(NAN), bounds.l, w),
+        lines(sv.unwrap_or(NAN), extent.t, h),
+        lines(sh.unwrap_or(NAN), extent.l, w),
     )
 }
 
@@ -273,7 +273,7 @@ mod tests {
 
     fn check(
         warp: &Warp,
-        b: Bounds,
+        b: StageRect,
         (w, h): (usize, usize),
         rows: Range<usize>,
         cols: Range<usize>,
@@ -327,7 +327,7 @@ mod tests {
             } else {
                 vec![m]
             };
-            let b = Bounds { t, l, b: t + h as i64, r: l + w as i64 };
+            let b = StageRect { t, l, b: t + h as i64, r: l + w as i64 };
             let warp = Warp::new(models, center, b, 3).unwrap();
             let (r0, c0) = (rect.0 % h, rect.1 % w);
             let rows = r0..(r0 + rect.2).min(h);
@@ -339,7 +339,7 @@ mod tests {
     #[test]
     fn the_bound_is_tight_for_a_usual_distortion_and_whole_for_non_finite_warps() {
         let (w, h) = (1200, 800);
-        let b = Bounds::of_size(w, h);
+        let b = StageRect::of_size(w, h);
         let warp = Warp::new(
             vec![Model::Rectilinear {
                 kr: [1.0, -0.02, 0.0, 0.0],

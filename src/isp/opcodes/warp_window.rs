@@ -25,7 +25,7 @@
 
 use super::warp::{plan, resample_plan, Src, Warp};
 use super::warp_bounds::window;
-use super::Bounds;
+use super::StageRect;
 use crate::error::{Error, Result};
 use crate::limits::try_filled;
 use rayon::prelude::*;
@@ -119,6 +119,20 @@ pub struct WindowStats {
     pub lines: usize,
 }
 
+/// How a [`Chain`] cuts its image: an active area of `dims` (stage image `extent`) cut along
+/// `axis` in strips of `lines` lines.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Strips {
+    /// The direction of the cut.
+    pub(crate) axis: Axis,
+    /// Active-area width and height.
+    pub(crate) dims: (usize, usize),
+    /// Lines per strip.
+    pub(crate) lines: usize,
+    /// The stage image (relative warp centres refer to it).
+    pub(crate) extent: StageRect,
+}
+
 /// The warps of OpcodeList3 with their source windows (see the module documentation).
 pub(crate) struct Chain<'a> {
     axis: Axis,
@@ -126,7 +140,7 @@ pub(crate) struct Chain<'a> {
     dims: (usize, usize),
     /// Lines per strip.
     sb: usize,
-    bounds: Bounds,
+    extent: StageRect,
     warps: Vec<Warp>,
     pre: &'a PreFn<'a>,
     after: &'a AfterFn<'a>,
@@ -150,18 +164,13 @@ fn strips_of(range: &Range<usize>, sb: usize) -> Range<usize> {
 }
 
 impl<'a> Chain<'a> {
-    /// The chain of `warps` over an active area of `dims` (stage bounds `bounds`), cut along
-    /// `axis` in strips of `sb` lines. `pre(rows, cols)`: the image before the first warp
+    /// The chain of `warps` over the image `strips` cuts. `pre(rows, cols)`: the image before the first warp
     /// over a rectangle (interleaved RGB, row by row); `after(j, data, rows, cols)`: the
     /// in-place opcodes after warp `j` on a rectangle. `finals`: the rectangle of every
     /// output band, in the order they are made; `limit`: the lines held at once past which
     /// the whole-image path runs (default [`limit`]).
-    #[allow(clippy::too_many_arguments)]
     pub(crate) fn new(
-        axis: Axis,
-        dims: (usize, usize),
-        sb: usize,
-        bounds: Bounds,
+        strips: Strips,
         warps: Vec<Warp>,
         pre: &'a PreFn<'a>,
         after: &'a AfterFn<'a>,
@@ -171,12 +180,18 @@ impl<'a> Chain<'a> {
         if warps.is_empty() {
             return Err(Error::invalid("a warp chain without a warp"));
         }
+        let Strips {
+            axis,
+            dims,
+            lines: sb,
+            extent,
+        } = strips;
         let sb = sb.max(1);
         let mut c = Chain {
             axis,
             dims,
             sb,
-            bounds,
+            extent,
             warps,
             pre,
             after,
@@ -295,7 +310,7 @@ impl<'a> Chain<'a> {
     fn need(&self, j: usize, rows: &Range<usize>, cols: &Range<usize>) -> Range<usize> {
         let (r, c) = window(
             &self.warps[j],
-            self.bounds,
+            self.extent,
             self.dims,
             rows.clone(),
             cols.clone(),
@@ -353,7 +368,7 @@ impl<'a> Chain<'a> {
         let p = plan(
             &self.warps[j],
             dims,
-            self.bounds,
+            self.extent,
             rows.clone(),
             cols.clone(),
         );
@@ -377,7 +392,7 @@ impl<'a> Chain<'a> {
             },
         };
         let mut out = try_filled(0.0f32, 3 * rows.len() * cols.len(), "a band of the warp")?;
-        resample_plan(&p, dims, self.bounds, &src, &mut out);
+        resample_plan(&p, dims, self.extent, &src, &mut out);
         Ok(out)
     }
 
@@ -530,7 +545,7 @@ mod tests {
             .collect()
     }
 
-    fn warps(b: Bounds) -> Vec<Warp> {
+    fn warps(b: StageRect) -> Vec<Warp> {
         let rect = Model::Rectilinear {
             kr: [1.0, -0.15, 0.03, 0.0],
             kt: [0.004, -0.003],
@@ -548,7 +563,7 @@ mod tests {
     /// the whole warps; the strips all dropped at the end.
     fn run(axis: Axis, sb: usize, nw: usize, order: &[usize], threads: usize, band: usize) {
         let (w, h) = (23, 41);
-        let b = Bounds::of_size(w, h);
+        let b = StageRect::of_size(w, h);
         let data = image(w, h);
         let ws = warps(b)[..nw].to_vec();
         let mut whole = data.clone();
@@ -578,18 +593,13 @@ mod tests {
             }
         };
         let finals: Vec<_> = order.iter().map(|&i| rect(i)).collect();
-        let chain = Chain::new(
+        let strips = Strips {
             axis,
-            (w, h),
-            sb,
-            b,
-            ws,
-            &pre,
-            &after,
-            &finals,
-            Some(usize::MAX),
-        )
-        .unwrap();
+            dims: (w, h),
+            lines: sb,
+            extent: b,
+        };
+        let chain = Chain::new(strips, ws, &pre, &after, &finals, Some(usize::MAX)).unwrap();
         let bands: Vec<Vec<f32>> = rayon::ThreadPoolBuilder::new()
             .num_threads(threads)
             .build()

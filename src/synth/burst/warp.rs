@@ -18,7 +18,7 @@
 
 use super::interp::Interp;
 use super::motion::apply;
-use crate::isp::demosaic::{demosaic_rect, mhc_row_kernel, RowKernel};
+use crate::isp::demosaic::{demosaic_rect, mhc_row_kernel, RowDemosaic, RowKernel};
 use crate::normalize::Normalizer;
 use crate::raw::Bayer;
 use std::ops::Range;
@@ -182,17 +182,13 @@ impl<'a> Warper<'a> {
         let emit = |i: usize, rgb: &mut [f32]| {
             buf[3 * ww * i..3 * ww * (i + 1)].copy_from_slice(rgb);
         };
-        demosaic_rect(
-            aw,
-            ah,
+        let cfa = RowDemosaic {
+            width: aw,
+            height: ah,
             bayer,
-            self.kernel,
-            wr.clone(),
-            wc.clone(),
-            fill,
-            &|_| {},
-            emit,
-        );
+            kernel: self.kernel,
+        };
+        demosaic_rect(cfa, wr.clone(), wc.clone(), fill, &|_| {}, emit);
         let r = self.interp.radius();
         let taps = 2 * r;
         let (mut wx, mut wy) = ([0.0f64; 6], [0.0f64; 6]);
