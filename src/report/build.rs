@@ -111,15 +111,7 @@ pub fn build(opts: &ReportOptions, vis: &dyn Visuals) -> Result<ReportSummary> {
         };
         return Err(Error::invalid(why).in_file(out));
     }
-    let manifests = manifest::all_manifests(out)?;
-    if manifests.is_empty() {
-        return Err(Error::invalid("no manifest*.jsonl here: not a dataset folder").in_file(out));
-    }
-    let mut all = Vec::new();
-    for m in &manifests {
-        all.extend(manifest::read(m)?.records);
-    }
-    let records: Vec<Record> = manifest::latest(all).into_values().collect();
+    let records = latest_records(out)?;
     let report_dir = out.join("report");
     let img_dir = report_dir.join("img");
     std::fs::create_dir_all(&img_dir)
@@ -136,33 +128,7 @@ pub fn build(opts: &ReportOptions, vis: &dyn Visuals) -> Result<ReportSummary> {
     let sidecars: Vec<Option<serde_json::Value>> =
         ok.iter().map(|r| read_sidecar(out, r)).collect();
 
-    // Dataset-level plots.
-    let dims: Vec<f64> = sidecars
-        .iter()
-        .flatten()
-        .filter_map(|s| vis.dim_factor(s))
-        .collect();
-    let rg: Vec<f64> = ok
-        .iter()
-        .filter_map(|r| r.night_neutral.map(|n| n[0] / n[1]))
-        .collect();
-    let bg: Vec<f64> = ok
-        .iter()
-        .filter_map(|r| r.night_neutral.map(|n| n[2] / n[1]))
-        .collect();
-    let mut isos: BTreeMap<u32, usize> = BTreeMap::new();
-    for r in &ok {
-        for i in &r.iso {
-            *isos.entry(*i).or_default() += 1;
-        }
-    }
-    let iso_bars: Vec<(String, usize)> = isos.iter().map(|(k, v)| (k.to_string(), *v)).collect();
-    let plots = [
-        plot::histogram("Dimming factor", "factor", &dims, 20)?,
-        plot::histogram("Night neutral r/g", "r/g", &rg, 20)?,
-        plot::histogram("Night neutral b/g", "b/g", &bg, 20)?,
-        plot::bars("Noisy outputs per ISO", "ISO", &iso_bars)?,
-    ];
+    let plots = dataset_plots(&ok, &sidecars, vis)?;
 
     // Samples spread evenly.
     let n = opts.samples.min(ok.len());
@@ -178,160 +144,7 @@ pub fn build(opts: &ReportOptions, vis: &dyn Visuals) -> Result<ReportSummary> {
         let (Some(r), Some(sc)) = (ok.get(i), sidecars.get(i)) else {
             continue;
         };
-        let id = sample_id(r);
-        let mut cells: Vec<Cell> = Vec::new();
-        let mut png = |name: &str, title: &str, res: Result<Rgb8>, summary: &mut ReportSummary| {
-            let file = format!("{}_{name}.png", safe(&id));
-            let html = match res.and_then(|img| {
-                img.write_png(&img_dir.join(&file))?;
-                Ok(img)
-            }) {
-                Ok(img) => {
-                    summary.pngs.push(img_dir.join(&file));
-                    format!(
-                        "<img src=\"img/{}\" width=\"{}\" height=\"{}\" alt=\"{}\">",
-                        escape(&file),
-                        img.width,
-                        img.height,
-                        escape(title)
-                    )
-                }
-                Err(e) => {
-                    summary.warnings.push(format!("{id}: {title}: {e}"));
-                    format!(
-                        "<p class=\"na\">not available: {}</p>",
-                        escape(&e.to_string())
-                    )
-                }
-            };
-            cells.push(Cell {
-                title: title.to_string(),
-                html,
-            });
-        };
-        let day = match &opts.day_dir {
-            Some(d) => vis.day(&d.join(&r.input), opts.thumb),
-            None => Err(Error::invalid("DAY_DIR unknown (pass --day-dir)")),
-        };
-        png("day", "Day render", day, &mut summary);
-        let clean_path = first_output(r, Kind::CleanRaw).map(|p| out.join(p));
-        let clean = clean_path
-            .as_deref()
-            .ok_or_else(|| Error::invalid("no clean raw output"))
-            .and_then(|p| vis.night(p, opts.thumb));
-        png("night", "Clean night render", clean, &mut summary);
-        let noisy = noisy_output(r)
-            .ok_or_else(|| Error::invalid("no noisy output"))
-            .and_then(|p| vis.noisy_crop(&out.join(p), 256));
-        let noisy_title = format!(
-            "Noisy crop (ISO {})",
-            r.iso
-                .last()
-                .map(|i| i.to_string())
-                .unwrap_or_else(|| "?".into())
-        );
-        png("noisy", &noisy_title, noisy, &mut summary);
-        fn missing<T>() -> Result<T> {
-            Err(Error::invalid("sidecar missing or unreadable"))
-        }
-        let (masks, ill, ill_xy) = match sc {
-            Some(sc) => (
-                vis.masks(sc, clean_path.as_deref(), opts.thumb),
-                vis.illuminants(sc),
-                vis.illuminants_xy(sc, clean_path.as_deref()),
-            ),
-            None => (missing(), missing(), missing()),
-        };
-        match masks {
-            Ok(ms) => {
-                for (name, img) in ms {
-                    let title = format!("Mask: {name}");
-                    let file_name = name.split(" (").next().unwrap_or(&name).to_string();
-                    png(
-                        &format!("mask_{}", safe(&file_name)),
-                        &title,
-                        Ok(img),
-                        &mut summary,
-                    );
-                }
-            }
-            Err(e) => png("mask", "Light masks", Err(e), &mut summary),
-        }
-        let ill_html = match ill.and_then(|il| {
-            let pts: Vec<(f64, f64, usize)> = il
-                .lights
-                .iter()
-                .map(|l| (l.chroma[0], l.chroma[1], l.kind))
-                .collect();
-            let kinds: Vec<&str> = il.kinds.iter().map(|s| s.as_str()).collect();
-            plot::chromaticity(
-                "Sampled illuminants",
-                (&il.axes.0, &il.axes.1),
-                &pts,
-                &kinds,
-                il.ellipse,
-            )
-        }) {
-            Ok(svg) => svg,
-            Err(e) => {
-                summary.warnings.push(format!("{id}: illuminants: {e}"));
-                format!(
-                    "<p class=\"na\">not available: {}</p>",
-                    escape(&e.to_string())
-                )
-            }
-        };
-        cells.push(Cell {
-            title: "Illuminants (over the dictionary ellipse, 1-3 sigma)".into(),
-            html: ill_html,
-        });
-        let xy_html = match ill_xy.and_then(|il| {
-            let pts: Vec<(f64, f64, usize)> = il
-                .lights
-                .iter()
-                .map(|l| (l.chroma[0], l.chroma[1], l.kind))
-                .collect();
-            let kinds: Vec<&str> = il.kinds.iter().map(|s| s.as_str()).collect();
-            super::plot_xy::planckian("Lights in CIE xy", &pts, &kinds)
-        }) {
-            Ok(svg) => svg,
-            Err(e) => {
-                summary
-                    .warnings
-                    .push(format!("{id}: illuminants in xy: {e}"));
-                format!(
-                    "<p class=\"na\">not available: {}</p>",
-                    escape(&e.to_string())
-                )
-            }
-        };
-        cells.push(Cell {
-            title: "Lights in CIE 1931 xy through the camera's colour matrices, against the \
-                    Planckian locus (ticks: CCT; grey: Duv +-0.01)"
-                .into(),
-            html: xy_html,
-        });
-        let nn = r
-            .night_neutral
-            .map(|n| format!("{:.3}, {:.3}, {:.3}", n[0], n[1], n[2]))
-            .unwrap_or_else(|| "-".into());
-        sample_html.push_str(&format!(
-            "<section class=\"sample\"><h3>{} <small>({}, variant {}, seed {}, ISO {:?}, night neutral {})</small></h3><div class=\"row\">",
-            escape(&r.input),
-            r.split.name(),
-            r.variant,
-            r.seed,
-            r.iso,
-            escape(&nn)
-        ));
-        for c in cells {
-            sample_html.push_str(&format!(
-                "<figure>{}<figcaption>{}</figcaption></figure>",
-                c.html,
-                escape(&c.title)
-            ));
-        }
-        sample_html.push_str("</div></section>\n");
+        sample_html.push_str(&sample_section(opts, vis, r, sc, &img_dir, &mut summary));
         summary.samples += 1;
     }
 
@@ -339,21 +152,7 @@ pub fn build(opts: &ReportOptions, vis: &dyn Visuals) -> Result<ReportSummary> {
         .iter()
         .filter(|r| r.split == crate::dataset::Split::Train)
         .count();
-    let mut fail_html = String::new();
-    if !failed.is_empty() {
-        fail_html.push_str(
-            "<h2>Failures</h2><table><tr><th>input</th><th>variant</th><th>error</th></tr>",
-        );
-        for r in &failed {
-            fail_html.push_str(&format!(
-                "<tr><td>{}</td><td>{}</td><td>{}</td></tr>",
-                escape(&r.input),
-                r.variant,
-                escape(r.error.as_deref().unwrap_or(""))
-            ));
-        }
-        fail_html.push_str("</table>");
-    }
+    let fail_html = failures_html(&failed);
     let page = format!(
         r#"<!DOCTYPE html>
 <html lang="en"><head><meta charset="utf-8">
@@ -406,6 +205,252 @@ window.addEventListener('load', function () {{
     };
     write_bytes_atomic(&summary.page, &policy, page.as_bytes())?;
     Ok(summary)
+}
+
+/// The latest record of every unit in the manifests of `out`.
+fn latest_records(out: &Path) -> Result<Vec<Record>> {
+    let manifests = manifest::all_manifests(out)?;
+    if manifests.is_empty() {
+        return Err(Error::invalid("no manifest*.jsonl here: not a dataset folder").in_file(out));
+    }
+    let mut all = Vec::new();
+    for m in &manifests {
+        all.extend(manifest::read(m)?.records);
+    }
+    Ok(manifest::latest(all).into_values().collect())
+}
+
+/// The dataset-level plots: dimming factors, night neutrals, noisy outputs per ISO.
+fn dataset_plots(
+    ok: &[&Record],
+    sidecars: &[Option<serde_json::Value>],
+    vis: &dyn Visuals,
+) -> Result<[String; 4]> {
+    let dims: Vec<f64> = sidecars
+        .iter()
+        .flatten()
+        .filter_map(|s| vis.dim_factor(s))
+        .collect();
+    let rg: Vec<f64> = ok
+        .iter()
+        .filter_map(|r| r.night_neutral.map(|n| n[0] / n[1]))
+        .collect();
+    let bg: Vec<f64> = ok
+        .iter()
+        .filter_map(|r| r.night_neutral.map(|n| n[2] / n[1]))
+        .collect();
+    let mut isos: BTreeMap<u32, usize> = BTreeMap::new();
+    for r in ok {
+        for i in &r.iso {
+            *isos.entry(*i).or_default() += 1;
+        }
+    }
+    let iso_bars: Vec<(String, usize)> = isos.iter().map(|(k, v)| (k.to_string(), *v)).collect();
+    Ok([
+        plot::histogram("Dimming factor", "factor", &dims, 20)?,
+        plot::histogram("Night neutral r/g", "r/g", &rg, 20)?,
+        plot::histogram("Night neutral b/g", "b/g", &bg, 20)?,
+        plot::bars("Noisy outputs per ISO", "ISO", &iso_bars)?,
+    ])
+}
+
+/// One sample's section of the page: its renders (PNGs written to `img_dir`), masks and
+/// illuminant plots; what cannot be made is said in the page and in `summary.warnings`.
+fn sample_section(
+    opts: &ReportOptions,
+    vis: &dyn Visuals,
+    r: &Record,
+    sc: &Option<serde_json::Value>,
+    img_dir: &Path,
+    summary: &mut ReportSummary,
+) -> String {
+    let out = &opts.out_dir;
+    let id = sample_id(r);
+    let mut cells: Vec<Cell> = Vec::new();
+    let mut png = |name: &str, title: &str, res: Result<Rgb8>, summary: &mut ReportSummary| {
+        let file = format!("{}_{name}.png", safe(&id));
+        let html = match res.and_then(|img| {
+            img.write_png(&img_dir.join(&file))?;
+            Ok(img)
+        }) {
+            Ok(img) => {
+                summary.pngs.push(img_dir.join(&file));
+                format!(
+                    "<img src=\"img/{}\" width=\"{}\" height=\"{}\" alt=\"{}\">",
+                    escape(&file),
+                    img.width,
+                    img.height,
+                    escape(title)
+                )
+            }
+            Err(e) => {
+                summary.warnings.push(format!("{id}: {title}: {e}"));
+                format!(
+                    "<p class=\"na\">not available: {}</p>",
+                    escape(&e.to_string())
+                )
+            }
+        };
+        cells.push(Cell {
+            title: title.to_string(),
+            html,
+        });
+    };
+    let day = match &opts.day_dir {
+        Some(d) => vis.day(&d.join(&r.input), opts.thumb),
+        None => Err(Error::invalid("DAY_DIR unknown (pass --day-dir)")),
+    };
+    png("day", "Day render", day, summary);
+    let clean_path = first_output(r, Kind::CleanRaw).map(|p| out.join(p));
+    let clean = clean_path
+        .as_deref()
+        .ok_or_else(|| Error::invalid("no clean raw output"))
+        .and_then(|p| vis.night(p, opts.thumb));
+    png("night", "Clean night render", clean, summary);
+    let noisy = noisy_output(r)
+        .ok_or_else(|| Error::invalid("no noisy output"))
+        .and_then(|p| vis.noisy_crop(&out.join(p), 256));
+    let noisy_title = format!(
+        "Noisy crop (ISO {})",
+        r.iso
+            .last()
+            .map(|i| i.to_string())
+            .unwrap_or_else(|| "?".into())
+    );
+    png("noisy", &noisy_title, noisy, summary);
+    fn missing<T>() -> Result<T> {
+        Err(Error::invalid("sidecar missing or unreadable"))
+    }
+    let (masks, ill, ill_xy) = match sc {
+        Some(sc) => (
+            vis.masks(sc, clean_path.as_deref(), opts.thumb),
+            vis.illuminants(sc),
+            vis.illuminants_xy(sc, clean_path.as_deref()),
+        ),
+        None => (missing(), missing(), missing()),
+    };
+    match masks {
+        Ok(ms) => {
+            for (name, img) in ms {
+                let title = format!("Mask: {name}");
+                let file_name = name.split(" (").next().unwrap_or(&name).to_string();
+                png(
+                    &format!("mask_{}", safe(&file_name)),
+                    &title,
+                    Ok(img),
+                    summary,
+                );
+            }
+        }
+        Err(e) => png("mask", "Light masks", Err(e), summary),
+    }
+    cells.extend(plot_cells(ill, ill_xy, &id, summary));
+    let nn = r
+        .night_neutral
+        .map(|n| format!("{:.3}, {:.3}, {:.3}", n[0], n[1], n[2]))
+        .unwrap_or_else(|| "-".into());
+    let mut html = format!(
+            "<section class=\"sample\"><h3>{} <small>({}, variant {}, seed {}, ISO {:?}, night neutral {})</small></h3><div class=\"row\">",
+            escape(&r.input),
+            r.split.name(),
+            r.variant,
+            r.seed,
+            r.iso,
+            escape(&nn)
+        );
+    for c in cells {
+        html.push_str(&format!(
+            "<figure>{}<figcaption>{}</figcaption></figure>",
+            c.html,
+            escape(&c.title)
+        ));
+    }
+    html.push_str("</div></section>\n");
+    html
+}
+
+/// The sampled illuminants over the dictionary ellipse, and in CIE xy.
+fn plot_cells(
+    ill: Result<Illuminants>,
+    ill_xy: Result<Illuminants>,
+    id: &str,
+    summary: &mut ReportSummary,
+) -> [Cell; 2] {
+    let ill_html = match ill.and_then(|il| {
+        let pts: Vec<(f64, f64, usize)> = il
+            .lights
+            .iter()
+            .map(|l| (l.chroma[0], l.chroma[1], l.kind))
+            .collect();
+        let kinds: Vec<&str> = il.kinds.iter().map(|s| s.as_str()).collect();
+        plot::chromaticity(
+            "Sampled illuminants",
+            (&il.axes.0, &il.axes.1),
+            &pts,
+            &kinds,
+            il.ellipse,
+        )
+    }) {
+        Ok(svg) => svg,
+        Err(e) => {
+            summary.warnings.push(format!("{id}: illuminants: {e}"));
+            format!(
+                "<p class=\"na\">not available: {}</p>",
+                escape(&e.to_string())
+            )
+        }
+    };
+    let ill_cell = Cell {
+        title: "Illuminants (over the dictionary ellipse, 1-3 sigma)".into(),
+        html: ill_html,
+    };
+    let xy_html = match ill_xy.and_then(|il| {
+        let pts: Vec<(f64, f64, usize)> = il
+            .lights
+            .iter()
+            .map(|l| (l.chroma[0], l.chroma[1], l.kind))
+            .collect();
+        let kinds: Vec<&str> = il.kinds.iter().map(|s| s.as_str()).collect();
+        super::plot_xy::planckian("Lights in CIE xy", &pts, &kinds)
+    }) {
+        Ok(svg) => svg,
+        Err(e) => {
+            summary
+                .warnings
+                .push(format!("{id}: illuminants in xy: {e}"));
+            format!(
+                "<p class=\"na\">not available: {}</p>",
+                escape(&e.to_string())
+            )
+        }
+    };
+    let xy_cell = Cell {
+        title: "Lights in CIE 1931 xy through the camera's colour matrices, against the \
+                    Planckian locus (ticks: CCT; grey: Duv +-0.01)"
+            .into(),
+        html: xy_html,
+    };
+    [ill_cell, xy_cell]
+}
+
+/// The failures table (empty without failures).
+fn failures_html(failed: &[&Record]) -> String {
+    let mut fail_html = String::new();
+    if !failed.is_empty() {
+        fail_html.push_str(
+            "<h2>Failures</h2><table><tr><th>input</th><th>variant</th><th>error</th></tr>",
+        );
+        for r in failed {
+            fail_html.push_str(&format!(
+                "<tr><td>{}</td><td>{}</td><td>{}</td></tr>",
+                escape(&r.input),
+                r.variant,
+                escape(r.error.as_deref().unwrap_or(""))
+            ));
+        }
+        fail_html.push_str("</table>");
+    }
+    fail_html
 }
 
 /// Output id of a record (its sidecar's file stem).

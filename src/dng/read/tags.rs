@@ -225,7 +225,106 @@ pub(super) fn build_meta(tiff: &Tiff, d: &Located<'_>, g: &Geometry) -> Result<R
     let planes = cfa.plane_color.len();
 
     // Geometry tags.
-    let active_area = match raw.get(ACTIVE_AREA) {
+    let active_area = active_area(raw, (w, h))?;
+    let (aw, ah) = match active_area {
+        Some(r) => (r.width(), r.height()),
+        None => (w as usize, h as usize),
+    };
+    let (default_crop_origin, default_crop_size) = default_crop(raw)?;
+
+    // Levels.
+    let (linearization_table, levels, linear_raw) = levels(raw, g, (aw, ah))?;
+
+    // Colour.
+    let ColorTags {
+        as_shot_neutral,
+        as_shot_white_xy,
+        color,
+        noise_profile,
+    } = color_tags(d, planes)?;
+    let orientation = ifd0.u32(ORIENTATION).unwrap_or(1);
+    let orientation = if (1..=8).contains(&orientation) {
+        orientation as u16
+    } else {
+        1
+    };
+
+    let exif = exif_info(ifd0);
+    let exif_ifd = ifd0.exif.as_deref();
+
+    let opcode = |tag: u16| raw.get(tag).and_then(|v| v.as_bytes()).map(|b| b.to_vec());
+    let dng_version = version4(ifd0.get(DNG_VERSION)).unwrap_or([1, 0, 0, 0]);
+    let raw_in_sub = d.path.is_some();
+    // TIFF/EP copies of the Exif fields in IFD0 are modelled too (the writer puts the
+    // current values in the Exif IFD; a stale IFD0 copy would contradict them).
+    let ifd0_extra = carried(ifd0, MODELLED_EXIF_TAGS);
+    let raw_extra = if raw_in_sub {
+        carried(raw, &[])
+    } else {
+        Vec::new()
+    };
+    let exif_extra = exif_ifd
+        .map(|e| carried(e, MODELLED_EXIF_TAGS))
+        .unwrap_or_default();
+    // GPS tags (0..=31) have their own numbering: every readable entry is carried.
+    let gps = ifd0
+        .gps
+        .as_deref()
+        .map(|g| g.entries.clone())
+        .unwrap_or_default();
+    Ok(RawMeta {
+        dng_version,
+        dng_backward_version: version4(ifd0.get(DNG_BACKWARD_VERSION)),
+        make: ifd0.string(MAKE),
+        model: ifd0.string(MODEL),
+        unique_camera_model: ifd0.string(UNIQUE_CAMERA_MODEL),
+        bits_per_sample: g.bits,
+        active_area,
+        default_crop_origin,
+        default_crop_size,
+        cfa,
+        linearization_table,
+        levels,
+        as_shot_neutral,
+        as_shot_white_xy,
+        color,
+        noise_profile,
+        orientation,
+        exif,
+        opcode_lists: [
+            opcode(OPCODE_LIST1),
+            opcode(OPCODE_LIST2),
+            opcode(OPCODE_LIST3),
+        ],
+        ifd0_extra,
+        raw_extra,
+        exif_extra,
+        gps,
+        storage: Some(Storage {
+            byte_order: tiff.byte_order,
+            sub_ifd: d.path.clone(),
+            layout: g.layout,
+            compression: g.compression,
+            predictor: raw.u32(PREDICTOR).map(|p| p as u16),
+        }),
+        linear_raw,
+        stored: STORED_TAGS
+            .iter()
+            .filter_map(|&tag| {
+                lookup(d, tag).map(|v| Entry {
+                    tag,
+                    value: v.clone(),
+                })
+            })
+            .collect(),
+        warnings: Vec::new(),
+        noise_profile_problem: None,
+    })
+}
+
+/// ActiveArea, checked inside the `w x h` image.
+fn active_area(raw: &Ifd, (w, h): (u32, u32)) -> Result<Option<Rect>> {
+    Ok(match raw.get(ACTIVE_AREA) {
         Some(v) => {
             let a = v
                 .to_u32_vec()
@@ -246,11 +345,12 @@ pub(super) fn build_meta(tiff: &Tiff, d: &Located<'_>, g: &Geometry) -> Result<R
             Some(r)
         }
         None => None,
-    };
-    let (aw, ah) = match active_area {
-        Some(r) => (r.width(), r.height()),
-        None => (w as usize, h as usize),
-    };
+    })
+}
+
+/// DefaultCropOrigin and DefaultCropSize (non-negative pairs; a zero size is an error).
+#[allow(clippy::type_complexity)]
+fn default_crop(raw: &Ifd) -> Result<(Option<[f64; 2]>, Option<[f64; 2]>)> {
     let pair = |tag: u16| -> Result<Option<[f64; 2]>> {
         match raw.get(tag).map(|v| floats(v, tag)).transpose()? {
             Some(p) if p.len() == 2 && p.iter().all(|&x| x >= 0.0) => Ok(Some([p[0], p[1]])),
@@ -269,8 +369,20 @@ pub(super) fn build_meta(tiff: &Tiff, d: &Located<'_>, g: &Geometry) -> Result<R
             return Err(Error::malformed("DefaultCropSize is zero"));
         }
     }
+    Ok((default_crop_origin, default_crop_size))
+}
 
-    // Levels.
+/// The levels of an `aw x ah` active area: LinearizationTable, black (with its repeat and
+/// deltas) and white, split for LinearRaw images (`linear_raw.rs`).
+fn levels(
+    raw: &Ifd,
+    g: &Geometry,
+    (aw, ah): (usize, usize),
+) -> Result<(
+    Option<Vec<u16>>,
+    Levels,
+    Option<crate::raw::meta::LinearRaw>,
+)> {
     let linearization_table = match raw.get(LINEARIZATION_TABLE) {
         Some(v) => {
             let t: Vec<u16> = v
@@ -356,8 +468,19 @@ pub(super) fn build_meta(tiff: &Tiff, d: &Located<'_>, g: &Geometry) -> Result<R
         white,
     };
     levels.validate(aw, ah)?;
+    Ok((linearization_table, levels, linear_raw))
+}
 
-    // Colour.
+/// The colour tags of a CFA of `planes` colour planes.
+struct ColorTags {
+    as_shot_neutral: Option<[f64; 3]>,
+    as_shot_white_xy: Option<[f64; 2]>,
+    color: ColorInfo,
+    noise_profile: Option<Vec<(f64, f64)>>,
+}
+
+/// AsShotNeutral, AsShotWhiteXY, the colour matrices and NoiseProfile.
+fn color_tags(d: &Located<'_>, planes: usize) -> Result<ColorTags> {
     let n3 = planes;
     let as_shot_neutral = match lookup(d, AS_SHOT_NEUTRAL) {
         Some(v) => {
@@ -433,17 +556,19 @@ pub(super) fn build_meta(tiff: &Tiff, d: &Located<'_>, g: &Geometry) -> Result<R
         }
         None => None,
     };
-    let orientation = ifd0.u32(ORIENTATION).unwrap_or(1);
-    let orientation = if (1..=8).contains(&orientation) {
-        orientation as u16
-    } else {
-        1
-    };
+    Ok(ColorTags {
+        as_shot_neutral,
+        as_shot_white_xy,
+        color,
+        noise_profile,
+    })
+}
 
-    // Exif (Exif IFD, falling back to TIFF/EP tags in IFD0).
+/// Exif fields (Exif IFD, falling back to TIFF/EP tags in IFD0).
+fn exif_info(ifd0: &Ifd) -> ExifInfo {
     let exif_ifd = ifd0.exif.as_deref();
     let ex = |tag: u16| exif_ifd.and_then(|e| e.get(tag)).or_else(|| ifd0.get(tag));
-    let exif = ExifInfo {
+    ExifInfo {
         iso: ex(ISO_SPEED_RATINGS)
             .and_then(|v| v.get_u32(0))
             .filter(|&i| i > 0),
@@ -456,76 +581,7 @@ pub(super) fn build_meta(tiff: &Tiff, d: &Located<'_>, g: &Geometry) -> Result<R
         date_time_original: ex(DATE_TIME_ORIGINAL)
             .and_then(|v| v.as_string())
             .filter(|s| !s.is_empty()),
-    };
-
-    let opcode = |tag: u16| raw.get(tag).and_then(|v| v.as_bytes()).map(|b| b.to_vec());
-    let dng_version = version4(ifd0.get(DNG_VERSION)).unwrap_or([1, 0, 0, 0]);
-    let raw_in_sub = d.path.is_some();
-    // TIFF/EP copies of the Exif fields in IFD0 are modelled too (the writer puts the
-    // current values in the Exif IFD; a stale IFD0 copy would contradict them).
-    let ifd0_extra = carried(ifd0, MODELLED_EXIF_TAGS);
-    let raw_extra = if raw_in_sub {
-        carried(raw, &[])
-    } else {
-        Vec::new()
-    };
-    let exif_extra = exif_ifd
-        .map(|e| carried(e, MODELLED_EXIF_TAGS))
-        .unwrap_or_default();
-    // GPS tags (0..=31) have their own numbering: every readable entry is carried.
-    let gps = ifd0
-        .gps
-        .as_deref()
-        .map(|g| g.entries.clone())
-        .unwrap_or_default();
-    Ok(RawMeta {
-        dng_version,
-        dng_backward_version: version4(ifd0.get(DNG_BACKWARD_VERSION)),
-        make: ifd0.string(MAKE),
-        model: ifd0.string(MODEL),
-        unique_camera_model: ifd0.string(UNIQUE_CAMERA_MODEL),
-        bits_per_sample: g.bits,
-        active_area,
-        default_crop_origin,
-        default_crop_size,
-        cfa,
-        linearization_table,
-        levels,
-        as_shot_neutral,
-        as_shot_white_xy,
-        color,
-        noise_profile,
-        orientation,
-        exif,
-        opcode_lists: [
-            opcode(OPCODE_LIST1),
-            opcode(OPCODE_LIST2),
-            opcode(OPCODE_LIST3),
-        ],
-        ifd0_extra,
-        raw_extra,
-        exif_extra,
-        gps,
-        storage: Some(Storage {
-            byte_order: tiff.byte_order,
-            sub_ifd: d.path.clone(),
-            layout: g.layout,
-            compression: g.compression,
-            predictor: raw.u32(PREDICTOR).map(|p| p as u16),
-        }),
-        linear_raw,
-        stored: STORED_TAGS
-            .iter()
-            .filter_map(|&tag| {
-                lookup(d, tag).map(|v| Entry {
-                    tag,
-                    value: v.clone(),
-                })
-            })
-            .collect(),
-        warnings: Vec::new(),
-        noise_profile_problem: None,
-    })
+    }
 }
 
 // ---------------------------------------------------------------------------------------
