@@ -89,10 +89,12 @@ pub(crate) fn fresh_pair<'py>(
                 let pair = crop_pair(&day.raw, &plan, crop, input, tone)?;
                 let (w, h) = (pair.width, pair.height);
                 let look = |c: u16| table[(c as usize).min(table.len() - 1)];
+                // v / 255 per byte value (numpy's float32 division, tabulated)
+                let unit: Vec<f32> = (0..=255u8).map(|v| v as f32 / 255.0).collect();
                 let (x, y) = match patch {
                     Some(p) => (
                         cut_patches(&pair.codes, w, h, p, look)?,
-                        Some(cut_patches(&pair.target, w, h, p, |v| v as f32 / 255.0)?),
+                        Some(cut_patches(&pair.target, w, h, p, |v| unit[v as usize])?),
                     ),
                     None => (pair.codes.iter().map(|&c| look(c)).collect(), None),
                 };

@@ -120,11 +120,7 @@ pub fn release_codes(
     let s = Sites::new(levels, bayer, neutral, top, left)?;
     let lin = linearization.filter(|t| !t.is_empty());
     // Steps 1-3 and the quantization, per sample: the same float32 operations as numpy's.
-    let quant = |x: u16, k: usize| -> u16 {
-        let v = match lin {
-            Some(t) => t[(x as usize).min(t.len() - 1)] as f32,
-            None => x as f32,
-        };
+    let quant = |v: f32, k: usize| -> u16 {
         let v = (v - s.black[k]).max(0.0) / s.scale[k];
         let v = (v / s.neutral[k]).clamp(0.0, 1.0);
         (v * RELEASE_SCALE as f32) as u16
@@ -135,10 +131,26 @@ pub fn release_codes(
         .zip(q.chunks_exact_mut(width))
         .enumerate()
     {
-        let k0 = (r & 1) << 1;
-        for (pair_s, pair_d) in src.chunks(2).zip(dst.chunks_mut(2)) {
-            for (j, (&x, d)) in pair_s.iter().zip(pair_d.iter_mut()).enumerate() {
-                *d = quant(x, k0 | j);
+        let (k0, k1) = ((r & 1) << 1, ((r & 1) << 1) | 1);
+        match lin {
+            Some(t) => {
+                let at = |x: u16| t[(x as usize).min(t.len() - 1)] as f32;
+                for (i, (&x, d)) in src.iter().zip(dst.iter_mut()).enumerate() {
+                    *d = quant(at(x), k0 | (i & 1));
+                }
+            }
+            None => {
+                // two columns at a time: the site constants are fixed per lane
+                let mut pairs = dst.chunks_exact_mut(2);
+                for (d, x) in (&mut pairs).zip(src.chunks_exact(2)) {
+                    d[0] = quant(x[0] as f32, k0);
+                    d[1] = quant(x[1] as f32, k1);
+                }
+                if let (Some(d), Some(&x)) = (pairs.into_remainder().first_mut(), src.last()) {
+                    if width % 2 == 1 {
+                        *d = quant(x as f32, k0);
+                    }
+                }
             }
         }
     }
@@ -168,21 +180,34 @@ fn demosaic_inner(q: &[u16], w: usize, h: usize, colour: &[usize; 4], out: &mut 
         for x in 1..w - 1 {
             let k = k0 | (x & 1);
             let c = colour[k];
-            let px = &mut orow[3 * x..3 * x + 3];
-            px[c] = mid[x];
             let (l, r) = (mid[x - 1] as u32, mid[x + 1] as u32);
             let (u, d) = (up[x] as u32, dn[x] as u32);
-            if c == 1 {
+            let v = mid[x];
+            let rgb = if c == 1 {
                 // the row's other colour from the horizontal neighbours, the column's from
                 // the vertical ones
-                px[colour[k ^ 1]] = ((l + r + 1) >> 1) as u16;
-                px[colour[k ^ 2]] = ((u + d + 1) >> 1) as u16;
+                let hor = ((l + r + 1) >> 1) as u16;
+                let ver = ((u + d + 1) >> 1) as u16;
+                if colour[k ^ 1] == 0 {
+                    [hor, v, ver]
+                } else {
+                    [ver, v, hor]
+                }
             } else {
-                px[1] = ((l + r + u + d + 2) >> 2) as u16;
+                let g = ((l + r + u + d + 2) >> 2) as u16;
                 let diag =
                     up[x - 1] as u32 + up[x + 1] as u32 + dn[x - 1] as u32 + dn[x + 1] as u32;
-                px[2 - c] = ((diag + 2) >> 2) as u16;
-            }
+                let other = ((diag + 2) >> 2) as u16;
+                if c == 0 {
+                    [v, g, other]
+                } else {
+                    [other, g, v]
+                }
+            };
+            let o = &mut orow[3 * x..3 * x + 3];
+            o[0] = rgb[0];
+            o[1] = rgb[1];
+            o[2] = rgb[2];
         }
     }
 }

@@ -171,11 +171,11 @@ pub fn cut_patches<T: Copy, U: Copy + Default>(
     let mut out = vec![U::default(); gw * gh * 3 * patch * patch];
     for (k, tile) in out.chunks_exact_mut(3 * patch * patch).enumerate() {
         let (gy, gx) = (k / gw, k % gw);
-        for i in 0..patch {
-            let src = &img[3 * ((gy * patch + i) * width + gx * patch)..][..3 * patch];
-            for (j, px) in src.chunks_exact(3).enumerate() {
-                for (c, &v) in px.iter().enumerate() {
-                    tile[(c * patch + i) * patch + j] = f(v);
+        for (c, plane) in tile.chunks_exact_mut(patch * patch).enumerate() {
+            for (i, dst) in plane.chunks_exact_mut(patch).enumerate() {
+                let src = &img[3 * ((gy * patch + i) * width + gx * patch)..][..3 * patch];
+                for (d, px) in dst.iter_mut().zip(src.chunks_exact(3)) {
+                    *d = f(px[c]);
                 }
             }
         }
