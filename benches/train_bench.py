@@ -1,15 +1,18 @@
 """Benchmarks of the night ISP trainer (day2night.train; issue 31), run by hand, not a test.
 
     python benches/train_bench.py train  [--features 32] [--batch 128] [--steps 5] [--runs 3]
-    python benches/train_bench.py fresh  DAY.dng [--crop 512] [--items 6] [--runs 3]
+    python benches/train_bench.py fresh  DAY.dng [--crop 512] [--items 40] [--runs 3] [--train-steps 1]
     python benches/train_bench.py noise  DAY.dng [--calls 200] [--runs 3]
     python benches/train_bench.py infer  DAY.dng [--features 32] [--tile 512] [--check-features 4]
 
 - train: training steps/s and patches/s of the UNet on CPU (random 64 x 64 patches; the
   first step, which builds the kernels, is not timed); the median over runs.
 - fresh: FreshPatches on one core (day2night.set_threads(1), torch.set_num_threads(1)):
-  items/s and 64 x 64 patches/s of whole items, and the share of each stage (synthesis,
-  network input, sRGB target, cutting).
+  items/s and 64 x 64 patches/s of whole items (one native ``fresh_pair`` call each), next
+  to the trainer's consumption on the same machine (training steps/s x batch of the UNet at
+  --features, one thread, after the fresh runs; --train-steps 0 skips it); then the numpy
+  path of earlier versions on the same items, stage by stage (synthesis, network input,
+  sRGB target, cutting). The Rust split of an item: benches/fresh.rs.
 - noise: synthesize(raw, crop=64 px) calls/s on an input whose NoiseProfile is removed
   (ISO known: the noise is estimated from the image) against the same input with it.
 - infer: peak RSS of a full-image inference (a child process per run, GNU-time-like
@@ -51,16 +54,17 @@ def bench_train(a):
         opt.step()
 
     step()
-    rates = []
+    rates, cpu = [], []
     for _ in range(a.runs):
-        t = time.perf_counter()
+        t, c = time.perf_counter(), time.process_time()
         for _ in range(a.steps):
             step()
         rates.append(a.steps / (time.perf_counter() - t))
+        cpu.append(a.steps / (time.process_time() - c))
     s = statistics.median(rates)
     return {"bench": "train", "features": a.features, "batch": a.batch,
             "threads": torch.get_num_threads(), "steps_per_s": s, "patches_per_s": s * a.batch,
-            "runs": rates}
+            "runs": rates, "patches_per_cpu_s": statistics.median(cpu) * a.batch}
 
 
 def bench_fresh(a):
@@ -73,18 +77,28 @@ def bench_fresh(a):
     os.symlink(os.path.abspath(a.dng), os.path.join(d, "day.dng"))
     ds = data.FreshPatches(d, crop=a.crop, patch=64, isos=(1600, 3200), seed=0,
                            crops_per_image=10**6)
-    ds[0]  # decode the image into the dataset's cache
-    rates, stages = [], {"synthesize": [], "input": [], "target": [], "cut": []}
-    k = 1
+    ds[0]  # decode the image into the dataset's cache, make its noise estimate
+    rates, cpu_rates, k = [], [], 1
     for _ in range(a.runs):
-        t = time.perf_counter()
+        t, c = time.perf_counter(), time.process_time()
         for _ in range(a.items):
             ds[k]
             k += 1
         rates.append(a.items / (time.perf_counter() - t))
-    for _ in range(a.items):   # the stages of the same work, timed apart
+        cpu_rates.append(a.items / (time.process_time() - c))
+    s = statistics.median(rates)
+    # per CPU second of the process (all its threads): what a core gives when the machine
+    # is shared and the wall clock counts other processes' time too
+    res = {"bench": "fresh", "crop": a.crop, "threads": 1, "items_per_s": s,
+           "patches_per_s_per_core": s * ds.patches_per_item, "runs": rates,
+           "patches_per_cpu_s": statistics.median(cpu_rates) * ds.patches_per_item,
+           "cpu_runs": cpu_rates}
+    # the numpy path of earlier versions on the same items, stage by stage
+    stages = {"synthesize": [], "input": [], "target": [], "cut": []}
+    old, old_cpu = [], []
+    for k in range(1, 1 + a.items):
+        c0 = time.process_time()
         q = ds.pairs.place(k)
-        k += 1
         t0 = time.perf_counter()
         out = day2night.synthesize(q["raw"], seed=0, variant=q["variant"], isos=(q["iso"],),
                                    crop=q["crop"])
@@ -98,10 +112,19 @@ def bench_fresh(a):
         t4 = time.perf_counter()
         for name, dt in zip(stages, (t1 - t0, t2 - t1, t3 - t2, t4 - t3)):
             stages[name].append(dt)
-    s = statistics.median(rates)
-    return {"bench": "fresh", "crop": a.crop, "items_per_s": s,
-            "patches_per_s_per_core": s * ds.patches_per_item, "runs": rates,
-            "stage_ms": {n: 1000 * statistics.median(v) for n, v in stages.items()}}
+        old.append(t4 - t0)
+        old_cpu.append(time.process_time() - c0)
+    res["numpy_path"] = {
+        "patches_per_s_per_core": ds.patches_per_item / statistics.median(old),
+        "patches_per_cpu_s": ds.patches_per_item * len(old_cpu) / sum(old_cpu),
+        "stage_ms": {n: 1000 * statistics.median(v) for n, v in stages.items()}}
+    if a.train_steps > 0:
+        tr = bench_train(argparse.Namespace(features=a.features, batch=a.batch,
+                                            steps=a.train_steps, runs=a.runs))
+        res["trainer"] = {k: tr[k] for k in ("features", "batch", "threads", "steps_per_s",
+                                              "patches_per_s", "runs", "patches_per_cpu_s")}
+        res["fresh_over_trainer"] = res["patches_per_s_per_core"] / tr["patches_per_s"]
+    return res
 
 
 def bench_noise(a):
@@ -182,7 +205,8 @@ def main():
     p.add_argument("--steps", type=int, default=5)
     p.add_argument("--runs", type=int, default=3)
     p.add_argument("--crop", type=int, default=512)
-    p.add_argument("--items", type=int, default=6)
+    p.add_argument("--items", type=int, default=40)
+    p.add_argument("--train-steps", type=int, default=1)
     p.add_argument("--calls", type=int, default=200)
     p.add_argument("--tile", type=int, default=512)
     a = p.parse_args()

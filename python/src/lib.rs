@@ -7,7 +7,8 @@
 //! JSON values, `Raw.meta`), `synth_options` (keyword options to a job), `raw_from` (a
 //! metadata dict to a raw). Entry points: `raw` (`Raw`, `read_dng`),
 //! `synthesize` (`synthesize`, `write_outputs`), `render`, `metrics`, `pairs`
-//! (`NightPairs` items), `dataset_units`, `pool` (`set_threads`, `threads`).
+//! (`NightPairs` items), `patches` (`fresh_pair`: `FreshPatches` items), `dataset_units`,
+//! `pool` (`set_threads`, `threads`).
 #![forbid(unsafe_code)]
 
 mod args;
@@ -17,6 +18,7 @@ mod dataset_units;
 mod errors;
 mod metrics;
 mod pairs;
+mod patches;
 mod pool;
 mod raw;
 mod raw_from;
@@ -58,6 +60,7 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("XYZ_TO_SRGB", xyz_to_srgb)?;
     m.add_function(wrap_pyfunction!(args::check_int, m)?)?;
     m.add_function(wrap_pyfunction!(pairs::night_pair, m)?)?;
+    m.add_function(wrap_pyfunction!(patches::fresh_pair, m)?)?;
     m.add_function(wrap_pyfunction!(dataset_units::dataset_units, m)?)?;
     m.add_function(wrap_pyfunction!(dataset_units::write_unit, m)?)?;
     m.add_function(wrap_pyfunction!(dataset_units::write_units, m)?)?;

@@ -93,6 +93,47 @@ def test_fresh_patches(day_dir):
         data.FreshPatches(day_dir, crop=100, patch=64)
 
 
+@pytest.mark.parametrize("task,gamma", [("noisy", None), ("clean", 1 / 2.2), ("noisy", 0.5)])
+def test_fresh_patches_native_path_equals_the_numpy_path(day_dir, task, gamma):
+    """The one native call per item (fresh_pair) gives the bits of synthesize + the numpy
+    network input (with its gamma table) + srgb8 + cut, for every item, task and gamma."""
+    need_torch()
+    from day2night.train import data
+    ds = data.FreshPatches(day_dir, crop=192, patch=64, isos=(1600, 3200), seed=5,
+                           crops_per_image=2, task=task, gamma=gamma)
+    for epoch in (0, 3):
+        ds.set_epoch(epoch)
+        for i in range(len(ds)):
+            xr, yr = ds.reference_arrays(i)
+            x, y = ds.arrays(i)
+            assert x.dtype == np.float32 and y.dtype == np.uint8
+            assert np.array_equal(x, xr) and np.array_equal(y, yr), (epoch, i)
+            xs, ys = ds[i]
+            assert np.array_equal(xs.numpy(), data.cut(xr, 64))
+            assert np.array_equal(ys.numpy(), data.cut(yr, 64).astype(np.float32) / np.float32(255))
+
+
+def test_fresh_pair_arguments(day_dng):
+    from day2night._native import fresh_pair
+    raw = day2night.read_dng(day_dng)
+    crop = (0, 0, 128, 128)
+    x, y = fresh_pair(raw, crop, 1600, patch=32)
+    assert x.shape == y.shape == (16, 3, 32, 32)
+    # the default table: code / 16383 ** (1/2.2) by Rust's powf, within 1 ulp of numpy's
+    from day2night.train import preprocess
+    xt, _ = fresh_pair(raw, crop, 1600, table=preprocess._table(preprocess.GAMMA))
+    xd, _ = fresh_pair(raw, crop, 1600)
+    assert np.max(np.abs(xd.view(np.int32) - xt.view(np.int32))) <= 1
+    with pytest.raises(ValueError, match="task"):
+        fresh_pair(raw, crop, 1600, task="both")
+    with pytest.raises(ValueError, match="whole number of 48x48"):
+        fresh_pair(raw, crop, 1600, patch=48)
+    with pytest.raises(ValueError, match="16384"):
+        fresh_pair(raw, crop, 1600, table=np.zeros(10, dtype=np.float32))
+    with pytest.raises(ValueError, match="odd|even"):
+        fresh_pair(raw, (1, 0, 64, 64), 1600)
+
+
 def test_noise_estimate_is_made_once_per_raw_with_the_same_numbers(day_dng):
     raw = day2night.read_dng(day_dng)
     meta = dict(raw.meta)
@@ -107,3 +148,29 @@ def test_noise_estimate_is_made_once_per_raw_with_the_same_numbers(day_dng):
         assert ref["noise_provenance"]["source"] == "image_estimate"
         assert ref["noise_profile"] == out["noise_profile"]
         assert np.array_equal(ref["noisy"][1600], out["noisy"][1600])
+
+
+def test_fresh_pair_of_a_linearized_input_reads_the_linear_night_samples(day_dng):
+    """The night raws of an input with a LinearizationTable hold linear samples (the table
+    is applied once, by the synthesis, and dropped from their metadata): the network input
+    normalizes them as they are. (The numpy path of earlier versions applied the day
+    input's table a second time.)"""
+    from day2night._native import fresh_pair
+    from day2night.train import preprocess
+    raw = day2night.read_dng(day_dng)
+    meta = dict(raw.meta)
+    # a curve that moves every value: x -> x * 7 / 8 + x^2 / 40000, capped at white
+    x = np.arange(4096, dtype=np.float64)
+    meta["linearization_table"] = list(np.minimum(x * 7 / 8 + x * x / 40000, 4095).astype(int))
+    lin = day2night.Raw.from_array(raw.data, meta, name=raw.name)
+    crop = (64, 96, 128, 128)
+    out = day2night.synthesize(lin, seed=4, variant=2, isos=(3200,), crop=crop)
+    night_meta = dict(meta, linearization_table=None)
+    want = preprocess.network_input_array(out["noisy"][3200], night_meta, out["neutral"], 64, 96)
+    got, y = fresh_pair(lin, crop, 3200, seed=4, variant=2,
+                        table=preprocess._table(preprocess.GAMMA))
+    assert np.array_equal(got, want)
+    twice = preprocess.network_input_array(out["noisy"][3200], meta, out["neutral"], 64, 96)
+    assert not np.array_equal(got, twice)
+    from day2night.train import targets
+    assert np.array_equal(y, targets.srgb8(out["target"]))

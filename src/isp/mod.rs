@@ -14,6 +14,7 @@ pub mod flat;
 pub mod geometry;
 pub mod opcodes;
 pub(crate) mod place;
+pub mod release_input;
 pub mod render;
 pub mod render_bands;
 pub mod render_crop;

@@ -27,6 +27,7 @@ pub mod neutral;
 pub mod night;
 pub mod noise_source;
 pub mod outputs;
+pub mod patches;
 pub mod plan;
 pub mod plan_bounds;
 pub mod readiness;

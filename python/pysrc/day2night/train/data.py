@@ -11,7 +11,11 @@
   ``crop`` x ``crop`` synthesis of a ``NightPairs`` draw (a new night variant, crop position
   and ISO per epoch and index) cut into (crop/patch)^2 patches: input = the release's
   network input of the noisy (or clean) crop white-balanced by the image's average night
-  illuminant, target = ``srgb8`` of the synthesized linear target / 255.
+  illuminant, target = ``srgb8`` of the synthesized linear target / 255. One native call
+  (``day2night._native.fresh_pair``) makes both, already cut: the numbers of
+  ``synthesize(..., crop=...)`` put through ``preprocess.network_input_array`` (with its
+  gamma table), ``targets.srgb8`` and ``cut``, bit for bit, without the arrays an item
+  does not need (no other ISO's noise, no clean plane returned, no plan dict).
 
 Both shard with ``torch.utils.data.DistributedSampler`` (``trainer`` does it under
 torchrun): an item is a function of its index (and of the epoch for ``FreshPatches``).
@@ -153,8 +157,21 @@ class FreshPatches(torch.utils.data.Dataset):
     def epoch(self):
         return self.pairs.epoch
 
+    def _pair(self, index, patch):
+        from .._native import fresh_pair
+        q = self.pairs.place(index)
+        return fresh_pair(q["raw"], q["crop"], q["iso"], seed=self.seed, variant=q["variant"],
+                          mode=self.mode, task=self.task, table=preprocess._table(self.gamma),
+                          patch=patch, **self.options)
+
     def arrays(self, index):
         """(input H x W x 3 float32, target H x W x 3 uint8) of item ``index``."""
+        return self._pair(index, None)
+
+    def reference_arrays(self, index):
+        """``arrays(index)`` computed the long way: ``synthesize`` of the crop, then
+        ``preprocess.network_input_array`` and ``targets.srgb8`` in numpy (the same numbers;
+        for tests and benches)."""
         from .._native import synthesize
         q = self.pairs.place(index)
         raw, (top, left, h, w) = q["raw"], q["crop"]
@@ -165,9 +182,7 @@ class FreshPatches(torch.utils.data.Dataset):
         return x, targets.srgb8(out["target"])
 
     def __getitem__(self, index):
-        x, y = self.arrays(int(index))
-        xs = cut(x, self.patch)
-        ys = cut(y, self.patch).astype(np.float32) / np.float32(255)
+        xs, ys = self._pair(int(index), self.patch)
         return torch.from_numpy(xs), torch.from_numpy(ys)
 
 

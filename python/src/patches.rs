@@ -1,0 +1,128 @@
+//! `fresh_pair`: the night ISP's training pair of one synthesized crop (the release's
+//! network input and the 8-bit target), whole or cut into patches, in one call
+//! (`day2night.train.FreshPatches`; `day2night::synth::patches`).
+
+use crate::args::{self, Iso, Seed, Variant};
+use crate::convert::warn_plan;
+use crate::errors::{py_err, value_err};
+use crate::pool::on_pool;
+use crate::raw::Raw;
+use crate::synth_options::{job_config, job_for};
+use day2night::isp::release_input::{check_table, release_table, RELEASE_GAMMA};
+use day2night::isp::tone::DisplayTone;
+use day2night::synth::patches::{crop_pair, cut_patches, PairInput};
+use numpy::ndarray::{Array3, Array4};
+use numpy::{IntoPyArray, PyReadonlyArray1};
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+
+/// The training pair of the ``crop`` of one night variant of ``raw``: what
+/// ``synthesize(raw, seed=seed, variant=variant, mode=mode, isos=(iso,), crop=crop,
+/// **options)`` makes of it, turned into the night ISP's input and target without
+/// returning anything else.
+///
+/// - input: the release's network input (``day2night.train.preprocess``) of the crop's
+///   noisy raw at ``iso`` (``task="noisy"``) or of its clean raw (``task="clean"``),
+///   white-balanced by the variant's night neutral, through ``table`` (16384 float32
+///   values, one per 14-bit code: ``preprocess``'s gamma table; default: ``code / 16383``
+///   raised to 1/2.2 by Rust's ``powf``);
+/// - target: the 8-bit ``tone`` encoding of the crop's linear target (``srgb8``).
+///
+/// With ``patch=None``: (input H x W x 3 float32, target H x W x 3 uint8). With
+/// ``patch=p``: both cut into the (H/p) * (W/p) tiles of their row-major grid, k x 3 x p x
+/// p float32 each, the target divided by 255 (``FreshPatches``' items). The crop's offsets
+/// must be even; only the ISO the input needs gets noise.
+///
+/// >>> x, y = day2night.fresh_pair(raw, (0, 0, 512, 512), 1600, variant=3, patch=64)
+/// >>> x.shape, y.shape
+/// ((64, 3, 64, 64), (64, 3, 64, 64))
+#[pyfunction]
+#[pyo3(signature = (raw, crop, iso, seed=Seed(0), variant=Variant(0), mode="local", task="noisy", table=None, patch=None, tone="srgb", **options))]
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn fresh_pair<'py>(
+    py: Python<'py>,
+    raw: &Bound<'py, Raw>,
+    crop: &Bound<'py, PyAny>,
+    iso: Iso,
+    seed: Seed,
+    variant: Variant,
+    mode: &str,
+    task: &str,
+    table: Option<PyReadonlyArray1<'py, f32>>,
+    patch: Option<usize>,
+    tone: &str,
+    options: Option<&Bound<'py, PyDict>>,
+) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>)> {
+    let input = match task {
+        "noisy" => PairInput::Noisy(iso.0),
+        "clean" => PairInput::Clean,
+        t => return Err(value_err(format!("task {t:?}: use \"noisy\" or \"clean\""))),
+    };
+    let tone: DisplayTone = tone.parse().map_err(py_err)?;
+    let table = match &table {
+        Some(t) => t.as_slice()?.to_vec(),
+        None => release_table(Some(RELEASE_GAMMA)),
+    };
+    check_table(&table).map_err(py_err)?;
+    if patch == Some(0) {
+        return Err(value_err("patch must be at least 1"));
+    }
+    let cfg = job_config(mode, vec![iso.0], true, options)?;
+    let r = raw.get();
+    let a = r.day.raw.active_area();
+    let crop = args::crop(crop, a.width(), a.height())?;
+    if let Some(p) = patch {
+        if crop.width % p != 0 || crop.height % p != 0 {
+            return Err(value_err(format!(
+                "crop {}x{} is not a whole number of {p}x{p} patches",
+                crop.width, crop.height
+            )));
+        }
+    }
+    let day = r.cfa_day()?;
+    let file_name = r.file_name.clone();
+    let (plan, pair, x, y) = py
+        .detach(move || {
+            on_pool(move || {
+                let job = job_for(&cfg)?;
+                let plan = job.plan(&day, &file_name, seed.0, variant.0)?;
+                let pair = crop_pair(&day.raw, &plan, crop, input, tone)?;
+                let (w, h) = (pair.width, pair.height);
+                let look = |c: u16| table[(c as usize).min(table.len() - 1)];
+                // v / 255 per byte value (numpy's float32 division, tabulated)
+                let unit: Vec<f32> = (0..=255u8).map(|v| v as f32 / 255.0).collect();
+                let (x, y) = match patch {
+                    Some(p) => (
+                        cut_patches(&pair.codes, w, h, p, look)?,
+                        Some(cut_patches(&pair.target, w, h, p, |v| unit[v as usize])?),
+                    ),
+                    None => (pair.codes.iter().map(|&c| look(c)).collect(), None),
+                };
+                Ok((plan, pair, x, y))
+            })
+        })
+        .map_err(py_err)?;
+    // The plan's warnings (as `synthesize` raises them), then the run's.
+    warn_plan(
+        py,
+        &r.file_name,
+        &r.day.raw.meta,
+        &plan,
+        &pair.report.warnings,
+    )?;
+    let shape_err = |e: numpy::ndarray::ShapeError| value_err(e.to_string());
+    let (w, h) = (pair.width, pair.height);
+    match (patch, y) {
+        (Some(p), Some(y)) => {
+            let k = (w / p) * (h / p);
+            let x = Array4::from_shape_vec((k, 3, p, p), x).map_err(shape_err)?;
+            let y = Array4::from_shape_vec((k, 3, p, p), y).map_err(shape_err)?;
+            Ok((x.into_pyarray(py).into_any(), y.into_pyarray(py).into_any()))
+        }
+        _ => {
+            let x = Array3::from_shape_vec((h, w, 3), x).map_err(shape_err)?;
+            let y = Array3::from_shape_vec((h, w, 3), pair.target).map_err(shape_err)?;
+            Ok((x.into_pyarray(py).into_any(), y.into_pyarray(py).into_any()))
+        }
+    }
+}
