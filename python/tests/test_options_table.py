@@ -104,3 +104,24 @@ def test_new_options_reach_the_plan(raw):
     assert out["plan"]["dim"]["range"] == [0.3, 0.3]
     base = day2night.synthesize(raw, isos=(1600,), crop=(0, 0, 32, 32), target=None)
     assert base["plan"]["dim"]["range"] == [0.55, 0.9]
+
+
+def test_parameters_bind_as_before(raw, day_dng, tmp_path):
+    """synthesize's parameters by position or by name, as its signature says."""
+    crop = (0, 0, 32, 32)
+    a = day2night.synthesize(raw, 3, 0, "local", (1600,), None, crop)
+    b = day2night.synthesize(raw, seed=3, variant=0, mode="local", isos=(1600,), target=None,
+                             crop=crop)
+    assert (a["clean"] == b["clean"]).all()
+    assert a["target"] is None and a["crop"] == crop
+    with pytest.raises(TypeError, match="multiple values for argument 'seed'"):
+        day2night.synthesize(raw, 3, seed=3)
+    with pytest.raises(TypeError, match="positional"):
+        day2night.synthesize(raw, 3, 0, "local", (1600,), None, crop, 1)
+    assert "seed=0" in day2night.synthesize.__text_signature__
+    with pytest.raises(TypeError, match="unexpected keyword argument 'colour'"):
+        day2night.dataset_units(tmp_path, colour=1)
+    with pytest.raises(ValueError, match=r"variants: 0 is outside"):
+        day2night.dataset_units(tmp_path, variants=0)
+    with pytest.raises(TypeError):
+        day2night.dataset_units(tmp_path, None, 2)
