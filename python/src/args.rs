@@ -101,15 +101,6 @@ impl IntArg {
     pub fn get_as<T: TryFrom<u64>>(&self, v: &Bound<'_, PyAny>, label: &str) -> PyResult<T> {
         in_range(v, label, self.lo, self.hi)
     }
-
-    /// An optional argument: None stays None.
-    pub fn opt<T: TryFrom<u64>>(&self, v: &Bound<'_, PyAny>) -> PyResult<Option<T>> {
-        if v.is_none() {
-            Ok(None)
-        } else {
-            self.get(v).map(Some)
-        }
-    }
 }
 
 /// `v` as an integer in `lo..=hi`, or the error naming `label` and the range.
@@ -329,4 +320,66 @@ pub(crate) fn crop(v: &Bound<'_, PyAny>, aw: usize, ah: usize) -> PyResult<Crop>
         height,
         width,
     })
+}
+
+/// A bound parameter's value, None when the call did not give it.
+pub(crate) type Given<'py> = Option<Bound<'py, PyAny>>;
+
+/// The parameters `names` of the Python function `func`, bound from its positional `args`
+/// (in order) and its keyword arguments `kwargs`, as Python binds a signature of
+/// positional-or-keyword parameters (a value given twice, or too many positional values,
+/// is a `TypeError` with Python's own words). Returns each parameter's value (None when
+/// not given: the caller applies the default) and the other keyword arguments: with
+/// `rest`, the `**options` the caller parses; without, an unexpected keyword is a
+/// `TypeError`. Lets a function with many parameters take them as one value.
+pub(crate) fn bind<'py>(
+    func: &str,
+    names: &[&str],
+    args: &Bound<'py, pyo3::types::PyTuple>,
+    kwargs: Option<&Bound<'py, PyDict>>,
+    rest: bool,
+) -> PyResult<(Vec<Given<'py>>, Bound<'py, PyDict>)> {
+    if args.len() > names.len() {
+        return Err(PyTypeError::new_err(format!(
+            "{func}() takes at most {} positional arguments after the first but {} were given",
+            names.len(),
+            args.len()
+        )));
+    }
+    let mut values: Vec<Given<'py>> = vec![None; names.len()];
+    for (slot, a) in values.iter_mut().zip(args.iter()) {
+        *slot = Some(a);
+    }
+    let others = PyDict::new(args.py());
+    if let Some(kw) = kwargs {
+        for (k, v) in kw.iter() {
+            let key: String = k.extract()?;
+            match names.iter().position(|n| *n == key) {
+                Some(i) if values[i].is_some() => {
+                    return Err(PyTypeError::new_err(format!(
+                        "{func}() got multiple values for argument '{key}'"
+                    )))
+                }
+                Some(i) => values[i] = Some(v),
+                None if rest => others.set_item(k, v)?,
+                None => {
+                    return Err(PyTypeError::new_err(format!(
+                        "{func}() got an unexpected keyword argument '{key}'"
+                    )))
+                }
+            }
+        }
+    }
+    Ok((values, others))
+}
+
+/// A bound parameter's value extracted, or `default` when it was not given.
+pub(crate) fn or_default<'py, T: for<'a> FromPyObject<'a, 'py, Error = PyErr>>(
+    v: &Given<'py>,
+    default: T,
+) -> PyResult<T> {
+    match v {
+        Some(v) => v.extract::<T>(),
+        None => Ok(default),
+    }
 }

@@ -1,44 +1,16 @@
-//! Night bursts in Python (docs/python.md, "Bursts"): the `burst=`, `motion=`,
-//! `shake_step=`, `shake_roll=` and `warp_interp=` options, a burst's frames as one
-//! (N, H, W) array, and the frames' transforms as Python values.
+//! Night bursts in Python (docs/python.md, "Bursts"): a burst's frames as one (N, H, W)
+//! array, and the frames' transforms as Python values. The `burst=`, `motion=`,
+//! `shake_step=`, `shake_roll=` and `warp_interp=` options are the option table's
+//! (python/src/synth_options.rs).
 
 use crate::convert::json_obj;
 use crate::errors::value_err;
 use day2night::raw::RawImage;
-use day2night::synth::burst::checks::{BurstRequest, Names};
-use day2night::synth::burst::motion::MAX_FRAMES;
-use day2night::synth::burst::BurstOptions;
 use day2night::synth::night::Night;
 use day2night::synth::Plan;
 use numpy::ndarray::{Array2, Array3};
 use numpy::IntoPyArray;
 use pyo3::prelude::*;
-
-/// The option names of a burst.
-pub(crate) const OPTIONS: [&str; 5] =
-    ["burst", "motion", "shake_step", "shake_roll", "warp_interp"];
-
-/// Record the burst option `key` (one of [`OPTIONS`]) from `v` in `r`: only its Python type
-/// is checked here (an int that is not a bool, a float, a str; a `TypeError` naming the
-/// argument); the values are checked together by [`resolve`], the command line's check.
-pub(crate) fn set_option(r: &mut BurstRequest, key: &str, v: &Bound<'_, PyAny>) -> PyResult<()> {
-    match key {
-        "burst" => r.frames = Some(crate::args::integer(v, key, 1, u64::from(MAX_FRAMES))?),
-        "motion" => r.motion = Some(crate::args::string(v, key)?),
-        "shake_step" => r.shake_step = Some(crate::args::float(v, key)?),
-        "shake_roll" => r.shake_roll = Some(crate::args::float(v, key)?),
-        "warp_interp" => r.warp_interp = Some(crate::args::string(v, key)?),
-        other => return Err(value_err(format!("unknown burst option {other:?}"))),
-    }
-    Ok(())
-}
-
-/// The burst `r` asks for, by the same rules and messages as the command line's flags
-/// (a `ValueError` naming the argument and its range).
-pub(crate) fn resolve(r: &BurstRequest) -> PyResult<BurstOptions> {
-    r.resolve(&Names::PYTHON)
-        .map_err(|e| value_err(crate::errors::text(&e)))
-}
 
 /// The frames of `iso` in `night` (frame 00 first) as raws.
 pub(crate) fn frames_of<'a>(night: &'a Night, iso: u32, frame0: &'a RawImage) -> Vec<&'a RawImage> {

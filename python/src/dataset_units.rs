@@ -3,19 +3,17 @@
 //! `day2night::dataset::units` does the work; this file converts Python values (the CLI's
 //! option names and values, in snake case) to the library's types and back.
 
-use crate::args::{self, Seed, Val, Variants, BULBS, EXR_ZIP_LEVEL, ISO, LIGHTS, SEED, VARIANTS};
+use crate::args::{self, Seed, Val, Variants, SEED, VARIANTS};
 use crate::convert::json_obj;
-use crate::errors::{arg_err, py_err, value_err};
+use crate::errors::{py_err, value_err};
 use crate::pool::on_pool;
+use crate::synth_options::{self, Scope};
 use day2night::dataset::resume::Reason;
 use day2night::dataset::synthesis::SynthProcessor;
 use day2night::dataset::units::{self as lib, UnitsOptions, WriteOptions};
 use day2night::dataset::{Record, Shard, Split, SplitRule, Unit};
-use day2night::dng::write::Compression;
-use day2night::encode::exr::{ExrCompression, ExrOptions};
-use day2night::synth::config::{parse_isos, parse_neutral, JobConfig};
-use day2night::synth::job::Target;
-use day2night::synth::{Covariance, MaskEval, Mode, RelightFormula};
+use day2night::synth::config::JobConfig;
+use day2night::synth::options::Draft;
 use day2night::Error;
 use pyo3::prelude::*;
 
@@ -38,7 +36,7 @@ impl day2night::dataset::Progress for StderrWarnings {
 fn stderr_warnings() -> day2night::dataset::ProgressSink {
     day2night::dataset::ProgressSink::new(StderrWarnings)
 }
-use pyo3::types::{PyDict, PyList};
+use pyo3::types::{PyDict, PyList, PyTuple};
 use std::collections::HashMap;
 use std::path::PathBuf;
 use std::sync::{Arc, Mutex, OnceLock};
@@ -81,27 +79,39 @@ fn parse_shard(shard: Option<&str>) -> PyResult<Shard> {
 ///
 /// >>> units = day2night.dataset_units("day/", "night/", variants=2, val=10, seed=1)
 #[pyfunction]
-#[pyo3(signature = (day_dir, out_dir=None, *, variants=Variants(1), val=None, val_fraction=None, seed=Seed(0), shard=None, overwrite=false))]
-#[allow(clippy::too_many_arguments)]
+#[pyo3(
+    signature = (day_dir, out_dir=None, **kwargs),
+    text_signature = "(day_dir, out_dir=None, *, variants=1, val=None, val_fraction=None, seed=0, shard=None, overwrite=False)"
+)]
 pub fn dataset_units<'py>(
     py: Python<'py>,
     day_dir: PathBuf,
     out_dir: Option<PathBuf>,
-    variants: Variants,
-    val: Option<Val>,
-    val_fraction: Option<f64>,
-    seed: Seed,
-    shard: Option<&str>,
-    overwrite: bool,
+    kwargs: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyList>> {
-    let (variants, val, seed) = (variants.0, val.map(|v| v.0), seed.0);
+    // Keyword-only parameters, bound by name (Python's errors for an unknown one).
+    let names = [
+        "variants",
+        "val",
+        "val_fraction",
+        "seed",
+        "shard",
+        "overwrite",
+    ];
+    let (p, _) = args::bind("dataset_units", &names, &PyTuple::empty(py), kwargs, false)?;
+    let variants = args::or_default(&p[0], Variants(1))?.0;
+    let val = args::or_default::<Option<Val>>(&p[1], None)?.map(|v| v.0);
+    let val_fraction = args::or_default::<Option<f64>>(&p[2], None)?;
+    let seed = args::or_default(&p[3], Seed(0))?.0;
+    let shard = args::or_default::<Option<String>>(&p[4], None)?;
+    let overwrite = args::or_default(&p[5], false)?;
     let opts = UnitsOptions {
         day_dir,
         out_dir,
         split: parse_split_rule(val, val_fraction, seed)?,
         variants,
         seed,
-        shard: parse_shard(shard)?,
+        shard: parse_shard(shard.as_deref())?,
         overwrite,
     };
     let planned = py.detach(move || lib::units(&opts)).map_err(py_err)?;
@@ -176,121 +186,18 @@ fn unit_from(d: &Bound<'_, PyAny>) -> PyResult<(Unit, Option<Record>)> {
     Ok((unit, previous))
 }
 
-const KNOWN: &str = "iso, mode, relight_formula, bulbs, lights, illuminants, covariance, \
-brightness, noise_model, day_neutral, mask_eval, target, input_exr, compression, \
-exr_compression, exr_zip_level, truncate, compat";
-
-fn parsed<T: std::str::FromStr<Err = Error>>(v: &Bound<'_, PyAny>, name: &str) -> PyResult<T> {
-    v.extract::<String>()?
-        .parse::<T>()
-        .map_err(|e| arg_err(name, e))
-}
-
 /// The job `dataset`'s flags spell, from keyword options named like the flags (`--iso` is
-/// `iso`, `--noise-model` is `noise_model`, ...), with the same values and defaults.
+/// `iso`, `--noise-model` is `noise_model`, ...), with the same values and defaults: the
+/// option table's (python/src/synth_options.rs).
 fn dataset_config(variants: u32, options: Option<&Bound<'_, PyDict>>) -> PyResult<JobConfig> {
-    let mut cfg = JobConfig {
-        variants,
-        ..JobConfig::default()
-    };
-    let mut release = false;
-    let mut zip_level = ExrOptions::DEFAULT_ZIP_LEVEL;
-    let path = |v: &Bound<'_, PyAny>| -> PyResult<Option<PathBuf>> {
-        if v.is_none() {
-            Ok(None)
-        } else {
-            Ok(Some(v.extract::<PathBuf>()?))
-        }
-    };
-    if let Some(opts) = options {
-        for (k, v) in opts.iter() {
-            let key: String = k.extract()?;
-            let o = &mut cfg.options;
-            match key.as_str() {
-                "iso" => {
-                    // As --iso: "1600,3200" or "none"; or one ISO, or a list of them (each
-                    // in ISO_RANGE, duplicates dropped).
-                    o.isos = if v.is_none() {
-                        Vec::new()
-                    } else if let Ok(s) = v.extract::<String>() {
-                        parse_isos(&s).map_err(|e| arg_err("iso", e))?
-                    } else if v.hasattr("__index__")? {
-                        vec![ISO.get(&v)?]
-                    } else {
-                        let mut list = Vec::new();
-                        for i in args::isos(&v, "iso")? {
-                            if !list.contains(&i) {
-                                list.push(i);
-                            }
-                        }
-                        list
-                    }
-                }
-                "mode" => o.mode = parsed::<Mode>(&v, "mode")?,
-                "relight_formula" => o.formula = parsed::<RelightFormula>(&v, "relight_formula")?,
-                "bulbs" => o.bulbs = BULBS.opt(&v)?,
-                "lights" => o.local_lights = LIGHTS.opt(&v)?,
-                "covariance" => o.covariance = parsed::<Covariance>(&v, "covariance")?,
-                "day_neutral" => {
-                    o.day_neutral = if v.is_none() {
-                        None
-                    } else if let Ok(s) = v.extract::<String>() {
-                        Some(parse_neutral(&s).map_err(|e| arg_err("day_neutral", e))?)
-                    } else {
-                        let n: Vec<f64> = v.extract()?;
-                        match n.as_slice() {
-                            [r, g, b] => Some([*r, *g, *b]),
-                            _ => return Err(value_err("day_neutral must be (r, g, b)")),
-                        }
-                    }
-                }
-                "mask_eval" => o.mask_eval = parsed::<MaskEval>(&v, "mask_eval")?,
-                "truncate" => o.truncate = v.extract()?,
-                "compat" => {
-                    release = match v.extract::<Option<String>>()?.as_deref() {
-                        None => false,
-                        Some("release") => true,
-                        Some(c) => return Err(value_err(format!("compat {c:?}: use \"release\" or None"))),
-                    }
-                }
-                "illuminants" => cfg.illuminants = path(&v)?,
-                "brightness" => cfg.brightness = path(&v)?,
-                "noise_model" => cfg.noise_model = path(&v)?,
-                "target" => {
-                    cfg.target = match v.extract::<String>()?.as_str() {
-                        "exr" => Target::Exr,
-                        "png" => Target::Png,
-                        "both" => Target::Both,
-                        "none" => Target::None,
-                        t => return Err(value_err(format!("target {t:?}: exr, png, both or none"))),
-                    }
-                }
-                "input_exr" => cfg.input_exr = v.extract()?,
-                "compression" => {
-                    cfg.compression = match v.extract::<String>()?.as_str() {
-                        "none" => Compression::None,
-                        "ljpeg" => Compression::Ljpeg,
-                        c => return Err(value_err(format!("compression {c:?}: none or ljpeg"))),
-                    }
-                }
-                "exr_compression" => {
-                    cfg.exr.compression = parsed::<ExrCompression>(&v, "exr_compression")?
-                }
-                "exr_zip_level" => zip_level = EXR_ZIP_LEVEL.get(&v)?,
-                other => {
-                    return Err(value_err(format!(
-                        "unknown option {other:?} (known: {KNOWN}; seed, variants, val and shard are dataset_units')"
-                    )))
-                }
-            }
-        }
-    }
-    cfg.exr.zip_level = zip_level;
-    if release {
-        // Applied last, like --compat release: it checks the other options.
-        cfg.options = cfg.options.clone().release_compat().map_err(py_err)?;
-    }
-    Ok(cfg)
+    let mut draft = Draft::new(variants);
+    synth_options::apply(
+        &mut draft,
+        options,
+        Scope::Files,
+        "; seed, variants, val and shard are dataset_units'",
+    )?;
+    synth_options::finish(draft)
 }
 
 /// Processors already built (calibration files loaded), by configuration: a worker writes

@@ -36,12 +36,6 @@ pub(crate) fn py_err_noting(e: Error, note: &str) -> PyErr {
     }
 }
 
-/// A library error about the Python argument `name`: `ValueError("name: <error>")`, the
-/// error below any file context.
-pub(crate) fn arg_err(name: &str, e: Error) -> PyErr {
-    value_err(format!("{name}: {}", e.root()))
-}
-
 /// An error's message without its kind (`invalid parameter: `, ...) or file context: the
 /// words a Python argument's error speaks.
 pub(crate) fn text(e: &Error) -> String {

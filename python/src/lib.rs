@@ -51,6 +51,7 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(pool::threads, m)?)?;
     m.add_function(wrap_pyfunction!(raw::write_dng, m)?)?;
     m.add("BOUNDS", args::bounds_dict(m.py())?)?;
+    m.add("SYNTH_OPTIONS", synth_options::table_dict(m.py())?)?;
     // XYZ (D65) -> linear sRGB, three rows: day2night::color::xyz::XYZ_TO_SRGB, the one
     // definition (rawpy_meta.py undoes LibRaw's camera -> sRGB matrix with it).
     let xyz_to_srgb: Vec<Vec<f64>> = day2night::color::xyz::XYZ_TO_SRGB

@@ -104,9 +104,7 @@ fn planar(rgb: &[f32], n: usize) -> Vec<f32> {
 /// (3 x h x w float32, linear Rec.709). Used by ``NightPairs``.
 #[pyfunction]
 #[pyo3(signature = (raw, seed, variant, iso, crop, mode="local", **options))]
-#[allow(clippy::too_many_arguments)]
 pub fn night_pair<'py>(
-    py: Python<'py>,
     raw: &Bound<'py, Raw>,
     seed: Seed,
     variant: Variant,
@@ -115,6 +113,7 @@ pub fn night_pair<'py>(
     mode: &str,
     options: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyDict>> {
+    let py = raw.py();
     let (seed, variant, iso) = (seed.0, variant.0, iso.0);
     let a = raw.get().day.raw.active_area();
     let Crop {

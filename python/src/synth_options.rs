@@ -1,122 +1,195 @@
-//! The options of `synthesize` and `night_pair` (the command line's flags as keyword
-//! arguments) converted to a `JobConfig`, and the jobs built from them, cached per process.
+//! The keyword options of the synthesis functions (`synthesize`, `night_pair`,
+//! `write_unit`, `write_units`), parsed through the library's option table
+//! (`day2night::synth::options::OPTIONS`, the one declaration of each option that the
+//! command line's flags are also made from), and the jobs built from them, cached per
+//! process. Each value is type checked here (a `TypeError` naming the keyword), integers
+//! against the table's range (a `ValueError` naming the keyword, the value and the range);
+//! the table's setter parses the rest (a `ValueError` naming the keyword, the value and
+//! what it accepts). An unknown keyword lists the keywords the function takes.
 
-use crate::args::{BULBS, LIGHTS};
-use crate::errors::{py_err, value_err};
+use crate::args;
+use crate::errors::{text, value_err};
 use day2night::synth::config::JobConfig;
-use day2night::synth::job::{SynthJob, Target};
-use day2night::synth::{Covariance, MaskEval, Mode, RelightFormula};
+use day2night::synth::job::SynthJob;
+use day2night::synth::options::{
+    self, Draft, Kind, OptionDef, OptionError, Python, Spelling, Value, OPTIONS,
+};
 use day2night::Error;
+use pyo3::exceptions::PyTypeError;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use std::collections::HashMap;
 use std::path::PathBuf;
 use std::sync::{Arc, Mutex, OnceLock};
 
-/// The job options a ``synthesize`` call spells, as the command line's flags.
+/// Which functions' keywords: the in-memory ones or those that write files.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Scope {
+    /// `synthesize`, `night_pair` (`NightPairs`): no output settings; `mode`, `isos` and
+    /// `target` are parameters of their own.
+    InMemory,
+    /// `write_unit`, `write_units`: every option `dataset` has.
+    Files,
+}
+
+/// Whether `scope`'s functions take `d` as a keyword option.
+fn accepts(d: &OptionDef, scope: Scope) -> bool {
+    match d.python {
+        Python::Keyword => true,
+        Python::Files | Python::Parameter(_) => scope == Scope::Files,
+        Python::Absent(_) => false,
+    }
+}
+
+/// The keyword options `scope`'s functions take, in the table's order.
+pub(crate) fn known(scope: Scope) -> Vec<String> {
+    OPTIONS
+        .iter()
+        .filter(|d| accepts(d, scope))
+        .map(|d| d.python_name())
+        .collect()
+}
+
+/// `day2night._native.SYNTH_OPTIONS`: every option of the table by its keyword: its flag
+/// and where Python takes it (`keyword`: every synthesis function; `files`: `write_unit`
+/// and `write_units`; `parameter`: a parameter of `synthesize` and `night_pair`, a keyword
+/// of the writers; `absent`: not in Python).
+pub(crate) fn table_dict(py: pyo3::Python<'_>) -> PyResult<Bound<'_, PyDict>> {
+    let d = PyDict::new(py);
+    for o in OPTIONS {
+        let e = PyDict::new(py);
+        e.set_item("flag", format!("--{}", o.name))?;
+        let (scope, note) = match o.python {
+            Python::Keyword => ("keyword", None),
+            Python::Files => ("files", None),
+            Python::Parameter(p) => ("parameter", Some(p)),
+            Python::Absent(why) => ("absent", Some(why)),
+        };
+        e.set_item("python", scope)?;
+        e.set_item("note", note)?;
+        e.set_item("default", o.default)?;
+        d.set_item(o.python_name(), e)?;
+    }
+    Ok(d)
+}
+
+/// An option's error as Python's `ValueError`.
+fn option_err(e: OptionError) -> PyErr {
+    match &e.option {
+        Some(_) => value_err(e.to_string()),
+        None => value_err(text(&e.error)),
+    }
+}
+
+/// The Python value `v` of the option `d` (called `key`) as the table's [`Value`].
+fn value(d: &OptionDef, key: &str, v: &Bound<'_, PyAny>) -> PyResult<Value> {
+    let none_ok = !matches!(
+        d.kind,
+        Kind::Switch | Kind::Float | Kind::Int { late: true, .. }
+    );
+    if none_ok && v.is_none() {
+        return Ok(Value::Unset);
+    }
+    Ok(match d.kind {
+        Kind::Switch => Value::Switch(v.extract::<bool>().map_err(|_| {
+            PyTypeError::new_err(format!("{key} must be a bool (got {})", type_name(v)))
+        })?),
+        Kind::Int { lo, hi, late, .. } => Value::Int(if late {
+            args::integer(v, key, lo, hi)?
+        } else {
+            i128::from(args::in_range::<u64>(v, key, lo, hi)?)
+        }),
+        Kind::Float => Value::Float(args::float(v, key)?),
+        Kind::Text | Kind::Choice(_) => Value::Text(args::string(v, key)?),
+        Kind::Path => Value::Path(v.extract::<PathBuf>().map_err(|_| {
+            PyTypeError::new_err(format!("{key} must be a path (got {})", type_name(v)))
+        })?),
+        Kind::Isos => {
+            // As --iso: "1600,3200" or "none"; or one ISO, or a sequence of them.
+            if let Ok(s) = v.extract::<String>() {
+                Value::Text(s)
+            } else if v.hasattr("__index__")? {
+                Value::Isos(vec![args::ISO.get_as(v, key)?])
+            } else {
+                Value::Isos(args::isos(v, key)?)
+            }
+        }
+        Kind::Numbers(n) => {
+            if let Ok(s) = v.extract::<String>() {
+                Value::Text(s)
+            } else {
+                Value::Numbers(v.extract::<Vec<f64>>().map_err(|_| {
+                    PyTypeError::new_err(format!(
+                        "{key} must be {n} numbers (got {})",
+                        type_name(v)
+                    ))
+                })?)
+            }
+        }
+    })
+}
+
+fn type_name(v: &Bound<'_, PyAny>) -> String {
+    v.get_type()
+        .name()
+        .map(|n| n.to_string())
+        .unwrap_or_else(|_| "?".into())
+}
+
+/// Apply the keyword options `opts` that `scope`'s functions take; another key is a
+/// `ValueError` listing the ones they take (and `note`, if any).
+pub(crate) fn apply(
+    draft: &mut Draft,
+    opts: Option<&Bound<'_, PyDict>>,
+    scope: Scope,
+    note: &str,
+) -> PyResult<()> {
+    let Some(opts) = opts else { return Ok(()) };
+    for (k, v) in opts.iter() {
+        let key: String = k.extract()?;
+        match options::find(&key) {
+            Some(d) if accepts(d, scope) && !key.contains('-') => {
+                let value = value(d, &key, &v)?;
+                draft.set(d, value, Spelling::Python).map_err(option_err)?;
+            }
+            _ => {
+                return Err(value_err(format!(
+                    "unknown option {key:?} (known: {}{note})",
+                    known(scope).join(", ")
+                )))
+            }
+        }
+    }
+    Ok(())
+}
+
+/// The configuration of a draft: the options that depend on each other checked together.
+pub(crate) fn finish(draft: Draft) -> PyResult<JobConfig> {
+    draft.finish(Spelling::Python).map_err(option_err)
+}
+
+/// The job options a ``synthesize`` or ``night_pair`` call spells: `mode`, `isos` (each
+/// already in range) and the keyword options; the target is rendered when `want_target`.
 pub(crate) fn job_config(
     mode: &str,
     isos: Vec<u32>,
     want_target: bool,
-    options: Option<&Bound<'_, PyDict>>,
+    opts: Option<&Bound<'_, PyDict>>,
 ) -> PyResult<JobConfig> {
-    let mut cfg = JobConfig::default();
-    let o = &mut cfg.options;
-    o.mode = mode.parse::<Mode>().map_err(py_err)?;
-    o.isos = Vec::new();
-    for iso in isos {
-        // Each in ISO_RANGE: checked when the argument was extracted (args::Isos).
-        if !o.isos.contains(&iso) {
-            o.isos.push(iso);
-        }
+    let mut draft = Draft::new(1);
+    for (key, v) in [
+        ("mode", Value::Text(mode.into())),
+        ("iso", Value::Isos(isos)),
+    ] {
+        let d = options::find(key).ok_or_else(|| value_err(format!("no option {key:?}")))?;
+        draft.set(d, v, Spelling::Python).map_err(option_err)?;
     }
-    let mut release = false;
-    let mut opcodes = None;
-    let mut burst = day2night::synth::burst::checks::BurstRequest::default();
-    if let Some(opts) = options {
-        for (k, v) in opts.iter() {
-            let key: String = k.extract()?;
-            let path = |v: &Bound<'_, PyAny>| -> PyResult<Option<PathBuf>> {
-                if v.is_none() {
-                    Ok(None)
-                } else {
-                    Ok(Some(v.extract::<PathBuf>()?))
-                }
-            };
-            match key.as_str() {
-                "relight_formula" | "formula" => {
-                    o.formula = v
-                        .extract::<String>()?
-                        .parse::<RelightFormula>()
-                        .map_err(py_err)?
-                }
-                "bulbs" => o.bulbs = BULBS.opt(&v)?,
-                "lights" => o.local_lights = LIGHTS.opt(&v)?,
-                "truncate" => o.truncate = v.extract()?,
-                "covariance" => {
-                    o.covariance = v
-                        .extract::<String>()?
-                        .parse::<Covariance>()
-                        .map_err(py_err)?
-                }
-                "day_neutral" => {
-                    o.day_neutral = if v.is_none() {
-                        None
-                    } else {
-                        let n: Vec<f64> = v.extract()?;
-                        match n.as_slice() {
-                            [r, g, b] => Some([*r, *g, *b]),
-                            _ => return Err(value_err("day_neutral must be (r, g, b)")),
-                        }
-                    }
-                }
-                "mask_eval" => {
-                    o.mask_eval = v.extract::<String>()?.parse::<MaskEval>().map_err(py_err)?
-                }
-                "compat" => {
-                    release = match v.extract::<Option<String>>()?.as_deref() {
-                        None => false,
-                        Some("release") => true,
-                        Some(c) => {
-                            return Err(value_err(format!("compat {c:?}: use \"release\" or None")))
-                        }
-                    }
-                }
-                "opcodes" => {
-                    opcodes = Some(
-                        v.extract::<String>()?
-                            .parse::<day2night::isp::opcodes::OpcodeMode>()
-                            .map_err(py_err)?,
-                    )
-                }
-                "illuminants" => cfg.illuminants = path(&v)?,
-                "brightness" => cfg.brightness = path(&v)?,
-                "noise_model" => cfg.noise_model = path(&v)?,
-                k if crate::burst::OPTIONS.contains(&k) => {
-                    crate::burst::set_option(&mut burst, k, &v)?
-                }
-                other => {
-                    return Err(value_err(format!(
-                    "unknown option {other:?} (known: relight_formula, bulbs, lights, truncate, \
-covariance, day_neutral, mask_eval, opcodes, illuminants, brightness, noise_model, burst, \
-motion, shake_step, shake_roll, warp_interp)"
-                )))
-                }
-            }
-        }
-    }
-    cfg.options.burst = crate::burst::resolve(&burst)?;
-    if release {
-        // Applied last, like --compat release: it checks the other options.
-        cfg.options = cfg.options.clone().release_compat().map_err(py_err)?;
-    }
-    if let Some(m) = opcodes {
-        cfg.options.opcodes = m;
-    }
+    apply(&mut draft, opts, Scope::InMemory, "")?;
+    let mut cfg = finish(draft)?;
     cfg.target = if want_target {
-        Target::Exr
+        day2night::synth::job::Target::Exr
     } else {
-        Target::None
+        day2night::synth::job::Target::None
     };
     Ok(cfg)
 }

@@ -18,7 +18,7 @@ use day2night::synth::Plan;
 use day2night::Error;
 use numpy::PyReadonlyArray3;
 use pyo3::prelude::*;
-use pyo3::types::PyDict;
+use pyo3::types::{PyDict, PyTuple};
 use std::path::PathBuf;
 use std::sync::Arc;
 
@@ -35,6 +35,41 @@ pub(crate) struct Synthesis {
     sha256: String,
 }
 
+/// `synthesize`'s parameters after `raw`, bound as its signature says (positional or by
+/// keyword), and its other keyword arguments (the synthesis options).
+struct SynthCall<'py> {
+    seed: u64,
+    variant: u32,
+    mode: String,
+    isos: Vec<u32>,
+    target: Option<String>,
+    crop: Option<Bound<'py, PyAny>>,
+    options: Bound<'py, PyDict>,
+}
+
+impl<'py> SynthCall<'py> {
+    fn bind(args: &Bound<'py, PyTuple>, kwargs: Option<&Bound<'py, PyDict>>) -> PyResult<Self> {
+        let names = ["seed", "variant", "mode", "isos", "target", "crop"];
+        let (p, options) = args::bind("synthesize", &names, args, kwargs, true)?;
+        Ok(SynthCall {
+            seed: args::or_default(&p[0], Seed(0))?.0,
+            variant: args::or_default(&p[1], Variant(0))?.0,
+            mode: match &p[2] {
+                Some(v) => args::string(v, "mode")?,
+                None => "local".into(),
+            },
+            isos: args::or_default(&p[3], Isos(vec![1600, 3200]))?.0,
+            target: match &p[4] {
+                None => Some("linear".into()),
+                Some(v) if v.is_none() => None,
+                Some(v) => Some(args::string(v, "target")?),
+            },
+            crop: p[5].clone(),
+            options,
+        })
+    }
+}
+
 /// Synthesize one night variant of ``raw`` in memory.
 ///
 /// The plan (lights, bulbs, illuminants, dimming, noise seeds) is sampled for the whole
@@ -48,13 +83,11 @@ pub(crate) struct Synthesis {
 /// target (before orientation) and ``noisy`` carries the model's noise from the crop's own
 /// random stream (keyed by the noise seed and the crop).
 ///
-/// Options (as the command line's flags): relight_formula ("release" | "paper"), bulbs,
-/// lights, truncate, covariance ("unbiased" | "ml"), day_neutral ((r, g, b)), mask_eval
-/// ("separable" | "exact" | "truncated:K" | "release"), compat ("release": the authors'
-/// release semantics, docs/synthesis.md), illuminants ("paper" | "cie" | a path; default:
-/// the paper phone's dictionary for the S20 FE and under compat "release", the CIE lamps
-/// through each file's colour matrices otherwise), brightness, noise_model (paths; a
-/// physics noise model file is recognized).
+/// Options: the command line's synthesis flags in snake case, with their values and
+/// defaults (``relight_formula``, ``bulbs``, ``lights``, ``illuminants``, ``noise_model``,
+/// ...: the option table, listed in docs/python.md and ``day2night._native.SYNTH_OPTIONS``);
+/// ``illuminants`` defaults to the paper phone's dictionary for the S20 FE and under
+/// ``compat="release"``, the CIE lamps through each file's colour matrices otherwise.
 ///
 /// Bursts: ``burst=N`` (with ``motion="shake"|"none"``, ``shake_step``, ``shake_roll``,
 /// ``warp_interp``, as ``--burst`` and its flags) makes every ``noisy[iso]`` an (N, H, W)
@@ -81,32 +114,30 @@ pub(crate) struct Synthesis {
 /// >>> out["noisy"][1600].shape, out["target"].shape
 /// ((512, 512), (512, 512, 3))
 #[pyfunction]
-#[pyo3(signature = (raw, seed=Seed(0), variant=Variant(0), mode="local", isos=Isos(vec![1600, 3200]), target=Some("linear"), crop=None, **options))]
-#[allow(clippy::too_many_arguments)]
+#[pyo3(
+    signature = (raw, *args, **kwargs),
+    text_signature = "(raw, seed=0, variant=0, mode='local', isos=(1600, 3200), target='linear', crop=None, **options)"
+)]
 pub(crate) fn synthesize<'py>(
-    py: Python<'py>,
     raw: &Bound<'py, Raw>,
-    seed: Seed,
-    variant: Variant,
-    mode: &str,
-    isos: Isos,
-    target: Option<&str>,
-    crop: Option<&Bound<'py, PyAny>>,
-    options: Option<&Bound<'py, PyDict>>,
+    args: &Bound<'py, PyTuple>,
+    kwargs: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let want_target = match target {
+    let py = raw.py();
+    let call = SynthCall::bind(args, kwargs)?;
+    let want_target = match call.target.as_deref() {
         None => false,
         Some("linear") => true,
         Some(t) => return Err(value_err(format!("target {t:?}: use \"linear\" or None"))),
     };
-    let cfg = job_config(mode, isos.0, want_target, options)?;
-    let (seed, variant) = (seed.0, variant.0);
+    let cfg = job_config(&call.mode, call.isos, want_target, Some(&call.options))?;
+    let (seed, variant, crop) = (call.seed, call.variant, call.crop);
     let r = raw.get();
     let crop = match crop.filter(|c| !c.is_none()) {
         None => None,
         Some(c) => {
             let a = r.day.raw.active_area();
-            Some(args::crop(c, a.width(), a.height())?)
+            Some(args::crop(&c, a.width(), a.height())?)
         }
     };
     let day = r.cfa_day()?;
@@ -315,15 +346,24 @@ pub(crate) fn write_outputs(
     let stem = r.name.clone();
     let plan = s.plan.clone();
     let from_file = r.from_file;
-    py.detach(move || {
-        on_pool(move || write_files(day, from_file, stem, plan, job, night, out_dir, overwrite))
-    })
-    .map_err(py_err)
+    let files = Files {
+        day,
+        from_file,
+        stem,
+        plan,
+        job,
+        night,
+        out_dir,
+        overwrite,
+    };
+    py.detach(move || on_pool(move || files.write()))
+        .map_err(py_err)
 }
 
-#[allow(clippy::too_many_arguments)]
-fn write_files(
+/// A synthesized variant and where its files go.
+struct Files {
     day: Arc<DayInput>,
+    /// The input is a file (an output never replaces it).
     from_file: bool,
     stem: String,
     plan: Plan,
@@ -331,8 +371,21 @@ fn write_files(
     night: Night,
     out_dir: PathBuf,
     overwrite: bool,
-) -> Result<Vec<String>, Error> {
-    {
+}
+
+impl Files {
+    /// Write the files, as `day2night synth` writes them; their names.
+    fn write(self) -> Result<Vec<String>, Error> {
+        let Files {
+            day,
+            from_file,
+            stem,
+            plan,
+            job,
+            night,
+            out_dir,
+            overwrite,
+        } = self;
         std::fs::create_dir_all(&out_dir).map_err(|e| Error::from(e).in_file(&out_dir))?;
         let policy = OutputPolicy {
             overwrite,

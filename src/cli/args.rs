@@ -3,7 +3,6 @@
 
 use super::{usage, Failure};
 use day2night::encode::exr::ExrOptions;
-use day2night::Error;
 
 /// `--max-pixels N` (global): a pixel count with an optional K/M/G suffix.
 pub fn parse_max_pixels(s: &str) -> Result<u64, String> {
@@ -43,12 +42,4 @@ pub fn parse_zip_level(level: u8) -> Result<u8, Failure> {
     .validate()
     .map(|_| level)
     .map_err(|e| usage(format!("--exr-zip-level: {}", e)))
-}
-
-/// A library parse error as a usage error naming the flag.
-pub fn flag<T>(name: &str, r: day2night::Result<T>) -> Result<T, Failure> {
-    r.map_err(|e| match e {
-        Error::InvalidParam(m) => usage(format!("{}: {}", name, m)),
-        e => usage(format!("{}: {}", name, e)),
-    })
 }

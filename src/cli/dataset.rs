@@ -63,7 +63,7 @@ pub struct DatasetArgs {
 
 /// The synthesis processor: `synth`'s job from the same options (`--replay` excluded).
 fn processor(f: &SynthOpts, variants: u32) -> Result<SynthProcessor, Failure> {
-    if f.extra.replay.is_some() {
+    if f.replay().is_some() {
         return Err(usage(
             "--replay applies to `synth` only (replay one sidecar with `day2night synth DAY.dng --replay meta/<id>.json`)",
         ));
@@ -83,7 +83,7 @@ pub fn run(args: DatasetArgs) -> CmdResult {
             }
             SplitRule::Fraction {
                 fraction: f,
-                seed: args.synth.seed,
+                seed: args.synth.seed(),
             }
         }
         (None, None) => SplitRule::AllTrain,
@@ -110,7 +110,7 @@ pub fn run(args: DatasetArgs) -> CmdResult {
         out_dir: args.out_dir.clone(),
         split,
         variants: args.variants,
-        seed: args.synth.seed,
+        seed: args.synth.seed(),
         shard,
         jobs,
         overwrite: args.overwrite,

@@ -18,6 +18,7 @@ mod real_pairs;
 mod render;
 mod report;
 mod synth;
+mod synth_opts;
 
 /// Turn daytime camera raw photos (DNG) into realistic nighttime raw photos.
 #[derive(Debug, Parser)]

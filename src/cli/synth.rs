@@ -3,80 +3,15 @@
 //! Inputs are processed one after another (each with rayon inside); an input that cannot
 //! be used is reported and skipped, and the exit code is 1 at the end.
 
-use super::args::{flag, parse_zip_level};
+pub use super::synth_opts::SynthOpts;
 use super::{usage, CmdResult, Failure};
-use day2night::dng::write::Compression;
-use day2night::encode::exr::{ExrCompression, ExrOptions};
 use day2night::error::Error;
 use day2night::output::{stop_requested, OutputPolicy, OutputSetLock};
-use day2night::synth::burst::checks::{BurstRequest, Names};
-use day2night::synth::burst::BurstOptions;
-use day2night::synth::config::{parse_isos, parse_neutral, JobConfig};
-use day2night::synth::job::{DayInput, DirSink, SynthJob, Target};
+use day2night::synth::job::{DayInput, DirSink, SynthJob};
 use day2night::synth::sidecar::Sidecar;
-use day2night::synth::{Covariance, Mode, Plan, RelightFormula, SynthOptions};
+use day2night::synth::{Mode, Plan};
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
-
-/// Relighting mode.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
-pub enum ModeArg {
-    /// Several local lights (the paper's method).
-    Local,
-    /// One night illuminant.
-    Global,
-    /// Dimmed day image (baseline).
-    Dimmed,
-    /// The day image itself (baseline).
-    Day,
-}
-
-/// Compatibility preset.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
-pub enum CompatArg {
-    /// The authors' released code where it is deterministic.
-    Release,
-}
-
-/// Local relighting formula.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
-pub enum FormulaArg {
-    /// The authors' released code.
-    Release,
-    /// The paper's equation.
-    Paper,
-}
-
-/// Targets to render.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
-pub enum TargetArg {
-    /// Linear EXR.
-    Exr,
-    /// sRGB PNG.
-    Png,
-    /// Both.
-    Both,
-    /// None.
-    None,
-}
-
-/// DNG compression.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
-pub enum CompressionArg {
-    /// Uncompressed.
-    None,
-    /// Lossless JPEG.
-    Ljpeg,
-}
-
-/// Covariance estimator of the illuminant fit.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
-pub enum CovArg {
-    /// 1/(M-1) (released code).
-    Unbiased,
-    /// 1/M (the paper's equation 2).
-    Ml,
-}
 
 /// Arguments of `day2night synth`.
 #[derive(Debug, clap::Args)]
@@ -121,211 +56,6 @@ pub struct SynthArgs {
     pub quiet: bool,
 }
 
-/// Synthesis and output options: the same flags, values and defaults in `synth` and
-/// `dataset` (one definition, so the two commands cannot drift apart).
-#[derive(Debug, clap::Args)]
-pub struct SynthOpts {
-    /// Master seed; each (input, variant) has its own random stream keyed by (seed, input
-    /// name, variant), never by position or thread count (dataset: the name is the path
-    /// relative to DAY_DIR).
-    #[arg(long, default_value_t = 0)]
-    pub seed: u64,
-    /// ISOs of the noisy outputs, comma-separated, or `none`.
-    #[arg(long, default_value = "1600,3200", value_name = "LIST|none")]
-    pub iso: String,
-    /// Relighting mode.
-    #[arg(long, value_enum, default_value = "local")]
-    pub mode: ModeArg,
-    /// Local relighting formula.
-    #[arg(long = "relight-formula", value_enum, default_value = "release")]
-    pub relight_formula: FormulaArg,
-    /// Saturated bulbs (default 5 with the release formula, 0 with the paper's).
-    #[arg(long)]
-    pub bulbs: Option<u32>,
-    /// Calibration files and finer options (boxed to keep the subcommand enum small).
-    #[command(flatten)]
-    pub extra: Box<ExtraArgs>,
-    /// Targets to render from the clean night raw.
-    #[arg(long, value_enum, default_value = "exr")]
-    pub target: TargetArg,
-    /// Also write the network input (normalized, white-balanced, demosaiced noisy raw).
-    #[arg(long = "input-exr")]
-    pub input_exr: bool,
-    /// DNG compression.
-    #[arg(long, value_enum, default_value = "none")]
-    pub compression: CompressionArg,
-    /// Truncate instead of rounding when denormalizing (released code, -0.5 DN bias).
-    #[arg(long)]
-    pub truncate: bool,
-    /// Reproduce the authors' released code where it is deterministic: implies --truncate
-    /// and --mask-eval release, truncates the noisy raws too, divides by the day neutral as
-    /// stored (not normalized to green = 1), does not cut illuminant draws at Mahalanobis 3
-    /// and samples every camera's lights from the paper phone's dictionary (unless
-    /// --illuminants says otherwise). See docs/synthesis.md, "Release compatibility".
-    #[arg(long, value_enum, value_name = "PRESET")]
-    pub compat: Option<CompatArg>,
-}
-
-/// Less common `synth` options.
-#[derive(Debug, clap::Args)]
-pub struct ExtraArgs {
-    /// Local lights besides the ambient (default 4 release; paper: 4 to 6 drawn).
-    #[arg(long)]
-    pub lights: Option<u32>,
-    /// Night illuminant dictionary: `paper` (the paper phone's gray cards, its camera RGB),
-    /// `cie` (CIE 015:2018 night lamps through each file's colour matrices) or a JSON file
-    /// (camera neutrals, a Gaussian, xy lamps; `./paper` for a file named paper). Default:
-    /// `paper` for the paper's phone (Samsung SM-G780*/SM-G781*) and under --compat release,
-    /// `cie` for every other camera.
-    #[arg(long, value_name = "paper|cie|FILE.json")]
-    pub illuminants: Option<PathBuf>,
-    /// Illuminant covariance estimator.
-    #[arg(long, value_enum, default_value = "unbiased")]
-    pub covariance: CovArg,
-    /// Night brightness dictionary (JSON): dim to a drawn mean instead of U(0.55, 0.9).
-    #[arg(long, value_name = "FILE.json")]
-    pub brightness: Option<PathBuf>,
-    /// Noise model (day2night-noise-model/1 JSON); default: the input's NoiseProfile, else
-    /// (the paper's phone: its embedded table) an estimate from the image at its ISO, else
-    /// the embedded paper phone table with a warning. See docs/noise.md.
-    #[arg(long = "noise-model", value_name = "FILE.json")]
-    pub noise_model: Option<PathBuf>,
-    /// Re-run a sidecar's plan on its input (one input): byte-identical outputs.
-    #[arg(long, value_name = "SIDECAR.json")]
-    pub replay: Option<PathBuf>,
-    /// Day neutral r,g,b overriding (or replacing a missing) AsShotNeutral.
-    #[arg(long = "day-neutral", value_name = "R,G,B")]
-    pub day_neutral: Option<String>,
-    /// Mask evaluation: separable (default), exact, truncated:K (K sigmas), or release (the
-    /// authors' sampled kernel resized bilinearly).
-    #[arg(long = "mask-eval", default_value = "separable")]
-    pub mask_eval: String,
-    /// EXR compression (lossless: zip (default, the fastest), piz (slower; larger on synth
-    /// targets, smaller on noisy images), zips,
-    /// rle, none; lossy for half: pxr24, b44, b44a). See docs/benchmarks.md.
-    #[arg(long = "exr-compression", default_value = "zip", value_name = "KIND")]
-    pub exr_compression: String,
-    /// Compression effort of zip/zips EXRs: 1 (default, fastest: day2night's run-length +
-    /// Huffman encoder) or 2 to 9 (miniz_oxide's zlib levels: 6 is 1.4 % smaller, 9 is 2 %
-    /// smaller, at 18x and 50x the compression time). Lossless at every level. See
-    /// docs/benchmarks.md.
-    #[arg(long = "exr-zip-level", default_value_t = 1, value_name = "N")]
-    pub exr_zip_level: u8,
-    /// DNG opcode lists of the input in the rendered targets and inputs: apply (default) or
-    /// ignore (implied by --compat release). The night DNGs keep the lists either way.
-    #[arg(long, value_name = "MODE")]
-    pub opcodes: Option<String>,
-    /// Frames per ISO: a night burst of N noisy DNGs <stem>[_vK]_iso<ISO>_f<NN>.dng (1 to
-    /// 64; 1 = one noisy DNG per ISO, as without a burst). See docs/synthesis.md, "Bursts".
-    #[arg(long, default_value_t = 1, value_name = "N")]
-    pub burst: u32,
-    /// Motion between the frames of a burst: none (a tripod) or shake (a hand-held camera,
-    /// the default).
-    #[arg(long, value_name = "none|shake")]
-    pub motion: Option<String>,
-    /// Hand-held walk: standard deviation of each frame's translation step per axis, in
-    /// pixels [default: 0.6].
-    #[arg(long = "shake-step", value_name = "PX")]
-    pub shake_step: Option<f64>,
-    /// Hand-held walk: standard deviation of each frame's rotation step, in degrees
-    /// [default: 0.015].
-    #[arg(long = "shake-roll", value_name = "DEG")]
-    pub shake_roll: Option<f64>,
-    /// Interpolant of the burst warp: catmull-rom (default), lanczos3 or bilinear.
-    #[arg(long = "warp-interp", value_name = "KIND")]
-    pub warp_interp: Option<String>,
-}
-
-impl ExtraArgs {
-    /// The burst these flags ask for (the library's one check of the burst options: the
-    /// motion flags need a burst, the shake flags need --motion shake).
-    fn burst(&self) -> Result<BurstOptions, Failure> {
-        BurstRequest {
-            frames: Some(i128::from(self.burst)),
-            motion: self.motion.clone(),
-            shake_step: self.shake_step,
-            shake_roll: self.shake_roll,
-            warp_interp: self.warp_interp.clone(),
-        }
-        .resolve(&Names::CLI)
-        .map_err(usage)
-    }
-}
-
-impl SynthOpts {
-    /// The library's [`JobConfig`] these flags spell (nothing loaded yet).
-    pub fn config(&self, variants: u32) -> Result<JobConfig, Failure> {
-        let options = SynthOptions {
-            mode: match self.mode {
-                ModeArg::Local => Mode::Local,
-                ModeArg::Global => Mode::Global,
-                ModeArg::Dimmed => Mode::Dimmed,
-                ModeArg::Day => Mode::Day,
-            },
-            formula: match self.relight_formula {
-                FormulaArg::Release => RelightFormula::Release,
-                FormulaArg::Paper => RelightFormula::Paper,
-            },
-            bulbs: self.bulbs,
-            local_lights: self.extra.lights,
-            isos: flag("--iso", parse_isos(&self.iso))?,
-            truncate: self.truncate,
-            covariance: match self.extra.covariance {
-                CovArg::Unbiased => Covariance::Unbiased,
-                CovArg::Ml => Covariance::MaximumLikelihood,
-            },
-            day_neutral: self
-                .extra
-                .day_neutral
-                .as_deref()
-                .map(|s| flag("--day-neutral", parse_neutral(s)))
-                .transpose()?,
-            mask_eval: flag("--mask-eval", self.extra.mask_eval.parse())?,
-            ..SynthOptions::default()
-        };
-        let mut options = match self.compat {
-            Some(CompatArg::Release) => flag("--compat release", options.release_compat())?,
-            None => options,
-        };
-        if let Some(m) = &self.extra.opcodes {
-            options.opcodes = flag("--opcodes", m.parse())?;
-        }
-        options.burst = self.extra.burst()?;
-        options.validate().map_err(usage)?;
-        Ok(JobConfig {
-            options,
-            illuminants: self.extra.illuminants.clone(),
-            brightness: self.extra.brightness.clone(),
-            noise_model: self.extra.noise_model.clone(),
-            variants,
-            target: match self.target {
-                TargetArg::Exr => Target::Exr,
-                TargetArg::Png => Target::Png,
-                TargetArg::Both => Target::Both,
-                TargetArg::None => Target::None,
-            },
-            input_exr: self.input_exr,
-            compression: match self.compression {
-                CompressionArg::None => Compression::None,
-                CompressionArg::Ljpeg => Compression::Ljpeg,
-            },
-            exr: ExrOptions {
-                compression: flag(
-                    "--exr-compression",
-                    self.extra.exr_compression.parse::<ExrCompression>(),
-                )?,
-                zip_level: parse_zip_level(self.extra.exr_zip_level)?,
-                ..ExrOptions::default()
-            },
-        })
-    }
-
-    /// The job these flags describe, calibration files loaded.
-    pub fn job(&self, variants: u32) -> Result<SynthJob, Failure> {
-        Ok(self.config(variants)?.build()?)
-    }
-}
-
 pub fn run(args: SynthArgs) -> CmdResult {
     if args.variants == 0 {
         return Err(usage("--variants must be at least 1"));
@@ -333,7 +63,7 @@ pub fn run(args: SynthArgs) -> CmdResult {
     if let Some(n) = args.jobs {
         day2night::bounds::jobs("--jobs", n).map_err(usage)?;
     }
-    let (job, seed, replay) = match &args.synth.extra.replay {
+    let (job, seed, replay) = match args.synth.replay() {
         Some(p) => {
             if args.inputs.len() != 1 {
                 return Err(usage(
@@ -343,7 +73,7 @@ pub fn run(args: SynthArgs) -> CmdResult {
             let sc = Sidecar::read(p)?;
             (SynthJob::from_sidecar(&sc)?, sc.plan.seed, Some(sc))
         }
-        None => (args.synth.job(args.variants)?, args.synth.seed, None),
+        None => (args.synth.job(args.variants)?, args.synth.seed(), None),
     };
     let policy = OutputPolicy {
         overwrite: args.overwrite,

@@ -26,6 +26,7 @@ pub mod masks;
 pub mod neutral;
 pub mod night;
 pub mod noise_source;
+pub mod options;
 pub mod outputs;
 pub mod patches;
 pub mod plan;

@@ -18,6 +18,7 @@ mod checks_burst;
 mod checks_inputs;
 mod cli_dialect;
 mod cli_docs;
+mod cli_options;
 mod cli_smoke;
 mod convert_opcodes;
 mod dataset_cli;
