@@ -21,6 +21,7 @@
 use super::dictionaries::xy::{load_illuminant_file, IlluminantFile, XyDict, XyLamp};
 use super::dictionaries::{embedded, IlluminantDict, MAX_NEUTRAL_RATIO};
 use super::illuminant::{Covariance, Gaussian2};
+use crate::diagnostics::{Code, Diagnostics};
 use crate::error::{Error, Result, ResultExt};
 use crate::isp::color::CameraColor;
 use crate::raw::camera::CameraId;
@@ -112,7 +113,7 @@ pub struct ResolvedIlluminants {
     /// Where it came from.
     pub provenance: IlluminantProvenance,
     /// Another camera's colours applied to this one, said once per plan.
-    pub warnings: Vec<String>,
+    pub warnings: Diagnostics,
 }
 
 /// The camera the embedded dictionary was measured on (descriptive; the rule that
@@ -287,12 +288,12 @@ impl IlluminantChoice {
         color: &ColorInfo,
         est: Covariance,
     ) -> Result<ResolvedIlluminants> {
-        let mut warnings = Vec::new();
+        let mut warnings = Diagnostics::new();
         let (gaussian, provenance) = match self {
             IlluminantChoice::Auto if camera.is_s20_fe() => (paper(est)?, paper_provenance(camera)),
             IlluminantChoice::Paper => {
                 if !camera.is_s20_fe() {
-                    warnings.push(format!(
+                    warnings.warn(Code::IlluminantsOtherCamera, format!(
                         "night illuminants: the paper phone's dictionary (Samsung Galaxy S20 FE \
                          camera RGB) applied to {camera}: its lamp colours are another camera's \
                          (--illuminants paper or --compat release); for this camera's colours \
@@ -387,7 +388,7 @@ fn file(
     camera: &CameraId,
     color: &ColorInfo,
     est: Covariance,
-    warnings: &mut Vec<String>,
+    warnings: &mut Diagnostics,
 ) -> Result<(Gaussian2, IlluminantProvenance)> {
     let same = f.camera.as_ref().and_then(|c| c.same_camera(camera));
     let measured_on = f
@@ -427,7 +428,7 @@ fn file(
             ))
         }
         (Some(rgb), None, Some(false)) => {
-            warnings.push(format!(
+            warnings.warn(Code::IlluminantsOtherCamera, format!(
                 "night illuminants: {} holds camera neutrals measured on {measured_on}, applied \
                  to {camera}: its lamp colours are another camera's; for this camera's colours \
                  use {FIXES}",

@@ -20,6 +20,7 @@ use super::{prepare, prepare_lists_for, Bounds, OpcodeEntry, OpcodeMode, OpcodeR
 use crate::dng::opcodes::{
     list_results, lists, AreaSpec, ListId, Opcode, OpcodeKind, OpcodeList, FLAG_OPTIONAL,
 };
+use crate::diagnostics::{Code, Diagnostics, Warning};
 use crate::error::{Error, Result};
 use crate::raw::{RawImage, RawMeta};
 
@@ -31,8 +32,8 @@ pub struct Checked {
     pub prepared: Option<Prepared>,
     /// Warnings, in pipeline order: skipped optional opcodes
     /// ([`OpcodeReport::warnings`]), then opcodes that make their samples one value, then
-    /// a TrimBounds that changes the rendered size.
-    pub warnings: Vec<String>,
+    /// a TrimBounds that changes the rendered size. No subject (the caller knows the file).
+    pub warnings: Diagnostics,
     /// The rendered size (width, height) when an OpcodeList3 TrimBounds changes it (`None`
     /// otherwise).
     pub trimmed_size: Option<(usize, usize)>,
@@ -81,10 +82,13 @@ pub fn check_render(img: &RawImage, mode: OpcodeMode, crop: bool, orient: bool) 
 pub fn report_without_render(
     meta: &RawMeta,
     mode: OpcodeMode,
-) -> (Option<OpcodeReport>, Vec<String>) {
+) -> (Option<OpcodeReport>, Diagnostics) {
     if mode == OpcodeMode::Ignore || meta.opcode_lists.iter().all(Option::is_none) {
         // prepare() neither parses nor fails in these cases.
-        return (prepare(meta, mode).ok().flatten().map(|p| p.report), vec![]);
+        return (
+            prepare(meta, mode).ok().flatten().map(|p| p.report),
+            Diagnostics::new(),
+        );
     }
     let linear_raw = meta.linear_raw.is_some();
     let reason = if linear_raw {
@@ -120,7 +124,7 @@ pub fn report_without_render(
         dropped: vec![],
     });
     let mut skipped = std::mem::take(&mut report.skipped).into_iter();
-    let mut warnings = vec![];
+    let mut warnings = Diagnostics::new();
     for id in ListId::ALL {
         if let Some(e) = &malformed[id.index()] {
             let (why, what) = match e.root() {
@@ -128,7 +132,7 @@ pub fn report_without_render(
                 Error::Malformed(m) => (m.clone(), "is malformed"),
                 other => (other.to_string(), "cannot be read"),
             };
-            warnings.push(format!(
+            warnings.warn(Code::OpcodeListMalformed, format!(
                 "{why}: the list {what}; no render was requested, so it is not used (the \
                  night raws carry it as stored; a render of them fails the same way unless \
                  it ignores the opcode lists)"
@@ -145,7 +149,7 @@ pub fn report_without_render(
             let Some(mut e) = skipped.next() else { break };
             if was_mandatory {
                 let why = e.reason.take().unwrap_or_default();
-                warnings.push(format!(
+                warnings.warn(Code::OpcodeNotApplied, format!(
                     "{}: {} (id {}) is not optional and cannot be applied: {why}; no render \
                      was requested, so nothing fails (a render of this file or of its night \
                      raws would, unless it ignores the opcode lists)",
@@ -519,7 +523,7 @@ fn region_text(t: &Touched, s: &Stage) -> String {
 /// touch one value (0 for the "non-positive" cases: the stage images are pinned at 0),
 /// named by list and position: "OpcodeList2: GainMap (opcode 1 of 1): every gain is <= 0
 /// (the largest is -2): the whole image becomes 0 (black) ...".
-fn flat_opcodes(parsed: &[OpcodeList; 3], g: &StageGeometry, linear_raw: bool) -> Vec<String> {
+fn flat_opcodes(parsed: &[OpcodeList; 3], g: &StageGeometry, linear_raw: bool) -> Vec<Warning> {
     let reason = if linear_raw {
         super::unsupported_reason_linear_raw
     } else {
@@ -569,10 +573,10 @@ fn flat_opcodes(parsed: &[OpcodeList; 3], g: &StageGeometry, linear_raw: bool) -
     out
 }
 
-fn flat_one(id: ListId, i: usize, n: usize, op: &Opcode, s: &Stage) -> Option<String> {
+fn flat_one(id: ListId, i: usize, n: usize, op: &Opcode, s: &Stage) -> Option<Warning> {
     let mut t = touched(&op.kind, s)?;
     let (why, v) = flat_kind(&op.kind, s, &mut t)?;
-    Some(format!(
+    let message = format!(
         "{}: {} (opcode {} of {n}): {why}: {} becomes {} (render with --opcodes ignore to \
          leave the lists out)",
         id.tag_name(),
@@ -580,7 +584,8 @@ fn flat_one(id: ListId, i: usize, n: usize, op: &Opcode, s: &Stage) -> Option<St
         i + 1,
         region_text(&t, s),
         value_text(v, s.range)
-    ))
+    );
+    Some(Warning::new(Code::OpcodeFlattens, message))
 }
 
 /// `rect` (top, left, bottom, right) when it is a non-empty rectangle inside `b`.
@@ -596,7 +601,7 @@ fn trimmed(b: Bounds, rect: [u32; 4]) -> Option<Bounds> {
 }
 
 /// The rendered size (width, height) after a TrimBounds that changes it, and its warning.
-type Trimmed = (Option<(usize, usize)>, Option<String>);
+type Trimmed = (Option<(usize, usize)>, Option<Warning>);
 
 /// The rendered size after OpcodeList3's TrimBounds, when they change it, and the warning
 /// that says so; errors as the render does for a TrimBounds outside the image or one that
@@ -671,7 +676,7 @@ fn trimmed_size(
         before.0,
         before.1
     );
-    Ok((Some(after), Some(warning)))
+    Ok((Some(after), Some(Warning::new(Code::OpcodeTrim, warning))))
 }
 
 #[cfg(test)]
