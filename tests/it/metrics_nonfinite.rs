@@ -60,7 +60,8 @@ fn nan_or_inf_is_an_error_unless_replaced() {
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(
-        err.contains("warning: 2 NaN/Inf samples replaced by 0"),
+        err.contains("warning[nonfinite-replaced]: ")
+            && err.contains(": 2 NaN/Inf samples replaced by 0"),
         "{err}"
     );
     let j: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
