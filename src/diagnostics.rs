@@ -420,7 +420,10 @@ mod tests {
             r#"{"code":"noise-extrapolated","subject":"day.dng","message":"ISO 25 ..."}"#
         );
         assert_eq!(serde_json::from_str::<Warning>(&text).unwrap(), w);
-        assert_eq!(w.to_string(), "warning[noise-extrapolated]: day.dng: ISO 25 ...");
+        assert_eq!(
+            w.to_string(),
+            "warning[noise-extrapolated]: day.dng: ISO 25 ..."
+        );
         assert_eq!(
             Warning::new(Code::UnknownIso, "m").line("x.dng"),
             "warning[unknown-iso]: x.dng: m"
@@ -443,8 +446,9 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(e.contains("unknown warning code \"nope\""), "{e}");
-        assert!(serde_json::from_str::<Warning>(r#"{"code":"legacy","message":"m","x":1}"#)
-            .is_err());
+        assert!(
+            serde_json::from_str::<Warning>(r#"{"code":"legacy","message":"m","x":1}"#).is_err()
+        );
         assert!(serde_json::from_str::<Warning>("3").is_err());
     }
 

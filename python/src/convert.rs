@@ -155,4 +155,3 @@ pub(crate) fn meta_dict<'py>(py: Python<'py>, raw: &RawImage) -> PyResult<Bound<
     crate::raw_from::extra_meta(&d, raw)?;
     Ok(d)
 }
-

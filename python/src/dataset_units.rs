@@ -429,21 +429,20 @@ pub fn write_units<'py>(
         progress: said.sink(),
     };
     let n = parsed.len();
-    let done = py
-        .detach(move || {
-            on_pool(move || {
-                let p = processor_for(&cfg)?;
-                let mut done: Vec<Option<(Record, Option<Reason>)>> = vec![None; n];
-                for (_, idx) in &groups {
-                    let group: Vec<(Unit, Option<Record>)> =
-                        idx.iter().map(|&i| parsed[i].clone()).collect();
-                    for (&i, r) in idx.iter().zip(lib::write_units(&group, &w, p.as_ref())?) {
-                        done[i] = Some(r);
-                    }
+    let done = py.detach(move || {
+        on_pool(move || {
+            let p = processor_for(&cfg)?;
+            let mut done: Vec<Option<(Record, Option<Reason>)>> = vec![None; n];
+            for (_, idx) in &groups {
+                let group: Vec<(Unit, Option<Record>)> =
+                    idx.iter().map(|&i| parsed[i].clone()).collect();
+                for (&i, r) in idx.iter().zip(lib::write_units(&group, &w, p.as_ref())?) {
+                    done[i] = Some(r);
                 }
-                Ok(done)
-            })
-        });
+            }
+            Ok(done)
+        })
+    });
     said.raise(py)?;
     let done = done.map_err(py_err)?;
     for (rec, why) in done.into_iter().flatten() {

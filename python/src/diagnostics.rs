@@ -33,7 +33,12 @@ pub(crate) fn warn_at(
     let emit = py.import("day2night.diagnostics")?.getattr("_emit")?;
     for w in warnings {
         // One frame more: `_emit` itself.
-        emit.call1((w.code.as_str(), w.subject_or(name), &w.message, stacklevel + 1))?;
+        emit.call1((
+            w.code.as_str(),
+            w.subject_or(name),
+            &w.message,
+            stacklevel + 1,
+        ))?;
     }
     Ok(())
 }

@@ -155,10 +155,13 @@ pub fn measure_gray_card(
             )));
         }
         if total > 0 && sat[k] as f64 > SATURATION_WARN * total as f64 {
-            warnings.warn(Code::GrayCardSaturated, format!(
-                "{} of {} {} sites saturated: the {} mean is biased low",
-                sat[k], total, names[k], names[k]
-            ));
+            warnings.warn(
+                Code::GrayCardSaturated,
+                format!(
+                    "{} of {} {} sites saturated: the {} mean is biased low",
+                    sat[k], total, names[k], names[k]
+                ),
+            );
         }
         means[k] = m;
     }
@@ -166,17 +169,23 @@ pub fn measure_gray_card(
     let xy = match CameraColor::new(&img.meta.color).and_then(|c| c.neutral_to_xy(chromaticity)) {
         Ok(xy) if crate::bounds::chromaticity_xy("xy", xy).is_ok() => Some(xy),
         Ok(xy) => {
-            warnings.warn(Code::GrayCardNoXy, format!(
-                "the colour matrices map this light to xy {xy:?}, not a light's chromaticity: \
+            warnings.warn(
+                Code::GrayCardNoXy,
+                format!(
+                    "the colour matrices map this light to xy {xy:?}, not a light's chromaticity: \
                  no xy (the dictionary serves this camera only)"
-            ));
+                ),
+            );
             None
         }
         Err(e) => {
-            warnings.warn(Code::GrayCardNoXy, format!(
-                "no xy ({}): the dictionary serves this camera only",
-                e.root()
-            ));
+            warnings.warn(
+                Code::GrayCardNoXy,
+                format!(
+                    "no xy ({}): the dictionary serves this camera only",
+                    e.root()
+                ),
+            );
             None
         }
     };
@@ -346,11 +355,14 @@ pub fn build_dictionary(
         Some(v) => v,
         None => {
             let n = xy.iter().filter(|p| p.is_none()).count();
-            notes.warn(Code::IlluminantsDictionary, format!(
-                "{n} of {} illuminants have no xy (no colour matrices, or a listed dictionary \
+            notes.warn(
+                Code::IlluminantsDictionary,
+                format!(
+                    "{n} of {} illuminants have no xy (no colour matrices, or a listed dictionary \
                  without them): the dictionary holds camera neutrals only, for this camera",
-                xy.len()
-            ));
+                    xy.len()
+                ),
+            );
             vec![]
         }
     };
@@ -370,16 +382,19 @@ pub fn build_dictionary(
                 .collect();
             names.sort();
             names.dedup();
-            notes.warn(Code::IlluminantsDictionary, format!(
-                "the illuminants come from {}: the camera is not recorded, so synth uses the \
+            notes.warn(
+                Code::IlluminantsDictionary,
+                format!(
+                    "the illuminants come from {}: the camera is not recorded, so synth uses the \
                  camera neutrals as they are for every camera{}",
-                names.join(", "),
-                if xy.is_empty() {
-                    ""
-                } else {
-                    " unless it uses the xy"
-                }
-            ));
+                    names.join(", "),
+                    if xy.is_empty() {
+                        ""
+                    } else {
+                        " unless it uses the xy"
+                    }
+                ),
+            );
             None
         }
     };
@@ -542,7 +557,10 @@ mod tests {
         other.camera = Some(CameraId::new(Some("Nikon".into()), Some("D3".into()), None));
         let (d, notes) = build_dictionary(vec![m, other], vec![], Estimator::Unbiased).unwrap();
         assert!(d.camera.is_none() && d.xy.len() == 2);
-        assert!(notes[0].message.contains("Nikon D3") && notes[0].message.contains("day2night Synthetic"));
+        assert!(
+            notes[0].message.contains("Nikon D3")
+                && notes[0].message.contains("day2night Synthetic")
+        );
         // No colour matrices: no xy, a warning on the card.
         let mut bare = card(Bayer::RGGB, [800.0, 1600.0, 400.0], 64, 48);
         bare.meta.color = Default::default();

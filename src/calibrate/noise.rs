@@ -652,12 +652,15 @@ pub fn build_model(
     let mut warnings = Diagnostics::new();
     for p in profiles {
         match models.entry(p.iso) {
-            std::collections::btree_map::Entry::Occupied(o) => warnings.warn(Code::CalibrateIsoOverlap, format!(
-                "ISO {}: the {} model takes precedence over the {} one",
-                p.iso,
-                o.get().source,
-                p.source
-            )),
+            std::collections::btree_map::Entry::Occupied(o) => warnings.warn(
+                Code::CalibrateIsoOverlap,
+                format!(
+                    "ISO {}: the {} model takes precedence over the {} one",
+                    p.iso,
+                    o.get().source,
+                    p.source
+                ),
+            ),
             std::collections::btree_map::Entry::Vacant(v) => {
                 v.insert(p);
             }

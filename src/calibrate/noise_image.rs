@@ -78,10 +78,13 @@ pub fn from_image_estimates(images: &[ImageEstimate]) -> Result<(Vec<IsoModel>, 
             .iter()
             .any(|e| e.black != first.black || e.white != first.white)
         {
-            warnings.warn(Code::CalibrateLevelsDiffer, format!(
-                "ISO {iso}: the images have different black or white levels; their normalized \
+            warnings.warn(
+                Code::CalibrateLevelsDiffer,
+                format!(
+                    "ISO {iso}: the images have different black or white levels; their normalized \
                  estimates are combined as they are"
-            ));
+                ),
+            );
         }
         let scale = first.white - first.black;
         let q = first.estimate.quantization_variance_removed;

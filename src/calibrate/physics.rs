@@ -291,9 +291,10 @@ fn fit_flats(
     measured.sort_by(|a, b| a.1.total_cmp(&b.1));
     if measured.len() % 2 == 1 {
         let last = measured.pop().map(|m| m.0).unwrap_or_default();
-        warnings.warn(crate::diagnostics::Code::CalibrateOddFlats, format!(
-            "ISO {iso}: odd number of flats, {last} (the brightest) left out of the pairs"
-        ));
+        warnings.warn(
+            crate::diagnostics::Code::CalibrateOddFlats,
+            format!("ISO {iso}: odd number of flats, {last} (the brightest) left out of the pairs"),
+        );
     }
     let range = norm.white - norm.black_at(0, 0).max(norm.black_at(1, 1));
     let mut pairs = Vec::new();

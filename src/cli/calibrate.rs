@@ -372,7 +372,9 @@ fn run_illuminants(a: IlluminantsArgs) -> CmdResult {
         f.covariance[1][1]
     );
     let degenerate = match f.count {
-        1 => Some("one illuminant: zero covariance, synth will always use it; shoot more gray cards"),
+        1 => {
+            Some("one illuminant: zero covariance, synth will always use it; shoot more gray cards")
+        }
         2 => Some("2 illuminants give a degenerate (line) covariance; shoot more gray cards"),
         _ => None,
     };

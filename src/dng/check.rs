@@ -171,11 +171,14 @@ fn calibration_illuminants(meta: &mut RawMeta) {
         ("CalibrationIlluminant2", c.calibration_illuminant2),
     ] {
         if let Some(v) = code.filter(|v| !bounds::EXIF_LIGHT_SOURCES.contains(v)) {
-            meta.warnings.warn(Code::CalibrationIlluminantUnknown, format!(
-                "{name} {v} is not an EXIF LightSource code (0-4, 9-24 or 255): its colour \
+            meta.warnings.warn(
+                Code::CalibrationIlluminantUnknown,
+                format!(
+                    "{name} {v} is not an EXIF LightSource code (0-4, 9-24 or 255): its colour \
                  temperature is unknown, so the colour matrices are not interpolated \
                  (ColorMatrix1 is used)"
-            ));
+                ),
+            );
         }
     }
 }
@@ -201,9 +204,10 @@ fn noise_profile(meta: &mut RawMeta) {
             short(max),
             short(max)
         );
-        meta.warnings.warn(Code::NoiseProfileInvalid, format!(
-            "{what}: ignored; noise from the built-in table unless --noise-model"
-        ));
+        meta.warnings.warn(
+            Code::NoiseProfileInvalid,
+            format!("{what}: ignored; noise from the built-in table unless --noise-model"),
+        );
         meta.noise_profile_problem = Some(format!("invalid {what}"));
         meta.noise_profile = None;
     }
@@ -213,13 +217,16 @@ fn exif_iso(meta: &mut RawMeta) {
     if let Some(iso) = meta.exif.iso {
         if bounds::iso("ISOSpeedRatings", iso).is_err() {
             meta.exif.iso = None;
-            meta.warnings.warn(Code::IsoOutOfRange, format!(
-                "ISOSpeedRatings {iso} is outside {}..={}: ignored (ISO unknown; clean \
+            meta.warnings.warn(
+                Code::IsoOutOfRange,
+                format!(
+                    "ISOSpeedRatings {iso} is outside {}..={}: ignored (ISO unknown; clean \
                  outputs use ISO {})",
-                bounds::ISO_RANGE.0,
-                bounds::ISO_RANGE.1,
-                meta.iso_or_default()
-            ));
+                    bounds::ISO_RANGE.0,
+                    bounds::ISO_RANGE.1,
+                    meta.iso_or_default()
+                ),
+            );
         }
     }
 }
@@ -313,7 +320,9 @@ mod tests {
         check_meta(&mut m).unwrap();
         assert_eq!(m.warnings.len(), 1);
         assert!(
-            m.warnings[0].message.starts_with("CalibrationIlluminant2 99 is not an EXIF LightSource code"),
+            m.warnings[0]
+                .message
+                .starts_with("CalibrationIlluminant2 99 is not an EXIF LightSource code"),
             "{:?}",
             m.warnings
         );

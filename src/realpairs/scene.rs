@@ -181,10 +181,13 @@ pub fn prepare(plan: &ScenePlan, limit: f64) -> Result<Prepared> {
             ));
         }
         if let Some(iso) = img.meta.exif.iso.filter(|&i| i != f.iso) {
-            warnings.warn(crate::diagnostics::Code::RealIsoMismatch, format!(
-                "{}: the DNG says ISO {iso}, its name or folder ISO {}",
-                f.name, f.iso
-            ));
+            warnings.warn(
+                crate::diagnostics::Code::RealIsoMismatch,
+                format!(
+                    "{}: the DNG says ISO {iso}, its name or folder ISO {}",
+                    f.name, f.iso
+                ),
+            );
         }
         let g = GreenPlane::of(&img).in_file(&f.path)?;
         let c = measured(f, "noisy", shift(&gm, &g).in_file(&f.path)?);

@@ -203,7 +203,9 @@ pub fn build(opts: &ReportOptions, vis: &dyn Visuals) -> Result<ReportSummary> {
                     )
                 }
                 Err(e) => {
-                    summary.warnings.push(not_available(&id, format!("{title}: {e}")));
+                    summary
+                        .warnings
+                        .push(not_available(&id, format!("{title}: {e}")));
                     format!(
                         "<p class=\"na\">not available: {}</p>",
                         escape(&e.to_string())

@@ -293,12 +293,15 @@ impl IlluminantChoice {
             IlluminantChoice::Auto if camera.is_s20_fe() => (paper(est)?, paper_provenance(camera)),
             IlluminantChoice::Paper => {
                 if !camera.is_s20_fe() {
-                    warnings.warn(Code::IlluminantsOtherCamera, format!(
+                    warnings.warn(
+                        Code::IlluminantsOtherCamera,
+                        format!(
                         "night illuminants: the paper phone's dictionary (Samsung Galaxy S20 FE \
                          camera RGB) applied to {camera}: its lamp colours are another camera's \
                          (--illuminants paper or --compat release); for this camera's colours \
                          use {FIXES}"
-                    ));
+                    ),
+                    );
                 }
                 (paper(est)?, paper_provenance(camera))
             }
@@ -428,12 +431,15 @@ fn file(
             ))
         }
         (Some(rgb), None, Some(false)) => {
-            warnings.warn(Code::IlluminantsOtherCamera, format!(
+            warnings.warn(
+                Code::IlluminantsOtherCamera,
+                format!(
                 "night illuminants: {} holds camera neutrals measured on {measured_on}, applied \
                  to {camera}: its lamp colours are another camera's; for this camera's colours \
                  use {FIXES}",
                 f.name
-            ));
+            ),
+            );
             Ok((
                 Gaussian2::from_source(rgb, est)?,
                 rgb_prov(format!(

@@ -77,22 +77,28 @@ pub fn choose_noise_model(
         let mut warnings = Diagnostics::new();
         if let Some(mc) = &m.camera {
             if mc.same_camera(&cam) == Some(false) {
-                warnings.warn(Code::NoiseOtherCamera, format!(
-                    "noise: {file} was calibrated on {}, not on this camera ({}): its noise \
+                warnings.warn(
+                    Code::NoiseOtherCamera,
+                    format!(
+                        "noise: {file} was calibrated on {}, not on this camera ({}): its noise \
                      may not match this camera's; {HOW_TO_CALIBRATE}",
-                    mc.label(),
-                    cam.label()
-                ));
+                        mc.label(),
+                        cam.label()
+                    ),
+                );
             }
         }
         let negative = m.negative_points();
         if !negative.is_empty() {
-            warnings.warn(Code::NoiseNegativeClamped, format!(
-                "noise: {file} has negative parameters at {}: a variance cannot be negative, \
+            warnings.warn(
+                Code::NoiseNegativeClamped,
+                format!(
+                    "noise: {file} has negative parameters at {}: a variance cannot be negative, \
                  so synth clamps them to 0 (no noise from that term); recalibrate, or fix the \
                  file (docs/noise.md, \"Negative parameters\")",
-                negative.join(", ")
-            ));
+                    negative.join(", ")
+                ),
+            );
         }
         let kind = if m.physics.is_some() {
             "physics noise model"
@@ -510,7 +516,9 @@ mod tests {
         let real = crate::noise::estimate(&flat, &EstimateOptions::default()).unwrap();
         let r = choose(&flat, None, false, real);
         assert!(
-            r.choice.warnings[0].message.contains("too few smooth samples"),
+            r.choice.warnings[0]
+                .message
+                .contains("too few smooth samples"),
             "{:?}",
             r.choice.warnings
         );

@@ -56,5 +56,7 @@ fn every_warning_code_is_documented_and_no_other() {
     }
     assert_eq!(listed.len(), day2night::Code::ALL.len(), "{listed:?}");
     let cli = std::fs::read_to_string(common::root().join("docs/cli.md")).unwrap();
-    assert!(cli.contains("`warning[CODE]: <subject>: <message>`") && cli.contains("docs/warnings.md"));
+    assert!(
+        cli.contains("`warning[CODE]: <subject>: <message>`") && cli.contains("docs/warnings.md")
+    );
 }

@@ -69,7 +69,13 @@ fn nan_or_inf_is_an_error_unless_replaced() {
     assert_eq!(j["nonfinite_replaced"], serde_json::json!([2, 0]));
     // The warning with its code in the JSON (absent when nothing was replaced).
     assert_eq!(j["warnings"][0]["code"], "nonfinite-replaced", "{j}");
-    assert!(j["warnings"][0]["subject"].as_str().unwrap().ends_with(".exr"), "{j}");
+    assert!(
+        j["warnings"][0]["subject"]
+            .as_str()
+            .unwrap()
+            .ends_with(".exr"),
+        "{j}"
+    );
     let psnr = j["psnr"].as_f64().unwrap();
     assert!(psnr > 20.0, "{j}");
     // Clean pairs: the JSON says the mode, nothing replaced.

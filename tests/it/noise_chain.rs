@@ -209,7 +209,11 @@ fn a_model_file_of_another_camera_warns() {
             f.display()
         );
         assert_eq!(err.contains(&want), warns, "{name}: {err}");
-        assert_eq!(err.contains("warning[noise-other-camera]: "), warns, "{name}: {err}");
+        assert_eq!(
+            err.contains("warning[noise-other-camera]: "),
+            warns,
+            "{name}: {err}"
+        );
         let prov = &sidecar(&out, "day")["calibration"]["provenance"]["noise"];
         assert_eq!(prov["source"], "file");
         assert_eq!(prov["camera"].is_null(), name == "none", "{name}: {prov}");

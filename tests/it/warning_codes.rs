@@ -16,7 +16,7 @@ fn synth_says_each_warning_once_with_its_code_and_the_sidecar_keeps_it() {
     let t = tempfile::tempdir().unwrap();
     let day = common::fixtures().join("day.dng");
     let o = t.path().join("o");
-    let r = synth(&[s(&day), "-o", s(&o), "--iso", "25,800", "--seed", "3"]);
+    let r = synth(&[s(&day), "-o", s(&o), "--iso", "25,100", "--seed", "3"]);
     ok(&r);
     let err = String::from_utf8_lossy(&r.stderr);
     let lines: Vec<&str> = err.lines().filter(|l| l.starts_with("warning[")).collect();
@@ -46,17 +46,26 @@ fn synth_says_each_warning_once_with_its_code_and_the_sidecar_keeps_it() {
 fn info_json_carries_codes_and_subjects() {
     // The 1x1 fixture has no NoiseProfile and too few samples for an estimate.
     let f = common::fixtures().join("edge_1x1.dng");
-    let r = common::bin().args(["info", "--json", s(&f)]).output().unwrap();
+    let r = common::bin()
+        .args(["info", "--json", s(&f)])
+        .output()
+        .unwrap();
     assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
     let j: serde_json::Value = serde_json::from_slice(&r.stdout).unwrap();
     let j = if j.is_array() { j[0].clone() } else { j };
     let w = &j["warnings"][0];
     assert_eq!(w["code"], "noise-estimate-untrusted", "{j}");
     assert_eq!(w["subject"], s(&f), "{j}");
-    assert!(w["message"].as_str().unwrap().starts_with("noise: the input has no NoiseProfile"));
+    assert!(w["message"]
+        .as_str()
+        .unwrap()
+        .starts_with("noise: the input has no NoiseProfile"));
     let err = String::from_utf8_lossy(&r.stderr);
     assert!(
-        err.contains(&format!("warning[noise-estimate-untrusted]: {}: noise: ", f.display())),
+        err.contains(&format!(
+            "warning[noise-estimate-untrusted]: {}: noise: ",
+            f.display()
+        )),
         "{err}"
     );
 }
@@ -66,7 +75,15 @@ fn a_sidecar_with_plain_string_warnings_loads_and_replays_byte_for_byte() {
     let t = tempfile::tempdir().unwrap();
     let day = common::fixtures().join("day.dng");
     let (a, b) = (t.path().join("a"), t.path().join("b"));
-    ok(&synth(&[s(&day), "-o", s(&a), "--iso", "25", "--seed", "9"]));
+    ok(&synth(&[
+        s(&day),
+        "-o",
+        s(&a),
+        "--iso",
+        "25",
+        "--seed",
+        "9",
+    ]));
     // The sidecar as an older day2night wrote it: warnings as plain strings.
     let mut sc = Sidecar::read(&a.join("day.json")).unwrap();
     let text = sc.to_json().unwrap();
@@ -92,5 +109,8 @@ fn a_sidecar_with_plain_string_warnings_loads_and_replays_byte_for_byte() {
     same(&fa, &fb, "replay of a plain-string sidecar");
     // The legacy warning is said with its code.
     sc.plan.warnings = read.plan.warnings.clone();
-    assert_eq!(sc.plan.warnings[0].line("day.dng"), format!("warning[legacy]: day.dng: {msg}"));
+    assert_eq!(
+        sc.plan.warnings[0].line("day.dng"),
+        format!("warning[legacy]: day.dng: {msg}")
+    );
 }

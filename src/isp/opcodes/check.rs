@@ -17,10 +17,10 @@
 
 use super::area::plane_range;
 use super::{prepare, prepare_lists_for, Bounds, OpcodeEntry, OpcodeMode, OpcodeReport, Prepared};
+use crate::diagnostics::{Code, Diagnostics, Warning};
 use crate::dng::opcodes::{
     list_results, lists, AreaSpec, ListId, Opcode, OpcodeKind, OpcodeList, FLAG_OPTIONAL,
 };
-use crate::diagnostics::{Code, Diagnostics, Warning};
 use crate::error::{Error, Result};
 use crate::raw::{RawImage, RawMeta};
 
@@ -132,11 +132,14 @@ pub fn report_without_render(
                 Error::Malformed(m) => (m.clone(), "is malformed"),
                 other => (other.to_string(), "cannot be read"),
             };
-            warnings.warn(Code::OpcodeListMalformed, format!(
-                "{why}: the list {what}; no render was requested, so it is not used (the \
+            warnings.warn(
+                Code::OpcodeListMalformed,
+                format!(
+                    "{why}: the list {what}; no render was requested, so it is not used (the \
                  night raws carry it as stored; a render of them fails the same way unless \
                  it ignores the opcode lists)"
-            ));
+                ),
+            );
             report.skipped.push(OpcodeEntry {
                 list: id.tag_name().into(),
                 name: MALFORMED_LIST.into(),
@@ -149,12 +152,15 @@ pub fn report_without_render(
             let Some(mut e) = skipped.next() else { break };
             if was_mandatory {
                 let why = e.reason.take().unwrap_or_default();
-                warnings.warn(Code::OpcodeNotApplied, format!(
-                    "{}: {} (id {}) is not optional and cannot be applied: {why}; no render \
+                warnings.warn(
+                    Code::OpcodeNotApplied,
+                    format!(
+                        "{}: {} (id {}) is not optional and cannot be applied: {why}; no render \
                      was requested, so nothing fails (a render of this file or of its night \
                      raws would, unless it ignores the opcode lists)",
-                    e.list, e.name, e.id
-                ));
+                        e.list, e.name, e.id
+                    ),
+                );
                 e.reason = Some(format!("{why}; not optional (no render was requested)"));
             } else {
                 // The same words as a render's warning.

@@ -330,7 +330,9 @@ fn a_trim_that_changes_the_size_is_said_and_measured() {
     turned.meta.orientation = 6;
     let c = check_render(&turned, OpcodeMode::Apply, true, true).unwrap();
     assert_eq!(c.trimmed_size, Some((16, 32)));
-    assert!(c.warnings[0].message.contains("16x32 pixels where the raw's default crop is 48x64"));
+    assert!(c.warnings[0]
+        .message
+        .contains("16x32 pixels where the raw's default crop is 48x64"));
     // A trim around the DefaultCrop does not change the size: nothing to say.
     let mut cropped = frame(64, 48, [vec![], vec![], vec![trim([4, 4, 44, 60])]]);
     cropped.meta.default_crop_origin = Some([8.0, 8.0]);
