@@ -17,6 +17,9 @@ a breaking change.
 Conventions of every command:
 - errors go to stderr as `day2night: <file>: <reason>`; nothing but the requested output goes
   to stdout; exit code 0 on success, 1 for bad input or failed work, 2 for bad usage;
+- warnings go to stderr, each once, as `warning[CODE]: <subject>: <message>` (the subject is
+  the file, scene or option it is about); `--json` outputs and sidecars carry them as
+  `{"code", "subject", "message"}`; every CODE is listed in docs/warnings.md;
 - the output option is `-o`/`--output` (alias `--out`) wherever there is one;
 - outputs are written to a temporary file beside the destination, synced and renamed into
   place (a `synth`/`dataset` variant's files appear together, after all are on disk, or not

@@ -15,6 +15,7 @@ pub mod calibrate;
 pub mod color;
 pub mod dataset;
 pub mod deflate;
+pub mod diagnostics;
 pub mod dng;
 pub mod encode;
 pub mod error;
@@ -32,6 +33,7 @@ pub mod report;
 pub mod synth;
 pub mod tiff;
 
+pub use diagnostics::{Code, Diagnostics, Warning};
 pub use error::{Error, Result};
 pub use raw::{Bayer, Levels, RawImage, Rect};
 

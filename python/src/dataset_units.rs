@@ -14,27 +14,36 @@ use day2night::dataset::units::{self as lib, UnitsOptions, WriteOptions};
 use day2night::dataset::{Record, Shard, Split, SplitRule, Unit};
 use day2night::synth::config::JobConfig;
 use day2night::synth::options::Draft;
-use day2night::Error;
+use day2night::{Error, Warning};
 use pyo3::prelude::*;
 
-/// The per-input warnings of a unit's decode (metadata corrections) on stderr, as
-/// `day2night dataset` prints them: the library itself prints nothing.
-struct StderrWarnings;
+/// The per-input warnings of a unit's decode (metadata corrections), collected on the worker
+/// threads and raised as Python warnings ([`Collected::raise`]) once the call has the GIL
+/// again: the library itself prints nothing.
+#[derive(Clone, Default)]
+struct Collected(Arc<Mutex<Vec<(PathBuf, Warning)>>>);
 
-impl day2night::dataset::Progress for StderrWarnings {
-    fn warning(&self, path: &std::path::Path, message: &str) {
-        use std::io::Write as _;
-        // a closed stderr must not fail the unit: the line is dropped
-        let _ = writeln!(
-            std::io::stderr(),
-            "day2night: {}: warning: {message}",
-            path.display()
-        );
+impl day2night::dataset::Progress for Collected {
+    fn warning(&self, path: &std::path::Path, warning: &Warning) {
+        let mut v = self.0.lock().unwrap_or_else(|e| e.into_inner());
+        v.push((path.to_path_buf(), warning.clone()));
     }
 }
 
-fn stderr_warnings() -> day2night::dataset::ProgressSink {
-    day2night::dataset::ProgressSink::new(StderrWarnings)
+impl Collected {
+    /// The run's progress sink, collecting into `self`.
+    fn sink(&self) -> day2night::dataset::ProgressSink {
+        day2night::dataset::ProgressSink::new(self.clone())
+    }
+
+    /// Raise every collected warning, in the order they came, about its input.
+    fn raise(&self, py: Python<'_>) -> PyResult<()> {
+        let all = std::mem::take(&mut *self.0.lock().unwrap_or_else(|e| e.into_inner()));
+        for (path, w) in all {
+            crate::diagnostics::warn_lines(py, &path.display().to_string(), &[w])?;
+        }
+        Ok(())
+    }
 }
 use pyo3::types::{PyDict, PyList, PyTuple};
 use std::collections::HashMap;
@@ -250,20 +259,21 @@ pub fn write_unit<'py>(
 ) -> PyResult<Bound<'py, PyAny>> {
     let (unit, previous) = unit_from(unit)?;
     let cfg = dataset_config(unit.variants, options)?;
+    let said = Collected::default();
     let w = WriteOptions {
         out_dir,
         overwrite,
         wait,
-        progress: stderr_warnings(),
+        progress: said.sink(),
     };
-    let (rec, why) = py
-        .detach(move || {
-            on_pool(move || {
-                let p = processor_for(&cfg)?;
-                lib::write_unit(&unit, previous.as_ref(), &w, p.as_ref())
-            })
+    let done = py.detach(move || {
+        on_pool(move || {
+            let p = processor_for(&cfg)?;
+            lib::write_unit(&unit, previous.as_ref(), &w, p.as_ref())
         })
-        .map_err(py_err)?;
+    });
+    said.raise(py)?;
+    let (rec, why) = done.map_err(py_err)?;
     let rec = json_obj(py, &rec)?;
     if reason {
         Ok((rec, why.map(|r| r.describe()))
@@ -318,29 +328,30 @@ pub fn write_units<'py>(
             None => groups.push((u.path.clone(), vec![i])),
         }
     }
+    let said = Collected::default();
     let w = WriteOptions {
         out_dir,
         overwrite,
         wait,
-        progress: stderr_warnings(),
+        progress: said.sink(),
     };
     let n = parsed.len();
-    let done = py
-        .detach(move || {
-            on_pool(move || {
-                let p = processor_for(&cfg)?;
-                let mut done: Vec<Option<(Record, Option<Reason>)>> = vec![None; n];
-                for (_, idx) in &groups {
-                    let group: Vec<(Unit, Option<Record>)> =
-                        idx.iter().map(|&i| parsed[i].clone()).collect();
-                    for (&i, r) in idx.iter().zip(lib::write_units(&group, &w, p.as_ref())?) {
-                        done[i] = Some(r);
-                    }
+    let done = py.detach(move || {
+        on_pool(move || {
+            let p = processor_for(&cfg)?;
+            let mut done: Vec<Option<(Record, Option<Reason>)>> = vec![None; n];
+            for (_, idx) in &groups {
+                let group: Vec<(Unit, Option<Record>)> =
+                    idx.iter().map(|&i| parsed[i].clone()).collect();
+                for (&i, r) in idx.iter().zip(lib::write_units(&group, &w, p.as_ref())?) {
+                    done[i] = Some(r);
                 }
-                Ok(done)
-            })
+            }
+            Ok(done)
         })
-        .map_err(py_err)?;
+    });
+    said.raise(py)?;
+    let done = done.map_err(py_err)?;
     for (rec, why) in done.into_iter().flatten() {
         let rec = json_obj(py, &rec)?;
         if reason {

@@ -15,6 +15,7 @@ mod args;
 mod burst;
 mod convert;
 mod dataset_units;
+mod diagnostics;
 mod errors;
 mod metrics;
 mod pairs;
@@ -52,6 +53,12 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(raw::write_dng, m)?)?;
     m.add("BOUNDS", args::bounds_dict(m.py())?)?;
     m.add("SYNTH_OPTIONS", synth_options::table_dict(m.py())?)?;
+    // Every warning code with its summary (day2night.diagnostics makes a class of each).
+    let codes: Vec<(&str, &str)> = day2night::Code::ALL
+        .iter()
+        .map(|c| (c.as_str(), c.summary()))
+        .collect();
+    m.add("WARNING_CODES", codes)?;
     // XYZ (D65) -> linear sRGB, three rows: day2night::color::xyz::XYZ_TO_SRGB, the one
     // definition (rawpy_meta.py undoes LibRaw's camera -> sRGB matrix with it).
     let xyz_to_srgb: Vec<Vec<f64>> = day2night::color::xyz::XYZ_TO_SRGB

@@ -3,7 +3,7 @@
 //! (`day2night.train.FreshPatches`; `day2night::synth::patches`).
 
 use crate::args::{self, Iso, Seed, Variant};
-use crate::convert::warn_plan;
+use crate::diagnostics::warn_plan;
 use crate::errors::{py_err, value_err};
 use crate::pool::on_pool;
 use crate::raw::Raw;

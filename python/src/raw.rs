@@ -2,7 +2,8 @@
 //! `write_dng`. A LinearRaw DNG (already demosaiced) is read too, so that it can be
 //! rendered; the synthesis refuses it with the command line's reason ([`Raw::cfa_day`]).
 
-use crate::convert::{meta_dict, warn_meta};
+use crate::convert::meta_dict;
+use crate::diagnostics::warn_meta;
 use crate::errors::{py_err, value_err};
 use crate::pool::on_pool;
 use day2night::dng::write::{write_dng as lib_write_dng, Compression, WriteOptions};

@@ -11,10 +11,8 @@ use day2night::raw::meta::RawMeta;
 use day2night::raw::{Bayer, Levels, RawImage, Rect};
 use day2night::synth::job::DayInput;
 use numpy::PyReadonlyArray2;
-use pyo3::exceptions::PyUserWarning;
 use pyo3::prelude::*;
 use pyo3::types::{PyBytes, PyDict};
-use std::ffi::CString;
 
 /// Every key `from_array` reads, as `Raw.meta` returns them.
 const KEYS: &[&str] = &[
@@ -490,12 +488,11 @@ pub(crate) fn from_array(
     // The DNG layer's value checks (matrix conditioning, neutral ratios, NoiseProfile, ...),
     // exactly as `read_dng` applies them to a file: corrections come back as warnings.
     day2night::dng::check::check_meta(&mut raw.meta).map_err(meta_err)?;
-    let warn_type = py.get_type::<PyUserWarning>();
-    for n in notes.into_iter().chain(raw.meta.warnings.iter().cloned()) {
-        let msg = CString::new(format!("day2night: {file_name}: {n}"))
-            .unwrap_or_else(|_| c"day2night: metadata default used".to_owned());
-        PyErr::warn(py, warn_type.as_any(), &msg, 2)?;
-    }
+    let defaults = notes
+        .into_iter()
+        .map(|n| day2night::Warning::new(day2night::Code::MetadataDefault, n));
+    let all: Vec<day2night::Warning> = defaults.chain(raw.meta.warnings.iter().cloned()).collect();
+    crate::diagnostics::warn_at(py, &file_name, &all, 2)?;
     let day = py.detach(move || on_pool(move || Ok(DayInput::in_memory(raw, &file_name))));
     Ok((day.map_err(py_err)?, stem))
 }

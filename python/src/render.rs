@@ -1,6 +1,7 @@
 //! `render` (the software ISP's linear render, as `day2night render --format exr`).
 
-use crate::convert::{rgb_array, warn_lines};
+use crate::convert::rgb_array;
+use crate::diagnostics::warn_lines;
 use crate::errors::py_err;
 use crate::pool::on_pool;
 use crate::raw::Raw;

@@ -2,7 +2,8 @@
 //! files, as `day2night synth` writes them).
 
 use crate::args::{self, Isos, Seed, Variant};
-use crate::convert::{json_obj, raw_image_from, rgb_array, u16_array, warn_plan};
+use crate::convert::{json_obj, raw_image_from, rgb_array, u16_array};
+use crate::diagnostics::warn_plan;
 use crate::errors::{py_err, value_err};
 use crate::pool::on_pool;
 use crate::raw::Raw;

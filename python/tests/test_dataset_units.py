@@ -5,6 +5,7 @@ tree the command line writes with the same options, byte for byte (the Ray examp
 the same three calls on a cluster: test_ray.py)."""
 
 import json
+import warnings
 
 import pytest
 
@@ -126,6 +127,17 @@ def with_bad_noise_profile(src, dst):
     dst.write_bytes(bytes(data))
 
 
+def profile_warnings(call):
+    """Run call(); the NoiseProfileInvalidWarning raised (one per decode), and its result."""
+    with warnings.catch_warnings(record=True) as rec:
+        warnings.simplefilter("always")
+        out = call()
+    got = [w for w in rec if issubclass(w.category, day2night.NoiseProfileInvalidWarning)]
+    assert all(w.message.code == "noise-profile-invalid" and "NoiseProfile pair 0" in str(w.message)
+               for w in got), got
+    return len(got), out
+
+
 def test_write_units_decodes_each_input_once(cli, tmp_path, capfd):
     from dataset_trees import FIXTURES
     days = tmp_path / "days"
@@ -141,14 +153,11 @@ def test_write_units_decodes_each_input_once(cli, tmp_path, capfd):
     units = day2night.dataset_units(days, b, **kw)
     assert [len(g) for g in day2night.group_units(units)] == [3, 3]
     assert [u["id"] for g in day2night.group_units(units) for u in g] == [u["id"] for u in units]
-    capfd.readouterr()
-    day2night.write_manifest([day2night.write_unit(u, b, **opts) for u in units], b)
-    one_by_one = capfd.readouterr().err.count("warning: NoiseProfile pair 0")
+    one_by_one, recs = profile_warnings(lambda: [day2night.write_unit(u, b, **opts) for u in units])
+    day2night.write_manifest(recs, b)
     units = day2night.dataset_units(days, c, **kw)
-    records = []
-    for group in day2night.group_units(units):
-        records += day2night.write_units(group, c, **opts)
-    grouped = capfd.readouterr().err.count("warning: NoiseProfile pair 0")
+    grouped, records = profile_warnings(
+        lambda: [r for g in day2night.group_units(units) for r in day2night.write_units(g, c, **opts)])
     day2night.write_manifest(records, c)
     # One decode per unit, against one per input (as `dataset`); the same bytes.
     assert (one_by_one, grouped) == (6, 2)
@@ -158,9 +167,9 @@ def test_write_units_decodes_each_input_once(cli, tmp_path, capfd):
     # (any order) are grouped by input; one output deleted: one decode, one unit redone.
     (c / "train" / "target" / "a_v2.exr").unlink()
     units = day2night.dataset_units(days, c, **kw)
-    capfd.readouterr()
-    done = day2night.write_units(list(reversed(units)), c, reason=True, **opts)
-    assert capfd.readouterr().err.count("warning: NoiseProfile pair 0") == 1
+    n, done = profile_warnings(
+        lambda: day2night.write_units(list(reversed(units)), c, reason=True, **opts))
+    assert n == 1
     assert [why for _, why in done] == [None] * 4 + ["outputs missing or altered", None]
     assert [r["variant"] for r, _ in done] == [3, 2, 1, 3, 2, 1]
     day2night.write_manifest([r for r, _ in done], c)

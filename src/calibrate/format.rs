@@ -51,8 +51,8 @@ pub struct GrayCardMeasurement {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub camera: Option<CameraId>,
     /// Things the user should know (e.g. many saturated sites).
-    #[serde(default, skip_serializing_if = "Vec::is_empty")]
-    pub warnings: Vec<String>,
+    #[serde(default, skip_serializing_if = "<[_]>::is_empty")]
+    pub warnings: crate::diagnostics::Diagnostics,
 }
 
 /// `calibrate illuminants` output (`synth --illuminants` input).

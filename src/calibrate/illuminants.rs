@@ -17,6 +17,7 @@
 
 use super::format::{Gaussian2Fit, GrayCardMeasurement, IlluminantDictionary, ILLUMINANTS_FORMAT};
 use super::stats::trimmed_mean;
+use crate::diagnostics::{Code, Diagnostics};
 use crate::error::{Error, Result};
 use crate::isp::color::CameraColor;
 use crate::normalize::Normalizer;
@@ -137,7 +138,7 @@ pub fn measure_gray_card(
     let names = ["red", "green", "blue"];
     let mut means = [0.0; 3];
     let mut pixels = [0usize; 3];
-    let mut warnings = vec![];
+    let mut warnings = Diagnostics::new();
     for k in 0..3 {
         let total = vals[k].len() + sat[k];
         pixels[k] = vals[k].len();
@@ -154,10 +155,13 @@ pub fn measure_gray_card(
             )));
         }
         if total > 0 && sat[k] as f64 > SATURATION_WARN * total as f64 {
-            warnings.push(format!(
-                "{} of {} {} sites saturated: the {} mean is biased low",
-                sat[k], total, names[k], names[k]
-            ));
+            warnings.warn(
+                Code::GrayCardSaturated,
+                format!(
+                    "{} of {} {} sites saturated: the {} mean is biased low",
+                    sat[k], total, names[k], names[k]
+                ),
+            );
         }
         means[k] = m;
     }
@@ -165,17 +169,23 @@ pub fn measure_gray_card(
     let xy = match CameraColor::new(&img.meta.color).and_then(|c| c.neutral_to_xy(chromaticity)) {
         Ok(xy) if crate::bounds::chromaticity_xy("xy", xy).is_ok() => Some(xy),
         Ok(xy) => {
-            warnings.push(format!(
-                "the colour matrices map this light to xy {xy:?}, not a light's chromaticity: \
+            warnings.warn(
+                Code::GrayCardNoXy,
+                format!(
+                    "the colour matrices map this light to xy {xy:?}, not a light's chromaticity: \
                  no xy (the dictionary serves this camera only)"
-            ));
+                ),
+            );
             None
         }
         Err(e) => {
-            warnings.push(format!(
-                "no xy ({}): the dictionary serves this camera only",
-                e.root()
-            ));
+            warnings.warn(
+                Code::GrayCardNoXy,
+                format!(
+                    "no xy ({}): the dictionary serves this camera only",
+                    e.root()
+                ),
+            );
             None
         }
     };
@@ -325,7 +335,7 @@ pub fn build_dictionary(
     files: Vec<GrayCardMeasurement>,
     extra: Vec<ListedIlluminants>,
     est: Estimator,
-) -> Result<(IlluminantDictionary, Vec<String>)> {
+) -> Result<(IlluminantDictionary, Diagnostics)> {
     let mut all: Vec<[f64; 3]> = vec![];
     let mut xy: Vec<Option<[f64; 2]>> = vec![];
     let mut cameras: Vec<Option<CameraId>> = vec![];
@@ -340,16 +350,19 @@ pub fn build_dictionary(
         cameras.push(m.camera.clone());
     }
     let fit = fit_gaussian(&all, est)?;
-    let mut notes = vec![];
+    let mut notes = Diagnostics::new();
     let xy: Vec<[f64; 2]> = match xy.iter().copied().collect::<Option<Vec<_>>>() {
         Some(v) => v,
         None => {
             let n = xy.iter().filter(|p| p.is_none()).count();
-            notes.push(format!(
-                "{n} of {} illuminants have no xy (no colour matrices, or a listed dictionary \
+            notes.warn(
+                Code::IlluminantsDictionary,
+                format!(
+                    "{n} of {} illuminants have no xy (no colour matrices, or a listed dictionary \
                  without them): the dictionary holds camera neutrals only, for this camera",
-                xy.len()
-            ));
+                    xy.len()
+                ),
+            );
             vec![]
         }
     };
@@ -369,16 +382,19 @@ pub fn build_dictionary(
                 .collect();
             names.sort();
             names.dedup();
-            notes.push(format!(
-                "the illuminants come from {}: the camera is not recorded, so synth uses the \
+            notes.warn(
+                Code::IlluminantsDictionary,
+                format!(
+                    "the illuminants come from {}: the camera is not recorded, so synth uses the \
                  camera neutrals as they are for every camera{}",
-                names.join(", "),
-                if xy.is_empty() {
-                    ""
-                } else {
-                    " unless it uses the xy"
-                }
-            ));
+                    names.join(", "),
+                    if xy.is_empty() {
+                        ""
+                    } else {
+                        " unless it uses the xy"
+                    }
+                ),
+            );
             None
         }
     };
@@ -532,22 +548,25 @@ mod tests {
             build_dictionary(vec![m.clone()], vec![listed], Estimator::Unbiased).unwrap();
         assert!(d.xy.is_empty() && d.camera.is_none() && d.observer.is_none());
         assert!(
-            notes[0].contains("1 of 2 illuminants have no xy"),
+            notes[0].message.contains("1 of 2 illuminants have no xy"),
             "{notes:?}"
         );
-        assert!(notes[1].contains("an unknown camera"), "{notes:?}");
+        assert!(notes[1].message.contains("an unknown camera"), "{notes:?}");
         // Another camera's cards: camera not recorded, xy kept.
         let mut other = m.clone();
         other.camera = Some(CameraId::new(Some("Nikon".into()), Some("D3".into()), None));
         let (d, notes) = build_dictionary(vec![m, other], vec![], Estimator::Unbiased).unwrap();
         assert!(d.camera.is_none() && d.xy.len() == 2);
-        assert!(notes[0].contains("Nikon D3") && notes[0].contains("day2night Synthetic"));
+        assert!(
+            notes[0].message.contains("Nikon D3")
+                && notes[0].message.contains("day2night Synthetic")
+        );
         // No colour matrices: no xy, a warning on the card.
         let mut bare = card(Bayer::RGGB, [800.0, 1600.0, 400.0], 64, 48);
         bare.meta.color = Default::default();
         let m = measure_gray_card(&bare, None, "b").unwrap();
         assert!(
-            m.xy.is_none() && m.warnings[0].contains("no ColorMatrix1"),
+            m.xy.is_none() && m.warnings[0].message.contains("no ColorMatrix1"),
             "{m:?}"
         );
         // Round trip through JSON and parse_listed.

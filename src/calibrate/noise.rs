@@ -28,6 +28,7 @@
 use super::format::{IsoLaws, IsoModel, NoiseModelFile, PositionFit, NOISE_FORMAT, NOISE_UNITS};
 use super::stats::{ls_through_origin, wls_line, LineFit};
 use super::{check_same_capture, SameCapture};
+use crate::diagnostics::{Code, Diagnostics};
 use crate::error::{Error, Result};
 use crate::noise::model::NoiseParams;
 use crate::normalize::Normalizer;
@@ -639,7 +640,7 @@ pub fn build_model(
     sources: Vec<SourceStats>,
     profiles: Vec<IsoModel>,
     camera: Option<CameraId>,
-) -> Result<(NoiseModelFile, Vec<String>)> {
+) -> Result<(NoiseModelFile, Diagnostics)> {
     let mut by_iso: BTreeMap<u32, Vec<SourceStats>> = BTreeMap::new();
     for s in sources {
         by_iso.entry(s.iso).or_default().push(s);
@@ -648,15 +649,18 @@ pub fn build_model(
     for (iso, srcs) in &by_iso {
         models.insert(*iso, fit_iso(srcs)?);
     }
-    let mut warnings = vec![];
+    let mut warnings = Diagnostics::new();
     for p in profiles {
         match models.entry(p.iso) {
-            std::collections::btree_map::Entry::Occupied(o) => warnings.push(format!(
-                "ISO {}: the {} model takes precedence over the {} one",
-                p.iso,
-                o.get().source,
-                p.source
-            )),
+            std::collections::btree_map::Entry::Occupied(o) => warnings.warn(
+                Code::CalibrateIsoOverlap,
+                format!(
+                    "ISO {}: the {} model takes precedence over the {} one",
+                    p.iso,
+                    o.get().source,
+                    p.source
+                ),
+            ),
             std::collections::btree_map::Entry::Vacant(v) => {
                 v.insert(p);
             }
@@ -671,7 +675,7 @@ pub fn build_model(
     for m in &isos {
         for f in &m.fits {
             if f.o < 0.0 || f.s < 0.0 {
-                warnings.push(format!(
+                warnings.warn(Code::CalibrateNegativeParameter, format!(
                     "ISO {} position {}: negative parameter (S {:.3e}, O {:.3e}); synth clamps variances at 0",
                     m.iso, f.position, f.s, f.o
                 ));

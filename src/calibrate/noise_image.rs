@@ -5,6 +5,7 @@
 //! is left out with a warning (an ISO none of whose images can be trusted is an error).
 
 use super::format::{IsoModel, PositionFit};
+use crate::diagnostics::{Code, Diagnostics};
 use crate::error::{Error, Result};
 use crate::noise::estimate::{estimate, EstimateOptions, NoiseEstimate};
 use crate::raw::RawImage;
@@ -46,22 +47,25 @@ pub fn estimate_image(name: &str, img: &RawImage, opts: &EstimateOptions) -> Res
 
 /// One model per ISO from image estimates, and warnings (untrusted images left out; images
 /// of different levels at one ISO). Errors when no image of some ISO can be trusted.
-pub fn from_image_estimates(images: &[ImageEstimate]) -> Result<(Vec<IsoModel>, Vec<String>)> {
+pub fn from_image_estimates(images: &[ImageEstimate]) -> Result<(Vec<IsoModel>, Diagnostics)> {
     let mut by_iso: BTreeMap<u32, Vec<&ImageEstimate>> = BTreeMap::new();
     for e in images {
         by_iso.entry(e.iso).or_default().push(e);
     }
-    let mut warnings = vec![];
+    let mut warnings = Diagnostics::new();
     let mut out = vec![];
     for (iso, list) in by_iso {
         let mut trusted = vec![];
         for e in list {
             match e.estimate.trusted() {
                 Ok(_) => trusted.push(e),
-                Err(why) => warnings.push(format!(
-                    "{}: the noise estimated from the image cannot be trusted ({why}); left out",
-                    e.name
-                )),
+                Err(why) => warnings.warn(
+                    Code::CalibrateImageUntrusted,
+                    format!(
+                        "{}: the noise estimated from the image cannot be trusted ({why}); left out",
+                        e.name
+                    ),
+                ),
             }
         }
         let Some(first) = trusted.first() else {
@@ -74,10 +78,13 @@ pub fn from_image_estimates(images: &[ImageEstimate]) -> Result<(Vec<IsoModel>, 
             .iter()
             .any(|e| e.black != first.black || e.white != first.white)
         {
-            warnings.push(format!(
-                "ISO {iso}: the images have different black or white levels; their normalized \
+            warnings.warn(
+                Code::CalibrateLevelsDiffer,
+                format!(
+                    "ISO {iso}: the images have different black or white levels; their normalized \
                  estimates are combined as they are"
-            ));
+                ),
+            );
         }
         let scale = first.white - first.black;
         let q = first.estimate.quantization_variance_removed;

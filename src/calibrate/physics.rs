@@ -103,8 +103,8 @@ pub struct PhysicsCalibration {
     /// Per ISO fit details (ignored by synth).
     pub fits: Vec<IsoFit>,
     /// Warnings (e.g. an odd flat left out).
-    #[serde(default, skip_serializing_if = "Vec::is_empty")]
-    pub warnings: Vec<String>,
+    #[serde(default, skip_serializing_if = "<[_]>::is_empty")]
+    pub warnings: crate::diagnostics::Diagnostics,
 }
 
 /// A frame with its display name.
@@ -281,7 +281,7 @@ fn fit_flats(
     flats: &[Named],
     norm: &Normalizer,
     dark: &DarkOut,
-    warnings: &mut Vec<String>,
+    warnings: &mut crate::diagnostics::Diagnostics,
 ) -> Result<(f64, Vec<FlatPair>, Option<[f64; 2]>)> {
     let mut measured = Vec::new();
     for (name, img) in flats {
@@ -291,9 +291,10 @@ fn fit_flats(
     measured.sort_by(|a, b| a.1.total_cmp(&b.1));
     if measured.len() % 2 == 1 {
         let last = measured.pop().map(|m| m.0).unwrap_or_default();
-        warnings.push(format!(
-            "ISO {iso}: odd number of flats, {last} (the brightest) left out of the pairs"
-        ));
+        warnings.warn(
+            crate::diagnostics::Code::CalibrateOddFlats,
+            format!("ISO {iso}: odd number of flats, {last} (the brightest) left out of the pairs"),
+        );
     }
     let range = norm.white - norm.black_at(0, 0).max(norm.black_at(1, 1));
     let mut pairs = Vec::new();
@@ -392,7 +393,7 @@ pub fn fit_physics(darks: &[Named], flats: &[Named], source: &str) -> Result<Phy
     }
     let mut points = Vec::new();
     let mut fits = Vec::new();
-    let mut warnings = Vec::new();
+    let mut warnings = crate::diagnostics::Diagnostics::new();
     for (iso, (d, f)) in &by_iso {
         if d.len() < MIN_DARK_FRAMES || f.len() < MIN_FLAT_FRAMES {
             return Err(Error::invalid(format!(

@@ -6,6 +6,7 @@ use day2night::error::ResultExt;
 use day2night::output::{write_bytes_atomic, OutputPolicy};
 use day2night::raw::camera::CameraId;
 use day2night::raw::RawImage;
+use day2night::{Code, Warning};
 use std::path::{Path, PathBuf};
 
 /// Calibration subcommands.
@@ -340,15 +341,13 @@ fn run_illuminants(a: IlluminantsArgs) -> CmdResult {
                 m.pixels[2],
                 m.saturated.iter().sum::<usize>()
             );
-            for w in &m.warnings {
-                eprintln!("day2night: warning: {}: {w}", p.display());
-            }
+            super::warn_all(p, &m.warnings);
             files.push(m);
         }
     }
     let (dict, notes) = illuminants::build_dictionary(files, extra, est)?;
     for n in &notes {
-        eprintln!("day2night: warning: {n}");
+        super::warn(n, "");
     }
     if let Some(c) = &dict.camera {
         eprintln!(
@@ -372,10 +371,15 @@ fn run_illuminants(a: IlluminantsArgs) -> CmdResult {
         f.covariance[1][0],
         f.covariance[1][1]
     );
-    if f.count == 1 {
-        eprintln!("day2night: warning: one illuminant: zero covariance, synth will always use it; shoot more gray cards");
-    } else if f.count == 2 {
-        eprintln!("day2night: warning: 2 illuminants give a degenerate (line) covariance; shoot more gray cards");
+    let degenerate = match f.count {
+        1 => {
+            Some("one illuminant: zero covariance, synth will always use it; shoot more gray cards")
+        }
+        2 => Some("2 illuminants give a degenerate (line) covariance; shoot more gray cards"),
+        _ => None,
+    };
+    if let Some(m) = degenerate {
+        super::warn(&Warning::new(Code::IlluminantsDegenerate, m), "");
     }
     write_json(&a.out, &a.inputs, &dict)
 }
@@ -395,7 +399,8 @@ fn run_brightness(a: BrightnessArgs) -> CmdResult {
         f.count, f.mean, f.std, f.min, f.max
     );
     if f.count == 1 {
-        eprintln!("day2night: warning: one image: std = 0, synth will always use this brightness");
+        let m = "one image: std = 0, synth will always use this brightness";
+        super::warn(&Warning::new(Code::BrightnessSingleImage, m), "");
     }
     write_json(&a.out, &a.inputs, &dict)
 }
@@ -452,12 +457,17 @@ fn run_noise(a: NoiseArgs) -> CmdResult {
         let c = CameraId::of(&img.meta);
         match &camera {
             None if !c.is_unknown() => camera = Some(c),
-            Some(first) if first.same_camera(&c) == Some(false) => eprintln!(
-                "day2night: warning: {}: another camera ({}) than the first input's ({}): the model records {}",
-                p.display(),
-                c.label(),
-                first.label(),
-                first.label()
+            Some(first) if first.same_camera(&c) == Some(false) => super::warn_all(
+                p,
+                &[Warning::new(
+                    Code::CalibrateMixedCameras,
+                    format!(
+                        "another camera ({}) than the first input's ({}): the model records {}",
+                        c.label(),
+                        first.label(),
+                        first.label()
+                    ),
+                )],
             ),
             _ => {}
         }
@@ -545,14 +555,15 @@ fn run_noise(a: NoiseArgs) -> CmdResult {
     pb.finish_and_clear();
     let refs: Vec<(String, &RawImage)> = profiled.iter().map(|(n, i)| (n.clone(), i)).collect();
     let mut profiles = noise::from_noise_profiles(&refs)?;
-    let mut est_warnings = vec![];
+    let mut est_warnings = day2night::Diagnostics::new();
     if !estimates.is_empty() {
         let (models, w) = noise_image::from_image_estimates(&estimates)?;
         profiles.extend(models);
         est_warnings = w;
     }
-    let (model, mut warnings) = noise::build_model(sources, profiles, camera)?;
-    warnings.splice(0..0, est_warnings);
+    let (model, warnings) = noise::build_model(sources, profiles, camera)?;
+    est_warnings.extend(warnings);
+    let warnings = est_warnings;
     for m in &model.isos {
         eprintln!(
             "ISO {} ({}, {} input(s), black {} white {}):",
@@ -579,7 +590,7 @@ fn run_noise(a: NoiseArgs) -> CmdResult {
         );
     }
     for w in &warnings {
-        eprintln!("day2night: warning: {w}");
+        super::warn(w, "");
     }
     write_json(&a.out, &inputs, &model)
 }
@@ -644,7 +655,7 @@ fn run_noise_physics(a: NoiseArgs) -> CmdResult {
         j.read.intercept, j.read.slope, j.read.residual_std, j.row.intercept, j.row.slope, j.row.residual_std
     );
     for w in &cal.warnings {
-        eprintln!("day2night: warning: {w}");
+        super::warn(w, "");
     }
     let inputs: Vec<PathBuf> = a.dark.iter().chain(&a.flat).cloned().collect();
     if let Some(plot) = &a.plot {

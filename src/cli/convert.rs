@@ -102,9 +102,12 @@ pub fn run(args: ConvertArgs) -> CmdResult {
                 )
                 .into());
             }
-            eprintln!(
-                "day2night: {}: warning: {e}: {tag} dropped (--bad-opcode-lists drop)",
-                args.input.display()
+            super::warn_all(
+                &args.input,
+                &[day2night::Warning::new(
+                    day2night::Code::OpcodeListDropped,
+                    format!("{e}: {tag} dropped (--bad-opcode-lists drop)"),
+                )],
             );
             img.meta.opcode_lists[list.index()] = None;
         }

@@ -88,6 +88,7 @@ pub fn run(args: EvalArgs) -> CmdResult {
         DEFAULT_BAND_ROWS,
     )
     .map_err(lib)?;
+    let mut warnings = day2night::Diagnostics::new();
     for (path, n) in [
         (&args.pred, r.non_finite[0]),
         (&args.target, r.non_finite[1]),
@@ -103,16 +104,19 @@ pub fn run(args: EvalArgs) -> CmdResult {
             });
         }
         if n > 0 {
-            eprintln!(
-                "day2night: {}: warning: {n} NaN/Inf samples replaced by 0 (--nonfinite zero)",
-                path.display()
-            );
+            let w = day2night::Warning::new(
+                day2night::Code::NonfiniteReplaced,
+                format!("{n} NaN/Inf samples replaced by 0 (--nonfinite zero)"),
+            )
+            .about(path.display().to_string());
+            super::warn(&w, "");
+            warnings.push(w);
         }
     }
     let (ps, ss, de) = (r.psnr, r.ssim, r.delta_e_2000);
     let a = &r;
     if args.json {
-        let v = serde_json::json!({
+        let mut v = serde_json::json!({
             "psnr": if ps.is_finite() { Some(ps) } else { None },
             "ssim": ss,
             "delta_e_2000": de,
@@ -125,6 +129,10 @@ pub fn run(args: EvalArgs) -> CmdResult {
             "nonfinite": if zero { "zero" } else { "error" },
             "nonfinite_replaced": r.non_finite,
         });
+        // The warnings with their codes, when there are any.
+        if !warnings.is_empty() {
+            v["warnings"] = serde_json::to_value(&warnings)?;
+        }
         println!("{}", serde_json::to_string_pretty(&v)?);
     } else {
         println!("psnr: {ps:.4} dB");

@@ -121,7 +121,10 @@ fn noise_verdict(info: &mut DngInfo, file: &Decoded) -> Option<day2night::noise:
             Some(c.provenance)
         }
         Err(e) => {
-            info.warnings.push(format!("noise: {}", e.root()));
+            info.warnings.warn(
+                day2night::Code::NoiseUnavailable,
+                format!("noise: {}", e.root()),
+            );
             None
         }
     }
@@ -140,9 +143,9 @@ pub fn run(args: InfoArgs) -> CmdResult {
                 readiness_verdict(&mut info, &file);
                 let ill = illuminant_verdict(&info);
                 let noise = noise_verdict(&mut info, &file);
-                for w in &info.warnings {
-                    eprintln!("day2night: {}: warning: {w}", f.display());
-                }
+                // Every warning of `info` is about this file.
+                info.warnings.about(&f.display().to_string());
+                super::warn_all(f, &info.warnings);
                 if let Some(e) = &info.error {
                     eprintln!("day2night: {}: {e}", f.display());
                     failed += 1;
@@ -484,7 +487,7 @@ fn describe(
         if i.synth_ready && i.warnings.is_empty() {
             "ready".to_string()
         } else if i.synth_ready {
-            format!("ready, with warnings: {}", i.warnings.join("; "))
+            format!("ready, with warnings: {}", i.warnings.messages().join("; "))
         } else {
             format!("not usable: {}", opt(&i.reason))
         }

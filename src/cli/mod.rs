@@ -149,9 +149,27 @@ pub fn main() -> ExitCode {
     }
 }
 
-/// Print what the metadata checks corrected in `meta` (`day2night: <file>: warning: ...`).
-pub fn print_meta_warnings(file: &std::path::Path, meta: &day2night::raw::meta::RawMeta) {
-    for w in &meta.warnings {
-        eprintln!("day2night: {}: warning: {w}", file.display());
+/// Print one warning on stderr, once: `warning[CODE]: SUBJECT: MESSAGE`, `fallback` (the
+/// file the command works on) standing for a missing subject. Every warning the command line
+/// prints goes through here (docs/warnings.md lists the codes).
+pub fn warn(w: &day2night::Warning, fallback: &str) {
+    use std::io::Write as _;
+    // A closed stderr drops the line (EPIPE must not panic).
+    let _ = writeln!(std::io::stderr(), "{}", w.line(fallback));
+}
+
+/// [`warn`] for each of `warnings`, about `file` when they name nothing else.
+pub fn warn_all<'a>(
+    file: &std::path::Path,
+    warnings: impl IntoIterator<Item = &'a day2night::Warning>,
+) {
+    let name = file.display().to_string();
+    for w in warnings {
+        warn(w, &name);
     }
+}
+
+/// Print what the metadata checks corrected in `meta` (`warning[CODE]: <file>: ...`).
+pub fn print_meta_warnings(file: &std::path::Path, meta: &day2night::raw::meta::RawMeta) {
+    warn_all(file, &meta.warnings);
 }

@@ -47,11 +47,8 @@ impl Progress for Stderr {
         }
     }
 
-    fn warning(&self, path: &Path, message: &str) {
-        self.line(&format!(
-            "day2night: {}: warning: {message}",
-            path.display()
-        ));
+    fn warning(&self, path: &Path, warning: &day2night::Warning) {
+        self.line(&warning.line(&path.display().to_string()));
     }
 
     fn input_done(&self, e: &InputDone<'_>) {

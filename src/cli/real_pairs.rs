@@ -146,7 +146,7 @@ fn scene_line(d: &realpairs::SceneDone<'_>) {
     use std::io::Write as _;
     let mut err = std::io::stderr().lock();
     for w in d.warnings {
-        let _ = writeln!(err, "real-pairs: {}: warning: {w}", d.scene);
+        let _ = writeln!(err, "{}", w.line(d.scene));
     }
     let _ = writeln!(
         err,

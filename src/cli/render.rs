@@ -137,15 +137,11 @@ pub fn run(args: RenderArgs) -> CmdResult {
     let checked =
         day2night::isp::opcodes::check::check_render(&img, opcodes, !args.no_crop, !args.no_orient)
             .map_err(in_file)?;
-    for w in &checked.warnings {
-        eprintln!("day2night: {}: warning: {w}", args.input.display());
-    }
+    super::warn_all(&args.input, &checked.warnings);
     // A render that comes out constant is said too (watched band by band).
     let flat = day2night::isp::flat::FlatCheck::new();
     let say_flat = || {
-        if let Some(w) = flat.warning("the render") {
-            eprintln!("day2night: {}: warning: {w}", args.input.display());
-        }
+        super::warn_all(&args.input, &flat.warning("the render"));
     };
     let opts = RenderOptions {
         demosaic,

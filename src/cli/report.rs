@@ -41,7 +41,7 @@ pub fn build_report(
     };
     let r = report::build(&opts, &LibraryVisuals)?;
     for w in &r.warnings {
-        eprintln!("day2night: report: {w}");
+        super::warn(w, "report");
     }
     Ok(r)
 }

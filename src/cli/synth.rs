@@ -185,6 +185,17 @@ impl Run<'_> {
         }
     }
 
+    /// Each warning once, `warning[CODE]: SUBJECT: MESSAGE` (above the progress bar).
+    fn say_warnings<'w>(
+        &self,
+        warnings: impl IntoIterator<Item = &'w day2night::Warning>,
+        file: &str,
+    ) {
+        for w in warnings {
+            self.say(w.line(file));
+        }
+    }
+
     /// Every variant of one input (the sidecar's one with --replay).
     fn input(&self, input: &Path) -> day2night::Result<()> {
         let day = DayInput::read(input)?;
@@ -231,7 +242,8 @@ impl Run<'_> {
         Ok(())
     }
 
-    /// One planned variant: warnings, outputs, progress.
+    /// One planned variant: outputs, then its warnings (the plan's and the run's, each
+    /// once), progress.
     fn variant(
         &self,
         input: &Path,
@@ -239,18 +251,22 @@ impl Run<'_> {
         stem: &str,
         plan: &Plan,
     ) -> day2night::Result<()> {
-        for w in &plan.warnings {
-            self.say(format!("day2night: {}: warning: {}", input.display(), w));
-        }
         std::fs::create_dir_all(self.out).map_err(|e| Error::from(e).in_file(self.out))?;
         // One process at a time checks and writes this output set (docs/concurrency.md).
         let base = self.job.base_name(stem, plan);
         let _set = OutputSetLock::acquire(self.out, &base, self.wait)?;
         let sink = DirSink::new(self.out, base, self.policy);
-        let written = self.job.run_variant(day, plan, &sink)?;
-        for w in &written.warnings {
-            self.say(format!("day2night: {}: warning: {}", input.display(), w));
-        }
+        let run = self.job.run_variant(day, plan, &sink);
+        // The plan's warnings are said whether or not the run succeeded; the run's after it.
+        let name = input.display().to_string();
+        let written = match run {
+            Ok(w) => w,
+            Err(e) => {
+                self.say_warnings(&plan.warnings, &name);
+                return Err(e);
+            }
+        };
+        self.say_warnings(plan.warnings.iter().chain(&written.warnings), &name);
         if let Some(b) = self.bar {
             b.inc(1);
         }

@@ -299,8 +299,8 @@ pub trait Processor: Sync {
     fn process(&self, input: &Self::Loaded, unit: &Unit, sink: &Sink) -> Result<UnitInfo>;
     /// Warnings about a decoded input (metadata corrections), said once per input through
     /// the run's [`Progress`]. None by default.
-    fn warnings(&self, input: &Self::Loaded) -> Vec<String> {
+    fn warnings(&self, input: &Self::Loaded) -> crate::diagnostics::Diagnostics {
         let _ = input;
-        Vec::new()
+        Default::default()
     }
 }

@@ -34,9 +34,10 @@ pub trait Progress: Send + Sync {
     fn start(&self, total: usize) {
         let _ = total;
     }
-    /// A warning about one input (a metadata correction), said once per input.
-    fn warning(&self, path: &Path, message: &str) {
-        let _ = (path, message);
+    /// A warning about one input (a metadata correction, without a subject: the input is
+    /// `path`), said once per input.
+    fn warning(&self, path: &Path, warning: &crate::diagnostics::Warning) {
+        let _ = (path, warning);
     }
     /// One input finished.
     fn input_done(&self, event: &InputDone<'_>) {

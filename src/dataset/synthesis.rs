@@ -60,7 +60,7 @@ impl Processor for SynthProcessor {
 
     /// Metadata corrections: said once per input (through the run's progress), and
     /// recorded in every sidecar.
-    fn warnings(&self, input: &DayInput) -> Vec<String> {
+    fn warnings(&self, input: &DayInput) -> crate::diagnostics::Diagnostics {
         input.raw.meta.warnings.clone()
     }
 

@@ -10,6 +10,7 @@
 //! same checks; raws built another way (Python's `Raw.from_array`) call [`check_meta`] too.
 
 use crate::bounds::{self, short, short_list};
+use crate::diagnostics::Code;
 use crate::error::{Error, Result};
 use crate::raw::meta::RawMeta;
 
@@ -29,7 +30,7 @@ pub fn check_meta(meta: &mut RawMeta) -> Result<()> {
 
 /// The warnings of `meta` as one line (`info`'s "ready, with warnings: ...").
 pub fn warnings_line(meta: &RawMeta) -> String {
-    meta.warnings.join("; ")
+    meta.warnings.messages().join("; ")
 }
 
 fn white_level(meta: &RawMeta) -> Result<()> {
@@ -170,11 +171,14 @@ fn calibration_illuminants(meta: &mut RawMeta) {
         ("CalibrationIlluminant2", c.calibration_illuminant2),
     ] {
         if let Some(v) = code.filter(|v| !bounds::EXIF_LIGHT_SOURCES.contains(v)) {
-            meta.warnings.push(format!(
-                "{name} {v} is not an EXIF LightSource code (0-4, 9-24 or 255): its colour \
+            meta.warnings.warn(
+                Code::CalibrationIlluminantUnknown,
+                format!(
+                    "{name} {v} is not an EXIF LightSource code (0-4, 9-24 or 255): its colour \
                  temperature is unknown, so the colour matrices are not interpolated \
                  (ColorMatrix1 is used)"
-            ));
+                ),
+            );
         }
     }
 }
@@ -200,9 +204,10 @@ fn noise_profile(meta: &mut RawMeta) {
             short(max),
             short(max)
         );
-        meta.warnings.push(format!(
-            "{what}: ignored; noise from the built-in table unless --noise-model"
-        ));
+        meta.warnings.warn(
+            Code::NoiseProfileInvalid,
+            format!("{what}: ignored; noise from the built-in table unless --noise-model"),
+        );
         meta.noise_profile_problem = Some(format!("invalid {what}"));
         meta.noise_profile = None;
     }
@@ -212,13 +217,16 @@ fn exif_iso(meta: &mut RawMeta) {
     if let Some(iso) = meta.exif.iso {
         if bounds::iso("ISOSpeedRatings", iso).is_err() {
             meta.exif.iso = None;
-            meta.warnings.push(format!(
-                "ISOSpeedRatings {iso} is outside {}..={}: ignored (ISO unknown; clean \
+            meta.warnings.warn(
+                Code::IsoOutOfRange,
+                format!(
+                    "ISOSpeedRatings {iso} is outside {}..={}: ignored (ISO unknown; clean \
                  outputs use ISO {})",
-                bounds::ISO_RANGE.0,
-                bounds::ISO_RANGE.1,
-                meta.iso_or_default()
-            ));
+                    bounds::ISO_RANGE.0,
+                    bounds::ISO_RANGE.1,
+                    meta.iso_or_default()
+                ),
+            );
         }
     }
 }
@@ -312,7 +320,9 @@ mod tests {
         check_meta(&mut m).unwrap();
         assert_eq!(m.warnings.len(), 1);
         assert!(
-            m.warnings[0].starts_with("CalibrationIlluminant2 99 is not an EXIF LightSource code"),
+            m.warnings[0]
+                .message
+                .starts_with("CalibrationIlluminant2 99 is not an EXIF LightSource code"),
             "{:?}",
             m.warnings
         );
@@ -335,7 +345,7 @@ mod tests {
             assert!(why.starts_with("invalid NoiseProfile pair 1 (S "), "{why}");
             assert_eq!(m.warnings.len(), 1);
             assert!(
-                m.warnings[0].starts_with("NoiseProfile pair 1"),
+                m.warnings[0].message.starts_with("NoiseProfile pair 1"),
                 "{:?}",
                 m.warnings
             );
@@ -354,7 +364,7 @@ mod tests {
         check_meta(&mut m).unwrap();
         assert_eq!(m.exif.iso, None);
         assert!(
-            m.warnings[0].contains("ISOSpeedRatings 5000000"),
+            m.warnings[0].message.contains("ISOSpeedRatings 5000000"),
             "{:?}",
             m.warnings
         );

@@ -8,6 +8,7 @@
 //! anywhere make a plane vary), so it is the same for any thread count.
 
 use super::RgbImage;
+use crate::diagnostics::{Code, Warning};
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 
 /// No value seen yet in a plane.
@@ -95,7 +96,7 @@ impl FlatCheck {
     /// The warning for `what` ("the target render", "the render") when a plane came out
     /// constant: "the render is constant: R, G and B are 0 in every pixel (all black)" or
     /// "the render's B plane is 0 in every pixel".
-    pub fn warning(&self, what: &str) -> Option<String> {
+    pub fn warning(&self, what: &str) -> Option<Warning> {
         let planes = self.constant()?;
         let names = ["R", "G", "B"];
         let held: Vec<(usize, f32)> = planes
@@ -135,12 +136,12 @@ impl FlatCheck {
                 parts.join(", ")
             )
         };
-        Some(text)
+        Some(Warning::new(Code::RenderConstant, text))
     }
 }
 
 /// The warning of [`FlatCheck::warning`] for a whole image.
-pub fn warning(img: &RgbImage, what: &str) -> Option<String> {
+pub fn warning(img: &RgbImage, what: &str) -> Option<Warning> {
     let f = FlatCheck::new();
     f.image(img);
     f.warning(what)
@@ -164,19 +165,21 @@ mod tests {
         let black = img(5, 4, |_, _, _| 0.0);
         assert_eq!(black.data.len(), 60);
         let w = warning(&black, "the render").unwrap();
+        assert_eq!(w.code, Code::RenderConstant);
+        let w = w.message;
         assert!(
             w.contains("R, G and B are 0 in every pixel (all black)"),
             "{w}"
         );
         let grey = img(5, 4, |_, _, c| [0.25, 0.5, 0.75][c]);
-        let w = warning(&grey, "the render").unwrap();
+        let w = warning(&grey, "the render").unwrap().message;
         assert!(w.contains("R 0.25, G 0.5, B 0.75"), "{w}");
         let no_blue = img(
             5,
             4,
             |r, x, c| if c == 2 { 0.0 } else { (r * 5 + x) as f32 },
         );
-        let w = warning(&no_blue, "the target render").unwrap();
+        let w = warning(&no_blue, "the target render").unwrap().message;
         assert_eq!(
             w,
             "the target render has a constant plane: B is 0 in every pixel"

@@ -371,7 +371,9 @@ mod tests {
             .unwrap()
             .unwrap();
         assert_eq!(p.report.applied.len(), 1);
-        assert!(p.report.warnings()[0].contains("OpcodeList2: FixBadPixelsConstant (id 4)"));
+        assert!(p.report.warnings()[0]
+            .message
+            .contains("OpcodeList2: FixBadPixelsConstant (id 4)"));
         assert_eq!(camera_rgb(&img, [1.0; 3]).unwrap().data[0], 0.25);
         with_list(&mut img, ListId::List2, vec![bad_pixels(0)]);
         let e = camera_rgb(&img, [1.0; 3]).unwrap_err().to_string();

@@ -241,10 +241,11 @@ pub struct RawMeta {
     #[serde(skip)]
     pub stored: Vec<Entry>,
     /// What [`crate::dng::check::check_meta`] corrected, one message per correction naming
-    /// the tag and the value used (printed by the CLI as `day2night: <file>: warning: ...`,
-    /// recorded in synth sidecars, raised as Python warnings). Not written to files.
+    /// the tag and the value used, without a subject (printed by the CLI as
+    /// `warning[CODE]: <file>: ...`, recorded in synth sidecars, raised as Python warnings).
+    /// Not written to files.
     #[serde(skip)]
-    pub warnings: Vec<String>,
+    pub warnings: crate::diagnostics::Diagnostics,
     /// Why [`crate::dng::check::check_meta`] dropped the NoiseProfile (its values and the
     /// rule they break), so that the noise chain reports an invalid NoiseProfile as one,
     /// not as a missing one. Not written to files.
@@ -320,7 +321,7 @@ impl RawMeta {
             storage: None,
             stored: Vec::new(),
             linear_raw: None,
-            warnings: Vec::new(),
+            warnings: Default::default(),
             noise_profile_problem: None,
         }
     }

@@ -68,7 +68,7 @@ pub struct Checks<'a> {
     /// Largest motion measured, raw pixels.
     pub motion_max_measured_px: f64,
     /// Warnings.
-    pub warnings: &'a [String],
+    pub warnings: &'a [crate::diagnostics::Warning],
 }
 
 /// How the target was made.

@@ -15,6 +15,7 @@ use crate::dataset::run::{
     blank_record, check_out_dir, remove_replaced_outputs, remove_stale_temp_files_of,
 };
 use crate::dataset::{sha256_hex, Sink, Split, Unit};
+use crate::diagnostics::{Diagnostics, Warning};
 use crate::error::{Error, Result, ResultExt};
 use crate::output::{stop_requested, OutputPolicy, OutputSetLock};
 use serde::Serialize;
@@ -51,8 +52,8 @@ pub struct SceneDone<'a> {
     pub scene: &'a str,
     /// "up to date", "done" or "FAILED (see the summary)".
     pub state: &'a str,
-    /// The scene's warnings.
-    pub warnings: &'a [String],
+    /// The scene's warnings (about the scene's input).
+    pub warnings: &'a [Warning],
     /// Seconds the scene took.
     pub secs: f64,
 }
@@ -74,8 +75,8 @@ pub struct Summary {
     pub recomputed: BTreeMap<String, usize>,
     /// Failures: (scene input, error).
     pub failures: Vec<(String, String)>,
-    /// Warnings: (scene input, warning).
-    pub warnings: Vec<(String, String)>,
+    /// Warnings, each about its scene's input (the subject), by scene.
+    pub warnings: Vec<Warning>,
     /// Output files written in this run.
     pub outputs_written: usize,
     /// Manifest written.
@@ -115,7 +116,7 @@ impl Summary {
 struct Outcome {
     record: Record,
     computed: Option<&'static str>,
-    warnings: Vec<String>,
+    warnings: Diagnostics,
 }
 
 /// Run `real-pairs`.
@@ -194,9 +195,9 @@ pub fn run(opts: &RunOptions, pairs: &PairOptions) -> Result<Summary> {
         ..Summary::default()
     };
     for o in &results {
-        for w in &o.warnings {
-            summary.warnings.push((o.record.input.clone(), w.clone()));
-        }
+        summary
+            .warnings
+            .extend(o.warnings.clone().about_owned(&o.record.input));
         match (o.computed, o.record.status) {
             (None, _) => summary.skipped += 1,
             (Some(reason), status) => {
@@ -215,7 +216,9 @@ pub fn run(opts: &RunOptions, pairs: &PairOptions) -> Result<Summary> {
         }
     }
     summary.failures.sort();
-    summary.warnings.sort();
+    summary
+        .warnings
+        .sort_by(|a, b| (&a.subject, &a.message).cmp(&(&b.subject, &b.message)));
     manifest::write_compacted(&own, results.into_iter().map(|o| o.record))?;
     summary.seconds = start.elapsed().as_secs_f64();
     Ok(summary)
@@ -256,7 +259,7 @@ fn one_scene(
             rec
         },
         computed: Some(reason),
-        warnings: vec![],
+        warnings: Diagnostics::new(),
     };
     let (hashes, input_sha) = match hash_scene(scene) {
         Ok(h) => h,
@@ -275,7 +278,7 @@ fn one_scene(
                 return Outcome {
                     record: p.clone(),
                     computed: None,
-                    warnings: vec![],
+                    warnings: Diagnostics::new(),
                 };
             }
             "new"

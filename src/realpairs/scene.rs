@@ -45,8 +45,9 @@ pub struct Prepared {
     pub noisy: Vec<(FileRef, Vec<u8>)>,
     /// Every frame's checks, clean frames first.
     pub frames: Vec<FrameCheck>,
-    /// Warnings (not fatal), for stderr and the sidecar.
-    pub warnings: Vec<String>,
+    /// Warnings (not fatal), for stderr and the sidecar; no subject (the scene's caller
+    /// names it).
+    pub warnings: crate::diagnostics::Diagnostics,
     /// Largest motion measured, raw pixels.
     pub max_motion: f64,
 }
@@ -137,7 +138,7 @@ fn merge_burst(
 
 /// Read, check and measure the scene (see the module documentation).
 pub fn prepare(plan: &ScenePlan, limit: f64) -> Result<Prepared> {
-    let mut warnings = Vec::new();
+    let mut warnings = crate::diagnostics::Diagnostics::new();
     let (clean, merge, first, mut frames) = match &plan.processed {
         None => {
             let (m, r, first, checks) = merge_burst(plan, limit)?;
@@ -174,16 +175,19 @@ pub fn prepare(plan: &ScenePlan, limit: f64) -> Result<Prepared> {
         .in_file(&f.path)?;
         let (fl, nl) = (&first.meta.levels, &img.meta.levels);
         if fl.black != nl.black || fl.white != nl.white {
-            warnings.push(format!(
+            warnings.warn(crate::diagnostics::Code::RealLevelsDiffer, format!(
                 "{}: black/white levels {:?}/{} differ from the clean burst's {:?}/{} (the noisy input keeps its own)",
                 f.name, nl.black, nl.white, fl.black, fl.white
             ));
         }
         if let Some(iso) = img.meta.exif.iso.filter(|&i| i != f.iso) {
-            warnings.push(format!(
-                "{}: the DNG says ISO {iso}, its name or folder ISO {}",
-                f.name, f.iso
-            ));
+            warnings.warn(
+                crate::diagnostics::Code::RealIsoMismatch,
+                format!(
+                    "{}: the DNG says ISO {iso}, its name or folder ISO {}",
+                    f.name, f.iso
+                ),
+            );
         }
         let g = GreenPlane::of(&img).in_file(&f.path)?;
         let c = measured(f, "noisy", shift(&gm, &g).in_file(&f.path)?);
@@ -192,7 +196,10 @@ pub fn prepare(plan: &ScenePlan, limit: f64) -> Result<Prepared> {
         noisy.push((f.clone(), bytes));
     }
     if plan.noisy.is_empty() {
-        warnings.push("no high-ISO frame: the scene serves the clean task only".into());
+        warnings.warn(
+            crate::diagnostics::Code::RealNoNoisyFrame,
+            "no high-ISO frame: the scene serves the clean task only",
+        );
     }
     let max_motion = frames.iter().map(|c| c.motion).fold(0.0, f64::max);
     Ok(Prepared {

@@ -91,8 +91,14 @@ pub struct ReportSummary {
     pub samples: usize,
     /// PNG files written.
     pub pngs: Vec<PathBuf>,
-    /// Things that could not be shown, with why.
-    pub warnings: Vec<String>,
+    /// Things that could not be shown, with why (the subject is the sample's id).
+    pub warnings: crate::diagnostics::Diagnostics,
+}
+
+/// A report warning about sample `id`: something that could not be shown.
+fn not_available(id: &str, message: String) -> crate::diagnostics::Warning {
+    crate::diagnostics::Warning::new(crate::diagnostics::Code::ReportNotAvailable, message)
+        .about(id)
 }
 
 struct Cell {
@@ -284,7 +290,9 @@ fn sample_section(
                 )
             }
             Err(e) => {
-                summary.warnings.push(format!("{id}: {title}: {e}"));
+                summary
+                    .warnings
+                    .push(not_available(&id, format!("{title}: {e}")));
                 format!(
                     "<p class=\"na\">not available: {}</p>",
                     escape(&e.to_string())
@@ -393,7 +401,9 @@ fn plot_cells(
     }) {
         Ok(svg) => svg,
         Err(e) => {
-            summary.warnings.push(format!("{id}: illuminants: {e}"));
+            summary
+                .warnings
+                .push(not_available(&id, format!("illuminants: {e}")));
             format!(
                 "<p class=\"na\">not available: {}</p>",
                 escape(&e.to_string())
@@ -417,7 +427,7 @@ fn plot_cells(
         Err(e) => {
             summary
                 .warnings
-                .push(format!("{id}: illuminants in xy: {e}"));
+                .push(not_available(&id, format!("illuminants in xy: {e}")));
             format!(
                 "<p class=\"na\">not available: {}</p>",
                 escape(&e.to_string())

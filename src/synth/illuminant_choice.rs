@@ -22,6 +22,7 @@ use super::dictionaries::embedded::{self, CameraCalibration};
 use super::dictionaries::xy::{load_illuminant_file, IlluminantFile, XyDict, XyLamp};
 use super::dictionaries::{IlluminantDict, MAX_NEUTRAL_RATIO};
 use super::illuminant::{Covariance, Gaussian2};
+use crate::diagnostics::{Code, Diagnostics};
 use crate::error::{Error, Result, ResultExt};
 use crate::isp::color::CameraColor;
 use crate::raw::camera::CameraId;
@@ -113,7 +114,7 @@ pub struct ResolvedIlluminants {
     /// Where it came from.
     pub provenance: IlluminantProvenance,
     /// Another camera's colours applied to this one, said once per plan.
-    pub warnings: Vec<String>,
+    pub warnings: Diagnostics,
 }
 
 /// How to avoid another camera's colours (appended to warnings and errors).
@@ -278,7 +279,7 @@ impl IlluminantChoice {
         color: &ColorInfo,
         est: Covariance,
     ) -> Result<ResolvedIlluminants> {
-        let mut warnings = Vec::new();
+        let mut warnings = Diagnostics::new();
         let own = embedded::for_camera(camera);
         let (gaussian, provenance) = match (self, own) {
             (IlluminantChoice::Auto, Some(own)) => {
@@ -287,12 +288,15 @@ impl IlluminantChoice {
             (IlluminantChoice::Paper, _) => {
                 let paper = embedded::paper();
                 if own.map(|c| c.key) != Some(paper.key) {
-                    warnings.push(format!(
+                    warnings.warn(
+                        Code::IlluminantsOtherCamera,
+                        format!(
                         "night illuminants: the paper phone's dictionary (Samsung Galaxy S20 FE \
                          camera RGB) applied to {camera}: its lamp colours are another camera's \
                          (--illuminants paper or --compat release); for this camera's colours \
                          use {FIXES}"
-                    ));
+                    ),
+                    );
                 }
                 (
                     fit_embedded(paper, est)?,
@@ -387,7 +391,7 @@ fn file(
     camera: &CameraId,
     color: &ColorInfo,
     est: Covariance,
-    warnings: &mut Vec<String>,
+    warnings: &mut Diagnostics,
 ) -> Result<(Gaussian2, IlluminantProvenance)> {
     let same = f.camera.as_ref().and_then(|c| c.same_camera(camera));
     let measured_on = f
@@ -427,12 +431,15 @@ fn file(
             ))
         }
         (Some(rgb), None, Some(false)) => {
-            warnings.push(format!(
+            warnings.warn(
+                Code::IlluminantsOtherCamera,
+                format!(
                 "night illuminants: {} holds camera neutrals measured on {measured_on}, applied \
                  to {camera}: its lamp colours are another camera's; for this camera's colours \
                  use {FIXES}",
                 f.name
-            ));
+            ),
+            );
             Ok((
                 Gaussian2::from_source(rgb, est)?,
                 rgb_prov(format!(

@@ -108,14 +108,14 @@ fn the_paper_dictionary_on_another_camera_is_a_warning() {
         .resolve(&cam, &srgb_camera(), Covariance::Unbiased)
         .unwrap();
     assert_eq!(r.warnings.len(), 1);
-    let w = &r.warnings[0];
+    let w = &r.warnings[0].message;
     assert!(w.contains("Canon EOS 5D") && w.contains("S20 FE"), "{w}");
     assert!(r.provenance.note.contains("another camera"));
     // a camera without names is another camera too
     let r = IlluminantChoice::Paper
         .resolve(&CameraId::default(), &srgb_camera(), Covariance::Unbiased)
         .unwrap();
-    assert!(r.warnings[0].contains("unknown camera"));
+    assert!(r.warnings[0].message.contains("unknown camera"));
 }
 
 #[test]
@@ -195,7 +195,7 @@ fn files_use_neutrals_for_their_camera_and_xy_for_others() {
         .resolve(&nikon, &srgb_camera(), Covariance::Unbiased)
         .unwrap();
     assert_eq!(r.provenance.source, IlluminantOrigin::FileCameraRgb);
-    let w = &r.warnings[0];
+    let w = &r.warnings[0].message;
     assert!(
         w.contains("Canon EOS 5D") && w.contains("Nikon D3") && w.contains("cal.json"),
         "{w}"

@@ -273,6 +273,8 @@ fn whole_frame<S: NightSink>(
         report.warnings.extend(flat::warning(&rgb, INPUT));
         sink.input(&rgb)?;
     }
+    // The renders' warnings are about this input.
+    report.warnings.about(&plan.input_name);
     Ok((clean, report))
 }
 
@@ -383,6 +385,8 @@ fn cropped<S: NightSink>(
     n?;
     t?;
     report.warnings.extend(target_flat.warning(TARGET));
+    // The renders' warnings are about this input.
+    report.warnings.about(&plan.input_name);
     Ok((clean, report))
 }
 

@@ -16,6 +16,7 @@
 
 use super::dictionaries::embedded;
 use super::{Calibration, SynthOptions};
+use crate::diagnostics::{Code, Diagnostics};
 use crate::error::Result;
 use crate::noise::{IsoPoint, NoiseEstimate, NoiseModel, NoiseProvenance, NoiseSource};
 use crate::raw::camera::CameraId;
@@ -29,7 +30,7 @@ pub struct NoiseChoice {
     /// Where it came from and whose camera it is.
     pub provenance: NoiseProvenance,
     /// Warnings for the plan (another camera's calibration, an untrusted estimate...).
-    pub warnings: Vec<String>,
+    pub warnings: Diagnostics,
 }
 
 /// How to calibrate a camera, for the warnings.
@@ -38,14 +39,19 @@ pub const HOW_TO_CALIBRATE: &str = "calibrate this camera: `day2night calibrate 
 --noise-model noise.json` (docs/calibration.md)";
 
 /// The embedded table as another camera's noise: model, provenance and the warning.
-fn embedded_elsewhere(cam: &CameraId, why: &str, note: &str) -> NoiseChoice {
+fn embedded_elsewhere(cam: &CameraId, code: Code, why: &str, note: &str) -> NoiseChoice {
     let model = embedded::noise_model();
-    NoiseChoice {
-        warnings: vec![format!(
+    let mut warnings = Diagnostics::new();
+    warnings.warn(
+        code,
+        format!(
             "noise: {why}; using the embedded noise table of the paper's phone (Samsung Galaxy \
              S20 FE): another camera's noise, not {}'s; {HOW_TO_CALIBRATE}",
             cam.label()
-        )],
+        ),
+    );
+    NoiseChoice {
+        warnings,
         provenance: NoiseProvenance {
             source: NoiseSource::EmbeddedS20Fe,
             camera: model.camera.clone(),
@@ -67,25 +73,31 @@ pub fn choose_noise_model(
     let cam = CameraId::of(&img.meta);
     if let Some(m) = &cal.noise {
         let file = m.file.as_deref().unwrap_or("the noise model file");
-        let mut warnings = vec![];
+        let mut warnings = Diagnostics::new();
         if let Some(mc) = &m.camera {
             if mc.same_camera(&cam) == Some(false) {
-                warnings.push(format!(
-                    "noise: {file} was calibrated on {}, not on this camera ({}): its noise \
+                warnings.warn(
+                    Code::NoiseOtherCamera,
+                    format!(
+                        "noise: {file} was calibrated on {}, not on this camera ({}): its noise \
                      may not match this camera's; {HOW_TO_CALIBRATE}",
-                    mc.label(),
-                    cam.label()
-                ));
+                        mc.label(),
+                        cam.label()
+                    ),
+                );
             }
         }
         let negative = m.negative_points();
         if !negative.is_empty() {
-            warnings.push(format!(
-                "noise: {file} has negative parameters at {}: a variance cannot be negative, \
+            warnings.warn(
+                Code::NoiseNegativeClamped,
+                format!(
+                    "noise: {file} has negative parameters at {}: a variance cannot be negative, \
                  so synth clamps them to 0 (no noise from that term); recalibrate, or fix the \
                  file (docs/noise.md, \"Negative parameters\")",
-                negative.join(", ")
-            ));
+                    negative.join(", ")
+                ),
+            );
         }
         let kind = if m.physics.is_some() {
             "physics noise model"
@@ -122,7 +134,7 @@ pub fn choose_noise_model(
                         note: m.source.clone(),
                     },
                     model: m,
-                    warnings: vec![],
+                    warnings: Diagnostics::new(),
                 })
             }
             Err(e) => profile_problem = Some(format!("its NoiseProfile is unusable ({e})")),
@@ -151,12 +163,13 @@ pub fn choose_noise_model(
                 ),
             },
             model,
-            warnings: vec![],
+            warnings: Diagnostics::new(),
         });
     }
     if opts.compat.embedded_noise {
         return Ok(embedded_elsewhere(
             &cam,
+            Code::NoiseCompatTable,
             &format!("{profile_words} and --compat release keeps the release's noise table"),
             "--compat release: the release's table",
         ));
@@ -164,6 +177,7 @@ pub fn choose_noise_model(
     let Some(iso) = iso else {
         return Ok(embedded_elsewhere(
             &cam,
+            Code::UnknownIso,
             &format!(
                 "{profile_words} and its ISO is unknown (Exif ISO 0 or absent), so its noise \
                  cannot be estimated from the image"
@@ -193,11 +207,12 @@ pub fn choose_noise_model(
                     note: format!("{profile_words}; {}", model.source),
                 },
                 model,
-                warnings: vec![],
+                warnings: Diagnostics::new(),
             })
         }
         Err(why) => Ok(embedded_elsewhere(
             &cam,
+            Code::NoiseEstimateUntrusted,
             &format!(
                 "{profile_words} and the noise estimated from the image (ISO {iso}) cannot \
                  be trusted: {why}"
@@ -301,7 +316,7 @@ mod tests {
         m.isos[0].positions[2][1] = -1.0;
         let r = choose(&i, Some(m), false, trusted_estimate());
         assert_eq!(r.choice.warnings.len(), 1, "{:?}", r.choice.warnings);
-        let w = &r.choice.warnings[0];
+        let w = &r.choice.warnings[0].message;
         assert!(
             w.contains("cal.json has negative parameters at ISO 800 position 2 (S 3e-4, O -1)")
                 && w.contains("clamps them to 0"),
@@ -317,7 +332,7 @@ mod tests {
         let mut est = trusted_estimate();
         est.positions[0].problem = Some("too flat".into());
         let r = choose(&i, None, false, est);
-        let w = &r.choice.warnings[0];
+        let w = &r.choice.warnings[0].message;
         assert!(
             w.contains("NoiseProfile is not used (invalid NoiseProfile pair 0 (S -1e-4, O 1e-6)"),
             "{w}"
@@ -330,7 +345,7 @@ mod tests {
             false,
             trusted_estimate(),
         );
-        let w = &r.choice.warnings[0];
+        let w = &r.choice.warnings[0].message;
         assert!(
             w.contains("NoiseProfile cannot be scaled without its ISO"),
             "{w}"
@@ -354,7 +369,7 @@ mod tests {
         assert!(!r.estimated);
         let r = choose(&i, Some(file_model(Some(other))), false, trusted_estimate());
         assert_eq!(r.choice.warnings.len(), 1);
-        let w = &r.choice.warnings[0];
+        let w = &r.choice.warnings[0].message;
         assert!(
             w.starts_with(
                 "noise: cal.json was calibrated on Nikon D3, not on this camera (Canon EOS 5D)"
@@ -385,7 +400,7 @@ mod tests {
         let i = img(None, true, "Canon", "EOS 5D");
         let r = choose(&i, None, false, trusted_estimate());
         assert_eq!(r.choice.provenance.source, NoiseSource::EmbeddedS20Fe);
-        assert!(r.choice.warnings[0].contains("ISO is unknown"));
+        assert!(r.choice.warnings[0].message.contains("ISO is unknown"));
         assert!(!r.estimated);
     }
 
@@ -412,7 +427,7 @@ mod tests {
         let r = choose(&i, None, true, trusted_estimate());
         assert_eq!(r.choice.provenance.source, NoiseSource::EmbeddedS20Fe);
         assert!(!r.estimated);
-        let w = &r.choice.warnings[0];
+        let w = &r.choice.warnings[0].message;
         assert!(
             w.contains("--compat release keeps the release's noise table"),
             "{w}"
@@ -437,7 +452,7 @@ mod tests {
             assert!(!r.estimated);
             assert_eq!(r.choice.provenance.source, NoiseSource::EmbeddedS20Fe);
             assert_eq!(r.choice.warnings.len(), 1);
-            let w = &r.choice.warnings[0];
+            let w = &r.choice.warnings[0].message;
             assert!(
                 w.starts_with(
                     "noise: the input has no NoiseProfile and its ISO is unknown (Exif ISO 0 or \
@@ -456,7 +471,7 @@ mod tests {
         let i = img(None, true, "Canon", "EOS Kiss X4");
         let r = choose(&i, None, false, trusted_estimate());
         assert_eq!(r.choice.provenance.source, NoiseSource::EmbeddedS20Fe);
-        let w = &r.choice.warnings[0];
+        let w = &r.choice.warnings[0].message;
         assert!(
             w.starts_with(
                 "noise: its NoiseProfile cannot be scaled without its ISO and its ISO is unknown"
@@ -490,7 +505,7 @@ mod tests {
         let r = choose(&i, None, false, est);
         assert!(r.estimated);
         assert_eq!(r.choice.provenance.source, NoiseSource::EmbeddedS20Fe);
-        let w = &r.choice.warnings[0];
+        let w = &r.choice.warnings[0].message;
         assert!(
             w.starts_with(
                 "noise: the input has no NoiseProfile and the noise estimated from the image \
@@ -504,7 +519,9 @@ mod tests {
         let real = crate::noise::estimate(&flat, &EstimateOptions::default()).unwrap();
         let r = choose(&flat, None, false, real);
         assert!(
-            r.choice.warnings[0].contains("too few smooth samples"),
+            r.choice.warnings[0]
+                .message
+                .contains("too few smooth samples"),
             "{:?}",
             r.choice.warnings
         );

@@ -168,7 +168,7 @@ pub struct VariantOutputs {
     pub isos: Vec<u32>,
     /// Warnings about what the renders made (the sidecar's `run.warnings`: a constant
     /// target or input); the plan's warnings are in [`super::Plan::warnings`].
-    pub warnings: Vec<String>,
+    pub warnings: crate::diagnostics::Diagnostics,
 }
 
 #[cfg(test)]

@@ -9,6 +9,7 @@ use super::neutral::day_neutral_for;
 use super::noise_source::choose_noise_model;
 use super::rng::SynthRng;
 use super::{Calibration, Mode, RelightFormula, SynthOptions};
+use crate::diagnostics::{Code, Diagnostics};
 use crate::error::{Error, Result};
 use crate::isp::opcodes::{OpcodeMode, OpcodeReport};
 use crate::noise::{Evaluated, NoiseEstimate, NoiseParams, NoiseProvenance, PhysicsParams};
@@ -105,8 +106,9 @@ pub struct Plan {
     pub noise: Vec<NoisePlan>,
     /// The stages that run, in order.
     pub stages: Vec<String>,
-    /// Warnings raised while planning (e.g. ISO extrapolation).
-    pub warnings: Vec<String>,
+    /// Warnings raised while planning (e.g. ISO extrapolation), about the input
+    /// (`input_name`); a version-1 sidecar's plain strings read as `legacy` warnings.
+    pub warnings: Diagnostics,
     /// What the renders (target, network input) do with the input's DNG opcode lists: the
     /// mode and the opcodes applied and skipped. Absent when the input has no opcode list,
     /// and in sidecars written before opcodes were applied: the renders then ignore them,
@@ -386,7 +388,7 @@ pub fn plan_with_estimate(
         let (e, physics) = at(iso)?;
         if e.extrapolated {
             let (lo, hi) = model.iso_range();
-            warnings.push(if model.physics.is_some() {
+            let message = if model.physics.is_some() {
                 format!(
                     "ISO {} is outside the physics noise model's calibrated range {}..{} ({}): K proportional to ISO, sigmas from the joint log-log fit",
                     iso, lo, hi, model.source
@@ -401,7 +403,8 @@ pub fn plan_with_estimate(
                     "ISO {} is outside the noise model's calibrated range {}..{} ({}): extrapolated",
                     iso, lo, hi, model.source
                 )
-            });
+            };
+            warnings.warn(Code::NoiseExtrapolated, message);
         }
         noise.push(NoisePlan {
             iso,
@@ -443,6 +446,8 @@ pub fn plan_with_estimate(
         warnings.extend(w);
         (r, None)
     };
+    // Every warning of this plan is about this input.
+    warnings.about(input_name);
     let plan = Plan {
         format: PLAN_FORMAT.into(),
         input_name: input_name.into(),

@@ -40,10 +40,10 @@ pub struct RunReport {
     /// Active-area sites saturated in the input (linear value >= white).
     pub saturated_sites: u64,
     /// Warnings about what the renders made (a target or network input that came out
-    /// constant, [`crate::isp::flat`]); absent when there is none, so other sidecars are
-    /// unchanged.
-    #[serde(default, skip_serializing_if = "Vec::is_empty")]
-    pub warnings: Vec<String>,
+    /// constant, [`crate::isp::flat`]), about the input; absent when there is none, so other
+    /// sidecars are unchanged.
+    #[serde(default, skip_serializing_if = "<[_]>::is_empty")]
+    pub warnings: crate::diagnostics::Diagnostics,
 }
 
 struct Prepared {
@@ -286,7 +286,7 @@ impl<'a> CleanPass<'a> {
             dim_scale: self.s,
             mean_white_balanced: self.mean_wb,
             saturated_sites: saturated,
-            warnings: vec![],
+            warnings: Default::default(),
         }
     }
 

@@ -301,11 +301,11 @@ fn stability_iso_25_and_204800_extrapolate_finite() {
     // The frame has no ISO: the embedded table, said first, then one warning per ISO.
     assert_eq!(p.warnings.len(), 3, "{:?}", p.warnings);
     assert!(
-        p.warnings[0].contains("ISO is unknown"),
+        p.warnings[0].message.contains("ISO is unknown"),
         "{}",
         p.warnings[0]
     );
-    assert!(p.warnings[1].contains("extrapolated"));
+    assert!(p.warnings[1].message.contains("extrapolated"));
     for np in &p.noise {
         assert!(np.extrapolated);
         for q in np.params.positions {
@@ -691,7 +691,7 @@ fn physics_model_plan_carries_params_and_gaussian_plans_do_not() {
         assert_eq!(n.params, ph.to_noise_params(scale));
         assert_eq!(n.extrapolated, n.iso == 6400);
     }
-    assert!(p.warnings.iter().any(|w| w.contains("ISO 6400")));
+    assert!(p.warnings.iter().any(|w| w.message.contains("ISO 6400")));
     p.check_against(&img).unwrap();
     // The plan round-trips through JSON (the sidecar) with its physics parameters.
     let back: Plan = serde_json::from_str(&serde_json::to_string(&p).unwrap()).unwrap();

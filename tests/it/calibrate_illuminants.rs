@@ -208,7 +208,7 @@ fn one_cameras_gray_cards_serve_another_through_xy() {
         let err = String::from_utf8_lossy(&r.stderr);
         assert!(
             !err.lines()
-                .any(|l| l.contains("warning") && !l.contains("warning: noise: ")),
+                .any(|l| l.contains("warning") && !l.contains(": noise: ")),
             "{err}"
         );
     }
@@ -266,7 +266,10 @@ fn degenerate_gray_cards() {
     let one_out = dir.path().join("one.json");
     let (code, _, err) = run_os(&args!["calibrate", "illuminants", &one, "-o", &one_out]);
     assert_eq!(code, 0, "{err}");
-    assert!(err.contains("warning: one illuminant"), "{err}");
+    assert!(
+        err.contains("warning[illuminants-degenerate]: one illuminant"),
+        "{err}"
+    );
     let d = read_json(&one_out);
     assert_eq!(
         d["fit"]["covariance"],
@@ -376,7 +379,10 @@ fn brightness_dictionary() {
     let one = dir.path().join("one.json");
     let (code, _, err) = run_os(&args!["calibrate", "brightness", &paths[0], "-o", &one]);
     assert_eq!(code, 0, "{err}");
-    assert!(err.contains("warning: one image"), "{err}");
+    assert!(
+        err.contains("warning[brightness-single-image]: one image"),
+        "{err}"
+    );
     assert_eq!(read_json(&one)["fit"]["std"], 0.0);
     // A black image is an error; an existing output is refused.
     let black_img = write(

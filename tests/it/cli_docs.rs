@@ -33,3 +33,30 @@ fn docs_cli_md_matches_help_output() {
         );
     }
 }
+
+/// Every warning code is documented in docs/warnings.md with its summary, and the doc lists
+/// no other code; docs/cli.md points there.
+#[test]
+fn every_warning_code_is_documented_and_no_other() {
+    let doc = std::fs::read_to_string(common::root().join("docs/warnings.md")).unwrap();
+    for c in day2night::Code::ALL {
+        let row = format!("| `{}` | {} |", c.as_str(), c.summary());
+        assert!(doc.contains(&row), "docs/warnings.md lacks the row {row}");
+    }
+    let listed: Vec<&str> = doc
+        .lines()
+        .filter_map(|l| l.strip_prefix("| `"))
+        .filter_map(|l| l.split('`').next())
+        .collect();
+    for name in &listed {
+        assert!(
+            day2night::Code::from_name(name).is_some(),
+            "docs/warnings.md lists `{name}`, which is no warning code"
+        );
+    }
+    assert_eq!(listed.len(), day2night::Code::ALL.len(), "{listed:?}");
+    let cli = std::fs::read_to_string(common::root().join("docs/cli.md")).unwrap();
+    assert!(
+        cli.contains("`warning[CODE]: <subject>: <message>`") && cli.contains("docs/warnings.md")
+    );
+}

@@ -221,7 +221,8 @@ fn whatever_convert_writes_from_mutated_lists_renders_and_passes_the_sdk() {
             if !render_in {
                 dropped += 1;
                 assert!(
-                    err.contains("warning: ") && err.contains(&format!("OpcodeList{n} dropped")),
+                    err.contains("warning[opcode-list-dropped]: ")
+                        && err.contains(&format!("OpcodeList{n} dropped")),
                     "{case}: {err}"
                 );
                 let back = day2night::dng::read_dng(&out).unwrap();

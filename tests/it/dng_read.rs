@@ -153,7 +153,8 @@ fn canon_info_cli() {
     let err = String::from_utf8_lossy(&out.stderr);
     assert_eq!(err.lines().count(), 1, "{err}");
     assert!(
-        err.contains("warning: noise: the input has no NoiseProfile and its ISO is unknown"),
+        err.contains("warning[unknown-iso]: ")
+            && err.contains(": noise: the input has no NoiseProfile and its ISO is unknown"),
         "{err}"
     );
 }

@@ -111,12 +111,14 @@ fn without_a_render_unusable_lists_warn_and_with_one_they_fail() {
     ]));
     assert!(r.status.success(), "{err}");
     assert!(
-        err.contains("bad.dng: warning: OpcodeList2: ")
+        err.contains("warning[opcode-list-malformed]: bad.dng: OpcodeList2: ")
             && err.contains("the list is malformed; no render was requested"),
         "{err}"
     );
     assert!(
-        err.contains("warning: OpcodeList3: FixBadPixelsConstant (id 4) is not optional"),
+        err.contains(
+            "warning[opcode-not-applied]: bad.dng: OpcodeList3: FixBadPixelsConstant (id 4) is not optional"
+        ),
         "{err}"
     );
     let sc = sidecar(&o.join("bad.json"));
@@ -128,14 +130,24 @@ fn without_a_render_unusable_lists_warn_and_with_one_they_fail() {
         .as_str()
         .unwrap()
         .contains("not optional (no render was requested)"));
-    // The two opcode warnings (the fixture's noise calibration adds its own: not this test's).
-    let opcode_warnings = sc["plan"]["warnings"]
+    // The two opcode warnings, with their codes, about the input (the fixture's noise
+    // calibration adds its own: not this test's).
+    let opcode_warnings: Vec<(&str, &str)> = sc["plan"]["warnings"]
         .as_array()
         .unwrap()
         .iter()
-        .filter(|w| w.as_str().unwrap().starts_with("OpcodeList"))
-        .count();
-    assert_eq!(opcode_warnings, 2, "{}", sc["plan"]["warnings"]);
+        .filter(|w| w["message"].as_str().unwrap().starts_with("OpcodeList"))
+        .map(|w| (w["code"].as_str().unwrap(), w["subject"].as_str().unwrap()))
+        .collect();
+    assert_eq!(
+        opcode_warnings,
+        [
+            ("opcode-list-malformed", "bad.dng"),
+            ("opcode-not-applied", "bad.dng")
+        ],
+        "{}",
+        sc["plan"]["warnings"]
+    );
     assert!(!sc["stages"]
         .as_array()
         .unwrap()
@@ -240,7 +252,7 @@ fn the_issues_silent_blacks_warn_before_and_after_rendering() {
         let (r, err) = run(&os(&["render", f.to_str().unwrap(), "-o", out.to_str().unwrap(), "--float"]));
         assert!(r.status.success(), "{err}");
         assert!(err.contains(want), "{name}: {err}");
-        assert!(err.contains("warning: the render is constant: R, G and B are 0 in every pixel (all black)"), "{name}: {err}");
+        assert!(err.contains("warning[render-constant]: ") && err.contains(": the render is constant: R, G and B are 0 in every pixel (all black)"), "{name}: {err}");
         assert_eq!(constant_planes(&out), [Some(0.0); 3]);
         // synth: the plan says it before, the run after; the CLI prints both.
         let o = t.path().join(format!("{name}.synth"));
@@ -250,7 +262,8 @@ fn the_issues_silent_blacks_warn_before_and_after_rendering() {
         let stem = name.trim_end_matches(".dng");
         let sc = sidecar(&o.join(format!("{stem}.json")));
         assert!(sc["plan"]["warnings"].to_string().contains("(opcode 1 of 1)"));
-        assert!(sc["run"]["warnings"][0].as_str().unwrap().starts_with("the target render is constant"));
+        assert!(sc["run"]["warnings"][0]["message"].as_str().unwrap().starts_with("the target render is constant"));
+        assert_eq!(sc["run"]["warnings"][0]["code"], "render-constant");
         // info: not "ready" without a word.
         let r = common::bin().arg("info").arg(&f).output().unwrap();
         assert!(String::from_utf8_lossy(&r.stdout).contains("ready, with warnings"));
@@ -480,8 +493,9 @@ fn every_constant_render_of_random_opcode_lists_warned() {
         ]));
         assert!(r.status.success(), "case {case}: {err}");
         let planes = constant_planes(&out);
-        let said = err.contains("warning: the render is constant")
-            || err.contains("warning: the render has a constant plane");
+        let said = err.contains(": the render is constant")
+            || err.contains(": the render has a constant plane");
+        assert_eq!(said, err.contains("warning[render-constant]: "), "{err}");
         if said {
             static_warned += usize::from(err.contains("(opcode "));
         }
@@ -571,7 +585,7 @@ fn a_trim_that_changes_the_target_size_is_said_and_recorded() {
     ]));
     assert!(r.status.success(), "{err}");
     assert!(
-        err.contains("warning: OpcodeList3: TrimBounds (opcode 1 of 1) keeps rows 8..24, columns 16..48 of the active area: rendered images are 32x16 pixels where the raw's default crop is 64x48"),
+        err.contains("warning[opcode-trim]: ") && err.contains(": OpcodeList3: TrimBounds (opcode 1 of 1) keeps rows 8..24, columns 16..48 of the active area: rendered images are 32x16 pixels where the raw's default crop is 64x48"),
         "{err}"
     );
     let sc = sidecar(&o.join("trim.json"));

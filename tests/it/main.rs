@@ -66,3 +66,4 @@ mod synth_burst;
 mod synth_cli;
 mod synth_lamps;
 mod synth_readiness;
+mod warning_codes;

@@ -60,18 +60,29 @@ fn nan_or_inf_is_an_error_unless_replaced() {
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(
-        err.contains("warning: 2 NaN/Inf samples replaced by 0"),
+        err.contains("warning[nonfinite-replaced]: ")
+            && err.contains(": 2 NaN/Inf samples replaced by 0"),
         "{err}"
     );
     let j: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
     assert_eq!(j["nonfinite"], "zero");
     assert_eq!(j["nonfinite_replaced"], serde_json::json!([2, 0]));
+    // The warning with its code in the JSON (absent when nothing was replaced).
+    assert_eq!(j["warnings"][0]["code"], "nonfinite-replaced", "{j}");
+    assert!(
+        j["warnings"][0]["subject"]
+            .as_str()
+            .unwrap()
+            .ends_with(".exr"),
+        "{j}"
+    );
     let psnr = j["psnr"].as_f64().unwrap();
     assert!(psnr > 20.0, "{j}");
     // Clean pairs: the JSON says the mode, nothing replaced.
     let o = eval(&c, &c, &[]);
     assert!(o.status.success());
     let j: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert!(j.get("warnings").is_none(), "{j}");
     assert_eq!(j["nonfinite"], "error");
     assert_eq!(j["nonfinite_replaced"], serde_json::json!([0, 0]));
     // A bad mode is a usage error.

@@ -71,7 +71,7 @@ fn estimate_is_used_recorded_and_measured_in_the_noisy_raw() {
     let p = write(t.path(), "day.dng", &img);
     let out = t.path().join("o");
     let o = synth(&p, &out, &[]);
-    assert!(!stderr(&o).contains("warning: noise:"), "{}", stderr(&o));
+    assert!(!stderr(&o).contains(": noise: "), "{}", stderr(&o));
     let sc = sidecar(&out, "day");
     let prov = &sc["calibration"]["provenance"]["noise"];
     assert_eq!(prov, &sc["plan"]["noise_provenance"]);
@@ -162,7 +162,7 @@ fn calibrate_from_image_round_trips_through_noise_model() {
     let (a, b) = (t.path().join("a"), t.path().join("b"));
     synth(&p, &a, &[]);
     let o = synth(&p, &b, &["--noise-model", model.to_str().unwrap()]);
-    assert!(!stderr(&o).contains("warning: noise:"), "{}", stderr(&o));
+    assert!(!stderr(&o).contains(": noise: "), "{}", stderr(&o));
     for f in ["day_clean.dng", "day_iso1600.dng"] {
         assert_eq!(
             std::fs::read(a.join(f)).unwrap(),
@@ -205,10 +205,15 @@ fn a_model_file_of_another_camera_warns() {
         let o = synth(&p, &out, &["--noise-model", f.to_str().unwrap()]);
         let err = stderr(&o);
         let want = format!(
-            "warning: noise: {} was calibrated on Nikon D3, not on this camera (day2night Synthetic)",
+            ": noise: {} was calibrated on Nikon D3, not on this camera (day2night Synthetic)",
             f.display()
         );
         assert_eq!(err.contains(&want), warns, "{name}: {err}");
+        assert_eq!(
+            err.contains("warning[noise-other-camera]: "),
+            warns,
+            "{name}: {err}"
+        );
         let prov = &sidecar(&out, "day")["calibration"]["provenance"]["noise"];
         assert_eq!(prov["source"], "file");
         assert_eq!(prov["camera"].is_null(), name == "none", "{name}: {prov}");
@@ -221,7 +226,7 @@ fn noise_profile_paper_phone_release_and_unknown_iso() {
     // The file's own NoiseProfile: no warning.
     let out = t.path().join("fixture");
     let o = synth(&common::fixtures().join("day.dng"), &out, &[]);
-    assert!(!stderr(&o).contains("warning: noise:"), "{}", stderr(&o));
+    assert!(!stderr(&o).contains(": noise: "), "{}", stderr(&o));
     let prov = &sidecar(&out, "day")["calibration"]["provenance"]["noise"];
     assert_eq!(prov["source"], "noise_profile");
     assert_eq!(
@@ -236,7 +241,7 @@ fn noise_profile_paper_phone_release_and_unknown_iso() {
     );
     let out = t.path().join("phone");
     let o = synth(&phone, &out, &[]);
-    assert!(!stderr(&o).contains("warning: noise:"), "{}", stderr(&o));
+    assert!(!stderr(&o).contains(": noise: "), "{}", stderr(&o));
     let prov = &sidecar(&out, "phone")["calibration"]["provenance"]["noise"];
     assert_eq!(prov["source"], "embedded_s20fe");
     assert_eq!(prov["camera"]["make"], "samsung");
@@ -245,7 +250,7 @@ fn noise_profile_paper_phone_release_and_unknown_iso() {
     let out = t.path().join("release");
     let o = synth(&p, &out, &["--compat", "release"]);
     assert!(
-        stderr(&o).contains("warning: noise: the input has no NoiseProfile and --compat release keeps the release's noise table; using the embedded noise table of the paper's phone (Samsung Galaxy S20 FE): another camera's noise, not day2night Synthetic's"),
+        stderr(&o).contains("warning[noise-compat-table]: ") && stderr(&o).contains(": noise: the input has no NoiseProfile and --compat release keeps the release's noise table; using the embedded noise table of the paper's phone (Samsung Galaxy S20 FE): another camera's noise, not day2night Synthetic's"),
         "{}",
         stderr(&o)
     );
@@ -260,7 +265,7 @@ fn noise_profile_paper_phone_release_and_unknown_iso() {
     let out = t.path().join("noiso");
     let o = synth(&p, &out, &[]);
     let err = stderr(&o);
-    assert!(err.contains("warning: noise: the input has no NoiseProfile and its ISO is unknown (Exif ISO 0 or absent)"), "{err}");
+    assert!(err.contains("warning[unknown-iso]: ") && err.contains(": noise: the input has no NoiseProfile and its ISO is unknown (Exif ISO 0 or absent)"), "{err}");
     assert!(
         err.contains("day2night calibrate noise --from-image DAY.dng [--assume-iso N]"),
         "{err}"
@@ -295,7 +300,7 @@ fn real_canon_without_iso_is_named_another_cameras_noise() {
         .unwrap();
     let v: Value = serde_json::from_slice(&o.stdout).unwrap();
     assert_eq!(v[0]["noise_model"]["source"], "embedded_s20fe");
-    assert!(stderr(&o).contains("warning: noise:"), "{}", stderr(&o));
+    assert!(stderr(&o).contains(": noise: "), "{}", stderr(&o));
 }
 
 #[test]

@@ -496,7 +496,10 @@ fn calibration_files() {
     ]);
     ok(&out);
     let err = String::from_utf8_lossy(&out.stderr);
-    assert!(err.contains("warning: ISO 25"), "{err}");
+    assert!(
+        err.contains("warning[noise-extrapolated]: day.dng: ISO 25"),
+        "{err}"
+    );
     assert!(!err.contains("ISO 1600"), "{err}");
     let sc: serde_json::Value =
         serde_json::from_slice(&std::fs::read(o.join("day.json")).unwrap()).unwrap();

@@ -307,7 +307,7 @@ fn the_paper_phone_keeps_the_paper_dictionary_byte_for_byte() {
         (out, String::from_utf8_lossy(&r.stderr).into_owned())
     };
     let (auto, err) = run("auto", &[]);
-    assert!(!err.contains("warning: night illuminants"), "{err}");
+    assert!(!err.contains("warning[illuminants-other-camera]"), "{err}");
     assert!(
         err.contains("night illuminants: embedded paper phone gray cards"),
         "{err}"
@@ -322,7 +322,10 @@ fn the_paper_phone_keeps_the_paper_dictionary_byte_for_byte() {
     let prov = sc.calibration.provenance.unwrap().illuminants.unwrap();
     assert_eq!(serde_json::to_value(prov.source).unwrap(), "embedded_s20fe");
     assert!(
-        !sc.plan.warnings.iter().any(|w| w.contains("illuminants")),
+        !sc.plan
+            .warnings
+            .iter()
+            .any(|w| w.message.contains("illuminants")),
         "{:?}",
         sc.plan.warnings
     );
@@ -356,7 +359,8 @@ fn the_release_preset_keeps_the_paper_dictionary_and_says_so() {
     ok(&r);
     let err = String::from_utf8_lossy(&r.stderr);
     assert!(
-        err.contains("warning: night illuminants: the paper phone's dictionary"),
+        err.contains("warning[illuminants-other-camera]: ")
+            && err.contains(": night illuminants: the paper phone's dictionary"),
         "{err}"
     );
     assert!(err.contains("day2night Fixture Camera"), "{err}");
@@ -364,7 +368,13 @@ fn the_release_preset_keeps_the_paper_dictionary_and_says_so() {
     assert!(sc.options.compat.paper_illuminants);
     let prov = sc.calibration.provenance.unwrap().illuminants.unwrap();
     assert_eq!(serde_json::to_value(prov.source).unwrap(), "embedded_s20fe");
-    assert!(sc.plan.warnings.iter().any(|w| w.contains("S20 FE")));
+    assert!(
+        sc.plan
+            .warnings
+            .iter()
+            .any(|w| w.message.contains("S20 FE")
+                && w.code == day2night::Code::IlluminantsOtherCamera)
+    );
     // An explicit choice wins over the preset.
     let o2 = t.path().join("c");
     ok(&synth(&[
@@ -433,7 +443,7 @@ fn xy_and_camera_rgb_files() {
     ok(&r);
     let err = String::from_utf8_lossy(&r.stderr);
     assert!(
-        err.contains("warning: night illuminants")
+        err.contains("warning[illuminants-other-camera]: ")
             && err.contains("Nikon D3")
             && err.contains("day2night Fixture Camera"),
         "{err}"

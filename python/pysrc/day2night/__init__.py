@@ -40,14 +40,25 @@ from ._native import (  # noqa: F401
     write_unit,
     write_units,
 )
+from . import diagnostics  # noqa: F401
+from .diagnostics import (  # noqa: F401
+    WARNING_CLASSES,
+    WARNING_CODES,
+    Day2NightWarning,
+    warning_class,
+)
 from .pairs import NightPairs, pack_bayer  # noqa: F401
 from .rawpy_meta import from_rawpy  # noqa: F401
 from .units import group_units  # noqa: F401
 
 __version__ = version()
 
+# One Day2NightWarning subclass per warning code (NoiseExtrapolatedWarning, ...).
+globals().update({c.__name__: c for c in WARNING_CLASSES.values()})
+
 __all__ = [
     "BOUNDS",
+    "Day2NightWarning",
     "NightPairs",
     "Raw",
     "Synthesis",
@@ -71,4 +82,7 @@ __all__ = [
     "write_outputs",
     "write_unit",
     "write_units",
-]
+    "WARNING_CLASSES",
+    "WARNING_CODES",
+    "warning_class",
+] + sorted(c.__name__ for c in WARNING_CLASSES.values())

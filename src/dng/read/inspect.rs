@@ -115,8 +115,8 @@ pub struct DngInfo {
     /// Why not, when `synth_ready` is false.
     pub reason: Option<String>,
     /// What the metadata checks corrected (each names the tag and the value used): synthesis
-    /// works but warns ("ready, with warnings").
-    pub warnings: Vec<String>,
+    /// works but warns ("ready, with warnings"). Serialized with their codes.
+    pub warnings: crate::diagnostics::Diagnostics,
     /// Set when the raw data itself is unreadable (unsupported compression, malformed,
     /// over the limits): `info` reports it as an error (exit code 1).
     pub error: Option<String>,
@@ -178,7 +178,7 @@ pub fn inspect_bytes(bytes: &[u8]) -> Result<DngInfo> {
         raw: None,
         synth_ready: false,
         reason: None,
-        warnings: Vec::new(),
+        warnings: Default::default(),
         error: None,
     };
     let located = match locate(&tiff) {

@@ -317,7 +317,7 @@ pub(super) fn build_meta(tiff: &Tiff, d: &Located<'_>, g: &Geometry) -> Result<R
                 })
             })
             .collect(),
-        warnings: Vec::new(),
+        warnings: Default::default(),
         noise_profile_problem: None,
     })
 }

@@ -19,6 +19,7 @@ use super::area::plane_range;
 use super::{
     prepare, prepare_lists_for, OpcodeEntry, OpcodeMode, OpcodeReport, Prepared, StageRect,
 };
+use crate::diagnostics::{Code, Diagnostics, Warning};
 use crate::dng::opcodes::{
     list_results, lists, AreaSpec, ListId, Opcode, OpcodeKind, OpcodeList, FLAG_OPTIONAL,
 };
@@ -33,8 +34,8 @@ pub struct Checked {
     pub prepared: Option<Prepared>,
     /// Warnings, in pipeline order: skipped optional opcodes
     /// ([`OpcodeReport::warnings`]), then opcodes that make their samples one value, then
-    /// a TrimBounds that changes the rendered size.
-    pub warnings: Vec<String>,
+    /// a TrimBounds that changes the rendered size. No subject (the caller knows the file).
+    pub warnings: Diagnostics,
     /// The rendered size (width, height) when an OpcodeList3 TrimBounds changes it (`None`
     /// otherwise).
     pub trimmed_size: Option<(usize, usize)>,
@@ -83,10 +84,13 @@ pub fn check_render(img: &RawImage, mode: OpcodeMode, crop: bool, orient: bool) 
 pub fn report_without_render(
     meta: &RawMeta,
     mode: OpcodeMode,
-) -> (Option<OpcodeReport>, Vec<String>) {
+) -> (Option<OpcodeReport>, Diagnostics) {
     if mode == OpcodeMode::Ignore || meta.opcode_lists.iter().all(Option::is_none) {
         // prepare() neither parses nor fails in these cases.
-        return (prepare(meta, mode).ok().flatten().map(|p| p.report), vec![]);
+        return (
+            prepare(meta, mode).ok().flatten().map(|p| p.report),
+            Diagnostics::new(),
+        );
     }
     let linear_raw = meta.linear_raw.is_some();
     let reason = if linear_raw {
@@ -122,7 +126,7 @@ pub fn report_without_render(
         dropped: vec![],
     });
     let mut skipped = std::mem::take(&mut report.skipped).into_iter();
-    let mut warnings = vec![];
+    let mut warnings = Diagnostics::new();
     for id in ListId::ALL {
         if let Some(e) = &malformed[id.index()] {
             let (why, what) = match e.root() {
@@ -130,11 +134,14 @@ pub fn report_without_render(
                 Error::Malformed(m) => (m.clone(), "is malformed"),
                 other => (other.to_string(), "cannot be read"),
             };
-            warnings.push(format!(
-                "{why}: the list {what}; no render was requested, so it is not used (the \
+            warnings.warn(
+                Code::OpcodeListMalformed,
+                format!(
+                    "{why}: the list {what}; no render was requested, so it is not used (the \
                  night raws carry it as stored; a render of them fails the same way unless \
                  it ignores the opcode lists)"
-            ));
+                ),
+            );
             report.skipped.push(OpcodeEntry {
                 list: id.tag_name().into(),
                 name: MALFORMED_LIST.into(),
@@ -147,12 +154,15 @@ pub fn report_without_render(
             let Some(mut e) = skipped.next() else { break };
             if was_mandatory {
                 let why = e.reason.take().unwrap_or_default();
-                warnings.push(format!(
-                    "{}: {} (id {}) is not optional and cannot be applied: {why}; no render \
+                warnings.warn(
+                    Code::OpcodeNotApplied,
+                    format!(
+                        "{}: {} (id {}) is not optional and cannot be applied: {why}; no render \
                      was requested, so nothing fails (a render of this file or of its night \
                      raws would, unless it ignores the opcode lists)",
-                    e.list, e.name, e.id
-                ));
+                        e.list, e.name, e.id
+                    ),
+                );
                 e.reason = Some(format!("{why}; not optional (no render was requested)"));
             } else {
                 // The same words as a render's warning.
@@ -521,7 +531,7 @@ fn region_text(t: &Touched, s: &Stage) -> String {
 /// touch one value (0 for the "non-positive" cases: the stage images are pinned at 0),
 /// named by list and position: "OpcodeList2: GainMap (opcode 1 of 1): every gain is <= 0
 /// (the largest is -2): the whole image becomes 0 (black) ...".
-fn flat_opcodes(parsed: &[OpcodeList; 3], g: &StageGeometry, linear_raw: bool) -> Vec<String> {
+fn flat_opcodes(parsed: &[OpcodeList; 3], g: &StageGeometry, linear_raw: bool) -> Vec<Warning> {
     let reason = if linear_raw {
         super::unsupported_reason_linear_raw
     } else {
@@ -571,10 +581,10 @@ fn flat_opcodes(parsed: &[OpcodeList; 3], g: &StageGeometry, linear_raw: bool) -
     out
 }
 
-fn flat_one(id: ListId, i: usize, n: usize, op: &Opcode, s: &Stage) -> Option<String> {
+fn flat_one(id: ListId, i: usize, n: usize, op: &Opcode, s: &Stage) -> Option<Warning> {
     let mut t = touched(&op.kind, s)?;
     let (why, v) = flat_kind(&op.kind, s, &mut t)?;
-    Some(format!(
+    let message = format!(
         "{}: {} (opcode {} of {n}): {why}: {} becomes {} (render with --opcodes ignore to \
          leave the lists out)",
         id.tag_name(),
@@ -582,7 +592,8 @@ fn flat_one(id: ListId, i: usize, n: usize, op: &Opcode, s: &Stage) -> Option<St
         i + 1,
         region_text(&t, s),
         value_text(v, s.range)
-    ))
+    );
+    Some(Warning::new(Code::OpcodeFlattens, message))
 }
 
 /// `rect` (top, left, bottom, right) when it is a non-empty rectangle inside `b`.
@@ -598,7 +609,7 @@ fn trimmed(b: StageRect, rect: [u32; 4]) -> Option<StageRect> {
 }
 
 /// The rendered size (width, height) after a TrimBounds that changes it, and its warning.
-type Trimmed = (Option<(usize, usize)>, Option<String>);
+type Trimmed = (Option<(usize, usize)>, Option<Warning>);
 
 /// The rendered size after OpcodeList3's TrimBounds, when they change it, and the warning
 /// that says so; errors as the render does for a TrimBounds outside the image or one that
@@ -673,7 +684,7 @@ fn trimmed_size(
         before.0,
         before.1
     );
-    Ok((Some(after), Some(warning)))
+    Ok((Some(after), Some(Warning::new(Code::OpcodeTrim, warning))))
 }
 
 #[cfg(test)]

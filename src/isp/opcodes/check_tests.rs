@@ -51,6 +51,9 @@ fn warnings(img: &RawImage) -> Vec<String> {
     check_render(img, OpcodeMode::Apply, true, true)
         .unwrap()
         .warnings
+        .iter()
+        .map(|w| w.message.clone())
+        .collect()
 }
 
 #[test]
@@ -311,10 +314,13 @@ fn a_trim_that_changes_the_size_is_said_and_measured() {
     let c = check_render(&img, OpcodeMode::Apply, true, true).unwrap();
     assert_eq!(c.trimmed_size, Some((32, 16)));
     assert_eq!(c.warnings.len(), 1);
+    assert_eq!(c.warnings[0].code, crate::diagnostics::Code::OpcodeTrim);
     assert!(
         c.warnings[0]
+            .message
             .contains("OpcodeList3: TrimBounds (opcode 1 of 1) keeps rows 8..24, columns 16..48")
             && c.warnings[0]
+                .message
                 .contains("rendered images are 32x16 pixels where the raw's default crop is 64x48"),
         "{}",
         c.warnings[0]
@@ -324,7 +330,9 @@ fn a_trim_that_changes_the_size_is_said_and_measured() {
     turned.meta.orientation = 6;
     let c = check_render(&turned, OpcodeMode::Apply, true, true).unwrap();
     assert_eq!(c.trimmed_size, Some((16, 32)));
-    assert!(c.warnings[0].contains("16x32 pixels where the raw's default crop is 48x64"));
+    assert!(c.warnings[0]
+        .message
+        .contains("16x32 pixels where the raw's default crop is 48x64"));
     // A trim around the DefaultCrop does not change the size: nothing to say.
     let mut cropped = frame(64, 48, [vec![], vec![], vec![trim([4, 4, 44, 60])]]);
     cropped.meta.default_crop_origin = Some([8.0, 8.0]);
@@ -419,6 +427,17 @@ fn without_a_render_nothing_fails_and_the_report_says_why() {
         .unwrap()
         .ends_with("not optional (no render was requested)"));
     assert_eq!(warnings.len(), 3, "{warnings:?}");
+    use crate::diagnostics::Code;
+    let codes: Vec<Code> = warnings.iter().map(|w| w.code).collect();
+    assert_eq!(
+        codes,
+        [
+            Code::OpcodeListMalformed,
+            Code::OpcodeNotApplied,
+            Code::OpcodeSkipped
+        ]
+    );
+    let warnings = warnings.messages();
     assert!(
         warnings[0].starts_with("OpcodeList1: ")
             && warnings[0].contains("the list is malformed; no render was requested"),
@@ -456,7 +475,7 @@ fn without_a_render_nothing_fails_and_the_report_says_why() {
     // No list, or ignore: as prepare says.
     assert_eq!(
         report_without_render(&frame(4, 4, Default::default()).meta, OpcodeMode::Apply),
-        (None, vec![])
+        (None, Default::default())
     );
     let (r, w) = report_without_render(&img.meta, OpcodeMode::Ignore);
     assert!(r.unwrap().applied.is_empty() && w.is_empty());

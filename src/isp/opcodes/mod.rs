@@ -114,16 +114,19 @@ pub struct OpcodeReport {
 impl OpcodeReport {
     /// One warning line per skipped opcode ("OpcodeList3: WarpRectilinear2 (id 14), optional,
     /// skipped: not implemented").
-    pub fn warnings(&self) -> Vec<String> {
+    pub fn warnings(&self) -> crate::diagnostics::Diagnostics {
         self.skipped
             .iter()
             .map(|e| {
-                format!(
-                    "{}: {} (id {}), optional, skipped: {}",
-                    e.list,
-                    e.name,
-                    e.id,
-                    e.reason.as_deref().unwrap_or("not applicable")
+                crate::diagnostics::Warning::new(
+                    crate::diagnostics::Code::OpcodeSkipped,
+                    format!(
+                        "{}: {} (id {}), optional, skipped: {}",
+                        e.list,
+                        e.name,
+                        e.id,
+                        e.reason.as_deref().unwrap_or("not applicable")
+                    ),
                 )
             })
             .collect()
@@ -608,7 +611,9 @@ mod tests {
         assert_eq!(p.list(ListId::List2), std::slice::from_ref(&scale));
         assert_eq!(p.report.applied.len(), 1);
         assert_eq!(p.report.skipped[0].id, 99);
-        assert!(p.report.warnings()[0].contains("OpcodeList2: unknown (id 99)"));
+        assert!(p.report.warnings()[0]
+            .message
+            .contains("OpcodeList2: unknown (id 99)"));
         lists[2].opcodes = vec![unknown(0)];
         let e = prepare_lists(&lists, OpcodeMode::Apply)
             .unwrap_err()

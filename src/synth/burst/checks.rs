@@ -9,6 +9,7 @@ use super::interp::Interp;
 use super::motion::{rigid, valid_rect, BurstOptions, FrameTransform, Motion, MAX_FRAMES};
 use super::motion::{MAX_ROLL_DEG, MAX_STEP_PX};
 use crate::bounds::short;
+use crate::diagnostics::{Code, Warning};
 use crate::error::{Error, Result};
 
 /// The shake step (px per frame) is at most this fraction of the active area's smaller side:
@@ -219,7 +220,7 @@ pub fn check_step_fits(opts: &BurstOptions, (w, h): (usize, usize)) -> Result<()
 
 /// One warning for the frames whose valid area is under [`MIN_VALID_FRACTION`] of the
 /// `w x h` active area (empty ones said so), or none.
-pub fn valid_area_warnings(transforms: &[FrameTransform], (w, h): (usize, usize)) -> Vec<String> {
+pub fn valid_area_warnings(transforms: &[FrameTransform], (w, h): (usize, usize)) -> Vec<Warning> {
     let area = (w * h) as f64;
     let small: Vec<String> = transforms
         .iter()
@@ -236,14 +237,15 @@ pub fn valid_area_warnings(transforms: &[FrameTransform], (w, h): (usize, usize)
     if small.is_empty() {
         return vec![];
     }
-    vec![format!(
+    let message = format!(
         "burst: {} of {} frames keep a valid area under half of the {w}x{h} active area ({}): \
          outside it a frame repeats the image's edge; lower {}",
         small.len(),
         transforms.len(),
         small.join(", "),
         Names::EITHER.shake_step
-    )]
+    );
+    vec![Warning::new(Code::BurstValidArea, message)]
 }
 
 fn bad(field: &str, why: impl std::fmt::Display) -> Error {
@@ -519,7 +521,8 @@ mod tests {
         };
         let w = valid_area_warnings(&far, (120, 80));
         assert_eq!(w.len(), 1);
-        assert!(w[0].contains("f03 empty"), "{w:?}");
+        assert!(w[0].message.contains("f03 empty"), "{w:?}");
+        assert_eq!(w[0].code, Code::BurstValidArea);
         assert!(valid_area_warnings(&shaken().0.transforms, (120, 80)).is_empty());
     }
 }
