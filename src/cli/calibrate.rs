@@ -419,6 +419,35 @@ fn parse_iso(s: &str) -> Result<u32, String> {
     Ok(iso)
 }
 
+/// The fits of a noise calibration, per ISO and position, and its ISO laws (stderr).
+fn print_fits(model: &day2night::calibrate::format::NoiseModelFile) {
+    for m in &model.isos {
+        eprintln!(
+            "ISO {} ({}, {} input(s), black {} white {}):",
+            m.iso, m.source, m.inputs, m.black, m.white
+        );
+        for f in &m.fits {
+            let fit = match (f.r2, f.chi2_reduced) {
+                (Some(r2), Some(c2)) => format!(
+                    "  R^2 {:.4}  chi2/dof {:.2}  {} bins  {} px  ({} clipped px excluded)",
+                    r2, c2, f.bins, f.pixels, f.clipped_pixels
+                ),
+                _ => String::new(),
+            };
+            eprintln!(
+                "  position {} ({}): S {:.4e}  O {:.4e}  (beta1 {:.4} DN, beta2 {:.3} DN^2){}",
+                f.position, f.color, f.s, f.o, f.beta1, f.beta2, fit
+            );
+        }
+    }
+    if let Some(l) = &model.iso_laws {
+        eprintln!(
+            "ISO laws over {:?}: S = {:.4e} * ISO, O = {:.4e} + {:.4e} * ISO^2 (position 0)",
+            l.isos, l.s_per_iso[0], l.o_at_iso0[0], l.o_per_iso2[0]
+        );
+    }
+}
+
 fn run_noise(a: NoiseArgs) -> CmdResult {
     if a.physics {
         return run_noise_physics(a);
@@ -564,31 +593,7 @@ fn run_noise(a: NoiseArgs) -> CmdResult {
     let (model, warnings) = noise::build_model(sources, profiles, camera)?;
     est_warnings.extend(warnings);
     let warnings = est_warnings;
-    for m in &model.isos {
-        eprintln!(
-            "ISO {} ({}, {} input(s), black {} white {}):",
-            m.iso, m.source, m.inputs, m.black, m.white
-        );
-        for f in &m.fits {
-            let fit = match (f.r2, f.chi2_reduced) {
-                (Some(r2), Some(c2)) => format!(
-                    "  R^2 {:.4}  chi2/dof {:.2}  {} bins  {} px  ({} clipped px excluded)",
-                    r2, c2, f.bins, f.pixels, f.clipped_pixels
-                ),
-                _ => String::new(),
-            };
-            eprintln!(
-                "  position {} ({}): S {:.4e}  O {:.4e}  (beta1 {:.4} DN, beta2 {:.3} DN^2){}",
-                f.position, f.color, f.s, f.o, f.beta1, f.beta2, fit
-            );
-        }
-    }
-    if let Some(l) = &model.iso_laws {
-        eprintln!(
-            "ISO laws over {:?}: S = {:.4e} * ISO, O = {:.4e} + {:.4e} * ISO^2 (position 0)",
-            l.isos, l.s_per_iso[0], l.o_at_iso0[0], l.o_per_iso2[0]
-        );
-    }
+    print_fits(&model);
     for w in &warnings {
         super::warn(w, "");
     }

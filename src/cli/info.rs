@@ -277,6 +277,156 @@ fn describe_opcodes(out: &mut String, lists: &[day2night::dng::opcodes::describe
     }
 }
 
+/// The raw image's lines of [`describe`].
+fn describe_raw(out: &mut String, r: &day2night::dng::read::RawSummary) {
+    let m = &r.meta;
+    let _ = writeln!(
+        out,
+        "  raw size:      {}x{}, {}-bit",
+        r.width, r.height, m.bits_per_sample
+    );
+    if let Some(a) = m.active_area {
+        let _ = writeln!(
+            out,
+            "  active area:   {},{},{},{} ({}x{})",
+            a.top,
+            a.left,
+            a.bottom,
+            a.right,
+            a.width(),
+            a.height()
+        );
+    }
+    if let (Some(o), Some(s)) = (m.default_crop_origin, m.default_crop_size) {
+        let _ = writeln!(
+            out,
+            "  default crop:  origin {} size {}",
+            nums(&o),
+            nums(&s)
+        );
+    }
+    let _ = writeln!(out, "  CFA:           {}", r.cfa);
+    if let Some(st) = &m.storage {
+        let layout = match st.layout {
+            day2night::raw::meta::Layout::Strips { rows_per_strip } => {
+                format!("strips of {rows_per_strip} rows")
+            }
+            day2night::raw::meta::Layout::Tiles { width, height } => {
+                format!("tiles {width}x{height}")
+            }
+        };
+        let _ = writeln!(
+            out,
+            "  storage:       {layout}, compression {} ({})",
+            st.compression,
+            day2night::dng::read::compression_name(st.compression)
+        );
+    }
+    describe_levels(out, m);
+    let e = &m.exif;
+    let _ = writeln!(
+        out,
+        "  exposure:      ISO {}, {} s, f/{}, {}",
+        opt(&e.iso),
+        opt(&e.exposure_time),
+        opt(&e.f_number),
+        opt(&e.date_time_original)
+    );
+    let _ = writeln!(
+        out,
+        "  noise profile: {}",
+        m.noise_profile.as_ref().map_or("-".into(), |p| p
+            .iter()
+            .map(|(s, o)| format!("S={} O={}", short_sci(*s), short_sci(*o)))
+            .collect::<Vec<_>>()
+            .join("; "))
+    );
+    let _ = writeln!(out, "  orientation:   {}", m.orientation);
+    if m.gps_entries > 0 {
+        let _ = writeln!(out, "  GPS:           {} entries (carried)", m.gps_entries);
+    }
+    let _ = writeln!(
+        out,
+        "  opcode lists:  {}",
+        if m.opcode_lists.is_empty() {
+            "none".to_string()
+        } else {
+            m.opcode_lists
+                .iter()
+                .map(|i| format!("OpcodeList{i}"))
+                .collect::<Vec<_>>()
+                .join(", ")
+        }
+    );
+    describe_opcodes(out, &m.opcodes);
+}
+
+/// Levels, neutral and colour tags of [`describe_raw`].
+fn describe_levels(out: &mut String, m: &day2night::dng::read::MetaSummary) {
+    let l = &m.levels;
+    let _ = writeln!(
+        out,
+        "  black level:   {} (repeat {}x{}){}{}",
+        nums(&l.black),
+        l.black_repeat.0,
+        l.black_repeat.1,
+        if l.black_delta_h.is_empty() {
+            ""
+        } else {
+            ", DeltaH"
+        },
+        if l.black_delta_v.is_empty() {
+            ""
+        } else {
+            ", DeltaV"
+        }
+    );
+    let _ = writeln!(out, "  white level:   {}", nums(&[l.white]));
+    if let Some(lr) = &m.linear_raw {
+        let _ = writeln!(
+            out,
+            "  per sample:    black {}, white {} (LinearRaw, {} samples)",
+            nums(&lr.black),
+            nums(&lr.white),
+            lr.samples_per_pixel
+        );
+    }
+    if let Some(n) = m.linearization_table_len {
+        let _ = writeln!(out, "  linearization: table of {n} entries");
+    }
+    let _ = writeln!(
+        out,
+        "  as-shot neutral: {}",
+        m.as_shot_neutral.map_or("-".into(), |n| nums(&n))
+    );
+    if let Some(xy) = m.as_shot_white_xy {
+        let _ = writeln!(out, "  as-shot white xy: {}", nums(&xy));
+    }
+    let c = &m.color;
+    for (name, mat, ill) in [
+        ("ColorMatrix1", &c.color_matrix1, c.calibration_illuminant1),
+        ("ColorMatrix2", &c.color_matrix2, c.calibration_illuminant2),
+    ] {
+        if let Some(mx) = mat {
+            let _ = writeln!(out, "  {name}:  {} (illuminant {})", nums(mx), opt(&ill));
+        }
+    }
+    for (name, mat) in [
+        ("ForwardMatrix1", &c.forward_matrix1),
+        ("ForwardMatrix2", &c.forward_matrix2),
+        ("CameraCalibration1", &c.camera_calibration1),
+        ("CameraCalibration2", &c.camera_calibration2),
+        ("AnalogBalance", &c.analog_balance),
+    ] {
+        if let Some(mx) = mat {
+            let _ = writeln!(out, "  {name}: {}", nums(mx));
+        }
+    }
+    if let Some(b) = c.baseline_exposure {
+        let _ = writeln!(out, "  baseline exposure: {} EV", nums(&[b]));
+    }
+}
+
 fn describe(
     out: &mut String,
     file: &std::path::Path,
@@ -316,147 +466,7 @@ fn describe(
     }
     let _ = writeln!(out, "  raw IFD:       {}", opt(&i.raw_ifd));
     if let Some(r) = &i.raw {
-        let m = &r.meta;
-        let _ = writeln!(
-            out,
-            "  raw size:      {}x{}, {}-bit",
-            r.width, r.height, m.bits_per_sample
-        );
-        if let Some(a) = m.active_area {
-            let _ = writeln!(
-                out,
-                "  active area:   {},{},{},{} ({}x{})",
-                a.top,
-                a.left,
-                a.bottom,
-                a.right,
-                a.width(),
-                a.height()
-            );
-        }
-        if let (Some(o), Some(s)) = (m.default_crop_origin, m.default_crop_size) {
-            let _ = writeln!(
-                out,
-                "  default crop:  origin {} size {}",
-                nums(&o),
-                nums(&s)
-            );
-        }
-        let _ = writeln!(out, "  CFA:           {}", r.cfa);
-        if let Some(st) = &m.storage {
-            let layout = match st.layout {
-                day2night::raw::meta::Layout::Strips { rows_per_strip } => {
-                    format!("strips of {rows_per_strip} rows")
-                }
-                day2night::raw::meta::Layout::Tiles { width, height } => {
-                    format!("tiles {width}x{height}")
-                }
-            };
-            let _ = writeln!(
-                out,
-                "  storage:       {layout}, compression {} ({})",
-                st.compression,
-                day2night::dng::read::compression_name(st.compression)
-            );
-        }
-        let l = &m.levels;
-        let _ = writeln!(
-            out,
-            "  black level:   {} (repeat {}x{}){}{}",
-            nums(&l.black),
-            l.black_repeat.0,
-            l.black_repeat.1,
-            if l.black_delta_h.is_empty() {
-                ""
-            } else {
-                ", DeltaH"
-            },
-            if l.black_delta_v.is_empty() {
-                ""
-            } else {
-                ", DeltaV"
-            }
-        );
-        let _ = writeln!(out, "  white level:   {}", nums(&[l.white]));
-        if let Some(lr) = &m.linear_raw {
-            let _ = writeln!(
-                out,
-                "  per sample:    black {}, white {} (LinearRaw, {} samples)",
-                nums(&lr.black),
-                nums(&lr.white),
-                lr.samples_per_pixel
-            );
-        }
-        if let Some(n) = m.linearization_table_len {
-            let _ = writeln!(out, "  linearization: table of {n} entries");
-        }
-        let _ = writeln!(
-            out,
-            "  as-shot neutral: {}",
-            m.as_shot_neutral.map_or("-".into(), |n| nums(&n))
-        );
-        if let Some(xy) = m.as_shot_white_xy {
-            let _ = writeln!(out, "  as-shot white xy: {}", nums(&xy));
-        }
-        let c = &m.color;
-        for (name, mat, ill) in [
-            ("ColorMatrix1", &c.color_matrix1, c.calibration_illuminant1),
-            ("ColorMatrix2", &c.color_matrix2, c.calibration_illuminant2),
-        ] {
-            if let Some(mx) = mat {
-                let _ = writeln!(out, "  {name}:  {} (illuminant {})", nums(mx), opt(&ill));
-            }
-        }
-        for (name, mat) in [
-            ("ForwardMatrix1", &c.forward_matrix1),
-            ("ForwardMatrix2", &c.forward_matrix2),
-            ("CameraCalibration1", &c.camera_calibration1),
-            ("CameraCalibration2", &c.camera_calibration2),
-            ("AnalogBalance", &c.analog_balance),
-        ] {
-            if let Some(mx) = mat {
-                let _ = writeln!(out, "  {name}: {}", nums(mx));
-            }
-        }
-        if let Some(b) = c.baseline_exposure {
-            let _ = writeln!(out, "  baseline exposure: {} EV", nums(&[b]));
-        }
-        let e = &m.exif;
-        let _ = writeln!(
-            out,
-            "  exposure:      ISO {}, {} s, f/{}, {}",
-            opt(&e.iso),
-            opt(&e.exposure_time),
-            opt(&e.f_number),
-            opt(&e.date_time_original)
-        );
-        let _ = writeln!(
-            out,
-            "  noise profile: {}",
-            m.noise_profile.as_ref().map_or("-".into(), |p| p
-                .iter()
-                .map(|(s, o)| format!("S={} O={}", short_sci(*s), short_sci(*o)))
-                .collect::<Vec<_>>()
-                .join("; "))
-        );
-        let _ = writeln!(out, "  orientation:   {}", m.orientation);
-        if m.gps_entries > 0 {
-            let _ = writeln!(out, "  GPS:           {} entries (carried)", m.gps_entries);
-        }
-        let _ = writeln!(
-            out,
-            "  opcode lists:  {}",
-            if m.opcode_lists.is_empty() {
-                "none".to_string()
-            } else {
-                m.opcode_lists
-                    .iter()
-                    .map(|i| format!("OpcodeList{i}"))
-                    .collect::<Vec<_>>()
-                    .join(", ")
-            }
-        );
-        describe_opcodes(out, &m.opcodes);
+        describe_raw(out, r);
     }
     match ill {
         Some(Ok(p)) => {

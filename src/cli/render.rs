@@ -81,22 +81,9 @@ enum Format {
     Tiff,
 }
 
-/// Run `day2night render`.
-pub fn run(args: RenderArgs) -> CmdResult {
-    let demosaic: Demosaic = args.demosaic.parse().map_err(usage)?;
-    let neutral = args
-        .neutral
-        .as_deref()
-        .map(parse_neutral)
-        .transpose()
-        .map_err(usage)?;
-    let compression: ExrCompression = args.exr_compression.parse().map_err(usage)?;
-    let zip_level = parse_zip_level(args.exr_zip_level)?;
-    let tone: DisplayTone = args.tone.parse().map_err(usage)?;
-    let opcodes: OpcodeMode = args
-        .opcodes
-        .parse()
-        .map_err(|e: day2night::Error| usage(format!("--opcodes: {e}")))?;
+/// The output's format (from its extension) and whether it is 16-bit (`--bits`, else TIFF
+/// 16 and the others 8).
+fn output_format(args: &RenderArgs) -> Result<(Format, bool), super::Failure> {
     let ext = args
         .output
         .extension()
@@ -120,6 +107,26 @@ pub fn run(args: RenderArgs) -> CmdResult {
         (None, Format::Tiff) => true,
         (None, _) => false,
     };
+    Ok((format, sixteen))
+}
+
+/// Run `day2night render`.
+pub fn run(args: RenderArgs) -> CmdResult {
+    let demosaic: Demosaic = args.demosaic.parse().map_err(usage)?;
+    let neutral = args
+        .neutral
+        .as_deref()
+        .map(parse_neutral)
+        .transpose()
+        .map_err(usage)?;
+    let compression: ExrCompression = args.exr_compression.parse().map_err(usage)?;
+    let zip_level = parse_zip_level(args.exr_zip_level)?;
+    let tone: DisplayTone = args.tone.parse().map_err(usage)?;
+    let opcodes: OpcodeMode = args
+        .opcodes
+        .parse()
+        .map_err(|e: day2night::Error| usage(format!("--opcodes: {e}")))?;
+    let (format, sixteen) = output_format(&args)?;
     let policy = OutputPolicy {
         overwrite: args.overwrite,
         inputs: vec![args.input.clone()],

@@ -206,6 +206,38 @@ pub fn check_out_dir(
     Ok(())
 }
 
+/// Count one input's units into `st`; returns its (done, skipped, failed) counts.
+fn tally(st: &mut Summary, outcome: &[(Record, Did)]) -> (usize, usize, usize) {
+    let (mut done, mut skipped, mut failed) = (0, 0, 0);
+    for (rec, what) in outcome {
+        match what {
+            Did::Skipped => {
+                st.skipped += 1;
+                skipped += 1;
+            }
+            Did::Computed(reason) => {
+                *st.recomputed
+                    .entry(reason.describe().to_string())
+                    .or_default() += 1;
+                if rec.status == Status::Ok {
+                    st.done += 1;
+                    done += 1;
+                    st.outputs_written += rec.outputs.len();
+                } else {
+                    st.failed += 1;
+                    failed += 1;
+                    st.failures.push((
+                        rec.input.clone(),
+                        rec.variant,
+                        rec.error.clone().unwrap_or_default(),
+                    ));
+                }
+            }
+        }
+    }
+    (done, skipped, failed)
+}
+
 /// Run the dataset generation with `processor`.
 pub fn run<P: Processor>(opts: &RunOptions, processor: &P) -> Result<Summary> {
     let start = Instant::now();
@@ -276,36 +308,10 @@ pub fn run<P: Processor>(opts: &RunOptions, processor: &P) -> Result<Summary> {
                     &policy,
                     &appender,
                 );
-                let (mut done, mut skipped, mut failed) = (0, 0, 0);
-                {
-                    let mut st = stats.lock().unwrap_or_else(|e| e.into_inner());
-                    for (rec, what) in &outcome {
-                        match what {
-                            Did::Skipped => {
-                                st.skipped += 1;
-                                skipped += 1;
-                            }
-                            Did::Computed(reason) => {
-                                *st.recomputed
-                                    .entry(reason.describe().to_string())
-                                    .or_default() += 1;
-                                if rec.status == Status::Ok {
-                                    st.done += 1;
-                                    done += 1;
-                                    st.outputs_written += rec.outputs.len();
-                                } else {
-                                    st.failed += 1;
-                                    failed += 1;
-                                    st.failures.push((
-                                        rec.input.clone(),
-                                        rec.variant,
-                                        rec.error.clone().unwrap_or_default(),
-                                    ));
-                                }
-                            }
-                        }
-                    }
-                }
+                let (done, skipped, failed) = tally(
+                    &mut stats.lock().unwrap_or_else(|e| e.into_inner()),
+                    &outcome,
+                );
                 progress.input_done(&InputDone {
                     index: finished.fetch_add(1, Ordering::SeqCst) + 1,
                     total: tasks.len(),

@@ -269,77 +269,9 @@ fn warp_planes2(params: &[u8]) -> Result<u32> {
 fn parse_kind(id: u32, params: &[u8]) -> Result<OpcodeKind> {
     let mut p = Params { b: params, pos: 0 };
     let kind = match id {
-        1 => {
-            let n = warp_planes(params, 48)?;
-            p.pos = 4;
-            let mut planes = Vec::with_capacity(n as usize);
-            for i in 0..n {
-                let mut kr = [0.0; 4];
-                for (j, k) in kr.iter_mut().enumerate() {
-                    *k = p.f64(&format!("plane {i} kr{j}"))?;
-                }
-                let kt = [
-                    p.f64(&format!("plane {i} kt0"))?,
-                    p.f64(&format!("plane {i} kt1"))?,
-                ];
-                planes.push(WarpPlane { kr, kt });
-            }
-            OpcodeKind::WarpRectilinear {
-                planes,
-                center: center(&mut p)?,
-            }
-        }
-        14 => {
-            // N, per plane kr0..kr14, kt0, kt1, min and max valid radius, then cx, cy and
-            // the reciprocal flag (a u32 after the centre).
-            let n = warp_planes2(params)?;
-            p.pos = 4;
-            let mut planes = Vec::with_capacity(n as usize);
-            for i in 0..n {
-                let mut kr = [0.0; 15];
-                for (j, k) in kr.iter_mut().enumerate() {
-                    *k = p.f64(&format!("plane {i} kr{j}"))?;
-                }
-                let kt = [
-                    p.f64(&format!("plane {i} kt0"))?,
-                    p.f64(&format!("plane {i} kt1"))?,
-                ];
-                let valid = [
-                    p.f64(&format!("plane {i} minimum valid radius"))?,
-                    p.f64(&format!("plane {i} maximum valid radius"))?,
-                ];
-                if !(0.0 <= valid[0] && valid[0] < valid[1] && valid[1] <= 1.0) {
-                    return Err(Error::malformed(format!(
-                        "plane {i}: valid radius range {}..{} must satisfy 0 <= min < max <= 1",
-                        valid[0], valid[1]
-                    )));
-                }
-                planes.push(WarpPlane2 { kr, kt, valid });
-            }
-            let center = center(&mut p)?;
-            let reciprocal = p.u32("reciprocal flag")? != 0;
-            OpcodeKind::WarpRectilinear2 {
-                planes,
-                center,
-                reciprocal,
-            }
-        }
-        2 => {
-            let n = warp_planes(params, 32)?;
-            p.pos = 4;
-            let mut planes = Vec::with_capacity(n as usize);
-            for i in 0..n {
-                let mut kr = [0.0; 4];
-                for (j, k) in kr.iter_mut().enumerate() {
-                    *k = p.f64(&format!("plane {i} kr{j}"))?;
-                }
-                planes.push(kr);
-            }
-            OpcodeKind::WarpFisheye {
-                planes,
-                center: center(&mut p)?,
-            }
-        }
+        1 => parse_warp_rectilinear(params, &mut p)?,
+        14 => parse_warp_rectilinear2(params, &mut p)?,
+        2 => parse_warp_fisheye(params, &mut p)?,
         3 => {
             check_len(params, 56)?;
             let mut k = [0.0; 5];
@@ -377,77 +309,10 @@ fn parse_kind(id: u32, params: &[u8]) -> Result<OpcodeKind> {
             }
             OpcodeKind::TrimBounds { bounds: b }
         }
-        7 => {
-            check_min(params, AREA_BYTES + 4)?;
-            let area = p.area()?;
-            let n = p.u32("TableSize")?;
-            if n < 1 {
-                return Err(Error::malformed("TableSize is 0, must be at least 1"));
-            }
-            if n > MAX_MAP_TABLE_LEN {
-                return Err(Error::limits(format!(
-                    "TableSize {n} exceeds the limit of {MAX_MAP_TABLE_LEN}"
-                )));
-            }
-            check_len(params, (AREA_BYTES + 4) as u64 + 2 * u64::from(n))?;
-            let mut table = Vec::with_capacity(n as usize);
-            for _ in 0..n {
-                table.push(p.u16("Table")?);
-            }
-            OpcodeKind::MapTable { area, table }
-        }
-        8 => {
-            check_min(params, AREA_BYTES + 4)?;
-            let area = p.area()?;
-            let degree = p.u32("Degree")?;
-            if degree > MAX_POLYNOMIAL_DEGREE {
-                return Err(Error::malformed(format!(
-                    "Degree {degree} exceeds the specification's {MAX_POLYNOMIAL_DEGREE}"
-                )));
-            }
-            check_len(
-                params,
-                (AREA_BYTES + 4) as u64 + 8 * (u64::from(degree) + 1),
-            )?;
-            let mut coefficients = Vec::with_capacity(degree as usize + 1);
-            for i in 0..=degree {
-                coefficients.push(p.f64(&format!("Coefficient {i}"))?);
-            }
-            OpcodeKind::MapPolynomial { area, coefficients }
-        }
+        7 => parse_map_table(params, &mut p)?,
+        8 => parse_map_polynomial(params, &mut p)?,
         9 => OpcodeKind::GainMap(parse_gain_map(params, &mut p)?),
-        10..=13 => {
-            check_min(params, AREA_BYTES + 4)?;
-            let area = p.area()?;
-            let n = p.u32("Count")?;
-            let (steps, per) = if id == 10 || id == 12 {
-                (area_row_steps(&area), "row")
-            } else {
-                (area_col_steps(&area), "column")
-            };
-            if u64::from(n) != steps {
-                return Err(Error::malformed(format!(
-                    "Count is {n}, the area has {steps} {per} steps"
-                )));
-            }
-            if u64::from(n) > MAX_PER_LINE_ENTRIES {
-                return Err(Error::limits(format!(
-                    "Count {n} exceeds the limit of {MAX_PER_LINE_ENTRIES}"
-                )));
-            }
-            check_len(params, (AREA_BYTES + 4) as u64 + 4 * u64::from(n))?;
-            let field = if id <= 11 { "Delta" } else { "Scale" };
-            let mut v = Vec::with_capacity(n as usize);
-            for i in 0..n {
-                v.push(p.f32(&format!("{field} {i}"))?);
-            }
-            match id {
-                10 => OpcodeKind::DeltaPerRow { area, deltas: v },
-                11 => OpcodeKind::DeltaPerColumn { area, deltas: v },
-                12 => OpcodeKind::ScalePerRow { area, scales: v },
-                _ => OpcodeKind::ScalePerColumn { area, scales: v },
-            }
-        }
+        10..=13 => parse_per_line(id, params, &mut p)?,
         _ => {
             return Ok(OpcodeKind::Unknown {
                 params: params.to_vec(),
@@ -464,6 +329,159 @@ fn parse_kind(id: u32, params: &[u8]) -> Result<OpcodeKind> {
         )));
     }
     Ok(kind)
+}
+
+/// WarpRectilinear (opcode 1).
+fn parse_warp_rectilinear(params: &[u8], p: &mut Params) -> Result<OpcodeKind> {
+    let n = warp_planes(params, 48)?;
+    p.pos = 4;
+    let mut planes = Vec::with_capacity(n as usize);
+    for i in 0..n {
+        let mut kr = [0.0; 4];
+        for (j, k) in kr.iter_mut().enumerate() {
+            *k = p.f64(&format!("plane {i} kr{j}"))?;
+        }
+        let kt = [
+            p.f64(&format!("plane {i} kt0"))?,
+            p.f64(&format!("plane {i} kt1"))?,
+        ];
+        planes.push(WarpPlane { kr, kt });
+    }
+    Ok(OpcodeKind::WarpRectilinear {
+        planes,
+        center: center(p)?,
+    })
+}
+
+/// WarpRectilinear2 (opcode 14).
+fn parse_warp_rectilinear2(params: &[u8], p: &mut Params) -> Result<OpcodeKind> {
+    // N, per plane kr0..kr14, kt0, kt1, min and max valid radius, then cx, cy and
+    // the reciprocal flag (a u32 after the centre).
+    let n = warp_planes2(params)?;
+    p.pos = 4;
+    let mut planes = Vec::with_capacity(n as usize);
+    for i in 0..n {
+        let mut kr = [0.0; 15];
+        for (j, k) in kr.iter_mut().enumerate() {
+            *k = p.f64(&format!("plane {i} kr{j}"))?;
+        }
+        let kt = [
+            p.f64(&format!("plane {i} kt0"))?,
+            p.f64(&format!("plane {i} kt1"))?,
+        ];
+        let valid = [
+            p.f64(&format!("plane {i} minimum valid radius"))?,
+            p.f64(&format!("plane {i} maximum valid radius"))?,
+        ];
+        if !(0.0 <= valid[0] && valid[0] < valid[1] && valid[1] <= 1.0) {
+            return Err(Error::malformed(format!(
+                "plane {i}: valid radius range {}..{} must satisfy 0 <= min < max <= 1",
+                valid[0], valid[1]
+            )));
+        }
+        planes.push(WarpPlane2 { kr, kt, valid });
+    }
+    let center = center(p)?;
+    let reciprocal = p.u32("reciprocal flag")? != 0;
+    Ok(OpcodeKind::WarpRectilinear2 {
+        planes,
+        center,
+        reciprocal,
+    })
+}
+
+/// WarpFisheye (opcode 2).
+fn parse_warp_fisheye(params: &[u8], p: &mut Params) -> Result<OpcodeKind> {
+    let n = warp_planes(params, 32)?;
+    p.pos = 4;
+    let mut planes = Vec::with_capacity(n as usize);
+    for i in 0..n {
+        let mut kr = [0.0; 4];
+        for (j, k) in kr.iter_mut().enumerate() {
+            *k = p.f64(&format!("plane {i} kr{j}"))?;
+        }
+        planes.push(kr);
+    }
+    Ok(OpcodeKind::WarpFisheye {
+        planes,
+        center: center(p)?,
+    })
+}
+
+/// MapTable (opcode 7).
+fn parse_map_table(params: &[u8], p: &mut Params) -> Result<OpcodeKind> {
+    check_min(params, AREA_BYTES + 4)?;
+    let area = p.area()?;
+    let n = p.u32("TableSize")?;
+    if n < 1 {
+        return Err(Error::malformed("TableSize is 0, must be at least 1"));
+    }
+    if n > MAX_MAP_TABLE_LEN {
+        return Err(Error::limits(format!(
+            "TableSize {n} exceeds the limit of {MAX_MAP_TABLE_LEN}"
+        )));
+    }
+    check_len(params, (AREA_BYTES + 4) as u64 + 2 * u64::from(n))?;
+    let mut table = Vec::with_capacity(n as usize);
+    for _ in 0..n {
+        table.push(p.u16("Table")?);
+    }
+    Ok(OpcodeKind::MapTable { area, table })
+}
+
+/// MapPolynomial (opcode 8).
+fn parse_map_polynomial(params: &[u8], p: &mut Params) -> Result<OpcodeKind> {
+    check_min(params, AREA_BYTES + 4)?;
+    let area = p.area()?;
+    let degree = p.u32("Degree")?;
+    if degree > MAX_POLYNOMIAL_DEGREE {
+        return Err(Error::malformed(format!(
+            "Degree {degree} exceeds the specification's {MAX_POLYNOMIAL_DEGREE}"
+        )));
+    }
+    check_len(
+        params,
+        (AREA_BYTES + 4) as u64 + 8 * (u64::from(degree) + 1),
+    )?;
+    let mut coefficients = Vec::with_capacity(degree as usize + 1);
+    for i in 0..=degree {
+        coefficients.push(p.f64(&format!("Coefficient {i}"))?);
+    }
+    Ok(OpcodeKind::MapPolynomial { area, coefficients })
+}
+
+/// DeltaPerRow, DeltaPerColumn, ScalePerRow and ScalePerColumn (opcodes 10 to 13).
+fn parse_per_line(id: u32, params: &[u8], p: &mut Params) -> Result<OpcodeKind> {
+    check_min(params, AREA_BYTES + 4)?;
+    let area = p.area()?;
+    let n = p.u32("Count")?;
+    let (steps, per) = if id == 10 || id == 12 {
+        (area_row_steps(&area), "row")
+    } else {
+        (area_col_steps(&area), "column")
+    };
+    if u64::from(n) != steps {
+        return Err(Error::malformed(format!(
+            "Count is {n}, the area has {steps} {per} steps"
+        )));
+    }
+    if u64::from(n) > MAX_PER_LINE_ENTRIES {
+        return Err(Error::limits(format!(
+            "Count {n} exceeds the limit of {MAX_PER_LINE_ENTRIES}"
+        )));
+    }
+    check_len(params, (AREA_BYTES + 4) as u64 + 4 * u64::from(n))?;
+    let field = if id <= 11 { "Delta" } else { "Scale" };
+    let mut v = Vec::with_capacity(n as usize);
+    for i in 0..n {
+        v.push(p.f32(&format!("{field} {i}"))?);
+    }
+    Ok(match id {
+        10 => OpcodeKind::DeltaPerRow { area, deltas: v },
+        11 => OpcodeKind::DeltaPerColumn { area, deltas: v },
+        12 => OpcodeKind::ScalePerRow { area, scales: v },
+        _ => OpcodeKind::ScalePerColumn { area, scales: v },
+    })
 }
 
 fn bayer_phase(v: u32) -> Result<u32> {

@@ -517,7 +517,7 @@ fn arb_opcode() -> impl Strategy<Value = Opcode> {
         op
     });
     let unknown = (
-        prop_oneof![Just(0u32), 14u32..1000, Just(u32::MAX)],
+        prop_oneof![Just(0u32), 15u32..1000, Just(u32::MAX)],
         proptest::collection::vec(any::<u8>(), 0..40),
         any::<u32>(),
     )
