@@ -403,7 +403,7 @@ fn plot_cells(
         Err(e) => {
             summary
                 .warnings
-                .push(not_available(&id, format!("illuminants: {e}")));
+                .push(not_available(id, format!("illuminants: {e}")));
             format!(
                 "<p class=\"na\">not available: {}</p>",
                 escape(&e.to_string())
@@ -427,7 +427,7 @@ fn plot_cells(
         Err(e) => {
             summary
                 .warnings
-                .push(not_available(&id, format!("illuminants in xy: {e}")));
+                .push(not_available(id, format!("illuminants in xy: {e}")));
             format!(
                 "<p class=\"na\">not available: {}</p>",
                 escape(&e.to_string())
