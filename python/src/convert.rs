@@ -187,16 +187,16 @@ pub(crate) fn warn_plan(
     py: Python<'_>,
     file: &str,
     meta: &RawMeta,
-    plan: &day2night::synth::Plan,
+    report: &day2night::synth::PlanReport,
     extra: &[String],
 ) -> PyResult<()> {
     // The plan's list starts with the reader's corrections (dng::check).
-    let own = if plan.warnings.starts_with(&meta.warnings) {
+    let own = if report.warnings.starts_with(&meta.warnings) {
         meta.warnings.len()
     } else {
         0
     };
-    let mut new = plan.warnings[own..].to_vec();
+    let mut new = report.warnings[own..].to_vec();
     new.extend(extra.iter().cloned());
     warn_lines(py, file, &new)
 }

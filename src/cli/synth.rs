@@ -14,7 +14,7 @@ use day2night::synth::burst::BurstOptions;
 use day2night::synth::config::{parse_isos, parse_neutral, JobConfig};
 use day2night::synth::job::{DayInput, DirSink, SynthJob, Target};
 use day2night::synth::sidecar::Sidecar;
-use day2night::synth::{Covariance, Mode, Plan, RelightFormula, SynthOptions};
+use day2night::synth::{Covariance, Mode, Planned, RelightFormula, SynthOptions};
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 
@@ -486,15 +486,15 @@ impl Run<'_> {
                         day.sha256, sc.input.sha256
                     )));
                 }
-                self.variant(input, &day, &stem, &sc.plan)?;
+                self.variant(input, &day, &stem, &sc.planned())?;
             }
             None => {
                 for v in 0..self.job.variants {
                     if stop_requested().is_some() {
                         return Err(Error::Interrupted);
                     }
-                    let plan = self.job.plan(&day, &name, self.seed, v)?;
-                    self.variant(input, &day, &stem, &plan)?;
+                    let planned = self.job.plan(&day, &name, self.seed, v)?;
+                    self.variant(input, &day, &stem, &planned)?;
                 }
             }
         }
@@ -507,17 +507,17 @@ impl Run<'_> {
         input: &Path,
         day: &DayInput,
         stem: &str,
-        plan: &Plan,
+        planned: &Planned,
     ) -> day2night::Result<()> {
-        for w in &plan.warnings {
+        for w in &planned.report.warnings {
             self.say(format!("day2night: {}: warning: {}", input.display(), w));
         }
         std::fs::create_dir_all(self.out).map_err(|e| Error::from(e).in_file(self.out))?;
         // One process at a time checks and writes this output set (docs/concurrency.md).
-        let base = self.job.base_name(stem, plan);
+        let base = self.job.base_name(stem, &planned.plan);
         let _set = OutputSetLock::acquire(self.out, &base, self.wait)?;
         let sink = DirSink::new(self.out, base, self.policy);
-        let written = self.job.run_variant(day, plan, &sink)?;
+        let written = self.job.run_variant(day, planned, &sink)?;
         for w in &written.warnings {
             self.say(format!("day2night: {}: warning: {}", input.display(), w));
         }

@@ -154,7 +154,7 @@ fn frames_with_little_valid_area_are_warned_about() {
                 for f in &small {
                     assert!(w.contains(&format!("f{f:02} ")), "f{f:02} missing: {w}");
                 }
-                let plan_warnings = sc["plan"]["warnings"].to_string();
+                let plan_warnings = sc["report"]["warnings"].to_string();
                 assert!(
                     plan_warnings.contains("valid area under half"),
                     "{plan_warnings}"

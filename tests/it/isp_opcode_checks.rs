@@ -120,7 +120,7 @@ fn without_a_render_unusable_lists_warn_and_with_one_they_fail() {
         "{err}"
     );
     let sc = sidecar(&o.join("bad.json"));
-    let skipped = &sc["plan"]["opcodes"]["skipped"];
+    let skipped = &sc["report"]["opcodes"]["skipped"];
     assert_eq!(skipped[0]["list"], "OpcodeList2");
     assert_eq!(skipped[0]["name"], "(malformed list)");
     assert_eq!(skipped[1]["name"], "FixBadPixelsConstant");
@@ -129,13 +129,13 @@ fn without_a_render_unusable_lists_warn_and_with_one_they_fail() {
         .unwrap()
         .contains("not optional (no render was requested)"));
     // The two opcode warnings (the fixture's noise calibration adds its own: not this test's).
-    let opcode_warnings = sc["plan"]["warnings"]
+    let opcode_warnings = sc["report"]["warnings"]
         .as_array()
         .unwrap()
         .iter()
         .filter(|w| w.as_str().unwrap().starts_with("OpcodeList"))
         .count();
-    assert_eq!(opcode_warnings, 2, "{}", sc["plan"]["warnings"]);
+    assert_eq!(opcode_warnings, 2, "{}", sc["report"]["warnings"]);
     assert!(!sc["stages"]
         .as_array()
         .unwrap()
@@ -189,7 +189,7 @@ fn without_a_render_unusable_lists_warn_and_with_one_they_fail() {
         .collect();
     assert_eq!(meta.len(), 1, "{meta:?}");
     assert_eq!(
-        sidecar(&meta[0])["plan"]["opcodes"]["skipped"]
+        sidecar(&meta[0])["report"]["opcodes"]["skipped"]
             .as_array()
             .unwrap()
             .len(),
@@ -249,7 +249,7 @@ fn the_issues_silent_blacks_warn_before_and_after_rendering() {
         assert!(err.contains(want) && err.contains("the target render is constant"), "{err}");
         let stem = name.trim_end_matches(".dng");
         let sc = sidecar(&o.join(format!("{stem}.json")));
-        assert!(sc["plan"]["warnings"].to_string().contains("(opcode 1 of 1)"));
+        assert!(sc["report"]["warnings"].to_string().contains("(opcode 1 of 1)"));
         assert!(sc["run"]["warnings"][0].as_str().unwrap().starts_with("the target render is constant"));
         // info: not "ready" without a word.
         let r = common::bin().arg("info").arg(&f).output().unwrap();
@@ -575,7 +575,7 @@ fn a_trim_that_changes_the_target_size_is_said_and_recorded() {
         "{err}"
     );
     let sc = sidecar(&o.join("trim.json"));
-    assert_eq!(sc["plan"]["target_size"], serde_json::json!([32, 16]));
+    assert_eq!(sc["report"]["target_size"], serde_json::json!([32, 16]));
     assert_eq!(
         (
             sc["plan"]["active_width"].as_u64(),
@@ -661,8 +661,8 @@ fn the_longest_lists_synthesize_and_replay() {
     ]));
     assert!(r.status.success(), "{err}");
     let sc = sidecar(&a.join("long.json"));
-    let applied = sc["plan"]["opcodes"]["applied"].as_array().unwrap().len();
-    let dropped = sc["plan"]["opcodes"]["dropped"]
+    let applied = sc["report"]["opcodes"]["applied"].as_array().unwrap().len();
+    let dropped = sc["report"]["opcodes"]["dropped"]
         .as_array()
         .map_or(0, |d| d.len());
     // Every opcode is accounted for: applied, or dropped as a repeat that changes nothing.

@@ -383,7 +383,7 @@ fn real_canon_file() {
         serde_json::from_slice(&std::fs::read(t.path().join(format!("{stem}.json"))).unwrap())
             .unwrap();
     assert_eq!(sc["plan"]["clean_iso"], 50);
-    assert!(sc["plan"]["noise_model_source"]
+    assert!(sc["report"]["noise_model_source"]
         .as_str()
         .unwrap()
         .contains("embedded"));
