@@ -69,7 +69,7 @@ fn preset_is_recorded_replayed_and_thread_count_free() {
     ok(&synth(&[s(&day), "-o", s(&d), "--seed", "5"]));
     assert_ne!(files(&a)["day_clean.dng"], files(&d)["day_clean.dng"]);
     let text = std::fs::read_to_string(d.join("day.json")).unwrap();
-    assert!(!text.contains("compat") && !text.contains("truncate_noise"));
+    assert!(!text.contains("compat") && text.contains("\"truncate_noise\": false"));
 }
 
 #[test]
