@@ -37,13 +37,14 @@ pub mod readiness;
 pub mod relight;
 pub mod rng;
 pub mod sidecar;
+pub mod sidecar_read;
 pub mod sidecar_v1;
 
 pub use illuminant::{Covariance, Gaussian2, SamplerRules};
 pub use illuminant_choice::{IlluminantChoice, IlluminantProvenance, ResolvedIlluminants};
 pub use masks::{Light, LightKind, MaskEval};
-pub use plan::{NoisePlan, Plan, Planner};
-pub use plan_report::{PlanReport, Planned};
+pub use plan::{NoisePlan, Plan, Planned, Planner};
+pub use plan_report::PlanReport;
 pub use relight::{run, run_clean, RunReport};
 
 use crate::error::{Error, Result};

@@ -9,7 +9,7 @@ use super::illuminant::Gaussian2;
 use super::masks::{opencv_sigma, release_sigma, Light, LightKind, MaskEval, MASK_FLOOR};
 use super::neutral::day_neutral_for;
 use super::noise_source::choose_noise_model;
-pub use super::plan_report::{PlanReport, Planned};
+use super::plan_report::PlanReport;
 use super::rng::SynthRng;
 use super::{Calibration, Mode, RelightFormula, SynthOptions};
 use crate::error::{Error, Result};
@@ -104,6 +104,16 @@ fn window_len(rng: &mut SynthRng, n: usize) -> f64 {
 
 fn center(rng: &mut SynthRng, n: usize) -> f64 {
     rng.range(0.1, 0.9) * n as f64
+}
+
+/// A plan and its report: what [`Planner::plan`] returns and what a job writes (`synth`,
+/// `dataset`, `--replay`).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Planned {
+    /// The draws.
+    pub plan: Plan,
+    /// What planning found.
+    pub report: PlanReport,
 }
 
 /// Samples the [`Plan`] of one (input, variant), set up step by step:

@@ -14,10 +14,7 @@ use crate::error::{Error, Result};
 /// Most lights in a plan: the ambient light plus [`MAX_LIGHTS`] local lights and
 /// [`MAX_LIGHTS`] bulbs.
 pub const MAX_PLAN_LIGHTS: usize = 1 + 2 * MAX_LIGHTS as usize;
-/// Most opcode entries (applied or skipped) and opcode warnings in a plan's report: every opcode
-/// the reader accepts, three lists of [`crate::limits::MAX_OPCODES_PER_LIST`] (a plan that
-/// `synth` samples for such a file must replay).
-pub const MAX_PLAN_OPCODES: usize = 3 * crate::limits::MAX_OPCODES_PER_LIST as usize;
+pub use super::plan_report::MAX_PLAN_OPCODES;
 // The value bounds live in the one table, crate::bounds (re-exported here by their old names).
 pub use crate::bounds::{
     ISO_RANGE, MAX_EXTENT_FACTOR, MAX_GAIN, MAX_LIST, MAX_NOISE_ENTRIES, MAX_NOISE_PARAM, MAX_RATIO,

@@ -1,16 +1,21 @@
 //! What planning found besides the draws: where the neutrals and the noise model came from,
 //! the stages that will run, what the renders do with the input's opcode lists, the
 //! target's size when a TrimBounds changes it, and the warnings. It sits beside the
-//! [`Plan`] (which holds only what was drawn and what the draws depend on), is carried with
-//! it through the job ([`Planned`]) and is written as the sidecar's `report`.
+//! [`Plan`](super::Plan) (which holds only what was drawn and what the draws depend on), is
+//! carried with it through the job ([`Planned`](super::Planned)) and is written as the
+//! sidecar's `report`.
 
-use super::plan::Plan;
-use super::plan_bounds::MAX_PLAN_OPCODES;
 use crate::bounds::MAX_LIST;
 use crate::error::{Error, Result};
 use crate::isp::opcodes::OpcodeReport;
 use crate::noise::NoiseProvenance;
 use serde::{Deserialize, Serialize};
+
+/// Most opcode entries (applied, skipped or dropped) and opcode warnings in a plan's
+/// report: every opcode the reader accepts, three lists of
+/// [`crate::limits::MAX_OPCODES_PER_LIST`] (a plan that `synth` samples for such a file must
+/// replay).
+pub const MAX_PLAN_OPCODES: usize = 3 * crate::limits::MAX_OPCODES_PER_LIST as usize;
 
 /// The report of one plan (the sidecar's `report`).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -37,16 +42,6 @@ pub struct PlanReport {
     /// Warnings raised while planning (the reader's corrections first, then e.g. ISO
     /// extrapolation).
     pub warnings: Vec<String>,
-}
-
-/// A plan and its report: what [`super::plan::Planner::plan`] returns and what a job
-/// writes (`synth`, `dataset`, `--replay`).
-#[derive(Debug, Clone, PartialEq)]
-pub struct Planned {
-    /// The draws.
-    pub plan: Plan,
-    /// What planning found.
-    pub report: PlanReport,
 }
 
 fn field(name: &str, why: impl std::fmt::Display) -> Error {

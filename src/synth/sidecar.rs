@@ -6,19 +6,19 @@
 //! reproduces the outputs byte for byte. Its content is deterministic (no timestamps), so a
 //! replay rewrites it identically. Every field is always written (null when absent).
 //!
-//! Version-1 sidecars (`day2night-sidecar/1`, whose plan held its report) are read by
-//! [`Sidecar::from_json`] through the one migration, [`super::sidecar_v1::migrate`].
+//! Reading (either version): [`super::sidecar_read`]; version-1 sidecars
+//! (`day2night-sidecar/1`, whose plan held its report) go through the one migration,
+//! `sidecar_v1::migrate`.
 
 use super::illuminant::Gaussian2;
 use super::illuminant_choice::IlluminantProvenance;
-use super::plan::Plan;
-use super::plan_report::{PlanReport, Planned};
+use super::plan::{Plan, Planned};
+use super::plan_report::PlanReport;
 use super::relight::RunReport;
 use super::SynthOptions;
 use crate::error::{Error, Result};
 use serde::{Deserialize, Serialize};
 use sha2::{Digest, Sha256};
-use std::path::Path;
 
 /// Format tag of sidecars.
 pub const SIDECAR_FORMAT: &str = "day2night-sidecar/2";
@@ -111,69 +111,12 @@ impl Sidecar {
         s.push('\n');
         Ok(s)
     }
-    /// Parse a sidecar of version 2, or of version 1 through its migration
-    /// ([`super::sidecar_v1::migrate`]), and check its bounds.
-    pub fn from_json(text: &str) -> Result<Sidecar> {
-        let v: serde_json::Value = serde_json::from_str(text)
-            .map_err(|e| Error::malformed(format!("sidecar JSON: {}", e)))?;
-        Sidecar::from_value(v)
-    }
-
-    /// [`Sidecar::from_json`] of a parsed document.
-    pub fn from_value(v: serde_json::Value) -> Result<Sidecar> {
-        let format = v.get("format").and_then(|f| f.as_str()).unwrap_or_default();
-        let json = |e: serde_json::Error| Error::malformed(format!("sidecar JSON: {}", e));
-        let s: Sidecar = match format {
-            SIDECAR_FORMAT => serde_json::from_value(v).map_err(json)?,
-            super::sidecar_v1::FORMAT => {
-                super::sidecar_v1::migrate(serde_json::from_value(v).map_err(json)?)?
-            }
-            other => {
-                return Err(Error::malformed(format!(
-                    "sidecar format {:?} (expected {:?} or {:?})",
-                    other,
-                    SIDECAR_FORMAT,
-                    super::sidecar_v1::FORMAT
-                )))
-            }
-        };
-        // Bounds before any use: a hostile sidecar is refused at once, naming the field.
-        s.plan
-            .validate_bounds()
-            .and_then(|()| s.report.validate_bounds())
-            .map_err(|e| Error::invalid(format!("sidecar: {}", strip_kind(&e))))?;
-        s.options
-            .validate()
-            .map_err(|e| Error::invalid(format!("sidecar options: {}", strip_kind(&e))))?;
-        if s.outputs.files.len() > 4 * super::plan_bounds::MAX_NOISE_ENTRIES + 16 {
-            return Err(Error::invalid(format!(
-                "sidecar: outputs.files lists {} files",
-                s.outputs.files.len()
-            )));
-        }
-        Ok(s)
-    }
-
     /// The plan and its report, as planning made them (what `--replay` runs).
     pub fn planned(&self) -> Planned {
         Planned {
             plan: self.plan.clone(),
             report: self.report.clone(),
         }
-    }
-
-    /// Read a sidecar file.
-    pub fn read(path: &Path) -> Result<Sidecar> {
-        let text = std::fs::read_to_string(path).map_err(|e| Error::from(e).in_file(path))?;
-        Sidecar::from_json(&text).map_err(|e| e.in_file(path))
-    }
-}
-
-/// The message of an `InvalidParam` error without its "invalid parameter: " prefix.
-fn strip_kind(e: &Error) -> String {
-    match e {
-        Error::InvalidParam(m) => m.clone(),
-        other => other.to_string(),
     }
 }
 
