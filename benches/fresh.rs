@@ -96,7 +96,7 @@ fn main() {
                 t[i].push((now - clock).as_secs_f64() * 1e3);
                 clock = now;
             };
-            let plan = job.plan(&day, &name, 0, k as u32).expect("a plan");
+            let plan = job.plan(&day, &name, 0, k as u32).expect("a plan").plan;
             lap(0, &mut t);
             let pair = crop_pair(
                 &day.raw,
@@ -129,7 +129,7 @@ fn main() {
                 &outer,
                 &plane,
                 &crop,
-                plan.opcode_mode(),
+                plan.opcodes,
             )
             .expect("target");
             lap(4, &mut t);

@@ -57,7 +57,13 @@ fn plan_with(img: &RawImage, mode: Mode, eval: MaskEval, physics: bool) -> synth
     if physics {
         cal.noise = Some(NoiseModel::from_physics(physics_model()).unwrap());
     }
-    synth::plan(img, "bench.dng", 1, 0, &o, &cal).unwrap()
+    synth::Planner::new(img, &o)
+        .calibration(&cal)
+        .name("bench.dng")
+        .seed(1)
+        .plan()
+        .map(|p| p.plan)
+        .unwrap()
 }
 
 /// A physics model for the bench frame's levels (14-bit, black 512): at ISO 3200 K = 4

@@ -52,20 +52,20 @@ pub(crate) fn warn_plan(
     py: Python<'_>,
     file: &str,
     meta: &RawMeta,
-    plan: &day2night::synth::Plan,
+    report: &day2night::synth::PlanReport,
     extra: &[Warning],
 ) -> PyResult<()> {
     // The plan's list starts with the reader's corrections (dng::check), given the input's
     // name as their subject.
     let same = |(p, m): (&Warning, &Warning)| p.code == m.code && p.message == m.message;
-    let own = if plan.warnings.len() >= meta.warnings.len()
-        && plan.warnings.iter().zip(meta.warnings.iter()).all(same)
+    let own = if report.warnings.len() >= meta.warnings.len()
+        && report.warnings.iter().zip(meta.warnings.iter()).all(same)
     {
         meta.warnings.len()
     } else {
         0
     };
-    let mut new = plan.warnings[own..].to_vec();
+    let mut new = report.warnings[own..].to_vec();
     new.extend(extra.iter().cloned());
     warn_lines(py, file, &new)
 }

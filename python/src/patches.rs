@@ -81,12 +81,12 @@ pub(crate) fn fresh_pair<'py>(
     }
     let day = r.cfa_day()?;
     let file_name = r.file_name.clone();
-    let (plan, pair, x, y) = py
+    let (planned, pair, x, y) = py
         .detach(move || {
             on_pool(move || {
                 let job = job_for(&cfg)?;
-                let plan = job.plan(&day, &file_name, seed.0, variant.0)?;
-                let pair = crop_pair(&day.raw, &plan, crop, input, tone)?;
+                let planned = job.plan(&day, &file_name, seed.0, variant.0)?;
+                let pair = crop_pair(&day.raw, &planned.plan, crop, input, tone)?;
                 let (w, h) = (pair.width, pair.height);
                 let look = |c: u16| table[(c as usize).min(table.len() - 1)];
                 // v / 255 per byte value (numpy's float32 division, tabulated)
@@ -98,7 +98,7 @@ pub(crate) fn fresh_pair<'py>(
                     ),
                     None => (pair.codes.iter().map(|&c| look(c)).collect(), None),
                 };
-                Ok((plan, pair, x, y))
+                Ok((planned, pair, x, y))
             })
         })
         .map_err(py_err)?;
@@ -107,7 +107,7 @@ pub(crate) fn fresh_pair<'py>(
         py,
         &r.file_name,
         &r.day.raw.meta,
-        &plan,
+        &planned.report,
         &pair.report.warnings,
     )?;
     let shape_err = |e: numpy::ndarray::ShapeError| value_err(e.to_string());

@@ -15,7 +15,7 @@ use day2night::raw::crop::Crop;
 use day2night::synth::job::{DayInput, DirSink, SynthJob, Target};
 use day2night::synth::night::{synthesize as lib_synthesize, Night, Request};
 use day2night::synth::relight::RunReport;
-use day2night::synth::Plan;
+use day2night::synth::Planned;
 use day2night::Error;
 use numpy::PyReadonlyArray3;
 use pyo3::prelude::*;
@@ -23,12 +23,12 @@ use pyo3::types::{PyDict, PyTuple};
 use std::path::PathBuf;
 use std::sync::Arc;
 
-/// What ``write_outputs`` needs besides the result's arrays: the job, the plan, the run
-/// report and the output metadata of each raw.
+/// What ``write_outputs`` needs besides the result's arrays: the job, the plan and its
+/// report, the run report and the output metadata of each raw.
 #[pyclass(module = "day2night", name = "Synthesis", frozen)]
 pub(crate) struct Synthesis {
     job: Arc<SynthJob>,
-    plan: Plan,
+    planned: Planned,
     report: RunReport,
     clean_meta: day2night::raw::meta::RawMeta,
     noisy_meta: Vec<(u32, day2night::raw::meta::RawMeta)>,
@@ -98,12 +98,14 @@ impl<'py> SynthCall<'py> {
 ///
 /// Returns a dict: ``clean`` (uint16, the whole stored plane, or the crop), ``noisy``
 /// ({iso: uint16 array}), ``transforms``, ``target`` (float32 HxWx3 linear Rec.709, or None), ``plan``
-/// (the sidecar's plan), ``neutral`` (the night AsShotNeutral), ``noise_profile``
-/// ({iso: [[S, O] per colour plane]}), ``clean_noise_profile``, ``report``, ``stages``,
+/// (the sidecar's plan: the draws), ``plan_report`` (the sidecar's report: provenance,
+/// planned stages, opcodes, warnings), ``neutral`` (the night AsShotNeutral), ``noise_profile``
+/// ({iso: [[S, O] per colour plane]}), ``clean_noise_profile``, ``report`` (the sidecar's
+/// ``run``), ``stages``,
 /// ``crop``, ``target_origin`` ((row, column) of the crop's target in the whole-frame
 /// target, None outside the DefaultCrop or without a crop), ``noise_provenance`` (where
 /// the noise model came from and whose camera it is: ``source``, ``camera``, ``note``; also
-/// in ``plan``), ``illuminants_provenance`` (where the night illuminant dictionary came
+/// in ``plan_report``), ``illuminants_provenance`` (where the night illuminant dictionary came
 /// from and whose camera colours it is: ``source``, ``camera``, ``note``, ``file``, as the
 /// sidecar's ``calibration.provenance.illuminants``) and ``synthesis`` (for
 /// ``write_outputs``).
@@ -143,11 +145,11 @@ pub(crate) fn synthesize<'py>(
     };
     let day = r.cfa_day()?;
     let file_name = r.file_name.clone();
-    let (job, plan, night, ill) = py
+    let (job, planned, night, ill) = py
         .detach(move || {
             on_pool(move || {
                 let job = job_for(&cfg)?;
-                let plan = job.plan(&day, &file_name, seed, variant)?;
+                let planned = job.plan(&day, &file_name, seed, variant)?;
                 // The dictionary as the sidecar records it (its provenance and camera).
                 let ill = job.illuminants(&day)?;
                 let req = Request {
@@ -155,11 +157,12 @@ pub(crate) fn synthesize<'py>(
                     input: false,
                     crop,
                 };
-                let night = lib_synthesize(&day.raw, &plan, &req)?;
-                Ok((job, plan, night, ill))
+                let night = lib_synthesize(&day.raw, &planned.plan, &req)?;
+                Ok((job, planned, night, ill))
             })
         })
         .map_err(py_err)?;
+    let plan = &planned.plan;
     // a burst's frames, stacked per ISO (frame 00 first) before the night is taken apart
     let frames_n = plan.burst.as_ref().map_or(1, |b| b.frames);
     let mut stacks = Vec::new();
@@ -181,7 +184,13 @@ pub(crate) fn synthesize<'py>(
         ..
     } = night;
     // The plan's warnings after the reader's (raised by read_dng already), then the run's.
-    warn_plan(py, &r.file_name, &r.day.raw.meta, &plan, &report.warnings)?;
+    warn_plan(
+        py,
+        &r.file_name,
+        &r.day.raw.meta,
+        &planned.report,
+        &report.warnings,
+    )?;
     let d = PyDict::new(py);
     let bayer = plan.bayer;
     let profile = |p: &day2night::noise::NoiseParams| -> Vec<Vec<f64>> {
@@ -201,7 +210,7 @@ pub(crate) fn synthesize<'py>(
             None => noisy_arrays.set_item(iso, u16_array(py, img)?)?,
         }
     }
-    d.set_item("transforms", crate::burst::transforms(py, &plan)?)?;
+    d.set_item("transforms", crate::burst::transforms(py, plan)?)?;
     for n in &plan.noise {
         np.set_item(n.iso, profile(&n.params))?;
     }
@@ -210,16 +219,18 @@ pub(crate) fn synthesize<'py>(
     d.set_item("clean_noise_profile", profile(&plan.clean_noise))?;
     d.set_item("noise_profile", np)?;
     d.set_item("neutral", plan.night_neutral.to_vec())?;
-    d.set_item("plan", json_obj(py, &plan)?)?;
-    d.set_item("noise_provenance", json_obj(py, &plan.noise_provenance)?)?;
+    d.set_item("plan", json_obj(py, plan)?)?;
+    d.set_item("plan_report", json_obj(py, &planned.report)?)?;
+    let noise_provenance = &planned.report.noise_provenance;
+    d.set_item("noise_provenance", json_obj(py, noise_provenance)?)?;
     d.set_item("illuminants_provenance", json_obj(py, &ill.provenance)?)?;
     d.set_item("report", json_obj(py, &report)?)?;
-    d.set_item("stages", stages)?;
+    d.set_item("stages", planned.report.stages_with(&stages))?;
     d.set_item("crop", crop.map(|c| (c.top, c.left, c.height, c.width)))?;
     d.set_item("target_origin", origin)?;
     let synthesis = Synthesis {
         job,
-        plan,
+        planned,
         report,
         clean_meta: clean.meta.clone(),
         noisy_meta,
@@ -284,7 +295,7 @@ pub(crate) fn write_outputs(
     let noisy_d = item("noisy")?;
     let mut noisy = Vec::new();
     let mut frames = Vec::new();
-    let n = s.plan.burst.as_ref().map_or(1, |b| b.frames);
+    let n = s.planned.plan.burst.as_ref().map_or(1, |b| b.frames);
     for (iso, meta) in &s.noisy_meta {
         let a = noisy_d.get_item(*iso)?;
         let what = format!("result[\"noisy\"][{iso}]");
@@ -327,7 +338,7 @@ pub(crate) fn write_outputs(
     let mut job = (*s.job).clone();
     // Variant k is the (k+1)-th variant of `day2night synth --variants k+1`: its names
     // carry `_v{k+1}` when k > 0, and the sidecar records k+1 variants.
-    job.variants = s.plan.variant.saturating_add(1);
+    job.variants = s.planned.plan.variant.saturating_add(1);
     job.target = match (target.is_some(), png) {
         (false, _) => Target::None,
         (true, false) => Target::Exr,
@@ -345,13 +356,13 @@ pub(crate) fn write_outputs(
     };
     let day = r.day.clone();
     let stem = r.name.clone();
-    let plan = s.plan.clone();
+    let planned = s.planned.clone();
     let from_file = r.from_file;
     let files = Files {
         day,
         from_file,
         stem,
-        plan,
+        planned,
         job,
         night,
         out_dir,
@@ -367,7 +378,7 @@ struct Files {
     /// The input is a file (an output never replaces it).
     from_file: bool,
     stem: String,
-    plan: Plan,
+    planned: Planned,
     job: SynthJob,
     night: Night,
     out_dir: PathBuf,
@@ -381,7 +392,7 @@ impl Files {
             day,
             from_file,
             stem,
-            plan,
+            planned,
             job,
             night,
             out_dir,
@@ -397,7 +408,7 @@ impl Files {
             },
             ..OutputPolicy::default()
         };
-        let sink = DirSink::new(&out_dir, job.base_name(&stem, &plan), &policy);
-        Ok(job.write_night(&day, &plan, &night, &sink)?.files)
+        let sink = DirSink::new(&out_dir, job.base_name(&stem, &planned.plan), &policy);
+        Ok(job.write_night(&day, &planned, &night, &sink)?.files)
     }
 }

@@ -1,5 +1,5 @@
 """Where the noise model comes from (issue 24 points 2-3): synthesize returns the provenance
-(also in its plan) and raises the plan's warnings as UserWarning, as `day2night synth`
+(also in its plan report) and raises the plan's warnings as UserWarning, as `day2night synth`
 prints them; the estimate from the image is used when the input has no NoiseProfile."""
 
 import warnings
@@ -43,7 +43,7 @@ def test_estimate_is_used_and_recorded():
     out, noise = synth(noisy_frame(100))
     assert noise == []
     p = out["noise_provenance"]
-    assert p == out["plan"]["noise_provenance"]
+    assert p == out["plan_report"]["noise_provenance"]
     assert p["source"] == "image_estimate"
     assert p["camera"]["make"] == "Canon" and p["camera"]["model"] == "EOS 5D"
     # S at ISO 1600 is the ISO-100 estimate x16: near 16 * 1e-4 per plane.

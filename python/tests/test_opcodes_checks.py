@@ -44,7 +44,8 @@ def test_render_applies_the_gainmap_and_ignore_leaves_it_out(gainmap_raw):
 
 def test_targets_apply_opcodes_and_crops_equal_the_frame(gainmap_raw):
     full = day2night.synthesize(gainmap_raw, seed=3, isos=())
-    assert full["plan"]["opcodes"]["applied"] == [
+    assert full["plan"]["opcodes"] == "apply"
+    assert full["plan_report"]["opcodes"]["applied"] == [
         {"list": "OpcodeList2", "name": "GainMap", "id": 9}
     ]
     assert "apply_opcodes" in full["stages"]

@@ -9,7 +9,7 @@ use day2night::error::Error;
 use day2night::output::{stop_requested, OutputPolicy, OutputSetLock};
 use day2night::synth::job::{DayInput, DirSink, SynthJob};
 use day2night::synth::sidecar::Sidecar;
-use day2night::synth::{Mode, Plan};
+use day2night::synth::{Mode, Planned};
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 
@@ -227,15 +227,15 @@ impl Run<'_> {
                         day.sha256, sc.input.sha256
                     )));
                 }
-                self.variant(input, &day, &stem, &sc.plan)?;
+                self.variant(input, &day, &stem, &sc.planned())?;
             }
             None => {
                 for v in 0..self.job.variants {
                     if stop_requested().is_some() {
                         return Err(Error::Interrupted);
                     }
-                    let plan = self.job.plan(&day, &name, self.seed, v)?;
-                    self.variant(input, &day, &stem, &plan)?;
+                    let planned = self.job.plan(&day, &name, self.seed, v)?;
+                    self.variant(input, &day, &stem, &planned)?;
                 }
             }
         }
@@ -249,24 +249,27 @@ impl Run<'_> {
         input: &Path,
         day: &DayInput,
         stem: &str,
-        plan: &Plan,
+        planned: &Planned,
     ) -> day2night::Result<()> {
         std::fs::create_dir_all(self.out).map_err(|e| Error::from(e).in_file(self.out))?;
         // One process at a time checks and writes this output set (docs/concurrency.md).
-        let base = self.job.base_name(stem, plan);
+        let base = self.job.base_name(stem, &planned.plan);
         let _set = OutputSetLock::acquire(self.out, &base, self.wait)?;
         let sink = DirSink::new(self.out, base, self.policy);
-        let run = self.job.run_variant(day, plan, &sink);
+        let run = self.job.run_variant(day, planned, &sink);
         // The plan's warnings are said whether or not the run succeeded; the run's after it.
         let name = input.display().to_string();
         let written = match run {
             Ok(w) => w,
             Err(e) => {
-                self.say_warnings(&plan.warnings, &name);
+                self.say_warnings(&planned.report.warnings, &name);
                 return Err(e);
             }
         };
-        self.say_warnings(plan.warnings.iter().chain(&written.warnings), &name);
+        self.say_warnings(
+            planned.report.warnings.iter().chain(&written.warnings),
+            &name,
+        );
         if let Some(b) = self.bar {
             b.inc(1);
         }

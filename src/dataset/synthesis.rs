@@ -77,7 +77,7 @@ impl Processor for SynthProcessor {
         let out = job.run_variant(input, &plan, sink)?;
         Ok(UnitInfo {
             iso: out.isos,
-            night_neutral: Some(plan.night_neutral),
+            night_neutral: Some(plan.plan.night_neutral),
             stages: out.stages,
         })
     }

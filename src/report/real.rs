@@ -34,8 +34,9 @@ fn thumbnail(img: &RgbImage, max: usize) -> Rgb8 {
     })
 }
 
+/// A sidecar of either version ([`Sidecar::from_value`]).
 fn sidecar(v: &serde_json::Value) -> Result<Sidecar> {
-    serde_json::from_value(v.clone()).map_err(|e| Error::malformed(format!("sidecar: {e}")))
+    Sidecar::from_value(v.clone())
 }
 
 impl Visuals for LibraryVisuals {
@@ -220,17 +221,17 @@ mod tests {
         job.target = Target::None;
         let plan = job.plan(&day, "day.dng", 1, 0).unwrap();
         let policy = OutputPolicy::default();
-        let sink = DirSink::new(dir.path(), job.base_name("day", &plan), &policy);
+        let sink = DirSink::new(dir.path(), job.base_name("day", &plan.plan), &policy);
         job.run_variant(&day, &plan, &sink).unwrap();
         let sc: serde_json::Value =
             serde_json::from_slice(&std::fs::read(dir.path().join("day.json")).unwrap()).unwrap();
         let vis = LibraryVisuals;
         let clean = dir.path().join("day_clean.dng");
         let xy = vis.illuminants_xy(&sc, Some(&clean)).unwrap();
-        assert_eq!(xy.lights.len(), plan.lights.len());
+        assert_eq!(xy.lights.len(), plan.plan.lights.len());
         assert_eq!(xy.axes.0, "x");
         let color = CameraColor::new(&day.raw.meta.color).unwrap();
-        for (m, l) in xy.lights.iter().zip(&plan.lights) {
+        for (m, l) in xy.lights.iter().zip(&plan.plan.lights) {
             let (cct, duv) = crate::color::planck::cct_duv(m.chroma).unwrap();
             assert!(
                 (1500.0..8000.0).contains(&cct) && duv.abs() < 0.03,
@@ -266,7 +267,7 @@ mod tests {
             let out = dir.path().join(format!("o{orientation}"));
             std::fs::create_dir_all(&out).unwrap();
             let policy = OutputPolicy::default();
-            let sink = DirSink::new(&out, job.base_name("day", &plan), &policy);
+            let sink = DirSink::new(&out, job.base_name("day", &plan.plan), &policy);
             job.run_variant(&day, &plan, &sink).unwrap();
             let sc: serde_json::Value =
                 serde_json::from_slice(&std::fs::read(out.join("day.json")).unwrap()).unwrap();

@@ -4,7 +4,7 @@
 //!
 //! A [`SynthJob`] holds what is decided once per run: synthesis options, calibration and the
 //! output settings. For a decoded [`DayInput`], [`SynthJob::plan`] samples one variant's
-//! random values and [`SynthJob::run_variant`] makes and writes, doing only what was asked:
+//! random values (a [`Planned`]: the plan and its report) and [`SynthJob::run_variant`] makes and writes, doing only what was asked:
 //!
 //! 1. the clean night raw (always) -> [`OutputKind::CleanDng`];
 //! 2. one noisy raw per planned ISO -> [`OutputKind::NoisyDng`] (none for `isos: []`);
@@ -12,8 +12,8 @@
 //!    [`OutputKind::TargetPng`] (no render at all for [`Target::None`]);
 //! 4. with `input_exr`, the network input render of the first noisy raw (the clean raw when
 //!    there is no ISO) -> [`OutputKind::InputExr`];
-//! 5. last, the sidecar JSON ([`Sidecar`]: options, calibration, plan, run report, the
-//!    stages run and the files written) -> [`OutputKind::Sidecar`].
+//! 5. last, the sidecar JSON ([`Sidecar`]: options, calibration, plan, its report, run
+//!    report, the stages run and the files written) -> [`OutputKind::Sidecar`].
 //!
 //! Steps 1, 2 and 3 are independent rayon tasks (the noisy raws are made one after another
 //! inside theirs, so at most one is in memory); every output's bytes are the same whatever
@@ -39,9 +39,9 @@
 //! let day = DayInput::read("day.dng".as_ref())?;
 //! let policy = OutputPolicy::default();
 //! for v in 0..job.variants {
-//!     let plan = job.plan(&day, "day.dng", 0, v)?;
-//!     let sink = DirSink::new("night".as_ref(), job.base_name("day", &plan), &policy);
-//!     let out = job.run_variant(&day, &plan, &sink)?;
+//!     let planned = job.plan(&day, "day.dng", 0, v)?;
+//!     let sink = DirSink::new("night".as_ref(), job.base_name("day", &planned.plan), &policy);
+//!     let out = job.run_variant(&day, &planned, &sink)?;
 //!     println!("{:?} ({:?})", out.files, out.stages);
 //! }
 //! # Ok(()) }
@@ -53,7 +53,8 @@ use super::night::Night;
 use super::night::{synthesize_into, NightSink, Request};
 use super::relight::RunReport;
 use super::sidecar::{CalibrationInfo, InputInfo, OutputInfo, Provenance, Sidecar, SIDECAR_FORMAT};
-use super::{Calibration, IlluminantChoice, Plan, ResolvedIlluminants, SynthOptions};
+use super::SynthOptions;
+use super::{Calibration, IlluminantChoice, Plan, Planned, Planner, ResolvedIlluminants};
 use crate::dng::write::Compression;
 use crate::encode::exr::ExrOptions;
 use crate::error::{Error, Result};
@@ -138,22 +139,20 @@ impl SynthJob {
         })
     }
 
-    /// Sample the plan of variant `variant` (0-based) of `day`; the random stream is keyed
-    /// by (`seed`, `name`, `variant`), and `name` is recorded as the sidecar's input name.
-    /// A job that renders nothing (no target, no input EXR) does not fail on opcode lists
-    /// a render could not apply ([`super::plan_for`]).
-    pub fn plan(&self, day: &DayInput, name: &str, seed: u64, variant: u32) -> Result<Plan> {
+    /// Sample the plan of variant `variant` (0-based) of `day`, with its report; the
+    /// random stream is keyed by (`seed`, `name`, `variant`), and `name` is recorded as the
+    /// sidecar's input name. A job that renders nothing (no target, no input EXR) does not
+    /// fail on opcode lists a render could not apply ([`Planner::renders`]).
+    pub fn plan(&self, day: &DayInput, name: &str, seed: u64, variant: u32) -> Result<Planned> {
         let req = self.request();
-        super::plan_with_estimate(
-            &day.raw,
-            name,
-            seed,
-            variant,
-            &self.options,
-            &self.calibration,
-            req.target || req.input,
-            &|| day.noise_estimate(),
-        )
+        Planner::new(&day.raw, &self.options)
+            .calibration(&self.calibration)
+            .name(name)
+            .seed(seed)
+            .variant(variant)
+            .renders(req.target || req.input)
+            .estimate(&|| day.noise_estimate())
+            .plan()
     }
 
     /// The night illuminant dictionary of `day` as the sidecar records it: the one the plan
@@ -191,11 +190,11 @@ impl SynthJob {
     pub fn run_variant(
         &self,
         day: &DayInput,
-        plan: &Plan,
+        planned: &Planned,
         sink: &dyn OutputSink,
     ) -> Result<VariantOutputs> {
-        self.write_with(day, plan, sink, |files| {
-            synthesize_into(&day.raw, plan, &self.request(), files).map(|s| s.report)
+        self.write_with(day, planned, sink, |files| {
+            synthesize_into(&day.raw, &planned.plan, &self.request(), files).map(|s| s.report)
         })
     }
 
@@ -205,7 +204,7 @@ impl SynthJob {
     pub fn write_night(
         &self,
         day: &DayInput,
-        plan: &Plan,
+        planned: &Planned,
         night: &Night,
         sink: &dyn OutputSink,
     ) -> Result<VariantOutputs> {
@@ -214,15 +213,16 @@ impl SynthJob {
                 "a crop's products are not written as files: synthesize the whole frame",
             ));
         }
+        let plan = &planned.plan;
         let isos: Vec<u32> = night.noisy.iter().map(|(iso, _)| *iso).collect();
-        let planned: Vec<u32> = plan.noise.iter().map(|n| n.iso).collect();
+        let planned_isos: Vec<u32> = plan.noise.iter().map(|n| n.iso).collect();
         let frames = plan.burst.as_ref().map_or(1, |b| b.frames);
-        let planned_frames: Vec<(u32, u32)> = planned
+        let planned_frames: Vec<(u32, u32)> = planned_isos
             .iter()
             .flat_map(|&iso| (1..frames).map(move |k| (iso, k)))
             .collect();
         let got_frames: Vec<(u32, u32)> = night.frames.iter().map(|f| (f.0, f.1)).collect();
-        if isos != planned
+        if isos != planned_isos
             || got_frames != planned_frames
             || (self.target != Target::None) != night.target.is_some()
             || self.input_exr != night.input.is_some()
@@ -231,7 +231,7 @@ impl SynthJob {
                 "the computed variant does not hold the products this job writes (ISOs, target, input)",
             ));
         }
-        self.write_with(day, plan, sink, |files| {
+        self.write_with(day, planned, sink, |files| {
             let (c, (n, t)) = rayon::join(
                 || files.clean(&night.clean),
                 || {
@@ -265,10 +265,11 @@ impl SynthJob {
     fn write_with(
         &self,
         day: &DayInput,
-        plan: &Plan,
+        planned: &Planned,
         sink: &dyn OutputSink,
         compute: impl FnOnce(&FileSink<'_>) -> Result<RunReport>,
     ) -> Result<VariantOutputs> {
+        let plan = &planned.plan;
         // Every output but the sidecar is synced on a background thread and renamed into
         // place once all of them are on disk (crate::output): the compute threads never
         // wait for the disk, and on an error no output of the variant appears.
@@ -291,7 +292,7 @@ impl SynthJob {
             .flat_map(|&iso| (0..frames).map(move |k| OutputKind::noisy(iso, k, frames)))
             .collect();
         let (want_exr, want_png) = (self.target.exr(), self.target.png());
-        let mut stages = plan.stages.clone();
+        let mut stages = planned.report.stages.clone();
         let mut files = vec![sink.name(OutputKind::CleanDng)];
         stages.push("write_clean_dng".into());
         files.extend(noisy_kinds.iter().map(|&k| sink.name(k)));
@@ -332,7 +333,7 @@ impl SynthJob {
             IlluminantChoice::Gaussian(_, None) => None,
             _ => Some(ill.provenance),
         };
-        let noise = plan.noise_provenance.clone();
+        let noise = planned.report.noise_provenance.clone();
         let provenance =
             (illuminants.is_some() || noise.is_some()).then_some(Provenance { illuminants, noise });
         let sc = Sidecar {
@@ -347,10 +348,11 @@ impl SynthJob {
             calibration: CalibrationInfo {
                 illuminants: ill.gaussian,
                 brightness: self.calibration.brightness.clone(),
-                noise_model: plan.noise_model_source.clone(),
+                noise_model: planned.report.noise_model_source.clone(),
                 provenance,
             },
             plan: plan.clone(),
+            report: planned.report.clone(),
             run: report,
             stages: stages.clone(),
             outputs: OutputInfo {
@@ -395,9 +397,9 @@ mod tests {
         let day = small_day();
         let mut job = SynthJob::new(SynthOptions::default()).unwrap();
         let plan = job.plan(&day, "day.dng", 0, 1).unwrap();
-        assert_eq!(job.base_name("day", &plan), "day");
+        assert_eq!(job.base_name("day", &plan.plan), "day");
         job.variants = 3;
-        assert_eq!(job.base_name("day", &plan), "day_v2");
+        assert_eq!(job.base_name("day", &plan.plan), "day_v2");
     }
 
     /// Records every `written` call (and refuses one kind, to test error propagation).
@@ -441,7 +443,7 @@ mod tests {
         let plan = job.plan(&day, "day.dng", 1, 0).unwrap();
         let policy = OutputPolicy::default();
         let sink = Recorder {
-            inner: DirSink::new(dir.path(), job.base_name("day", &plan), &policy),
+            inner: DirSink::new(dir.path(), job.base_name("day", &plan.plan), &policy),
             seen: Default::default(),
             fail: None,
         };
@@ -522,7 +524,8 @@ mod tests {
             let t = tempfile::tempdir().unwrap();
             let whole = t.path().join("whole");
             std::fs::create_dir(&whole).unwrap();
-            let night = crate::synth::night::synthesize(&day.raw, &plan, &job.request()).unwrap();
+            let night =
+                crate::synth::night::synthesize(&day.raw, &plan.plan, &job.request()).unwrap();
             let rgb = night.target.as_ref().unwrap();
             let want_h = crop_h.unwrap_or(rgb.height);
             assert_eq!(
@@ -534,13 +537,13 @@ mod tests {
                 want_h,
                 "case {k}"
             );
-            let sink = DirSink::new(&whole, job.base_name("day", &plan), &policy);
+            let sink = DirSink::new(&whole, job.base_name("day", &plan.plan), &policy);
             job.write_night(&day, &plan, &night, &sink).unwrap();
             let want = dir_files(&whole);
             for threads in [1, 2, 3] {
                 let d = t.path().join(format!("j{threads}"));
                 std::fs::create_dir(&d).unwrap();
-                let sink = DirSink::new(&d, job.base_name("day", &plan), &policy);
+                let sink = DirSink::new(&d, job.base_name("day", &plan.plan), &policy);
                 pool(threads)
                     .install(|| job.run_variant(&day, &plan, &sink))
                     .unwrap();
@@ -616,7 +619,7 @@ mod tests {
         let policy = OutputPolicy::default();
         for (threads, fail_at) in [(1, 0), (1, 3), (2, 3), (3, 1)] {
             let dir = tempfile::tempdir().unwrap();
-            let sink = DirSink::new(dir.path(), job.base_name("day", &plan), &policy);
+            let sink = DirSink::new(dir.path(), job.base_name("day", &plan.plan), &policy);
             let e = pool(threads)
                 .install(|| {
                     job.write_with(&day, &plan, &sink, |files| {
@@ -624,7 +627,8 @@ mod tests {
                             inner: files,
                             fail_at,
                         };
-                        synthesize_into(&day.raw, &plan, &job.request(), &failing).map(|s| s.report)
+                        synthesize_into(&day.raw, &plan.plan, &job.request(), &failing)
+                            .map(|s| s.report)
                     })
                 })
                 .unwrap_err();
@@ -652,7 +656,7 @@ mod tests {
         let plan = job.plan(&day, "day.dng", 1, 0).unwrap();
         let policy = OutputPolicy::default();
         let sink = Recorder {
-            inner: DirSink::new(dir.path(), job.base_name("day", &plan), &policy),
+            inner: DirSink::new(dir.path(), job.base_name("day", &plan.plan), &policy),
             seen: Default::default(),
             fail: Some(OutputKind::TargetPng),
         };

@@ -1,5 +1,5 @@
-//! Day-to-night synthesis (docs/synthesis.md): a seeded [`Plan`] sampled up front by [`plan()`],
-//! then a pure [`run`].
+//! Day-to-night synthesis (docs/synthesis.md): a seeded [`Plan`] sampled up front by a
+//! [`Planner`] (with its [`PlanReport`]), then a pure [`run`].
 //!
 //! ```no_run
 //! use day2night::synth::{self, Calibration, SynthOptions};
@@ -7,8 +7,11 @@
 //! let day = day2night::dng::read_dng("day.dng".as_ref())?;
 //! let opts = SynthOptions::default();
 //! let cal = Calibration::embedded(&opts)?;
-//! let plan = synth::plan(&day, "day.dng", 0, 0, &opts, &cal)?;
-//! let out = synth::run(&day, &plan)?;
+//! let planned = synth::Planner::new(&day, &opts)
+//!     .calibration(&cal)
+//!     .name("day.dng")
+//!     .plan()?;
+//! let out = synth::run(&day, &planned.plan)?;
 //! // out.clean: the clean night raw; out.noisy: one (ISO, raw) per --iso value.
 //! # Ok(()) }
 //! ```
@@ -31,15 +34,19 @@ pub mod outputs;
 pub mod patches;
 pub mod plan;
 pub mod plan_bounds;
+pub mod plan_report;
 pub mod readiness;
 pub mod relight;
 pub mod rng;
 pub mod sidecar;
+pub mod sidecar_read;
+pub mod sidecar_v1;
 
 pub use illuminant::{Covariance, Gaussian2, SamplerRules};
 pub use illuminant_choice::{IlluminantChoice, IlluminantProvenance, ResolvedIlluminants};
 pub use masks::{Light, LightKind, MaskEval};
-pub use plan::{plan, plan_for, plan_with_estimate, NoisePlan, Plan};
+pub use plan::{NoisePlan, Plan, Planned, Planner};
+pub use plan_report::PlanReport;
 pub use relight::{run, run_clean, RunReport};
 
 use crate::error::{Error, Result};
@@ -460,7 +467,12 @@ mod compat_tests {
     }
 
     fn planned(img: &RawImage, o: &SynthOptions) -> Plan {
-        plan(img, "c.dng", 7, 0, o, &Calibration::embedded(o).unwrap()).unwrap()
+        Planner::new(img, o)
+            .name("c.dng")
+            .seed(7)
+            .plan()
+            .unwrap()
+            .plan
     }
 
     #[test]
@@ -470,8 +482,9 @@ mod compat_tests {
         assert!(!j.contains("compat"), "{j}");
         let p = planned(&frame([0.5, 1.0, 0.4]), &o);
         let pj = serde_json::to_string(&p).unwrap();
-        assert!(!pj.contains("truncate_noise"), "{pj}");
-        // options and plans written before the field existed parse to the defaults
+        assert!(pj.contains("\"truncate_noise\":false"), "{pj}");
+        // options written before the field existed parse to the defaults (plans of
+        // version 1 without it: sidecar_v1)
         let back: SynthOptions = serde_json::from_str(&j).unwrap();
         assert_eq!(back, o);
         let back: Plan = serde_json::from_str(&pj).unwrap();

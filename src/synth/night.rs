@@ -29,7 +29,8 @@
 //! # fn main() -> day2night::Result<()> {
 //! let day = day2night::dng::read_dng("day.dng".as_ref())?;
 //! let opts = SynthOptions::default();
-//! let plan = synth::plan(&day, "day.dng", 0, 0, &opts, &Calibration::embedded(&opts)?)?;
+//! let cal = Calibration::embedded(&opts)?;
+//! let plan = synth::Planner::new(&day, &opts).calibration(&cal).name("day.dng").plan()?.plan;
 //! let crop = Crop { top: 512, left: 1024, height: 512, width: 512 };
 //! let night = synthesize(&day, &plan, &Request { target: true, input: false, crop: Some(crop) })?;
 //! assert_eq!(night.clean.data.len(), 512 * 512);
@@ -132,8 +133,8 @@ pub struct Synthesized {
     pub clean: RawImage,
     /// Values computed while running.
     pub report: RunReport,
-    /// The plan's stages, then the products computed (`render_target`, `render_input`,
-    /// `crop`).
+    /// The products computed (`render_target`, `render_input`, `crop`); the whole list
+    /// with the plan's stages is [`PlanReport::stages_with`](super::PlanReport::stages_with).
     pub stages: Vec<String>,
 }
 
@@ -144,7 +145,7 @@ pub fn synthesize_into<S: NightSink>(
     req: &Request,
     sink: &S,
 ) -> Result<Synthesized> {
-    let mut stages = plan.stages.clone();
+    let mut stages = Vec::new();
     let (clean, report) = match &req.crop {
         None => whole_frame(day, plan, req, sink)?,
         Some(crop) => {
@@ -156,10 +157,6 @@ pub fn synthesize_into<S: NightSink>(
             cropped(day, plan, req.target, crop, sink)?
         }
     };
-    let renders = req.target || req.input;
-    if renders && plan.opcodes.as_ref().is_some_and(|r| !r.applied.is_empty()) {
-        stages.push("apply_opcodes".into());
-    }
     if req.target {
         stages.push("render_target".into());
     }
@@ -240,7 +237,7 @@ fn whole_frame<S: NightSink>(
             target_res = Some((|| {
                 let ropts = RenderOptions {
                     neutral: Some(neutral),
-                    opcodes: plan.opcode_mode(),
+                    opcodes: plan.opcodes,
                     ..RenderOptions::default()
                 };
                 if sink.banded() {
@@ -269,7 +266,7 @@ fn whole_frame<S: NightSink>(
     report.warnings.extend(target_flat.warning(TARGET));
     if req.input {
         let src = first_noisy.as_ref().unwrap_or(&clean);
-        let rgb = render_input_with(src, Some(neutral), Default::default(), plan.opcode_mode())?;
+        let rgb = render_input_with(src, Some(neutral), Default::default(), plan.opcodes)?;
         report.warnings.extend(flat::warning(&rgb, INPUT));
         sink.input(&rgb)?;
     }
@@ -345,7 +342,7 @@ fn cropped<S: NightSink>(
                     if !target {
                         return Ok(());
                     }
-                    let mode = plan.opcode_mode();
+                    let mode = plan.opcodes;
                     let rgb = match opcodes::active(&day.meta, mode)? {
                         // Bad pixels, warps, TrimBounds: the crop's region of the frame's
                         // render (the whole frame is synthesized for it).
@@ -408,7 +405,7 @@ pub struct Night {
     pub input: Option<RgbImage>,
     /// Values computed while running.
     pub report: RunReport,
-    /// Stages run ([`Synthesized::stages`]).
+    /// The products computed ([`Synthesized::stages`]).
     pub stages: Vec<String>,
     /// The crop, if any.
     pub crop: Option<Crop>,

@@ -3,7 +3,7 @@
 use super::*;
 use crate::isp::render::default_crop;
 use crate::isp::render_crop::target_origin;
-use crate::synth::{plan, Calibration, Mode, SynthOptions};
+use crate::synth::{Calibration, Mode, PlanReport, Planner, SynthOptions};
 use std::path::Path;
 
 fn day() -> RawImage {
@@ -12,20 +12,22 @@ fn day() -> RawImage {
 }
 
 fn planned(day: &RawImage, mode: Mode, isos: Vec<u32>) -> Plan {
+    planned_with_report(day, mode, isos).0
+}
+
+fn planned_with_report(day: &RawImage, mode: Mode, isos: Vec<u32>) -> (Plan, PlanReport) {
     let opts = SynthOptions {
         mode,
         isos,
         ..SynthOptions::default()
     };
-    plan(
-        day,
-        "day.dng",
-        3,
-        1,
-        &opts,
-        &Calibration::embedded(&opts).unwrap(),
-    )
-    .unwrap()
+    let p = Planner::new(day, &opts)
+        .name("day.dng")
+        .seed(3)
+        .variant(1)
+        .plan()
+        .unwrap();
+    (p.plan, p.report)
 }
 
 /// Every sample of the crop raw `c` equals the same active-area site of `full`.
@@ -233,10 +235,11 @@ fn crop_targets_equal_the_frame_region_with_opcodes() {
             day.meta.opcode_lists[i] =
                 (!l.is_empty()).then(|| encode_list(&OpcodeList { opcodes: l }));
         }
-        let p = planned(&day, Mode::Local, vec![]);
-        let report = p.opcodes.as_ref().unwrap();
+        let (p, plan_report) = planned_with_report(&day, Mode::Local, vec![]);
+        let report = plan_report.opcodes.as_ref().unwrap();
         assert_eq!(report.mode, crate::isp::opcodes::OpcodeMode::Apply);
-        assert!(!p.stages.iter().any(|s| s == "apply_opcodes"));
+        assert_eq!(p.opcodes, crate::isp::opcodes::OpcodeMode::Apply);
+        assert!(!plan_report.stages.iter().any(|s| s == "apply_opcodes"));
         let full = synthesize(
             &day,
             &p,
@@ -246,7 +249,9 @@ fn crop_targets_equal_the_frame_region_with_opcodes() {
             },
         )
         .unwrap();
-        assert!(full.stages.iter().any(|s| s == "apply_opcodes"));
+        assert!(!full.stages.iter().any(|s| s == "apply_opcodes"));
+        let stages = plan_report.stages_with(&full.stages);
+        assert!(stages.iter().any(|s| s == "apply_opcodes"), "{stages:?}");
         assert_eq!(full.clean.meta.opcode_lists, day.meta.opcode_lists);
         let ft = full.target.as_ref().unwrap();
         assert_eq!(ft.count_non_finite(), 0);
@@ -376,7 +381,13 @@ fn physics_noise_on_a_crop_equals_the_frame_region() {
     let (b, w) = (day.meta.levels.black_max(), day.meta.levels.white);
     let pm = PhysicsModel::new("t", b, w, vec![pt(800, 0.5), pt(1600, 1.0)]).unwrap();
     cal.noise = Some(NoiseModel::from_physics(pm).unwrap());
-    let p = plan(&day, "day.dng", 3, 0, &opts, &cal).unwrap();
+    let p = Planner::new(&day, &opts)
+        .calibration(&cal)
+        .name("day.dng")
+        .seed(3)
+        .plan()
+        .map(|p| p.plan)
+        .unwrap();
     assert!(p.noise[0].physics.is_some());
     let full = synthesize(&day, &p, &Request::default()).unwrap();
     let crop = Crop {

@@ -167,7 +167,7 @@ pub struct VariantOutputs {
     /// ISO of each noisy raw, in order.
     pub isos: Vec<u32>,
     /// Warnings about what the renders made (the sidecar's `run.warnings`: a constant
-    /// target or input); the plan's warnings are in [`super::Plan::warnings`].
+    /// target or input); the plan's warnings are in [`super::PlanReport::warnings`].
     pub warnings: crate::diagnostics::Diagnostics,
 }
 

@@ -189,7 +189,7 @@ mod tests {
     use crate::isp::release_input::release_codes;
     use crate::raw::Bayer;
     use crate::synth::night::synthesize;
-    use crate::synth::{plan, Calibration, SynthOptions};
+    use crate::synth::{Calibration, SynthOptions};
 
     #[test]
     fn cut_patches_is_the_row_major_grid_channel_first() {
@@ -234,7 +234,14 @@ mod tests {
             ..SynthOptions::default()
         };
         let cal = Calibration::embedded(&opts).unwrap();
-        let p = plan(&day, "d.dng", 3, 1, &opts, &cal).unwrap();
+        let p = crate::synth::Planner::new(&day, &opts)
+            .calibration(&cal)
+            .name("d.dng")
+            .seed(3)
+            .variant(1)
+            .plan()
+            .unwrap()
+            .plan;
         let crop = Crop {
             top: 10,
             left: 14,

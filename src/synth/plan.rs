@@ -1,23 +1,26 @@
 //! The `Plan`: every random value of one (input, variant), sampled up front from the
 //! (seed, input name, variant) stream, in a fixed order: dimming, lights (ambient, local
 //! lights, bulbs; each: illuminant, then geometry, then gains), then one noise seed per ISO.
+//! A [`Planner`] samples it; what planning found besides the draws (provenance, stages,
+//! opcodes, warnings) is its [`PlanReport`], returned beside it.
 
 use super::dim::{sample_dim, DimPlan};
 use super::illuminant::Gaussian2;
 use super::masks::{opencv_sigma, release_sigma, Light, LightKind, MaskEval, MASK_FLOOR};
 use super::neutral::day_neutral_for;
 use super::noise_source::choose_noise_model;
+use super::plan_report::PlanReport;
 use super::rng::SynthRng;
 use super::{Calibration, Mode, RelightFormula, SynthOptions};
 use crate::diagnostics::{Code, Diagnostics};
 use crate::error::{Error, Result};
-use crate::isp::opcodes::{OpcodeMode, OpcodeReport};
-use crate::noise::{Evaluated, NoiseEstimate, NoiseParams, NoiseProvenance, PhysicsParams};
+use crate::isp::opcodes::OpcodeMode;
+use crate::noise::{Evaluated, NoiseEstimate, NoiseParams, PhysicsParams};
 use crate::raw::{Bayer, RawImage};
 use serde::{Deserialize, Serialize};
 
 /// Format tag of serialized plans.
-pub const PLAN_FORMAT: &str = "day2night-plan/1";
+pub const PLAN_FORMAT: &str = "day2night-plan/2";
 
 /// Noise to add for one ISO.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -31,13 +34,13 @@ pub struct NoisePlan {
     /// True when the ISO was outside the model's calibrated range.
     pub extrapolated: bool,
     /// The physics-based model at this ISO when `--noise-model` is a physics file (then
-    /// `params` is its equivalent Gaussian, written as NoiseProfile). Absent otherwise, so
-    /// Gaussian plans and sidecars are unchanged.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
+    /// `params` is its equivalent Gaussian, written as NoiseProfile); null otherwise.
     pub physics: Option<crate::noise::PhysicsParams>,
 }
 
-/// Everything needed to run synthesis on one image, with no randomness left.
+/// Everything needed to run synthesis on one image, with no randomness left: the draws
+/// and what they depend on (geometry, mode, formula, rounding, neutrals, noise model
+/// values, the renders' opcode mode). What planning found besides is its [`PlanReport`].
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Plan {
     /// [`PLAN_FORMAT`].
@@ -52,11 +55,6 @@ pub struct Plan {
     pub active_width: usize,
     /// Active-area height.
     pub active_height: usize,
-    /// Size `[width, height]` of the rendered target (and network input) when an
-    /// OpcodeList3 TrimBounds changes it; absent otherwise (the target is then the raw's
-    /// DefaultCrop, oriented), so other sidecars are unchanged.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub target_size: Option<[usize; 2]>,
     /// Bayer pattern of the active area.
     pub bayer: Bayer,
     /// Relighting mode.
@@ -65,12 +63,10 @@ pub struct Plan {
     pub formula: RelightFormula,
     /// Truncate instead of rounding when denormalizing (released code).
     pub truncate: bool,
-    /// Truncate the noisy raws too (`truncate` and `compat.truncate_noise`; absent = false).
-    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    /// Truncate the noisy raws too (`truncate` and `compat.truncate_noise`).
     pub truncate_noise: bool,
     /// Normalize and denormalize each site with its own range `white - black(site)`
-    /// (`compat.range_per_site`, the release; absent = false: `white - black_max`).
-    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    /// (`compat.range_per_site`, the release; false: `white - black_max`).
     pub range_per_site: bool,
     /// Keep negative normalized values (no clip at 0).
     pub keep_negative: bool,
@@ -80,8 +76,6 @@ pub struct Plan {
     pub mask_eval: MaskEval,
     /// Day neutral (green = 1; as stored with `compat.neutral_as_stored`).
     pub day_neutral: [f64; 3],
-    /// Where the day neutral came from.
-    pub day_neutral_source: String,
     /// Dimming.
     pub dim: DimPlan,
     /// Lights: ambient first, then local lights, then bulbs (empty for `day`/`dimmed`; one
@@ -89,43 +83,18 @@ pub struct Plan {
     pub lights: Vec<Light>,
     /// Night neutral written as AsShotNeutral (green = 1).
     pub night_neutral: [f64; 3],
-    /// How the night neutral was computed.
-    pub night_neutral_definition: String,
     /// ISO written to the clean DNG (input ISO, or 50 when unknown).
     pub clean_iso: u32,
     /// NoiseProfile model of the clean DNG (the model at `clean_iso`).
     pub clean_noise: NoiseParams,
-    /// Where the noise model came from.
-    pub noise_model_source: String,
-    /// Where the noise model came from and which camera it belongs to (also the sidecar's
-    /// `calibration.provenance.noise`). Absent in plans written before it existed, so their
-    /// sidecars replay byte for byte.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub noise_provenance: Option<NoiseProvenance>,
     /// One entry per noisy output.
     pub noise: Vec<NoisePlan>,
-    /// The stages that run, in order.
-    pub stages: Vec<String>,
-    /// Warnings raised while planning (e.g. ISO extrapolation), about the input
-    /// (`input_name`); a version-1 sidecar's plain strings read as `legacy` warnings.
-    pub warnings: Diagnostics,
-    /// What the renders (target, network input) do with the input's DNG opcode lists: the
-    /// mode and the opcodes applied and skipped. Absent when the input has no opcode list,
-    /// and in sidecars written before opcodes were applied: the renders then ignore them,
-    /// so such sidecars replay byte for byte.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub opcodes: Option<OpcodeReport>,
+    /// What the renders (target, network input) do with the input's DNG opcode lists:
+    /// `ignore` when the input has none (the report's `opcodes` lists them).
+    pub opcodes: OpcodeMode,
     /// The burst (`--burst N`, N > 1): frames, motion model and every frame's transform,
-    /// drawn from the burst's own stream. Absent for a single frame.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
+    /// drawn from the burst's own stream; null for a single frame.
     pub burst: Option<super::burst::BurstPlan>,
-}
-
-impl Plan {
-    /// The opcode mode of this plan's renders ([`Plan::opcodes`]; ignore when absent).
-    pub fn opcode_mode(&self) -> OpcodeMode {
-        self.opcodes.as_ref().map_or(OpcodeMode::Ignore, |r| r.mode)
-    }
 }
 
 fn window_len(rng: &mut SynthRng, n: usize) -> f64 {
@@ -138,232 +107,425 @@ fn center(rng: &mut SynthRng, n: usize) -> f64 {
     rng.range(0.1, 0.9) * n as f64
 }
 
-/// Sample a plan for `img` (metadata and geometry; the pixels are read only when the noise
-/// model is estimated from the image, [`super::noise_source`]), for a job that renders (a
-/// target or the network input): [`plan_for`] with `renders` true.
-pub fn plan(
-    img: &RawImage,
-    input_name: &str,
-    seed: u64,
-    variant: u32,
-    opts: &SynthOptions,
-    cal: &Calibration,
-) -> Result<Plan> {
-    plan_for(img, input_name, seed, variant, opts, cal, true)
+/// A plan and its report: what [`Planner::plan`] returns and what a job writes (`synth`,
+/// `dataset`, `--replay`).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Planned {
+    /// The draws.
+    pub plan: Plan,
+    /// What planning found.
+    pub report: PlanReport,
 }
 
-/// [`plan`] for a job that renders (`renders`: a target or the network input) or not. The
-/// opcode lists are checked for the renders ([`crate::isp::opcodes::check::check_render`]:
-/// an opcode that cannot be applied and is not optional is an error, opcodes that make
-/// their samples constant and a TrimBounds that changes the target's size are warnings);
-/// without a render nothing about them fails: lists that cannot be parsed or applied are
-/// warnings ([`crate::isp::opcodes::check::report_without_render`]).
-pub fn plan_for(
-    img: &RawImage,
-    input_name: &str,
+/// Samples the [`Plan`] of one (input, variant), set up step by step:
+///
+/// ```no_run
+/// use day2night::synth::{Calibration, Planner, SynthOptions};
+/// # fn main() -> day2night::Result<()> {
+/// let day = day2night::dng::read_dng("day.dng".as_ref())?;
+/// let opts = SynthOptions::default();
+/// let cal = Calibration::embedded(&opts)?;
+/// let planned = Planner::new(&day, &opts)
+///     .calibration(&cal)
+///     .name("day.dng")
+///     .seed(7)
+///     .variant(1)
+///     .plan()?;
+/// println!("{} lights; warnings {:?}", planned.plan.lights.len(), planned.report.warnings);
+/// # Ok(()) }
+/// ```
+///
+/// Defaults: the embedded calibration of the options ([`Calibration::embedded`]), input
+/// name `""`, seed 0, variant 0, a job that renders, the noise estimate computed from the
+/// image when the noise chain gets to it. The image's metadata and geometry are read; its
+/// pixels only for that estimate ([`super::noise_source`]).
+#[derive(Clone, Copy)]
+pub struct Planner<'a> {
+    img: &'a RawImage,
+    opts: &'a SynthOptions,
+    cal: Option<&'a Calibration>,
+    input_name: &'a str,
     seed: u64,
     variant: u32,
-    opts: &SynthOptions,
-    cal: &Calibration,
     renders: bool,
-) -> Result<Plan> {
-    plan_with_estimate(img, input_name, seed, variant, opts, cal, renders, &|| {
-        crate::noise::estimate(img, &Default::default())
-    })
+    estimate: Option<&'a dyn Fn() -> Result<NoiseEstimate>>,
 }
 
-/// [`plan_for`] with the image's noise estimate given by `estimate` (called only when the
-/// noise chain gets to it; e.g. a cached one, [`super::job::DayInput::noise_estimate`]).
-#[allow(clippy::too_many_arguments)]
-pub fn plan_with_estimate(
-    img: &RawImage,
-    input_name: &str,
-    seed: u64,
-    variant: u32,
-    opts: &SynthOptions,
-    cal: &Calibration,
-    renders: bool,
-    estimate: &dyn Fn() -> Result<NoiseEstimate>,
-) -> Result<Plan> {
-    opts.validate()?;
-    img.validate()?;
-    let bayer = img.bayer()?;
-    // Everything this input lacks for these options, listed at once (docs/your-camera.md).
-    super::readiness::check(&img.meta, opts, cal, renders)?;
-    let a = img.active_area();
-    let (w, h) = (a.width(), a.height());
-    let (dn, dn_src) = day_neutral_for(&img.meta, opts)?;
-    let mut rng = SynthRng::new(seed, input_name, variant);
-    // What the metadata checks corrected on reading (dng::check) comes first.
-    let mut warnings = img.meta.warnings.clone();
-    // The stage names of the sidecar's `stages`: from normalize to denormalize they run in
-    // one fused row pass (synth/relight.rs, `run_clean`), not in functions of those names.
-    let mut stages: Vec<String> = vec!["normalize".into(), "remove_day_illuminant".into()];
-
-    let dim = if opts.mode == Mode::Day {
-        DimPlan::None
-    } else {
-        stages.push("dim".into());
-        sample_dim(&mut rng, opts.dim_range, cal.brightness.as_ref())?
-    };
-
-    // The night illuminant dictionary of this input, only when illuminants are sampled
-    // (docs/synthesis.md, "Night lamps in CIE xy"): another camera's colours are a warning.
-    let resolved = match opts.mode {
-        Mode::Global | Mode::Local => {
-            let r = cal.illuminants_for(&img.meta, opts)?;
-            warnings.extend(r.warnings.iter().cloned());
-            Some(r.gaussian)
+impl<'a> Planner<'a> {
+    /// A planner for `img` with `opts` and the defaults above.
+    pub fn new(img: &'a RawImage, opts: &'a SynthOptions) -> Planner<'a> {
+        Planner {
+            img,
+            opts,
+            cal: None,
+            input_name: "",
+            seed: 0,
+            variant: 0,
+            renders: true,
+            estimate: None,
         }
-        Mode::Day | Mode::Dimmed => None,
+    }
+
+    /// The calibration (illuminant dictionary, brightness dictionary, noise model).
+    pub fn calibration(self, cal: &'a Calibration) -> Self {
+        Planner {
+            cal: Some(cal),
+            ..self
+        }
+    }
+
+    /// The input's file name: it keys the random stream and is recorded in the plan.
+    pub fn name(self, input_name: &'a str) -> Self {
+        Planner { input_name, ..self }
+    }
+
+    /// The master seed.
+    pub fn seed(self, seed: u64) -> Self {
+        Planner { seed, ..self }
+    }
+
+    /// The variant index (0-based).
+    pub fn variant(self, variant: u32) -> Self {
+        Planner { variant, ..self }
+    }
+
+    /// Whether the job renders (a target or the network input). The opcode lists are
+    /// checked for the renders ([`crate::isp::opcodes::check::check_render`]: an opcode
+    /// that cannot be applied and is not optional is an error, opcodes that make their
+    /// samples constant and a TrimBounds that changes the target's size are warnings);
+    /// without a render nothing about them fails: lists that cannot be parsed or applied
+    /// are warnings ([`crate::isp::opcodes::check::report_without_render`]).
+    pub fn renders(self, renders: bool) -> Self {
+        Planner { renders, ..self }
+    }
+
+    /// The image's noise estimate, called only when the noise chain gets to it (e.g. a
+    /// cached one, [`super::job::DayInput::noise_estimate`]).
+    pub fn estimate(self, estimate: &'a dyn Fn() -> Result<NoiseEstimate>) -> Self {
+        Planner {
+            estimate: Some(estimate),
+            ..self
+        }
+    }
+
+    /// Sample the plan and make its report.
+    pub fn plan(&self) -> Result<Planned> {
+        let embedded;
+        let cal = match self.cal {
+            Some(c) => c,
+            None => {
+                embedded = Calibration::embedded(self.opts)?;
+                &embedded
+            }
+        };
+        let own_estimate = || crate::noise::estimate(self.img, &Default::default());
+        let estimate: &dyn Fn() -> Result<NoiseEstimate> = match self.estimate {
+            Some(e) => e,
+            None => &own_estimate,
+        };
+        self.sample(cal, estimate)
+    }
+
+    fn sample(
+        &self,
+        cal: &Calibration,
+        estimate: &dyn Fn() -> Result<NoiseEstimate>,
+    ) -> Result<Planned> {
+        let (img, opts) = (self.img, self.opts);
+        opts.validate()?;
+        img.validate()?;
+        let bayer = img.bayer()?;
+        // Everything this input lacks for these options, listed at once (docs/your-camera.md).
+        super::readiness::check(&img.meta, opts, cal, self.renders)?;
+        let a = img.active_area();
+        let (w, h) = (a.width(), a.height());
+        let (day_neutral, day_neutral_source) = day_neutral_for(&img.meta, opts)?;
+        let mut rng = SynthRng::new(self.seed, self.input_name, self.variant);
+        // What the metadata checks corrected on reading (dng::check) comes first.
+        let mut warnings = img.meta.warnings.clone();
+        let mut stages: Vec<String> = vec!["normalize".into(), "remove_day_illuminant".into()];
+        let dim = if opts.mode == Mode::Day {
+            DimPlan::None
+        } else {
+            stages.push("dim".into());
+            sample_dim(&mut rng, opts.dim_range, cal.brightness.as_ref())?
+        };
+        // The night illuminant dictionary of this input, only when illuminants are sampled
+        // (docs/synthesis.md, "Night lamps in CIE xy"): another camera's colours are a warning.
+        let resolved = match opts.mode {
+            Mode::Global | Mode::Local => {
+                let r = cal.illuminants_for(&img.meta, opts)?;
+                warnings.extend(r.warnings.iter().cloned());
+                Some(r.gaussian)
+            }
+            Mode::Day | Mode::Dimmed => None,
+        };
+        let lit = sample_lights(
+            &mut rng,
+            opts,
+            resolved.as_ref(),
+            (w, h),
+            day_neutral,
+            &mut stages,
+        )?;
+        let night_neutral = super::neutral::check_neutral(lit.neutral, "night neutral")?;
+        stages.push("denormalize".into());
+        let noise = plan_noise(img, cal, opts, estimate, &mut rng, &mut warnings)?;
+        if !noise.entries.is_empty() {
+            stages.push("noise".into());
+        }
+        // The burst's motion from its own stream (nothing drawn for a single frame).
+        // Before any draw: a step the image cannot hold is refused with the image's size.
+        super::burst::checks::check_step_fits(&opts.burst, (w, h))?;
+        let key = (self.seed, self.input_name, self.variant);
+        let burst = super::burst::motion::plan_burst(&opts.burst, (w, h), key)?;
+        if let Some(b) = &burst {
+            let valid = super::burst::checks::valid_area_warnings(&b.transforms, (w, h));
+            warnings.extend(valid);
+            stages.push("burst_frames".into());
+            if b.transforms.iter().any(|t| !t.is_identity()) {
+                stages.push("burst_warp".into());
+            }
+        }
+        // The renders' opcodes: unapplicable optional ones are warnings, mandatory ones and
+        // work over the budget errors (warnings when nothing is rendered, and no budget). The
+        // stage `apply_opcodes` is recorded by the synthesis when a render runs.
+        let (opcodes, target_size) = if self.renders {
+            let c = crate::isp::opcodes::check::check_render(img, opts.opcodes, true, true)?;
+            warnings.extend(c.warnings);
+            let size = c.trimmed_size.map(|(w, h)| [w, h]);
+            (c.prepared.map(|p| p.report), size)
+        } else {
+            let (r, w) = crate::isp::opcodes::check::report_without_render(&img.meta, opts.opcodes);
+            warnings.extend(w);
+            (r, None)
+        };
+        // Every warning of this plan is about this input.
+        warnings.about(self.input_name);
+        let plan = Plan {
+            format: PLAN_FORMAT.into(),
+            input_name: self.input_name.into(),
+            seed: self.seed,
+            variant: self.variant,
+            active_width: w,
+            active_height: h,
+            bayer,
+            mode: opts.mode,
+            formula: opts.formula,
+            truncate: opts.truncate,
+            truncate_noise: opts.truncate && opts.compat.truncate_noise,
+            range_per_site: opts.compat.range_per_site,
+            keep_negative: opts.keep_negative,
+            keep_highlights: opts.keep_highlights,
+            mask_eval: opts.mask_eval,
+            day_neutral,
+            dim,
+            lights: lit.lights,
+            night_neutral,
+            clean_iso: noise.clean_iso,
+            clean_noise: noise.clean,
+            noise: noise.entries,
+            opcodes: opcodes.as_ref().map_or(OpcodeMode::Ignore, |r| r.mode),
+            burst,
+        };
+        let report = PlanReport {
+            day_neutral_source,
+            night_neutral_definition: lit.definition,
+            noise_model_source: noise.source,
+            noise_provenance: Some(noise.provenance),
+            stages,
+            opcodes,
+            target_size,
+            warnings,
+        };
+        // The replay check (`synth --replay`) applies the same table: a plan synth writes is a
+        // plan it reads back (e.g. a physics model extrapolated past the noise bounds is
+        // refused here, naming the field, rather than written to a sidecar nobody can replay).
+        plan.validate_bounds()?;
+        report.validate_bounds()?;
+        Ok(Planned { plan, report })
+    }
+}
+
+/// The lights of a plan, the night neutral they give and how it was computed.
+struct Lit {
+    lights: Vec<Light>,
+    neutral: [f64; 3],
+    definition: String,
+}
+
+/// The light holding the illuminant of `global` mode, or the ambient light of `local`.
+fn ambient(illuminant: [f64; 3], gain: f64, weight: f64) -> Light {
+    Light {
+        kind: LightKind::Ambient,
+        illuminant,
+        gain,
+        weight,
+        center: [0.0, 0.0],
+        window: None,
+        sigma: [0.0, 0.0],
+        floor: 0.0,
+    }
+}
+
+/// The lights of the mode (none for `day` and `dimmed`), adding their stages.
+fn sample_lights(
+    rng: &mut SynthRng,
+    opts: &SynthOptions,
+    resolved: Option<&Gaussian2>,
+    size: (usize, usize),
+    day_neutral: [f64; 3],
+    stages: &mut Vec<String>,
+) -> Result<Lit> {
+    let sampled =
+        || resolved.ok_or_else(|| Error::invalid("no night illuminant dictionary in this mode"));
+    let lit = |lights, neutral, definition: &str| Lit {
+        lights,
+        neutral,
+        definition: definition.into(),
     };
-    let sampled = || -> Result<&Gaussian2> {
-        resolved
-            .as_ref()
-            .ok_or_else(|| Error::invalid("no night illuminant dictionary in this mode"))
-    };
-    let rules = &opts.sampler;
-    let mut lights = Vec::new();
-    let (night_neutral, definition) = match opts.mode {
+    match opts.mode {
         Mode::Day => {
             stages.push("relight_day".into());
-            (dn, "day neutral (mode day)".to_string())
+            Ok(lit(vec![], day_neutral, "day neutral (mode day)"))
         }
         Mode::Dimmed => {
             stages.push("relight_dimmed".into());
-            (dn, "day neutral (mode dimmed)".to_string())
+            Ok(lit(vec![], day_neutral, "day neutral (mode dimmed)"))
         }
         Mode::Global => {
             stages.push("sample_illuminants".into());
             stages.push("relight_global".into());
-            let l = sampled()?.sample(&mut rng, rules)?;
-            lights.push(Light {
-                kind: LightKind::Ambient,
-                illuminant: l,
-                gain: 1.0,
-                weight: 1.0,
-                center: [0.0, 0.0],
-                window: None,
-                sigma: [0.0, 0.0],
-                floor: 0.0,
-            });
-            (l, "the global illuminant".to_string())
+            let l = sampled()?.sample(rng, &opts.sampler)?;
+            Ok(lit(vec![ambient(l, 1.0, 1.0)], l, "the global illuminant"))
         }
-        Mode::Local => {
-            stages.push("sample_illuminants".into());
-            let paper = opts.formula == RelightFormula::Paper;
-            stages.push(
-                if paper {
-                    "relight_local_paper"
-                } else {
-                    "relight_local_release"
-                }
-                .into(),
-            );
-            stages.push("ambient".into());
-            stages.push("masks".into());
-            let g = sampled()?;
-            // Ambient.
-            let l0 = g.sample(&mut rng, rules)?;
-            let (gain0, weight0) = if paper {
-                (1.0, rng.range(0.05, 0.10))
-            } else {
-                (opts.ambient_gain, 1.0)
-            };
-            lights.push(Light {
-                kind: LightKind::Ambient,
-                illuminant: l0,
-                gain: gain0,
-                weight: weight0,
-                center: [0.0, 0.0],
-                window: None,
-                sigma: [0.0, 0.0],
-                floor: 0.0,
-            });
-            let k = match opts.local_lights {
-                Some(k) => k as u64,
-                None if paper => rng.int_range(4, 7), // 5 to 7 lights in total
-                None => 4,
-            };
-            for _ in 0..k {
-                let l = g.sample(&mut rng, rules)?;
-                let c = [center(&mut rng, h), center(&mut rng, w)];
-                if paper {
-                    let s = [
-                        rng.range(0.5, 1.0) * h as f64,
-                        rng.range(0.5, 1.0) * w as f64,
-                    ];
-                    lights.push(Light {
-                        kind: LightKind::Local,
-                        illuminant: l,
-                        gain: 1.0,
-                        weight: 1.0,
-                        center: c,
-                        window: None,
-                        sigma: s,
-                        floor: 0.0,
-                    });
-                } else {
-                    let (wh, ww) = (window_len(&mut rng, h), window_len(&mut rng, w));
-                    lights.push(Light {
-                        kind: LightKind::Local,
-                        illuminant: l,
-                        gain: 1.0,
-                        weight: 1.0,
-                        center: c,
-                        window: Some([wh, ww]),
-                        sigma: release_sigma(wh, ww),
-                        floor: MASK_FLOOR,
-                    });
-                }
-            }
-            let bulbs = opts.bulbs.unwrap_or(if paper { 0 } else { 5 });
-            if bulbs > 0 {
-                stages.push("bulbs".into());
-            }
-            for _ in 0..bulbs {
-                let l = g.sample(&mut rng, rules)?;
-                let c = [center(&mut rng, h), center(&mut rng, w)];
-                let (wh, ww) = (window_len(&mut rng, h), window_len(&mut rng, w));
-                let u = rng.uniform();
-                let gain = rng.range(opts.bulb_gain[0], opts.bulb_gain[1]);
-                // Released code: OpenCV's size-to-sigma rule applied to a kernel size of
-                // max(h, w) / (5 + 5u), then scaled per axis like the local lights.
-                let m = wh.max(ww);
-                let s = opencv_sigma(m / (5.0 + 5.0 * u));
-                lights.push(Light {
-                    kind: LightKind::Bulb,
-                    illuminant: l,
-                    gain,
-                    weight: 1.0,
-                    center: c,
-                    window: Some([wh, ww]),
-                    sigma: [s * wh / m, s * ww / m],
-                    floor: MASK_FLOOR,
-                });
-            }
-            let used: Vec<&Light> = lights
-                .iter()
-                .filter(|l| !paper || l.kind != LightKind::Bulb)
-                .collect();
-            let mut n = [0.0; 3];
-            for l in &used {
-                for (ni, li) in n.iter_mut().zip(l.illuminant) {
-                    *ni += li / used.len() as f64;
-                }
-            }
-            let def = if paper {
-                "mean of the night illuminants (ambient and local lights; paper)"
-            } else {
-                "mean of all sampled lights: ambient, local lights and bulbs (released code)"
-            };
-            (n, def.to_string())
-        }
-    };
-    let night_neutral = super::neutral::check_neutral(night_neutral, "night neutral")?;
-    stages.push("denormalize".into());
+        Mode::Local => local_lights(rng, opts, sampled()?, size, stages),
+    }
+}
 
-    let choice = choose_noise_model(img, cal, opts, bayer, estimate)?;
+/// `local` mode: the ambient light, the local lights and the bulbs, in that order.
+fn local_lights(
+    rng: &mut SynthRng,
+    opts: &SynthOptions,
+    g: &Gaussian2,
+    (w, h): (usize, usize),
+    stages: &mut Vec<String>,
+) -> Result<Lit> {
+    let rules = &opts.sampler;
+    stages.push("sample_illuminants".into());
+    let paper = opts.formula == RelightFormula::Paper;
+    stages.push(
+        if paper {
+            "relight_local_paper"
+        } else {
+            "relight_local_release"
+        }
+        .into(),
+    );
+    stages.push("ambient".into());
+    stages.push("masks".into());
+    let l0 = g.sample(rng, rules)?;
+    let (gain0, weight0) = if paper {
+        (1.0, rng.range(0.05, 0.10))
+    } else {
+        (opts.ambient_gain, 1.0)
+    };
+    let mut lights = vec![ambient(l0, gain0, weight0)];
+    let k = match opts.local_lights {
+        Some(k) => k as u64,
+        None if paper => rng.int_range(4, 7), // 5 to 7 lights in total
+        None => 4,
+    };
+    for _ in 0..k {
+        let illuminant = g.sample(rng, rules)?;
+        let center = [center(rng, h), center(rng, w)];
+        let local = |window, sigma, floor| Light {
+            kind: LightKind::Local,
+            illuminant,
+            gain: 1.0,
+            weight: 1.0,
+            center,
+            window,
+            sigma,
+            floor,
+        };
+        lights.push(if paper {
+            let s = [
+                rng.range(0.5, 1.0) * h as f64,
+                rng.range(0.5, 1.0) * w as f64,
+            ];
+            local(None, s, 0.0)
+        } else {
+            let (wh, ww) = (window_len(rng, h), window_len(rng, w));
+            local(Some([wh, ww]), release_sigma(wh, ww), MASK_FLOOR)
+        });
+    }
+    let bulbs = opts.bulbs.unwrap_or(if paper { 0 } else { 5 });
+    if bulbs > 0 {
+        stages.push("bulbs".into());
+    }
+    for _ in 0..bulbs {
+        let l = g.sample(rng, rules)?;
+        let c = [center(rng, h), center(rng, w)];
+        let (wh, ww) = (window_len(rng, h), window_len(rng, w));
+        let u = rng.uniform();
+        let gain = rng.range(opts.bulb_gain[0], opts.bulb_gain[1]);
+        // Released code: OpenCV's size-to-sigma rule applied to a kernel size of
+        // max(h, w) / (5 + 5u), then scaled per axis like the local lights.
+        let m = wh.max(ww);
+        let s = opencv_sigma(m / (5.0 + 5.0 * u));
+        lights.push(Light {
+            kind: LightKind::Bulb,
+            illuminant: l,
+            gain,
+            weight: 1.0,
+            center: c,
+            window: Some([wh, ww]),
+            sigma: [s * wh / m, s * ww / m],
+            floor: MASK_FLOOR,
+        });
+    }
+    let used: Vec<&Light> = lights
+        .iter()
+        .filter(|l| !paper || l.kind != LightKind::Bulb)
+        .collect();
+    let mut n = [0.0; 3];
+    for l in &used {
+        for (ni, li) in n.iter_mut().zip(l.illuminant) {
+            *ni += li / used.len() as f64;
+        }
+    }
+    let definition = if paper {
+        "mean of the night illuminants (ambient and local lights; paper)"
+    } else {
+        "mean of all sampled lights: ambient, local lights and bulbs (released code)"
+    };
+    Ok(Lit {
+        lights,
+        neutral: n,
+        definition: definition.into(),
+    })
+}
+
+/// The noise part of a plan: the clean DNG's ISO and model, one entry per ISO (each with
+/// its seed, drawn in order), and where the model came from.
+struct NoiseDraws {
+    clean_iso: u32,
+    clean: NoiseParams,
+    entries: Vec<NoisePlan>,
+    source: String,
+    provenance: crate::noise::NoiseProvenance,
+}
+
+fn plan_noise(
+    img: &RawImage,
+    cal: &Calibration,
+    opts: &SynthOptions,
+    estimate: &dyn Fn() -> Result<NoiseEstimate>,
+    rng: &mut SynthRng,
+    warnings: &mut Diagnostics,
+) -> Result<NoiseDraws> {
+    let choice = choose_noise_model(img, cal, opts, img.bayer()?, estimate)?;
     warnings.extend(choice.warnings);
     let model = choice.model;
     let clean_iso = img.meta.iso_or_default();
@@ -382,8 +544,8 @@ pub fn plan_with_estimate(
             None => Ok((model.at(iso)?, None)),
         }
     };
-    let clean_noise = at(clean_iso)?.0.params;
-    let mut noise = Vec::new();
+    let clean = at(clean_iso)?.0.params;
+    let mut entries = Vec::new();
     for &iso in &opts.isos {
         let (e, physics) = at(iso)?;
         if e.extrapolated {
@@ -406,7 +568,7 @@ pub fn plan_with_estimate(
             };
             warnings.warn(Code::NoiseExtrapolated, message);
         }
-        noise.push(NoisePlan {
+        entries.push(NoisePlan {
             iso,
             seed: rng.next_u64(),
             params: e.params,
@@ -414,78 +576,13 @@ pub fn plan_with_estimate(
             physics,
         });
     }
-    if !noise.is_empty() {
-        stages.push("noise".into());
-    }
-    // The burst's motion from its own stream (nothing drawn for a single frame).
-    // Before any draw: a step the image cannot hold is refused with the image's size.
-    super::burst::checks::check_step_fits(&opts.burst, (w, h))?;
-    let burst = super::burst::motion::plan_burst(&opts.burst, (w, h), (seed, input_name, variant))?;
-    if let Some(b) = &burst {
-        warnings.extend(super::burst::checks::valid_area_warnings(
-            &b.transforms,
-            (w, h),
-        ));
-        stages.push("burst_frames".into());
-        if b.transforms.iter().any(|t| !t.is_identity()) {
-            stages.push("burst_warp".into());
-        }
-    }
-    // The renders' opcodes: unapplicable optional ones are warnings, mandatory ones and
-    // work over the budget errors (warnings when nothing is rendered, and no budget). The
-    // stage `apply_opcodes` is recorded by the synthesis when a render runs.
-    let (opcodes, target_size) = if renders {
-        let c = crate::isp::opcodes::check::check_render(img, opts.opcodes, true, true)?;
-        warnings.extend(c.warnings);
-        (
-            c.prepared.map(|p| p.report),
-            c.trimmed_size.map(|(w, h)| [w, h]),
-        )
-    } else {
-        let (r, w) = crate::isp::opcodes::check::report_without_render(&img.meta, opts.opcodes);
-        warnings.extend(w);
-        (r, None)
-    };
-    // Every warning of this plan is about this input.
-    warnings.about(input_name);
-    let plan = Plan {
-        format: PLAN_FORMAT.into(),
-        input_name: input_name.into(),
-        seed,
-        variant,
-        active_width: w,
-        active_height: h,
-        target_size,
-        bayer,
-        mode: opts.mode,
-        formula: opts.formula,
-        truncate: opts.truncate,
-        truncate_noise: opts.truncate && opts.compat.truncate_noise,
-        range_per_site: opts.compat.range_per_site,
-        keep_negative: opts.keep_negative,
-        keep_highlights: opts.keep_highlights,
-        mask_eval: opts.mask_eval,
-        day_neutral: dn,
-        day_neutral_source: dn_src,
-        dim,
-        lights,
-        night_neutral,
-        night_neutral_definition: definition,
+    Ok(NoiseDraws {
         clean_iso,
-        clean_noise,
-        noise_model_source: model.source.clone(),
-        noise_provenance: Some(choice.provenance),
-        noise,
-        stages,
-        warnings,
-        opcodes,
-        burst,
-    };
-    // The replay check (`synth --replay`) applies the same table: a plan synth writes is a
-    // plan it reads back (e.g. a physics model extrapolated past the noise bounds is
-    // refused here, naming the field, rather than written to a sidecar nobody can replay).
-    plan.validate_bounds()?;
-    Ok(plan)
+        clean,
+        entries,
+        source: model.source.clone(),
+        provenance: choice.provenance,
+    })
 }
 
 impl Plan {

@@ -1,7 +1,8 @@
 //! Bounds on a [`Plan`] read from a file (`synth --replay` sidecars): every count, ISO,
 //! sigma, window, gain and level must be finite and within a physical range, so that a
 //! hostile or damaged sidecar (200,000 lights, sigma 1e30) is refused at once with the field
-//! named, before any pixel work. Plans sampled by [`super::plan::plan`] always pass.
+//! named, before any pixel work. Plans sampled by [`super::plan::Planner`] always pass (the
+//! report's lists: [`super::plan_report::PlanReport::validate_bounds`]).
 
 use super::burst::BurstPlan;
 use super::dim::DimPlan;
@@ -13,10 +14,7 @@ use crate::error::{Error, Result};
 /// Most lights in a plan: the ambient light plus [`MAX_LIGHTS`] local lights and
 /// [`MAX_LIGHTS`] bulbs.
 pub const MAX_PLAN_LIGHTS: usize = 1 + 2 * MAX_LIGHTS as usize;
-/// Most opcode entries (applied or skipped) and opcode warnings in a plan: every opcode
-/// the reader accepts, three lists of [`crate::limits::MAX_OPCODES_PER_LIST`] (a plan that
-/// `synth` samples for such a file must replay).
-pub const MAX_PLAN_OPCODES: usize = 3 * crate::limits::MAX_OPCODES_PER_LIST as usize;
+pub use super::plan_report::MAX_PLAN_OPCODES;
 // The value bounds live in the one table, crate::bounds (re-exported here by their old names).
 pub use crate::bounds::{
     ISO_RANGE, MAX_EXTENT_FACTOR, MAX_GAIN, MAX_LIST, MAX_NOISE_ENTRIES, MAX_NOISE_PARAM, MAX_RATIO,
@@ -61,13 +59,6 @@ impl Plan {
                 return Err(field(name, format!("{v} is outside 1..={max_side}")));
             }
         }
-        if let Some([w, h]) = self.target_size {
-            for (name, v) in [("target_size[0]", w), ("target_size[1]", h)] {
-                if v == 0 || v > max_side {
-                    return Err(field(name, format!("{v} is outside 1..={max_side}")));
-                }
-            }
-        }
         if self.lights.len() > MAX_PLAN_LIGHTS {
             return Err(field(
                 "lights",
@@ -79,24 +70,6 @@ impl Plan {
                 "noise",
                 format!("{} entries (at most {MAX_NOISE_ENTRIES})", self.noise.len()),
             ));
-        }
-        if self.stages.len() > MAX_LIST {
-            return Err(field("stages", format!("more than {MAX_LIST}")));
-        }
-        // One warning per opcode is possible, besides the others.
-        if self.warnings.len() > MAX_LIST + MAX_PLAN_OPCODES {
-            return Err(field(
-                "warnings",
-                format!("more than {}", MAX_LIST + MAX_PLAN_OPCODES),
-            ));
-        }
-        if let Some(o) = &self.opcodes {
-            if o.applied.len() > MAX_PLAN_OPCODES || o.skipped.len() > MAX_PLAN_OPCODES {
-                return Err(field(
-                    "opcodes",
-                    format!("more than {MAX_PLAN_OPCODES} entries"),
-                ));
-            }
         }
         ratio("day_neutral", &self.day_neutral)?;
         ratio("night_neutral", &self.night_neutral)?;

@@ -2,7 +2,7 @@
 //! (docs/synthesis.md, "1. Normalize"), remove the day illuminant (2), dim (3), relight (5)
 //! and denormalize (6), with rayon over rows and per-thread row buffers (no whole-image
 //! temporaries per light). The plan's stage names `normalize`, `remove_day_illuminant`,
-//! `dim`, `masks`, `relight_*`, `bulbs` and `denormalize` (listed by `synth::plan`) all run
+//! `dim`, `masks`, `relight_*`, `bulbs` and `denormalize` (listed by the plan's report) all run
 //! here, in this one pass, not in functions of those names: `dim.rs` only draws the
 //! factor, `masks.rs` evaluates the masks this pass asks for, and the normalize and
 //! denormalize arithmetic is [`crate::normalize::Normalizer`]'s.
@@ -40,9 +40,7 @@ pub struct RunReport {
     /// Active-area sites saturated in the input (linear value >= white).
     pub saturated_sites: u64,
     /// Warnings about what the renders made (a target or network input that came out
-    /// constant, [`crate::isp::flat`]), about the input; absent when there is none, so other
-    /// sidecars are unchanged.
-    #[serde(default, skip_serializing_if = "<[_]>::is_empty")]
+    /// constant, [`crate::isp::flat`]).
     pub warnings: crate::diagnostics::Diagnostics,
 }
 
@@ -561,7 +559,7 @@ mod tests {
     use super::*;
     use crate::raw::meta::RawMeta;
     use crate::raw::Bayer;
-    use crate::synth::{plan, Calibration, Compat, SynthOptions};
+    use crate::synth::{Calibration, Compat, Planner, SynthOptions};
 
     /// A 10-bit frame with stored values below black, across the range, at and above white.
     fn frame(bayer: Bayer, table: bool, delta: bool) -> RawImage {
@@ -623,7 +621,12 @@ mod tests {
                                 ..SynthOptions::default()
                             };
                             let cal = Calibration::embedded(&opts).unwrap();
-                            let p = plan(&img, "d.dng", 0, 0, &opts, &cal).unwrap();
+                            let p = Planner::new(&img, &opts)
+                                .calibration(&cal)
+                                .name("d.dng")
+                                .plan()
+                                .map(|p| p.plan)
+                                .unwrap();
                             let (out, _) = run_clean(&img, &p).unwrap();
                             let crop = Crop {
                                 top: 2,
@@ -674,7 +677,13 @@ mod tests {
             .release_compat()
             .unwrap();
             let cal = Calibration::embedded(&opts).unwrap();
-            let mut p = plan(&img, "s.dng", 1, 0, &opts, &cal).unwrap();
+            let mut p = Planner::new(&img, &opts)
+                .calibration(&cal)
+                .name("s.dng")
+                .seed(1)
+                .plan()
+                .map(|p| p.plan)
+                .unwrap();
             assert!(p.range_per_site);
             // one bulb over the whole frame, bright enough to saturate every lit site
             let bulb = p.lights.last_mut().unwrap();
@@ -720,7 +729,13 @@ mod tests {
         .release_compat()
         .unwrap();
         let cal = Calibration::embedded(&opts).unwrap();
-        let mut p = plan(&img, "o.dng", 4, 0, &opts, &cal).unwrap();
+        let mut p = Planner::new(&img, &opts)
+            .calibration(&cal)
+            .name("o.dng")
+            .seed(4)
+            .plan()
+            .map(|p| p.plan)
+            .unwrap();
         let (on, _) = run_clean(&img, &p).unwrap();
         p.range_per_site = false;
         let (off, _) = run_clean(&img, &p).unwrap();

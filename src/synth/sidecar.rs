@@ -1,21 +1,27 @@
-//! The JSON sidecar written next to each (input, variant)'s outputs: every sampled value
-//! (the whole [`Plan`]), the options, calibration summary, values computed while running,
-//! the stages that ran, the tool version, the input's name and SHA-256, and the output
-//! names. `--replay` rebuilds the plan from it and reproduces the outputs byte for byte.
-//! Its content is deterministic (no timestamps), so a replay rewrites it identically.
+//! The JSON sidecar written next to each (input, variant)'s outputs, version 2
+//! (`day2night-sidecar/2`, docs/synthesis.md "The sidecar"): every sampled value (the
+//! [`Plan`]), what planning found besides (the [`PlanReport`]), the options, calibration
+//! summary, values computed while running, the stages that ran, the tool version, the
+//! input's name and SHA-256, and the output names. `--replay` rebuilds the plan from it and
+//! reproduces the outputs byte for byte. Its content is deterministic (no timestamps), so a
+//! replay rewrites it identically. Every field is always written (null when absent).
+//!
+//! Reading (either version): [`super::sidecar_read`]; version-1 sidecars
+//! (`day2night-sidecar/1`, whose plan held its report) go through the one migration,
+//! `sidecar_v1::migrate`.
 
 use super::illuminant::Gaussian2;
 use super::illuminant_choice::IlluminantProvenance;
-use super::plan::Plan;
+use super::plan::{Plan, Planned};
+use super::plan_report::PlanReport;
 use super::relight::RunReport;
 use super::SynthOptions;
 use crate::error::{Error, Result};
 use serde::{Deserialize, Serialize};
 use sha2::{Digest, Sha256};
-use std::path::Path;
 
 /// Format tag of sidecars.
-pub const SIDECAR_FORMAT: &str = "day2night-sidecar/1";
+pub const SIDECAR_FORMAT: &str = "day2night-sidecar/2";
 
 /// The input file.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -33,11 +39,10 @@ pub struct CalibrationInfo {
     pub illuminants: Gaussian2,
     /// Brightness dictionary (name, mean, std), if used.
     pub brightness: Option<super::dictionaries::BrightnessDict>,
-    /// Noise model source.
+    /// Noise model source (the report's `noise_model_source`).
     pub noise_model: String,
-    /// Where each calibration came from and which camera it belongs to (issue 24). Absent
-    /// in sidecars written before it existed (their replays write none, byte for byte).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
+    /// Where each calibration came from and which camera it belongs to; null in the
+    /// replays of version-1 sidecars written before it existed.
     pub provenance: Option<Provenance>,
 }
 
@@ -47,10 +52,8 @@ pub struct CalibrationInfo {
 pub struct Provenance {
     /// The night illuminant dictionary: embedded S20 FE, CIE lamps through this file's
     /// matrices, a file's camera RGB or xy; and its camera.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub illuminants: Option<IlluminantProvenance>,
-    /// The noise model's (the plan's `noise_provenance`).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
+    /// The noise model's (the report's `noise_provenance`).
     pub noise: Option<crate::noise::NoiseProvenance>,
 }
 
@@ -67,38 +70,10 @@ pub struct OutputInfo {
     pub input_exr: bool,
     /// Names of the files written.
     pub files: Vec<String>,
-    /// EXR compression of the EXR outputs (`synth --exr-compression`); absent = "zip" (the
-    /// default, not written so default sidecars stay as before).
-    #[serde(
-        default = "default_exr_compression",
-        skip_serializing_if = "is_default_exr_compression"
-    )]
+    /// EXR compression of the EXR outputs (`synth --exr-compression`).
     pub exr_compression: String,
-    /// zlib level of zip/zips EXR outputs (`--exr-zip-level`); absent = 1 (the default, not
-    /// written). Sidecars of 0.1.0 have no field: their EXRs were level-4 ZIP from the `exr`
-    /// crate, so a replay reproduces their raw outputs byte for byte and their EXR pixels
-    /// exactly, in a smaller-compression container.
-    #[serde(
-        default = "default_zip_level",
-        skip_serializing_if = "is_default_zip_level"
-    )]
+    /// zlib level of zip/zips EXR outputs (`--exr-zip-level`).
     pub exr_zip_level: u8,
-}
-
-fn default_zip_level() -> u8 {
-    crate::encode::exr::ExrOptions::DEFAULT_ZIP_LEVEL
-}
-
-fn is_default_zip_level(l: &u8) -> bool {
-    *l == default_zip_level()
-}
-
-fn default_exr_compression() -> String {
-    "zip".into()
-}
-
-fn is_default_exr_compression(s: &str) -> bool {
-    s == "zip"
 }
 
 /// The sidecar document.
@@ -118,6 +93,8 @@ pub struct Sidecar {
     pub calibration: CalibrationInfo,
     /// Every sampled value.
     pub plan: Plan,
+    /// What planning found besides: provenance, planned stages, opcodes, warnings.
+    pub report: PlanReport,
     /// Values computed while running.
     pub run: RunReport,
     /// Stages that ran (plan stages plus the outputs written).
@@ -134,43 +111,12 @@ impl Sidecar {
         s.push('\n');
         Ok(s)
     }
-    /// Parse and check the format tag.
-    pub fn from_json(text: &str) -> Result<Sidecar> {
-        let s: Sidecar = serde_json::from_str(text)
-            .map_err(|e| Error::malformed(format!("sidecar JSON: {}", e)))?;
-        if s.format != SIDECAR_FORMAT {
-            return Err(Error::malformed(format!(
-                "sidecar format {:?} (expected {:?})",
-                s.format, SIDECAR_FORMAT
-            )));
+    /// The plan and its report, as planning made them (what `--replay` runs).
+    pub fn planned(&self) -> Planned {
+        Planned {
+            plan: self.plan.clone(),
+            report: self.report.clone(),
         }
-        // Bounds before any use: a hostile sidecar is refused at once, naming the field.
-        s.plan
-            .validate_bounds()
-            .map_err(|e| Error::invalid(format!("sidecar: {}", strip_kind(&e))))?;
-        s.options
-            .validate()
-            .map_err(|e| Error::invalid(format!("sidecar options: {}", strip_kind(&e))))?;
-        if s.outputs.files.len() > 4 * super::plan_bounds::MAX_NOISE_ENTRIES + 16 {
-            return Err(Error::invalid(format!(
-                "sidecar: outputs.files lists {} files",
-                s.outputs.files.len()
-            )));
-        }
-        Ok(s)
-    }
-    /// Read a sidecar file.
-    pub fn read(path: &Path) -> Result<Sidecar> {
-        let text = std::fs::read_to_string(path).map_err(|e| Error::from(e).in_file(path))?;
-        Sidecar::from_json(&text).map_err(|e| e.in_file(path))
-    }
-}
-
-/// The message of an `InvalidParam` error without its "invalid parameter: " prefix.
-fn strip_kind(e: &Error) -> String {
-    match e {
-        Error::InvalidParam(m) => m.clone(),
-        other => other.to_string(),
     }
 }
 

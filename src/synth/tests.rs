@@ -43,8 +43,17 @@ fn opts(mode: Mode) -> SynthOptions {
 }
 
 fn plan_for(img: &RawImage, o: &SynthOptions) -> Plan {
+    planned_for(img, o).plan
+}
+
+fn planned_for(img: &RawImage, o: &SynthOptions) -> Planned {
     let cal = Calibration::embedded(o).unwrap();
-    plan(img, "t.dng", 1, 0, o, &cal).unwrap()
+    Planner::new(img, o)
+        .calibration(&cal)
+        .name("t.dng")
+        .seed(1)
+        .plan()
+        .unwrap()
 }
 
 fn with_dim(mut p: Plan, s: f64) -> Plan {
@@ -91,9 +100,9 @@ fn dimmed_by_hand_all_phases() {
 fn day_mode_is_identity_except_clipped_highlights() {
     for b in Bayer::ALL {
         let img = frame(b, 6, 4, [500, 700, 300]);
-        let p = plan_for(&img, &opts(Mode::Day));
+        let Planned { plan: p, report } = planned_for(&img, &opts(Mode::Day));
         assert_eq!(p.dim, DimPlan::None);
-        assert!(!p.stages.contains(&"masks".to_string()));
+        assert!(!report.stages.contains(&"masks".to_string()));
         assert_eq!(p.night_neutral, [0.5, 1.0, 0.25]);
         let (out, _) = run_clean(&img, &p).unwrap();
         assert_eq!(out.data, img.data);
@@ -213,14 +222,25 @@ fn stability_black_ge_white_is_an_error() {
     let mut img = frame(Bayer::RGGB, 4, 4, [500, 700, 300]);
     img.meta.levels.black = vec![1023.0];
     let cal = Calibration::embedded(&SynthOptions::default()).unwrap();
-    let e = plan(&img, "x", 0, 0, &SynthOptions::default(), &cal).unwrap_err();
+    let e = Planner::new(&img, &SynthOptions::default())
+        .calibration(&cal)
+        .name("x")
+        .plan()
+        .map(|p| p.plan)
+        .unwrap_err();
     assert!(e.to_string().contains(">= white"), "{e}");
 }
 
 fn full_run(img: &RawImage) -> SynthOutput {
     let o = SynthOptions::default();
     let cal = Calibration::embedded(&o).unwrap();
-    let p = plan(img, "x.dng", 3, 0, &o, &cal).unwrap();
+    let p = Planner::new(img, &o)
+        .calibration(&cal)
+        .name("x.dng")
+        .seed(3)
+        .plan()
+        .map(|p| p.plan)
+        .unwrap();
     run(img, &p).unwrap()
 }
 
@@ -266,7 +286,12 @@ fn stability_tiny_or_zero_neutral_is_an_error() {
         let mut img = frame(Bayer::RGGB, 4, 4, [500, 700, 300]);
         img.meta.as_shot_neutral = Some(n);
         let cal = Calibration::embedded(&SynthOptions::default()).unwrap();
-        let e = plan(&img, "x", 0, 0, &SynthOptions::default(), &cal).unwrap_err();
+        let e = Planner::new(&img, &SynthOptions::default())
+            .calibration(&cal)
+            .name("x")
+            .plan()
+            .map(|p| p.plan)
+            .unwrap_err();
         assert!(e.to_string().contains("AsShotNeutral"), "{e}");
     }
 }
@@ -280,7 +305,12 @@ fn stability_white_65535_no_overflow() {
     let mut o = opts(Mode::Day);
     o.isos = vec![3200];
     let cal = Calibration::embedded(&o).unwrap();
-    let p = plan(&img, "x", 0, 0, &o, &cal).unwrap();
+    let p = Planner::new(&img, &o)
+        .calibration(&cal)
+        .name("x")
+        .plan()
+        .map(|p| p.plan)
+        .unwrap();
     let out = run(&img, &p).unwrap();
     // Day mode: G stays 65535, R 65535 with n = 0.5 -> y_w clipped -> 32768 (rounded).
     assert_eq!(at_colour(&out.clean, Bayer::RGGB, 1), 65535);
@@ -297,15 +327,16 @@ fn stability_iso_25_and_204800_extrapolate_finite() {
         ..SynthOptions::default()
     };
     let cal = Calibration::embedded(&o).unwrap();
-    let p = plan(&img, "x", 0, 0, &o, &cal).unwrap();
+    let Planned { plan: p, report } = Planner::new(&img, &o)
+        .calibration(&cal)
+        .name("x")
+        .plan()
+        .unwrap();
     // The frame has no ISO: the embedded table, said first, then one warning per ISO.
-    assert_eq!(p.warnings.len(), 3, "{:?}", p.warnings);
-    assert!(
-        p.warnings[0].message.contains("ISO is unknown"),
-        "{}",
-        p.warnings[0]
-    );
-    assert!(p.warnings[1].message.contains("extrapolated"));
+    let w = &report.warnings;
+    assert_eq!(w.len(), 3, "{w:?}");
+    assert!(w[0].message.contains("ISO is unknown"), "{}", w[0]);
+    assert!(w[1].message.contains("extrapolated"));
     for np in &p.noise {
         assert!(np.extrapolated);
         for q in np.params.positions {
@@ -332,7 +363,12 @@ fn stability_single_illuminant_dictionary() {
         brightness: None,
         noise: None,
     };
-    let p = plan(&img, "x", 0, 0, &o, &cal).unwrap();
+    let p = Planner::new(&img, &o)
+        .calibration(&cal)
+        .name("x")
+        .plan()
+        .map(|p| p.plan)
+        .unwrap();
     assert!(p.lights.iter().all(|l| l.illuminant == [0.7, 1.0, 0.35]));
     assert_eq!(p.night_neutral, [0.7, 1.0, 0.35]);
     run(&img, &p).unwrap();
@@ -348,15 +384,30 @@ fn no_nan_anywhere_in_plan_and_sidecar_values() {
             ..SynthOptions::default()
         };
         let cal = Calibration::embedded(&o).unwrap();
-        let p = plan(&img, "x", 9, 0, &o, &cal).unwrap();
+        let p = Planner::new(&img, &o)
+            .calibration(&cal)
+            .name("x")
+            .seed(9)
+            .plan()
+            .map(|p| p.plan)
+            .unwrap();
         let j = serde_json::to_string(&p).unwrap();
         // serde_json writes non-finite floats as null: no null may appear except the
-        // ambient/global light's absent window and the absent names of a camera.
+        // ambient/global light's absent window, the absent names of a camera, and the
+        // absent physics model and burst.
         let v: serde_json::Value = serde_json::from_str(&j).unwrap();
         fn walk(v: &serde_json::Value, key: &str) {
             match v {
                 serde_json::Value::Null => assert!(
-                    ["window", "make", "model", "unique_camera_model"].contains(&key),
+                    [
+                        "window",
+                        "make",
+                        "model",
+                        "unique_camera_model",
+                        "physics",
+                        "burst"
+                    ]
+                    .contains(&key),
                     "null (NaN?) at {key}"
                 ),
                 serde_json::Value::Number(n) => assert!(n.as_f64().unwrap().is_finite()),
@@ -376,8 +427,23 @@ fn run_is_pure_and_deterministic_across_threads_and_seeds() {
     let img = frame(Bayer::RGGB, 64, 48, [500, 700, 300]);
     let o = SynthOptions::default();
     let cal = Calibration::embedded(&o).unwrap();
-    let p = plan(&img, "a.dng", 5, 0, &o, &cal).unwrap();
-    assert_eq!(p, plan(&img, "a.dng", 5, 0, &o, &cal).unwrap());
+    let p = Planner::new(&img, &o)
+        .calibration(&cal)
+        .name("a.dng")
+        .seed(5)
+        .plan()
+        .map(|p| p.plan)
+        .unwrap();
+    assert_eq!(
+        p,
+        Planner::new(&img, &o)
+            .calibration(&cal)
+            .name("a.dng")
+            .seed(5)
+            .plan()
+            .map(|p| p.plan)
+            .unwrap()
+    );
     let a = run(&img, &p).unwrap();
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(1)
@@ -388,9 +454,22 @@ fn run_is_pure_and_deterministic_across_threads_and_seeds() {
     for (x, y) in a.noisy.iter().zip(&b.noisy) {
         assert_eq!(x.1.data, y.1.data);
     }
-    let q = plan(&img, "a.dng", 6, 0, &o, &cal).unwrap();
+    let q = Planner::new(&img, &o)
+        .calibration(&cal)
+        .name("a.dng")
+        .seed(6)
+        .plan()
+        .map(|p| p.plan)
+        .unwrap();
     assert_ne!(run(&img, &q).unwrap().clean.data, a.clean.data);
-    let v = plan(&img, "a.dng", 5, 1, &o, &cal).unwrap();
+    let v = Planner::new(&img, &o)
+        .calibration(&cal)
+        .name("a.dng")
+        .seed(5)
+        .variant(1)
+        .plan()
+        .map(|p| p.plan)
+        .unwrap();
     assert_ne!(v.lights, p.lights);
     // A plan round-trips through JSON exactly (replay).
     let j = serde_json::to_string(&p).unwrap();
@@ -423,13 +502,14 @@ fn output_metadata() {
 #[test]
 fn masks_and_lights_skipped_in_modes_that_do_not_need_them() {
     let img = frame(Bayer::RGGB, 8, 8, [500, 700, 300]);
-    let p = plan_for(&img, &opts(Mode::Global));
-    assert!(!p.stages.iter().any(|s| s == "masks" || s == "noise"));
-    let p = plan_for(&img, &opts(Mode::Local));
-    assert!(p.stages.iter().any(|s| s == "masks") && p.stages.iter().any(|s| s == "bulbs"));
+    let stages = |o: &SynthOptions| planned_for(&img, o).report.stages;
+    let s = stages(&opts(Mode::Global));
+    assert!(!s.iter().any(|s| s == "masks" || s == "noise"));
+    let s = stages(&opts(Mode::Local));
+    assert!(s.iter().any(|s| s == "masks") && s.iter().any(|s| s == "bulbs"));
     let mut o = opts(Mode::Local);
     o.bulbs = Some(0);
-    assert!(!plan_for(&img, &o).stages.iter().any(|s| s == "bulbs"));
+    assert!(!stages(&o).iter().any(|s| s == "bulbs"));
 }
 
 #[test]
@@ -457,7 +537,12 @@ fn noise_flat_field_matches_written_profile_per_band() {
     let mut o = opts(Mode::Day);
     o.isos = vec![1600, 3200];
     let cal = Calibration::embedded(&o).unwrap();
-    let p = plan(&img, "flat.dng", 0, 0, &o, &cal).unwrap();
+    let p = Planner::new(&img, &o)
+        .calibration(&cal)
+        .name("flat.dng")
+        .plan()
+        .map(|p| p.plan)
+        .unwrap();
     let out = run(&img, &p).unwrap();
     assert_eq!(out.clean.data, img.data);
     for (iso, noisy) in &out.noisy {
@@ -507,7 +592,12 @@ proptest! {
             o.formula = RelightFormula::Paper;
         }
         let cal = Calibration::embedded(&o).unwrap();
-        let p = plan(&img, "g", seed, 0, &o, &cal).unwrap();
+        let p = Planner::new(&img, &o)
+        .calibration(&cal)
+        .name("g")
+        .seed(seed)
+        .plan()
+        .map(|p| p.plan).unwrap();
         let (wf, hf) = (w as f64, h as f64);
         match p.dim {
             DimPlan::Uniform { s, .. } => prop_assert!((0.55..0.90).contains(&s)),
@@ -616,11 +706,21 @@ fn non_bayer_cfa_is_a_clear_error() {
     img.meta.cfa.cols = 3;
     img.meta.cfa.pattern = vec![0, 1, 2, 1, 2, 0, 2, 0, 1];
     let cal = Calibration::embedded(&SynthOptions::default()).unwrap();
-    let e = plan(&img, "x", 0, 0, &SynthOptions::default(), &cal).unwrap_err();
+    let e = Planner::new(&img, &SynthOptions::default())
+        .calibration(&cal)
+        .name("x")
+        .plan()
+        .map(|p| p.plan)
+        .unwrap_err();
     assert!(e.to_string().contains("not a 2x2 Bayer"), "{e}");
     let mut img = frame(Bayer::RGGB, 6, 6, [500, 700, 300]);
     img.meta.cfa.plane_color = vec![0, 1, 3];
-    assert!(plan(&img, "x", 0, 0, &SynthOptions::default(), &cal).is_err());
+    assert!(Planner::new(&img, &SynthOptions::default())
+        .calibration(&cal)
+        .name("x")
+        .plan()
+        .map(|p| p.plan)
+        .is_err());
 }
 
 /// The per-value tables of the clean pass (2x2-periodic black) give the bytes of the
@@ -668,9 +768,16 @@ fn physics_model_plan_carries_params_and_gaussian_plans_do_not() {
         ..SynthOptions::default()
     };
     let mut cal = Calibration::embedded(&o).unwrap();
-    let gauss = plan(&img, "x", 3, 0, &o, &cal).unwrap();
+    let gauss = Planner::new(&img, &o)
+        .calibration(&cal)
+        .name("x")
+        .seed(3)
+        .plan()
+        .map(|p| p.plan)
+        .unwrap();
     assert!(gauss.noise.iter().all(|n| n.physics.is_none()));
-    assert!(!serde_json::to_string(&gauss).unwrap().contains("physics"));
+    let j = serde_json::to_string(&gauss).unwrap();
+    assert!(!j.contains("\"physics\":{"), "{j}");
     let pt = |iso, k| PhysicsPoint {
         iso,
         k,
@@ -681,7 +788,12 @@ fn physics_model_plan_carries_params_and_gaussian_plans_do_not() {
     };
     let pm = PhysicsModel::new("t", 512.0, 16383.0, vec![pt(800, 1.0), pt(1600, 2.0)]).unwrap();
     cal.noise = Some(NoiseModel::from_physics(pm.clone()).unwrap());
-    let p = plan(&img, "x", 3, 0, &o, &cal).unwrap();
+    let Planned { plan: p, report } = Planner::new(&img, &o)
+        .calibration(&cal)
+        .name("x")
+        .seed(3)
+        .plan()
+        .unwrap();
     // Same random draws as the Gaussian plan (the seeds do not depend on the model).
     assert_eq!(p.lights, gauss.lights);
     let scale = WHITE - BLACK;
@@ -691,7 +803,10 @@ fn physics_model_plan_carries_params_and_gaussian_plans_do_not() {
         assert_eq!(n.params, ph.to_noise_params(scale));
         assert_eq!(n.extrapolated, n.iso == 6400);
     }
-    assert!(p.warnings.iter().any(|w| w.message.contains("ISO 6400")));
+    assert!(report
+        .warnings
+        .iter()
+        .any(|w| w.message.contains("ISO 6400")));
     p.check_against(&img).unwrap();
     // The plan round-trips through JSON (the sidecar) with its physics parameters.
     let back: Plan = serde_json::from_str(&serde_json::to_string(&p).unwrap()).unwrap();
@@ -737,7 +852,12 @@ proptest! {
             o.formula = RelightFormula::Paper;
         }
         let cal = Calibration::embedded(&o).unwrap();
-        let p = plan(&img, "b", seed, 0, &o, &cal).unwrap();
+        let p = Planner::new(&img, &o)
+        .calibration(&cal)
+        .name("b")
+        .seed(seed)
+        .plan()
+        .map(|p| p.plan).unwrap();
         prop_assert!(p.validate_bounds().is_ok());
     }
 }

@@ -155,7 +155,7 @@ fn frames_with_little_valid_area_are_warned_about() {
                     assert!(w.contains(&format!("f{f:02} ")), "f{f:02} missing: {w}");
                 }
                 assert!(w.starts_with("warning[burst-valid-area]: "), "{w}");
-                let plan_warnings = sc["plan"]["warnings"].to_string();
+                let plan_warnings = sc["report"]["warnings"].to_string();
                 assert!(
                     plan_warnings.contains("valid area under half")
                         && plan_warnings.contains("\"code\":\"burst-valid-area\""),

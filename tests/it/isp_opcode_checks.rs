@@ -122,7 +122,7 @@ fn without_a_render_unusable_lists_warn_and_with_one_they_fail() {
         "{err}"
     );
     let sc = sidecar(&o.join("bad.json"));
-    let skipped = &sc["plan"]["opcodes"]["skipped"];
+    let skipped = &sc["report"]["opcodes"]["skipped"];
     assert_eq!(skipped[0]["list"], "OpcodeList2");
     assert_eq!(skipped[0]["name"], "(malformed list)");
     assert_eq!(skipped[1]["name"], "FixBadPixelsConstant");
@@ -132,7 +132,7 @@ fn without_a_render_unusable_lists_warn_and_with_one_they_fail() {
         .contains("not optional (no render was requested)"));
     // The two opcode warnings, with their codes, about the input (the fixture's noise
     // calibration adds its own: not this test's).
-    let opcode_warnings: Vec<(&str, &str)> = sc["plan"]["warnings"]
+    let opcode_warnings: Vec<(&str, &str)> = sc["report"]["warnings"]
         .as_array()
         .unwrap()
         .iter()
@@ -146,7 +146,7 @@ fn without_a_render_unusable_lists_warn_and_with_one_they_fail() {
             ("opcode-not-applied", "bad.dng")
         ],
         "{}",
-        sc["plan"]["warnings"]
+        sc["report"]["warnings"]
     );
     assert!(!sc["stages"]
         .as_array()
@@ -201,7 +201,7 @@ fn without_a_render_unusable_lists_warn_and_with_one_they_fail() {
         .collect();
     assert_eq!(meta.len(), 1, "{meta:?}");
     assert_eq!(
-        sidecar(&meta[0])["plan"]["opcodes"]["skipped"]
+        sidecar(&meta[0])["report"]["opcodes"]["skipped"]
             .as_array()
             .unwrap()
             .len(),
@@ -261,7 +261,7 @@ fn the_issues_silent_blacks_warn_before_and_after_rendering() {
         assert!(err.contains(want) && err.contains("the target render is constant"), "{err}");
         let stem = name.trim_end_matches(".dng");
         let sc = sidecar(&o.join(format!("{stem}.json")));
-        assert!(sc["plan"]["warnings"].to_string().contains("(opcode 1 of 1)"));
+        assert!(sc["report"]["warnings"].to_string().contains("(opcode 1 of 1)"));
         assert!(sc["run"]["warnings"][0]["message"].as_str().unwrap().starts_with("the target render is constant"));
         assert_eq!(sc["run"]["warnings"][0]["code"], "render-constant");
         // info: not "ready" without a word.
@@ -542,7 +542,7 @@ fn every_constant_render_of_random_opcode_lists_warned() {
             let sc = sidecar(&o.join(format!("r{case}.json")));
             let target = o.join(format!("r{case}_target.exr"));
             let flat = read_image(&target).unwrap().image;
-            let run_warned = !sc["run"]["warnings"].is_null();
+            let run_warned = !sc["run"]["warnings"].as_array().unwrap().is_empty();
             let any_flat = [0, 1, 2].iter().any(|&c| {
                 let v0 = flat.data[c];
                 flat.data.iter().skip(c).step_by(3).all(|&v| v == v0)
@@ -589,7 +589,7 @@ fn a_trim_that_changes_the_target_size_is_said_and_recorded() {
         "{err}"
     );
     let sc = sidecar(&o.join("trim.json"));
-    assert_eq!(sc["plan"]["target_size"], serde_json::json!([32, 16]));
+    assert_eq!(sc["report"]["target_size"], serde_json::json!([32, 16]));
     assert_eq!(
         (
             sc["plan"]["active_width"].as_u64(),
@@ -646,9 +646,7 @@ fn a_trim_that_changes_the_target_size_is_said_and_recorded() {
         "none",
     ]));
     assert!(r.status.success() && !err.contains("TrimBounds"), "{err}");
-    assert!(sidecar(&t.path().join("n/trim.json"))["plan"]
-        .get("target_size")
-        .is_none());
+    assert!(sidecar(&t.path().join("n/trim.json"))["report"]["target_size"].is_null());
 }
 
 /// A list as long as the reader accepts (4096 opcodes) is sampled, written and replayed:
@@ -675,8 +673,8 @@ fn the_longest_lists_synthesize_and_replay() {
     ]));
     assert!(r.status.success(), "{err}");
     let sc = sidecar(&a.join("long.json"));
-    let applied = sc["plan"]["opcodes"]["applied"].as_array().unwrap().len();
-    let dropped = sc["plan"]["opcodes"]["dropped"]
+    let applied = sc["report"]["opcodes"]["applied"].as_array().unwrap().len();
+    let dropped = sc["report"]["opcodes"]["dropped"]
         .as_array()
         .map_or(0, |d| d.len());
     // Every opcode is accounted for: applied, or dropped as a repeat that changes nothing.

@@ -405,8 +405,8 @@ fn unknown_optional_opcodes_warn_and_mandatory_ones_fail() {
     assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
     let sc: serde_json::Value =
         serde_json::from_slice(&std::fs::read(o.join("opt.json")).unwrap()).unwrap();
-    assert_eq!(sc["plan"]["opcodes"]["skipped"][0]["list"], "OpcodeList3");
-    assert_eq!(sc["plan"]["opcodes"]["skipped"][0]["id"], 99);
+    assert_eq!(sc["report"]["opcodes"]["skipped"][0]["list"], "OpcodeList3");
+    assert_eq!(sc["report"]["opcodes"]["skipped"][0]["id"], 99);
     let r = common::bin()
         .arg("synth")
         .arg(&f2)

@@ -62,6 +62,7 @@ mod release_version;
 mod release_workflow;
 mod runs_concurrent;
 mod runs_interrupt;
+mod sidecar_v1;
 mod synth_burst;
 mod synth_cli;
 mod synth_lamps;

@@ -74,7 +74,7 @@ fn estimate_is_used_recorded_and_measured_in_the_noisy_raw() {
     assert!(!stderr(&o).contains(": noise: "), "{}", stderr(&o));
     let sc = sidecar(&out, "day");
     let prov = &sc["calibration"]["provenance"]["noise"];
-    assert_eq!(prov, &sc["plan"]["noise_provenance"]);
+    assert_eq!(prov, &sc["report"]["noise_provenance"]);
     assert_eq!(prov["source"], "image_estimate");
     assert_eq!(prov["camera"]["make"], "day2night");
     assert_eq!(prov["camera"]["model"], "Synthetic");
@@ -329,17 +329,18 @@ fn info_says_where_the_noise_model_comes_from() {
 
 #[test]
 fn a_sidecar_without_provenance_replays_byte_for_byte() {
-    // A sidecar as written before provenance existed: today's, without the two entries.
+    // A sidecar as written before provenance existed (version 1 without the two entries,
+    // migrated): today's, with the two entries null.
     let t = tempfile::tempdir().unwrap();
     let p = write(t.path(), "day.dng", &day_frame(None));
     let a = t.path().join("a");
     synth(&p, &a, &[]);
     let mut sc = Sidecar::read(&a.join("day.json")).unwrap();
-    assert!(sc.plan.noise_provenance.is_some() && sc.calibration.provenance.is_some());
-    sc.plan.noise_provenance = None;
+    assert!(sc.report.noise_provenance.is_some() && sc.calibration.provenance.is_some());
+    sc.report.noise_provenance = None;
     sc.calibration.provenance = None;
     let old = sc.to_json().unwrap();
-    assert!(!old.contains("provenance"));
+    assert!(old.contains("\"noise_provenance\": null") && old.contains("\"provenance\": null"));
     let old_path = t.path().join("old.json");
     std::fs::write(&old_path, &old).unwrap();
     let b = t.path().join("b");

@@ -54,7 +54,7 @@ fn preset_is_recorded_replayed_and_thread_count_free() {
     assert_eq!(sc.options.compat, Compat::RELEASE);
     assert_eq!(sc.options.mask_eval, MaskEval::Release);
     assert_eq!(sc.options.sampler.max_mahalanobis, NO_MAHALANOBIS_CUT);
-    assert!(sc.plan.day_neutral_source.contains("as stored"));
+    assert!(sc.report.day_neutral_source.contains("as stored"));
     // replay reproduces every byte
     ok(&synth(&[
         s(&day),
@@ -69,7 +69,7 @@ fn preset_is_recorded_replayed_and_thread_count_free() {
     ok(&synth(&[s(&day), "-o", s(&d), "--seed", "5"]));
     assert_ne!(files(&a)["day_clean.dng"], files(&d)["day_clean.dng"]);
     let text = std::fs::read_to_string(d.join("day.json")).unwrap();
-    assert!(!text.contains("compat") && !text.contains("truncate_noise"));
+    assert!(!text.contains("compat") && text.contains("\"truncate_noise\": false"));
 }
 
 #[test]
@@ -236,7 +236,13 @@ fn release_bulbs_with_per_site_black_match_the_release_on_every_cfa_phase() {
 /// Clean night raw of `img` with `opts` (seed 3).
 fn clean(img: &RawImage, opts: &SynthOptions) -> (RawImage, synth::Plan) {
     let cal = Calibration::embedded(opts).unwrap();
-    let p = synth::plan(img, "x.dng", 3, 0, opts, &cal).unwrap();
+    let p = synth::Planner::new(img, opts)
+        .calibration(&cal)
+        .name("x.dng")
+        .seed(3)
+        .plan()
+        .map(|p| p.plan)
+        .unwrap();
     (run_clean(img, &p).unwrap().0, p)
 }
 
@@ -412,7 +418,13 @@ fn measure_release_masks() {
                 ..SynthOptions::default()
             };
             let cal = Calibration::embedded(&base).unwrap();
-            let mut pa = synth::plan(&img, "m.dng", seed, 0, &base, &cal).unwrap();
+            let mut pa = synth::Planner::new(&img, &base)
+                .calibration(&cal)
+                .name("m.dng")
+                .seed(seed)
+                .plan()
+                .map(|p| p.plan)
+                .unwrap();
             if snap {
                 // centres on the release's grid (its integer location ty is the window's
                 // first row + h // 2): only the kernel's shape differs, not its placement

@@ -383,7 +383,7 @@ fn real_canon_file() {
         serde_json::from_slice(&std::fs::read(t.path().join(format!("{stem}.json"))).unwrap())
             .unwrap();
     assert_eq!(sc["plan"]["clean_iso"], 50);
-    assert!(sc["plan"]["noise_model_source"]
+    assert!(sc["report"]["noise_model_source"]
         .as_str()
         .unwrap()
         .contains("embedded"));
@@ -504,7 +504,7 @@ fn calibration_files() {
     let sc: serde_json::Value =
         serde_json::from_slice(&std::fs::read(o.join("day.json")).unwrap()).unwrap();
     let plan = &sc["plan"];
-    assert!(plan["noise_model_source"]
+    assert!(sc["report"]["noise_model_source"]
         .as_str()
         .unwrap()
         .contains("embedded"));
@@ -562,8 +562,8 @@ fn exr_compression_option_is_recorded_and_replayed() {
         "piz",
     ]));
     let (fz, fp) = (files(&z), files(&p));
-    // Default sidecars do not mention the option; a non-default one is recorded.
-    assert!(!String::from_utf8_lossy(&fz["day.json"]).contains("exr_compression"));
+    // The option is recorded, default or not.
+    assert!(String::from_utf8_lossy(&fz["day.json"]).contains("\"exr_compression\": \"zip\""));
     assert!(String::from_utf8_lossy(&fp["day.json"]).contains("\"exr_compression\": \"piz\""));
     assert_eq!(fz["day_clean.dng"], fp["day_clean.dng"]);
     // zip renders band by band, piz from the whole image: the same PNG bytes
@@ -592,7 +592,7 @@ fn exr_zip_level_is_recorded_replayed_and_checked() {
         &[&base[..], &["-o", s(&n), "--exr-zip-level", "9"]].concat(),
     ));
     let (fz, fn_) = (files(&z), files(&n));
-    assert!(!String::from_utf8_lossy(&fz["day.json"]).contains("exr_zip_level"));
+    assert!(String::from_utf8_lossy(&fz["day.json"]).contains("\"exr_zip_level\": 1"));
     assert!(String::from_utf8_lossy(&fn_["day.json"]).contains("\"exr_zip_level\": 9"));
     assert_eq!(fz["day_clean.dng"], fn_["day_clean.dng"]);
     // Level 9 is smaller than level 1 (lossless both: the pixels are compared by the

@@ -82,7 +82,13 @@ fn sampled_xy(img: &RawImage, cal: &Calibration, n: usize) -> Vec<[f64; 2]> {
     let mut out = Vec::new();
     let mut seed = 0;
     while out.len() < n {
-        let p = synth::plan(img, "x.dng", seed, 0, &opts, cal).unwrap();
+        let p = synth::Planner::new(img, &opts)
+            .calibration(cal)
+            .name("x.dng")
+            .seed(seed)
+            .plan()
+            .map(|p| p.plan)
+            .unwrap();
         for l in &p.lights {
             out.push(cc.neutral_to_xy(l.illuminant).unwrap());
         }
@@ -322,12 +328,12 @@ fn the_paper_phone_keeps_the_paper_dictionary_byte_for_byte() {
     let prov = sc.calibration.provenance.unwrap().illuminants.unwrap();
     assert_eq!(serde_json::to_value(prov.source).unwrap(), "embedded_s20fe");
     assert!(
-        !sc.plan
+        !sc.report
             .warnings
             .iter()
             .any(|w| w.message.contains("illuminants")),
         "{:?}",
-        sc.plan.warnings
+        sc.report.warnings
     );
     // The Gaussian is the embedded fit itself (docs/synthesis.md, "4. Night illuminants").
     let g = &sc.calibration.illuminants;
@@ -369,7 +375,7 @@ fn the_release_preset_keeps_the_paper_dictionary_and_says_so() {
     let prov = sc.calibration.provenance.unwrap().illuminants.unwrap();
     assert_eq!(serde_json::to_value(prov.source).unwrap(), "embedded_s20fe");
     assert!(
-        sc.plan
+        sc.report
             .warnings
             .iter()
             .any(|w| w.message.contains("S20 FE")
@@ -504,19 +510,13 @@ fn sidecars_without_provenance_replay_their_old_outputs() {
         "800",
     ]));
     // A sidecar as written before provenance existed (neither the illuminants' nor the
-    // noise model's: the plan's `noise_provenance` came with the latter).
+    // noise model's: the report's `noise_provenance` came with the latter).
     let mut v: serde_json::Value =
         serde_json::from_slice(&std::fs::read(a.join("day.json")).unwrap()).unwrap();
     assert!(v["calibration"]["provenance"]["illuminants"].is_object());
     assert!(v["calibration"]["provenance"]["noise"].is_object());
-    v["calibration"]
-        .as_object_mut()
-        .unwrap()
-        .remove("provenance");
-    v["plan"]
-        .as_object_mut()
-        .unwrap()
-        .remove("noise_provenance");
+    v["calibration"]["provenance"] = serde_json::Value::Null;
+    v["report"]["noise_provenance"] = serde_json::Value::Null;
     let old = t.path().join("old.json");
     std::fs::write(
         &old,
@@ -529,7 +529,8 @@ fn sidecars_without_provenance_replay_their_old_outputs() {
     // same pixels; the replayed sidecar is the old one (no provenance added), as synth
     // writes it
     let canonical = Sidecar::read(&old).unwrap().to_json().unwrap();
-    assert!(!canonical.contains("provenance"));
+    assert!(canonical.contains("\"provenance\": null"));
+    assert!(canonical.contains("\"noise_provenance\": null"));
     fa.insert("day.json".into(), canonical.into_bytes());
     same(&fa, &fb, "replay of a sidecar without provenance");
     // and a new sidecar replays byte for byte, provenance included

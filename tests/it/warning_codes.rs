@@ -27,7 +27,7 @@ fn synth_says_each_warning_once_with_its_code_and_the_sidecar_keeps_it() {
     );
     let sc = Sidecar::read(&o.join("day.json")).unwrap();
     let w: Vec<(Code, &str)> = sc
-        .plan
+        .report
         .warnings
         .iter()
         .map(|w| (w.code, w.subject.as_str()))
@@ -35,8 +35,8 @@ fn synth_says_each_warning_once_with_its_code_and_the_sidecar_keeps_it() {
     assert_eq!(w, [(Code::NoiseExtrapolated, "day.dng")]);
     let raw: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(o.join("day.json")).unwrap()).unwrap();
-    assert_eq!(raw["plan"]["warnings"][0]["code"], "noise-extrapolated");
-    assert!(raw["plan"]["warnings"][0]["message"]
+    assert_eq!(raw["report"]["warnings"][0]["code"], "noise-extrapolated");
+    assert!(raw["report"]["warnings"][0]["message"]
         .as_str()
         .unwrap()
         .starts_with("ISO 25 scaled from the single calibrated ISO 100"));
@@ -87,9 +87,9 @@ fn a_sidecar_with_plain_string_warnings_loads_and_replays_byte_for_byte() {
     // The sidecar as an older day2night wrote it: warnings as plain strings.
     let mut sc = Sidecar::read(&a.join("day.json")).unwrap();
     let text = sc.to_json().unwrap();
-    let msg = sc.plan.warnings[0].message.clone();
+    let msg = sc.report.warnings[0].message.clone();
     let old = text.replace(
-        &serde_json::to_string_pretty(&sc.plan.warnings[0])
+        &serde_json::to_string_pretty(&sc.report.warnings[0])
             .unwrap()
             .replace('\n', "\n      "),
         &serde_json::to_string(&msg).unwrap(),
@@ -98,8 +98,8 @@ fn a_sidecar_with_plain_string_warnings_loads_and_replays_byte_for_byte() {
     let old_path = t.path().join("old.json");
     std::fs::write(&old_path, &old).unwrap();
     let read = Sidecar::read(&old_path).unwrap();
-    assert_eq!(read.plan.warnings[0].code, Code::Legacy);
-    assert_eq!(read.plan.warnings[0].message, msg);
+    assert_eq!(read.report.warnings[0].code, Code::Legacy);
+    assert_eq!(read.report.warnings[0].message, msg);
     // Written back as the same string: the old file round-trips byte for byte.
     assert_eq!(read.to_json().unwrap(), old);
     ok(&synth(&[s(&day), "-o", s(&b), "--replay", s(&old_path)]));
@@ -108,9 +108,9 @@ fn a_sidecar_with_plain_string_warnings_loads_and_replays_byte_for_byte() {
     fa.insert("day.json".into(), old.clone().into_bytes());
     same(&fa, &fb, "replay of a plain-string sidecar");
     // The legacy warning is said with its code.
-    sc.plan.warnings = read.plan.warnings.clone();
+    sc.report.warnings = read.report.warnings.clone();
     assert_eq!(
-        sc.plan.warnings[0].line("day.dng"),
+        sc.report.warnings[0].line("day.dng"),
         format!("warning[legacy]: day.dng: {msg}")
     );
 }

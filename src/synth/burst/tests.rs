@@ -9,7 +9,7 @@ use crate::raw::crop::Crop;
 use crate::raw::meta::RawMeta;
 use crate::raw::{Bayer, RawImage};
 use crate::synth::night::{synthesize, Request};
-use crate::synth::{plan, Calibration, Plan, SynthOptions};
+use crate::synth::{Calibration, Plan, Planner, SynthOptions};
 use std::path::Path;
 
 /// A smooth colour scene (normalized values in about [0.1, 0.9]) at (x, y).
@@ -181,7 +181,13 @@ fn burst_plan(day: &RawImage, motion: Motion, physics: bool) -> Plan {
         let pm = PhysicsModel::new("t", b, w, vec![pt(800, 0.5), pt(1600, 1.0)]).unwrap();
         cal.noise = Some(crate::noise::NoiseModel::from_physics(pm).unwrap());
     }
-    plan(day, "day.dng", 5, 0, &opts, &cal).unwrap()
+    Planner::new(day, &opts)
+        .calibration(&cal)
+        .name("day.dng")
+        .seed(5)
+        .plan()
+        .map(|p| p.plan)
+        .unwrap()
 }
 
 /// Every sample of the crop raw `c` equals the same active-area site of `full`.

@@ -1,4 +1,4 @@
-//! The synthesis options, each declared once ([`OPTIONS`], in [`table`]): its name, kind,
+//! The synthesis options, each declared once ([`OPTIONS`], in `table.rs`): its name, kind,
 //! default, range or choices, help text, how Python spells and reaches it, the sidecar field
 //! it lands in, and how its value sets a [`JobConfig`]. The command line's `synth` and
 //! `dataset` flags (src/cli/synth.rs), Python's keyword arguments (python/src/synth_options.rs)
