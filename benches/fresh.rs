@@ -10,7 +10,9 @@
 //! --release --example make_bench_input -- day.dng`; `D2N_FRESH_ITEMS`, default 200).
 //! Python-side numbers (patches/s next to the trainer): benches/train_bench.py.
 use day2night::encode::png::encode_u8;
-use day2night::isp::release_input::{release_codes, release_table, RELEASE_GAMMA};
+use day2night::isp::release_input::{
+    release_codes, release_table, CfaPlane, FrameFacts, RELEASE_GAMMA,
+};
 use day2night::isp::render_crop::{render_linear_crop_with, CROP_MARGIN};
 use day2night::isp::tone::DisplayTone;
 use day2night::isp::Demosaic;
@@ -134,15 +136,19 @@ fn main() {
             .expect("target");
             lap(4, &mut t);
             let codes = release_codes(
-                &noisy,
-                side,
-                side,
-                crop.top,
-                crop.left,
-                &day.raw.meta.levels,
-                bayer,
-                plan.night_neutral,
-                None,
+                &CfaPlane {
+                    data: &noisy,
+                    width: side,
+                    height: side,
+                    top: crop.top,
+                    left: crop.left,
+                },
+                &FrameFacts {
+                    levels: &day.raw.meta.levels,
+                    bayer,
+                    neutral: plan.night_neutral,
+                    linearization: None,
+                },
             )
             .expect("codes");
             lap(5, &mut t);

@@ -14,7 +14,44 @@ use day2night::synth::patches::{crop_pair, cut_patches, PairInput};
 use numpy::ndarray::{Array3, Array4};
 use numpy::{IntoPyArray, PyReadonlyArray1};
 use pyo3::prelude::*;
-use pyo3::types::PyDict;
+use pyo3::types::{PyDict, PyTuple};
+
+/// `fresh_pair`'s parameters after `iso`, bound as Python binds them (positional or
+/// keyword), and its other keyword arguments (the synthesis options).
+struct PairCall<'py> {
+    seed: Seed,
+    variant: Variant,
+    mode: String,
+    task: String,
+    table: Option<PyReadonlyArray1<'py, f32>>,
+    patch: Option<usize>,
+    tone: String,
+    options: Bound<'py, PyDict>,
+}
+
+impl<'py> PairCall<'py> {
+    fn bind(args: &Bound<'py, PyTuple>, kwargs: Option<&Bound<'py, PyDict>>) -> PyResult<Self> {
+        let names = ["seed", "variant", "mode", "task", "table", "patch", "tone"];
+        let (p, options) = args::bind("fresh_pair", &names, args, kwargs, true)?;
+        let text = |v: &args::Given<'py>, name: &str, default: &str| -> PyResult<String> {
+            match v {
+                Some(v) => args::string(v, name),
+                None => Ok(default.into()),
+            }
+        };
+        let opt = |v: &args::Given<'py>| v.as_ref().filter(|v| !v.is_none()).cloned();
+        Ok(PairCall {
+            seed: args::or_default(&p[0], Seed(0))?,
+            variant: args::or_default(&p[1], Variant(0))?,
+            mode: text(&p[2], "mode", "local")?,
+            task: text(&p[3], "task", "noisy")?,
+            table: opt(&p[4]).map(|t| t.extract()).transpose()?,
+            patch: opt(&p[5]).map(|t| t.extract()).transpose()?,
+            tone: text(&p[6], "tone", "srgb")?,
+            options,
+        })
+    }
+}
 
 /// The training pair of the ``crop`` of one night variant of ``raw``: what
 /// ``synthesize(raw, seed=seed, variant=variant, mode=mode, isos=(iso,), crop=crop,
@@ -37,22 +74,27 @@ use pyo3::types::PyDict;
 /// >>> x.shape, y.shape
 /// ((64, 3, 64, 64), (64, 3, 64, 64))
 #[pyfunction]
-#[pyo3(signature = (raw, crop, iso, seed=Seed(0), variant=Variant(0), mode="local", task="noisy", table=None, patch=None, tone="srgb", **options))]
-#[allow(clippy::too_many_arguments)]
+#[pyo3(
+    signature = (raw, crop, iso, *args, **kwargs),
+    text_signature = "(raw, crop, iso, seed=0, variant=0, mode='local', task='noisy', table=None, patch=None, tone='srgb', **options)"
+)]
 pub(crate) fn fresh_pair<'py>(
     py: Python<'py>,
     raw: &Bound<'py, Raw>,
     crop: &Bound<'py, PyAny>,
     iso: Iso,
-    seed: Seed,
-    variant: Variant,
-    mode: &str,
-    task: &str,
-    table: Option<PyReadonlyArray1<'py, f32>>,
-    patch: Option<usize>,
-    tone: &str,
-    options: Option<&Bound<'py, PyDict>>,
+    args: &Bound<'py, PyTuple>,
+    kwargs: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>)> {
+    let call = PairCall::bind(args, kwargs)?;
+    let (seed, variant, mode, task, patch) = (
+        call.seed,
+        call.variant,
+        call.mode.as_str(),
+        call.task.as_str(),
+        call.patch,
+    );
+    let (table, tone, options) = (call.table, call.tone.as_str(), Some(&call.options));
     let input = match task {
         "noisy" => PairInput::Noisy(iso.0),
         "clean" => PairInput::Clean,

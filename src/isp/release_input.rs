@@ -94,18 +94,52 @@ impl Sites {
 /// the frame's, `neutral` the white balance (camera RGB, any scale), `linearization` the
 /// frame's LinearizationTable for stored samples (None for linear samples). The plane must
 /// be at least 3 x 3.
-#[allow(clippy::too_many_arguments)]
-pub fn release_codes(
-    plane: &[u16],
-    width: usize,
-    height: usize,
-    top: usize,
-    left: usize,
-    levels: &Levels,
-    bayer: Bayer,
-    neutral: [f64; 3],
-    linearization: Option<&[u16]>,
-) -> Result<Vec<u16>> {
+/// A CFA plane cut from a frame: its samples (`width` x `height`, row-major) and where it
+/// sits in the active area (`top`, `left`: the CFA phase).
+#[derive(Debug, Clone, Copy)]
+pub struct CfaPlane<'a> {
+    /// The samples.
+    pub data: &'a [u16],
+    /// Width in samples.
+    pub width: usize,
+    /// Height in samples.
+    pub height: usize,
+    /// Row of the plane's first sample in the active area.
+    pub top: usize,
+    /// Column of the plane's first sample in the active area.
+    pub left: usize,
+}
+
+/// What the release's input needs to know of the frame a plane comes from.
+#[derive(Debug, Clone, Copy)]
+pub struct FrameFacts<'a> {
+    /// The frame's black and white levels.
+    pub levels: &'a Levels,
+    /// The frame's CFA pattern at the active area's origin.
+    pub bayer: Bayer,
+    /// The white balance (camera RGB, any scale).
+    pub neutral: [f64; 3],
+    /// The frame's LinearizationTable for stored samples (None for linear samples).
+    pub linearization: Option<&'a [u16]>,
+}
+
+/// The demosaiced 14-bit codes of the release's network input of a CFA `plane` from the
+/// frame `frame`: `height * width * 3` codes (R, G, B interleaved), steps 1-4 of the
+/// module documentation. The plane must be at least 3 x 3.
+pub fn release_codes(plane: &CfaPlane<'_>, frame: &FrameFacts<'_>) -> Result<Vec<u16>> {
+    let CfaPlane {
+        data: plane,
+        width,
+        height,
+        top,
+        left,
+    } = *plane;
+    let FrameFacts {
+        levels,
+        bayer,
+        neutral,
+        linearization,
+    } = *frame;
     if width < 3 || height < 3 {
         return Err(Error::invalid(format!(
             "bilinear demosaic needs at least 3x3 samples, got {width}x{height}"
@@ -310,8 +344,22 @@ mod tests {
         let lv = levels(vec![60.0, 64.5, 66.0, 70.0], (2, 2), 1023.0);
         for bayer in Bayer::ALL {
             for (top, left) in [(0, 0), (1, 0), (0, 1), (3, 5)] {
-                let got = release_codes(&plane, w, h, top, left, &lv, bayer, [0.6, 1.0, 0.3], None)
-                    .unwrap();
+                let got = release_codes(
+                    &CfaPlane {
+                        data: &plane,
+                        width: w,
+                        height: h,
+                        top,
+                        left,
+                    },
+                    &FrameFacts {
+                        levels: &lv,
+                        bayer,
+                        neutral: [0.6, 1.0, 0.3],
+                        linearization: None,
+                    },
+                )
+                .unwrap();
                 assert_eq!(
                     got,
                     reference(&plane, w, h, top, left, bayer),
@@ -327,8 +375,22 @@ mod tests {
         let plane = vec![10u16; 16];
         let table: Vec<u16> = (0..8).map(|x| 100 * x).collect();
         // every sample beyond the table's end maps to its last entry (700)
-        let c =
-            release_codes(&plane, 4, 4, 0, 0, &lv, Bayer::RGGB, [1.0; 3], Some(&table)).unwrap();
+        let c = release_codes(
+            &CfaPlane {
+                data: &plane,
+                width: 4,
+                height: 4,
+                top: 0,
+                left: 0,
+            },
+            &FrameFacts {
+                levels: &lv,
+                bayer: Bayer::RGGB,
+                neutral: [1.0; 3],
+                linearization: Some(&table),
+            },
+        )
+        .unwrap();
         let want = ((700.0f32 - 64.0) / 959.0 * 16383.0) as u16;
         assert!(c.iter().all(|&v| v == want), "{c:?}");
         let bad = |r: Result<Vec<u16>>, what: &str| {
@@ -336,20 +398,76 @@ mod tests {
             assert!(e.contains(what), "{e}");
         };
         bad(
-            release_codes(&plane, 2, 8, 0, 0, &lv, Bayer::RGGB, [1.0; 3], None),
+            release_codes(
+                &CfaPlane {
+                    data: &plane,
+                    width: 2,
+                    height: 8,
+                    top: 0,
+                    left: 0,
+                },
+                &FrameFacts {
+                    levels: &lv,
+                    bayer: Bayer::RGGB,
+                    neutral: [1.0; 3],
+                    linearization: None,
+                },
+            ),
             "3x3",
         );
         bad(
-            release_codes(&plane, 5, 3, 0, 0, &lv, Bayer::RGGB, [1.0; 3], None),
+            release_codes(
+                &CfaPlane {
+                    data: &plane,
+                    width: 5,
+                    height: 3,
+                    top: 0,
+                    left: 0,
+                },
+                &FrameFacts {
+                    levels: &lv,
+                    bayer: Bayer::RGGB,
+                    neutral: [1.0; 3],
+                    linearization: None,
+                },
+            ),
             "holds 16",
         );
         bad(
-            release_codes(&plane, 4, 4, 0, 0, &lv, Bayer::RGGB, [1.0, 0.0, 1.0], None),
+            release_codes(
+                &CfaPlane {
+                    data: &plane,
+                    width: 4,
+                    height: 4,
+                    top: 0,
+                    left: 0,
+                },
+                &FrameFacts {
+                    levels: &lv,
+                    bayer: Bayer::RGGB,
+                    neutral: [1.0, 0.0, 1.0],
+                    linearization: None,
+                },
+            ),
             "neutral",
         );
         let hi = levels(vec![1023.0], (1, 1), 1023.0);
         bad(
-            release_codes(&plane, 4, 4, 0, 0, &hi, Bayer::RGGB, [1.0; 3], None),
+            release_codes(
+                &CfaPlane {
+                    data: &plane,
+                    width: 4,
+                    height: 4,
+                    top: 0,
+                    left: 0,
+                },
+                &FrameFacts {
+                    levels: &hi,
+                    bayer: Bayer::RGGB,
+                    neutral: [1.0; 3],
+                    linearization: None,
+                },
+            ),
             ">= white",
         );
         assert!(check_table(&release_table(None)).is_ok());

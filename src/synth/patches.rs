@@ -17,7 +17,7 @@ use super::relight::RunReport;
 use super::Plan;
 use crate::encode::png::encode_u8;
 use crate::error::{Error, Result};
-use crate::isp::release_input::release_codes;
+use crate::isp::release_input::{release_codes, CfaPlane, FrameFacts};
 use crate::isp::tone::DisplayTone;
 use crate::raw::crop::Crop;
 use crate::raw::RawImage;
@@ -76,15 +76,19 @@ pub fn crop_pair(
         tone,
         codes_of: &|img: &RawImage| {
             release_codes(
-                &img.data,
-                img.width,
-                img.height,
-                crop.top,
-                crop.left,
-                &day.meta.levels,
-                bayer,
-                plan.night_neutral,
-                None,
+                &CfaPlane {
+                    data: &img.data,
+                    width: img.width,
+                    height: img.height,
+                    top: crop.top,
+                    left: crop.left,
+                },
+                &FrameFacts {
+                    levels: &day.meta.levels,
+                    bayer,
+                    neutral: plan.night_neutral,
+                    linearization: None,
+                },
             )
         },
         codes: Mutex::new(None),
@@ -186,7 +190,7 @@ pub fn cut_patches<T: Copy, U: Copy + Default>(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::isp::release_input::release_codes;
+    use crate::isp::release_input::{release_codes, CfaPlane, FrameFacts};
     use crate::raw::Bayer;
     use crate::synth::night::synthesize;
     use crate::synth::{Calibration, SynthOptions};
@@ -258,15 +262,19 @@ mod tests {
         let target = encode_u8(night.target.as_ref().unwrap(), tone);
         let codes = |img: &RawImage| {
             release_codes(
-                &img.data,
-                48,
-                32,
-                10,
-                14,
-                &day.meta.levels,
-                Bayer::GRBG,
-                p.night_neutral,
-                None,
+                &CfaPlane {
+                    data: &img.data,
+                    width: 48,
+                    height: 32,
+                    top: 10,
+                    left: 14,
+                },
+                &FrameFacts {
+                    levels: &day.meta.levels,
+                    bayer: Bayer::GRBG,
+                    neutral: p.night_neutral,
+                    linearization: None,
+                },
             )
             .unwrap()
         };
