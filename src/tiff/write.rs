@@ -282,89 +282,9 @@ pub fn write_tiff_head<W: std::io::Write>(
         prev = Some(idx);
     }
 
-    // Final entry lists with placeholders for offsets (their sizes are already final).
-    for n in nodes.iter_mut() {
-        let mut entries: BTreeMap<u16, Value> = n
-            .ifd
-            .entries
-            .iter()
-            .filter(|(t, _)| !is_writer_managed(**t, &n.ifd.children))
-            .map(|(t, v)| (*t, v.clone()))
-            .collect();
-        for (tag, ids) in &n.child_nodes {
-            entries.insert(*tag, Value::Long(vec![0; ids.len()]));
-        }
-        if let Some(ch) = &n.ifd.chunks {
-            let (off_tag, cnt_tag) = ch.tags();
-            let lens = ch.lens();
-            entries.insert(off_tag, Value::Long(vec![0; lens.len()]));
-            let mut counts = Vec::with_capacity(lens.len());
-            for &len in &lens {
-                counts.push(
-                    u32::try_from(len)
-                        .map_err(|_| Error::limits("strip or tile larger than 4 GiB"))?,
-                );
-            }
-            entries.insert(cnt_tag, Value::Long(counts));
-        }
-        if entries.len() > u16::MAX as usize {
-            return Err(Error::limits("too many entries in one IFD"));
-        }
-        n.entries = entries.into_iter().collect();
-    }
-
-    // Layout pass.
-    let mut cursor: u64 = 8;
-    for n in nodes.iter_mut() {
-        cursor = align2(cursor);
-        n.dir_offset = cursor;
-        cursor += 2 + 12 * n.entries.len() as u64 + 4;
-        n.value_offsets = Vec::with_capacity(n.entries.len());
-        for (_, v) in &n.entries {
-            let len = v.byte_len() as u64;
-            if len > 4 {
-                cursor = align2(cursor);
-                n.value_offsets.push(cursor);
-                cursor += len;
-            } else {
-                n.value_offsets.push(0);
-            }
-        }
-    }
-    for n in nodes.iter_mut() {
-        if let Some(ch) = &n.ifd.chunks {
-            for len in ch.lens() {
-                cursor = align2(cursor);
-                n.chunk_offsets.push(cursor);
-                cursor += len;
-            }
-        }
-    }
-    if cursor > u32::MAX as u64 {
-        return Err(Error::limits(format!(
-            "output of {cursor} bytes exceeds the 4 GiB TIFF limit"
-        )));
-    }
-
-    // Fill in pointers and offsets.
-    let dir_offsets: Vec<u64> = nodes.iter().map(|n| n.dir_offset).collect();
-    for n in nodes.iter_mut() {
-        let child_vals: Vec<(u16, Vec<u32>)> = n
-            .child_nodes
-            .iter()
-            .map(|(t, ids)| (*t, ids.iter().map(|&i| dir_offsets[i] as u32).collect()))
-            .collect();
-        let chunk_tag = n.ifd.chunks.as_ref().map(|c| c.tags().0);
-        let chunk_vals: Vec<u32> = n.chunk_offsets.iter().map(|&o| o as u32).collect();
-        for (tag, v) in n.entries.iter_mut() {
-            if let Some((_, offs)) = child_vals.iter().find(|(t, _)| t == tag) {
-                *v = Value::Long(offs.clone());
-            } else if Some(*tag) == chunk_tag {
-                *v = Value::Long(chunk_vals.clone());
-            }
-        }
-    }
-
+    final_entries(&mut nodes)?;
+    let cursor = layout(&mut nodes)?;
+    fill_pointers(&mut nodes);
     // Serialize the directories and values (everything before the first chunk).
     let head_len = nodes
         .iter()
@@ -372,40 +292,8 @@ pub fn write_tiff_head<W: std::io::Write>(
         .min()
         .copied()
         .unwrap_or(cursor);
-    let big = order == ByteOrder::Big;
-    let mut o = Out {
-        buf: Vec::with_capacity(head_len as usize),
-        big,
-    };
-    o.buf.extend_from_slice(if big { b"MM" } else { b"II" });
-    o.u16(42);
-    o.u32(nodes[0].dir_offset as u32);
-    for n in &nodes {
-        o.pad_to(n.dir_offset);
-        o.u16(n.entries.len() as u16);
-        for ((tag, v), &voff) in n.entries.iter().zip(&n.value_offsets) {
-            o.u16(*tag);
-            o.u16(v.field_type() as u16);
-            o.u32(v.count() as u32);
-            let bytes = encode_value(v, order);
-            if bytes.len() > 4 {
-                o.u32(voff as u32);
-            } else {
-                let mut inline = [0u8; 4];
-                inline[..bytes.len()].copy_from_slice(&bytes);
-                o.buf.extend_from_slice(&inline);
-            }
-        }
-        o.u32(n.next.map(|i| dir_offsets[i] as u32).unwrap_or(0));
-        for ((_, v), &voff) in n.entries.iter().zip(&n.value_offsets) {
-            if voff != 0 {
-                o.pad_to(voff);
-                o.buf.extend_from_slice(&encode_value(v, order));
-            }
-        }
-    }
-    o.pad_to(head_len);
-    sink.write_all(&o.buf)?;
+    let head = serialize_head(&nodes, order, head_len);
+    sink.write_all(&head)?;
     let mut tail = Tail {
         ifd0_values: nodes[0]
             .entries
@@ -446,6 +334,140 @@ pub fn write_tiff_head<W: std::io::Write>(
     }
     tail.written = pos;
     Ok(tail)
+}
+
+/// Each node's final entry list, with placeholders for the offsets (their sizes are
+/// already final).
+fn final_entries(nodes: &mut [Node]) -> Result<()> {
+    for n in nodes.iter_mut() {
+        let mut entries: BTreeMap<u16, Value> = n
+            .ifd
+            .entries
+            .iter()
+            .filter(|(t, _)| !is_writer_managed(**t, &n.ifd.children))
+            .map(|(t, v)| (*t, v.clone()))
+            .collect();
+        for (tag, ids) in &n.child_nodes {
+            entries.insert(*tag, Value::Long(vec![0; ids.len()]));
+        }
+        if let Some(ch) = &n.ifd.chunks {
+            let (off_tag, cnt_tag) = ch.tags();
+            let lens = ch.lens();
+            entries.insert(off_tag, Value::Long(vec![0; lens.len()]));
+            let mut counts = Vec::with_capacity(lens.len());
+            for &len in &lens {
+                counts.push(
+                    u32::try_from(len)
+                        .map_err(|_| Error::limits("strip or tile larger than 4 GiB"))?,
+                );
+            }
+            entries.insert(cnt_tag, Value::Long(counts));
+        }
+        if entries.len() > u16::MAX as usize {
+            return Err(Error::limits("too many entries in one IFD"));
+        }
+        n.entries = entries.into_iter().collect();
+    }
+
+    Ok(())
+}
+
+/// Place every directory, value and chunk: each node's offsets; the file's length.
+fn layout(nodes: &mut [Node]) -> Result<u64> {
+    let mut cursor: u64 = 8;
+    for n in nodes.iter_mut() {
+        cursor = align2(cursor);
+        n.dir_offset = cursor;
+        cursor += 2 + 12 * n.entries.len() as u64 + 4;
+        n.value_offsets = Vec::with_capacity(n.entries.len());
+        for (_, v) in &n.entries {
+            let len = v.byte_len() as u64;
+            if len > 4 {
+                cursor = align2(cursor);
+                n.value_offsets.push(cursor);
+                cursor += len;
+            } else {
+                n.value_offsets.push(0);
+            }
+        }
+    }
+    for n in nodes.iter_mut() {
+        if let Some(ch) = &n.ifd.chunks {
+            for len in ch.lens() {
+                cursor = align2(cursor);
+                n.chunk_offsets.push(cursor);
+                cursor += len;
+            }
+        }
+    }
+    if cursor > u32::MAX as u64 {
+        return Err(Error::limits(format!(
+            "output of {cursor} bytes exceeds the 4 GiB TIFF limit"
+        )));
+    }
+
+    Ok(cursor)
+}
+
+/// Fill in the SubIFD pointers and the chunk offsets of every node.
+fn fill_pointers(nodes: &mut [Node]) {
+    let dir_offsets: Vec<u64> = nodes.iter().map(|n| n.dir_offset).collect();
+    for n in nodes.iter_mut() {
+        let child_vals: Vec<(u16, Vec<u32>)> = n
+            .child_nodes
+            .iter()
+            .map(|(t, ids)| (*t, ids.iter().map(|&i| dir_offsets[i] as u32).collect()))
+            .collect();
+        let chunk_tag = n.ifd.chunks.as_ref().map(|c| c.tags().0);
+        let chunk_vals: Vec<u32> = n.chunk_offsets.iter().map(|&o| o as u32).collect();
+        for (tag, v) in n.entries.iter_mut() {
+            if let Some((_, offs)) = child_vals.iter().find(|(t, _)| t == tag) {
+                *v = Value::Long(offs.clone());
+            } else if Some(*tag) == chunk_tag {
+                *v = Value::Long(chunk_vals.clone());
+            }
+        }
+    }
+}
+
+/// The bytes of the directories and values: everything before the first chunk at
+/// `head_len`.
+fn serialize_head(nodes: &[Node], order: ByteOrder, head_len: u64) -> Vec<u8> {
+    let dir_offsets: Vec<u64> = nodes.iter().map(|n| n.dir_offset).collect();
+    let big = order == ByteOrder::Big;
+    let mut o = Out {
+        buf: Vec::with_capacity(head_len as usize),
+        big,
+    };
+    o.buf.extend_from_slice(if big { b"MM" } else { b"II" });
+    o.u16(42);
+    o.u32(nodes[0].dir_offset as u32);
+    for n in nodes {
+        o.pad_to(n.dir_offset);
+        o.u16(n.entries.len() as u16);
+        for ((tag, v), &voff) in n.entries.iter().zip(&n.value_offsets) {
+            o.u16(*tag);
+            o.u16(v.field_type() as u16);
+            o.u32(v.count() as u32);
+            let bytes = encode_value(v, order);
+            if bytes.len() > 4 {
+                o.u32(voff as u32);
+            } else {
+                let mut inline = [0u8; 4];
+                inline[..bytes.len()].copy_from_slice(&bytes);
+                o.buf.extend_from_slice(&inline);
+            }
+        }
+        o.u32(n.next.map(|i| dir_offsets[i] as u32).unwrap_or(0));
+        for ((_, v), &voff) in n.entries.iter().zip(&n.value_offsets) {
+            if voff != 0 {
+                o.pad_to(voff);
+                o.buf.extend_from_slice(&encode_value(v, order));
+            }
+        }
+    }
+    o.pad_to(head_len);
+    o.buf
 }
 
 #[cfg(test)]
