@@ -61,6 +61,60 @@ fn embedded_elsewhere(cam: &CameraId, code: Code, why: &str, note: &str) -> Nois
     }
 }
 
+/// The choice of a `--noise-model` file `m` for the camera `cam`: warnings when it was
+/// calibrated on another camera or holds negative parameters.
+fn from_file(m: &NoiseModel, cam: &CameraId) -> NoiseChoice {
+    let file = m.file.as_deref().unwrap_or("the noise model file");
+    let mut warnings = Diagnostics::new();
+    if let Some(mc) = &m.camera {
+        if mc.same_camera(cam) == Some(false) {
+            warnings.warn(
+                Code::NoiseOtherCamera,
+                format!(
+                    "noise: {file} was calibrated on {}, not on this camera ({}): its noise \
+                 may not match this camera's; {HOW_TO_CALIBRATE}",
+                    mc.label(),
+                    cam.label()
+                ),
+            );
+        }
+    }
+    let negative = m.negative_points();
+    if !negative.is_empty() {
+        warnings.warn(
+            Code::NoiseNegativeClamped,
+            format!(
+                "noise: {file} has negative parameters at {}: a variance cannot be negative, \
+             so synth clamps them to 0 (no noise from that term); recalibrate, or fix the \
+             file (docs/noise.md, \"Negative parameters\")",
+                negative.join(", ")
+            ),
+        );
+    }
+    let kind = if m.physics.is_some() {
+        "physics noise model"
+    } else {
+        "noise model"
+    };
+    NoiseChoice {
+        model: m.clone(),
+        provenance: NoiseProvenance {
+            source: NoiseSource::File,
+            camera: m.camera.clone(),
+            note: format!(
+                "{kind} {file}{}: {}",
+                if m.camera.is_none() {
+                    " (records no camera)"
+                } else {
+                    ""
+                },
+                m.source
+            ),
+        },
+        warnings,
+    }
+}
+
 /// The noise model of a plan for `img` (see the module documentation). `estimate` is called
 /// only when the chain gets to the image estimate (it reads every pixel).
 pub fn choose_noise_model(
@@ -72,55 +126,7 @@ pub fn choose_noise_model(
 ) -> Result<NoiseChoice> {
     let cam = CameraId::of(&img.meta);
     if let Some(m) = &cal.noise {
-        let file = m.file.as_deref().unwrap_or("the noise model file");
-        let mut warnings = Diagnostics::new();
-        if let Some(mc) = &m.camera {
-            if mc.same_camera(&cam) == Some(false) {
-                warnings.warn(
-                    Code::NoiseOtherCamera,
-                    format!(
-                        "noise: {file} was calibrated on {}, not on this camera ({}): its noise \
-                     may not match this camera's; {HOW_TO_CALIBRATE}",
-                        mc.label(),
-                        cam.label()
-                    ),
-                );
-            }
-        }
-        let negative = m.negative_points();
-        if !negative.is_empty() {
-            warnings.warn(
-                Code::NoiseNegativeClamped,
-                format!(
-                    "noise: {file} has negative parameters at {}: a variance cannot be negative, \
-                 so synth clamps them to 0 (no noise from that term); recalibrate, or fix the \
-                 file (docs/noise.md, \"Negative parameters\")",
-                    negative.join(", ")
-                ),
-            );
-        }
-        let kind = if m.physics.is_some() {
-            "physics noise model"
-        } else {
-            "noise model"
-        };
-        return Ok(NoiseChoice {
-            model: m.clone(),
-            provenance: NoiseProvenance {
-                source: NoiseSource::File,
-                camera: m.camera.clone(),
-                note: format!(
-                    "{kind} {file}{}: {}",
-                    if m.camera.is_none() {
-                        " (records no camera)"
-                    } else {
-                        ""
-                    },
-                    m.source
-                ),
-            },
-            warnings,
-        });
+        return Ok(from_file(m, &cam));
     }
     let iso = img.meta.exif.iso.filter(|&i| i > 0);
     let mut profile_problem = None;
