@@ -448,6 +448,20 @@ fn print_fits(model: &day2night::calibrate::format::NoiseModelFile) {
     }
 }
 
+/// `calibrate noise` without any input is a usage error that lists the kinds of input.
+fn need_some_input(a: &NoiseArgs) -> CmdResult {
+    if a.burst.is_empty()
+        && a.pair.is_empty()
+        && a.from_noise_profile.is_empty()
+        && a.from_image.is_empty()
+    {
+        return Err(usage(
+            "give at least one --burst FRAMES..., --pair CLEAN NOISY, --from-noise-profile DNG..., --from-image DAY.dng... or --physics --dark ... --flat ...",
+        ));
+    }
+    Ok(())
+}
+
 fn run_noise(a: NoiseArgs) -> CmdResult {
     if a.physics {
         return run_noise_physics(a);
@@ -469,15 +483,7 @@ fn run_noise(a: NoiseArgs) -> CmdResult {
         }
         Ok(img)
     };
-    if a.burst.is_empty()
-        && a.pair.is_empty()
-        && a.from_noise_profile.is_empty()
-        && a.from_image.is_empty()
-    {
-        return Err(usage(
-            "give at least one --burst FRAMES..., --pair CLEAN NOISY, --from-noise-profile DNG..., --from-image DAY.dng... or --physics --dark ... --flat ...",
-        ));
-    }
+    need_some_input(&a)?;
     let mut inputs: Vec<PathBuf> = vec![];
     let mut sources = vec![];
     // The camera of the first input; inputs of other cameras are said.
