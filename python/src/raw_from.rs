@@ -248,6 +248,74 @@ fn parse_cfa(m: &Meta<'_>) -> PyResult<Bayer> {
     Bayer::from_pattern(arr).map_err(|e| Meta::bad(k, e))
 }
 
+/// The tags of the dict beyond the mosaic's layout: camera, colour, noise, Exif, opcodes.
+fn parse_tags(m: &Meta<'_>, meta: &mut RawMeta) -> PyResult<()> {
+    meta.make = m.extract("make", "a string")?;
+    meta.model = m.extract("model", "a string")?;
+    meta.unique_camera_model = m.extract("unique_camera_model", "a string")?;
+    meta.as_shot_neutral = m.floats_n::<3>("as_shot_neutral")?;
+    meta.as_shot_white_xy = m.floats_n::<2>("as_shot_white_xy")?;
+    let c = &mut meta.color;
+    c.color_matrix1 = m.floats("color_matrix1", Some(9))?;
+    c.color_matrix2 = m.floats("color_matrix2", Some(9))?;
+    c.camera_calibration1 = m.floats("camera_calibration1", Some(9))?;
+    c.camera_calibration2 = m.floats("camera_calibration2", Some(9))?;
+    c.forward_matrix1 = m.floats("forward_matrix1", Some(9))?;
+    c.forward_matrix2 = m.floats("forward_matrix2", Some(9))?;
+    c.calibration_illuminant1 = m.extract("calibration_illuminant1", "an EXIF LightSource code")?;
+    c.calibration_illuminant2 = m.extract("calibration_illuminant2", "an EXIF LightSource code")?;
+    c.analog_balance = m.floats("analog_balance", Some(3))?;
+    c.baseline_exposure = m.floats("baseline_exposure", Some(1))?.map(|v| v[0]);
+    meta.noise_profile = match m.floats("noise_profile", None)? {
+        None => None,
+        Some(v) if v.len() % 2 == 0 => Some(v.chunks_exact(2).map(|p| (p[0], p[1])).collect()),
+        Some(v) => {
+            return Err(Meta::bad(
+                "noise_profile",
+                format!("{} values: give [S, O] pairs", v.len()),
+            ))
+        }
+    };
+    meta.exif.iso = m.extract("iso", "a positive integer")?;
+    meta.exif.exposure_time = m.floats("exposure_time", Some(1))?.map(|v| v[0]);
+    meta.exif.f_number = m.floats("f_number", Some(1))?.map(|v| v[0]);
+    meta.exif.date_time_original = m.extract("date_time_original", "a string")?;
+    for i in 0..3 {
+        let k = format!("opcode_list{}", i + 1);
+        meta.opcode_lists[i] = m.extract::<Vec<u8>>(&k, "bytes")?;
+    }
+    Ok(())
+}
+
+/// The documented defaults of the colour metadata the dict does not have; their notes.
+fn apply_defaults(m: &Meta<'_>, meta: &mut RawMeta) -> PyResult<Vec<String>> {
+    // Colour metadata the dict does not have (the key missing; None means "absent, as in
+    // a DNG without the tag"): the library's documented defaults.
+    let mut notes = Vec::new();
+    let mut default = |d: ColorDefault, key: &str, meta: &mut RawMeta| {
+        notes.push(format!("meta[{key:?}] missing: {}", d.apply(meta)));
+    };
+    if !m.has("color_matrix1")? {
+        default(ColorDefault::ColorMatrix, "color_matrix1", meta);
+    } else if !m.has("calibration_illuminant1")? && meta.color.color_matrix1.is_some() {
+        default(
+            ColorDefault::CalibrationIlluminant,
+            "calibration_illuminant1",
+            meta,
+        );
+    }
+    if !m.has("as_shot_neutral")? && !m.has("as_shot_white_xy")? {
+        default(ColorDefault::Neutral, "as_shot_neutral", meta);
+    }
+    if !m.has("iso")? {
+        default(ColorDefault::Iso, "iso", meta);
+    }
+    if !m.has("noise_profile")? {
+        default(ColorDefault::NoiseProfile, "noise_profile", meta);
+    }
+    Ok(notes)
+}
+
 /// Build the library's metadata from the dict; returns it with the defaults' notes.
 fn parse_meta(
     m: &Meta<'_>,
@@ -350,65 +418,8 @@ fn parse_meta(
     meta.orientation = m
         .extract::<u16>("orientation", "an integer 1..8")?
         .unwrap_or(1);
-    meta.make = m.extract("make", "a string")?;
-    meta.model = m.extract("model", "a string")?;
-    meta.unique_camera_model = m.extract("unique_camera_model", "a string")?;
-    meta.as_shot_neutral = m.floats_n::<3>("as_shot_neutral")?;
-    meta.as_shot_white_xy = m.floats_n::<2>("as_shot_white_xy")?;
-    let c = &mut meta.color;
-    c.color_matrix1 = m.floats("color_matrix1", Some(9))?;
-    c.color_matrix2 = m.floats("color_matrix2", Some(9))?;
-    c.camera_calibration1 = m.floats("camera_calibration1", Some(9))?;
-    c.camera_calibration2 = m.floats("camera_calibration2", Some(9))?;
-    c.forward_matrix1 = m.floats("forward_matrix1", Some(9))?;
-    c.forward_matrix2 = m.floats("forward_matrix2", Some(9))?;
-    c.calibration_illuminant1 = m.extract("calibration_illuminant1", "an EXIF LightSource code")?;
-    c.calibration_illuminant2 = m.extract("calibration_illuminant2", "an EXIF LightSource code")?;
-    c.analog_balance = m.floats("analog_balance", Some(3))?;
-    c.baseline_exposure = m.floats("baseline_exposure", Some(1))?.map(|v| v[0]);
-    meta.noise_profile = match m.floats("noise_profile", None)? {
-        None => None,
-        Some(v) if v.len() % 2 == 0 => Some(v.chunks_exact(2).map(|p| (p[0], p[1])).collect()),
-        Some(v) => {
-            return Err(Meta::bad(
-                "noise_profile",
-                format!("{} values: give [S, O] pairs", v.len()),
-            ))
-        }
-    };
-    meta.exif.iso = m.extract("iso", "a positive integer")?;
-    meta.exif.exposure_time = m.floats("exposure_time", Some(1))?.map(|v| v[0]);
-    meta.exif.f_number = m.floats("f_number", Some(1))?.map(|v| v[0]);
-    meta.exif.date_time_original = m.extract("date_time_original", "a string")?;
-    for i in 0..3 {
-        let k = format!("opcode_list{}", i + 1);
-        meta.opcode_lists[i] = m.extract::<Vec<u8>>(&k, "bytes")?;
-    }
-
-    // Colour metadata the dict does not have (the key missing; None means "absent, as in
-    // a DNG without the tag"): the library's documented defaults.
-    let mut notes = Vec::new();
-    let mut default = |d: ColorDefault, key: &str, meta: &mut RawMeta| {
-        notes.push(format!("meta[{key:?}] missing: {}", d.apply(meta)));
-    };
-    if !m.has("color_matrix1")? {
-        default(ColorDefault::ColorMatrix, "color_matrix1", &mut meta);
-    } else if !m.has("calibration_illuminant1")? && meta.color.color_matrix1.is_some() {
-        default(
-            ColorDefault::CalibrationIlluminant,
-            "calibration_illuminant1",
-            &mut meta,
-        );
-    }
-    if !m.has("as_shot_neutral")? && !m.has("as_shot_white_xy")? {
-        default(ColorDefault::Neutral, "as_shot_neutral", &mut meta);
-    }
-    if !m.has("iso")? {
-        default(ColorDefault::Iso, "iso", &mut meta);
-    }
-    if !m.has("noise_profile")? {
-        default(ColorDefault::NoiseProfile, "noise_profile", &mut meta);
-    }
+    parse_tags(m, &mut meta)?;
+    let notes = apply_defaults(m, &mut meta)?;
     Ok((meta, notes))
 }
 
