@@ -21,86 +21,8 @@ pub(super) fn run(c: &Padded, bayer: Bayer, post: &Post) -> RgbImage {
     let red_row = |pr: usize, pc: usize| bayer.color_at(pr, pc + 1) == 0;
     let cd = &c.d;
 
-    // 1. Directional green estimates.
-    let gh = Padded::build(w, h, |y, out| {
-        let pr = y + PAD;
-        for (x, o) in out.iter_mut().enumerate() {
-            let i = c.idx(pr, x + PAD);
-            *o = if col(pr, x + PAD) == 1 {
-                cd[i]
-            } else {
-                0.5 * (cd[i - 1] + cd[i + 1]) + 0.5 * cd[i] - 0.25 * (cd[i - 2] + cd[i + 2])
-            };
-        }
-    });
-    let gv = Padded::build(w, h, |y, out| {
-        let pr = y + PAD;
-        for (x, o) in out.iter_mut().enumerate() {
-            let i = c.idx(pr, x + PAD);
-            *o = if col(pr, x + PAD) == 1 {
-                cd[i]
-            } else {
-                0.5 * (cd[i - s] + cd[i + s]) + 0.5 * cd[i] - 0.25 * (cd[i - 2 * s] + cd[i + 2 * s])
-            };
-        }
-    });
-
-    // 2. Colour-difference gradients D_H = |C_H(j) - C_H(j+2)|, D_V likewise (zero border:
-    //    the classifier's convolution uses constant padding).
-    let dh = Padded::build_unmirrored(w, h, |y, out| {
-        let pr = y + PAD;
-        for (x, o) in out.iter_mut().enumerate() {
-            let pc = x + PAD;
-            if col(pr, pc) != 1 {
-                let i = c.idx(pr, pc);
-                *o = ((cd[i] - gh.d[i]) - (cd[i + 2] - gh.d[i + 2])).abs();
-            }
-        }
-    });
-    let dv = Padded::build_unmirrored(w, h, |y, out| {
-        let pr = y + PAD;
-        for (x, o) in out.iter_mut().enumerate() {
-            let pc = x + PAD;
-            if col(pr, pc) != 1 {
-                let i = c.idx(pr, pc);
-                *o = ((cd[i] - gv.d[i]) - (cd[i + 2 * s] - gv.d[i + 2 * s])).abs();
-            }
-        }
-    });
-
-    // 3. Decision (1 = horizontal) and green.
-    let m = Padded::build_unmirrored(w, h, |y, out| {
-        let pr = y + PAD;
-        for (x, o) in out.iter_mut().enumerate() {
-            let i = c.idx(pr, x + PAD);
-            let a = &dh.d;
-            let d_h = 3.0 * (a[i] + a[i - 2])
-                + a[i + 2 * s]
-                + a[i + 2 * s - 2]
-                + a[i - 2 * s]
-                + a[i - 2 * s - 2]
-                + a[i + s - 1]
-                + a[i - s - 1];
-            let b = &dv.d;
-            let d_v = 3.0 * (b[i] + b[i - 2 * s])
-                + b[i + 2]
-                + b[i - 2 * s + 2]
-                + b[i - 2]
-                + b[i - 2 * s - 2]
-                + b[i - s + 1]
-                + b[i - s - 1];
-            *o = if d_v >= d_h { 1.0 } else { 0.0 };
-        }
-    });
-    drop((dh, dv));
-    let g = Padded::build(w, h, |y, out| {
-        let o0 = c.idx(y + PAD, PAD);
-        for (x, o) in out.iter_mut().enumerate() {
-            let i = o0 + x;
-            *o = if m.d[i] > 0.5 { gh.d[i] } else { gv.d[i] };
-        }
-    });
-    drop((gh, gv));
+    // 1-3. Green and the direction decision.
+    let (g, m) = green_and_decision(c, bayer);
     let gd = &g.d;
 
     // 4. Red and blue at green sites, from colour differences along the row or column of
@@ -221,4 +143,95 @@ pub(super) fn run(c: &Padded, bayer: Bayer, post: &Post) -> RgbImage {
     let r4 = refine_rb(0);
     let b4 = refine_rb(2);
     interleave(&r4, &g2, &b4, post)
+}
+
+/// Steps 1-3: the horizontal and vertical green estimates, the decision between them from
+/// colour-difference gradients (1 = horizontal) and the green plane it picks: (green,
+/// decision).
+fn green_and_decision(c: &Padded, bayer: Bayer) -> (Padded, Padded) {
+    let (w, h, s) = (c.w, c.h, c.s);
+    let col = |pr: usize, pc: usize| bayer.color_at(pr, pc);
+    let cd = &c.d;
+
+    // 1. Directional green estimates.
+    let gh = Padded::build(w, h, |y, out| {
+        let pr = y + PAD;
+        for (x, o) in out.iter_mut().enumerate() {
+            let i = c.idx(pr, x + PAD);
+            *o = if col(pr, x + PAD) == 1 {
+                cd[i]
+            } else {
+                0.5 * (cd[i - 1] + cd[i + 1]) + 0.5 * cd[i] - 0.25 * (cd[i - 2] + cd[i + 2])
+            };
+        }
+    });
+    let gv = Padded::build(w, h, |y, out| {
+        let pr = y + PAD;
+        for (x, o) in out.iter_mut().enumerate() {
+            let i = c.idx(pr, x + PAD);
+            *o = if col(pr, x + PAD) == 1 {
+                cd[i]
+            } else {
+                0.5 * (cd[i - s] + cd[i + s]) + 0.5 * cd[i] - 0.25 * (cd[i - 2 * s] + cd[i + 2 * s])
+            };
+        }
+    });
+
+    // 2. Colour-difference gradients D_H = |C_H(j) - C_H(j+2)|, D_V likewise (zero border:
+    //    the classifier's convolution uses constant padding).
+    let dh = Padded::build_unmirrored(w, h, |y, out| {
+        let pr = y + PAD;
+        for (x, o) in out.iter_mut().enumerate() {
+            let pc = x + PAD;
+            if col(pr, pc) != 1 {
+                let i = c.idx(pr, pc);
+                *o = ((cd[i] - gh.d[i]) - (cd[i + 2] - gh.d[i + 2])).abs();
+            }
+        }
+    });
+    let dv = Padded::build_unmirrored(w, h, |y, out| {
+        let pr = y + PAD;
+        for (x, o) in out.iter_mut().enumerate() {
+            let pc = x + PAD;
+            if col(pr, pc) != 1 {
+                let i = c.idx(pr, pc);
+                *o = ((cd[i] - gv.d[i]) - (cd[i + 2 * s] - gv.d[i + 2 * s])).abs();
+            }
+        }
+    });
+
+    // 3. Decision (1 = horizontal) and green.
+    let m = Padded::build_unmirrored(w, h, |y, out| {
+        let pr = y + PAD;
+        for (x, o) in out.iter_mut().enumerate() {
+            let i = c.idx(pr, x + PAD);
+            let a = &dh.d;
+            let d_h = 3.0 * (a[i] + a[i - 2])
+                + a[i + 2 * s]
+                + a[i + 2 * s - 2]
+                + a[i - 2 * s]
+                + a[i - 2 * s - 2]
+                + a[i + s - 1]
+                + a[i - s - 1];
+            let b = &dv.d;
+            let d_v = 3.0 * (b[i] + b[i - 2 * s])
+                + b[i + 2]
+                + b[i - 2 * s + 2]
+                + b[i - 2]
+                + b[i - 2 * s - 2]
+                + b[i - s + 1]
+                + b[i - s - 1];
+            *o = if d_v >= d_h { 1.0 } else { 0.0 };
+        }
+    });
+    drop((dh, dv));
+    let g = Padded::build(w, h, |y, out| {
+        let o0 = c.idx(y + PAD, PAD);
+        for (x, o) in out.iter_mut().enumerate() {
+            let i = o0 + x;
+            *o = if m.d[i] > 0.5 { gh.d[i] } else { gv.d[i] };
+        }
+    });
+    drop((gh, gv));
+    (g, m)
 }
