@@ -1,7 +1,8 @@
 //! Decompression bombs and the pixel limit: tiny DNGs that claim a 268-megapixel image by
 //! pointing every tile or strip at the same bytes are refused by every command at once
-//! (exit 1, a named error, a few seconds, little memory, no temporary file left), and the
-//! pixel limit is enforced and can be raised (--max-pixels, D2N_MAX_PIXELS).
+//! (exit 1, a named error, little memory, no temporary file left; the time is printed, not
+//! asserted), and the pixel limit is enforced and can be raised (--max-pixels,
+//! D2N_MAX_PIXELS).
 //! The bomb files are generated here (tests/dngbuild), never committed.
 
 use crate::common;
@@ -101,7 +102,8 @@ fn check_all_commands(bomb: &[u8], name: &str, expect: &str) {
             err.contains(expect) || stdout.contains(expect),
             "{what}: expected {expect:?} in\n{err}\n{stdout}"
         );
-        assert!(took < Duration::from_secs(5), "{what} took {took:?}");
+        // No time limit here (timings belong in benchmarks): a bomb that were decoded would
+        // allocate gigabytes, which the peak-RSS bound below catches.
         assert!(rss < 400 * 1024, "{what}: peak RSS {rss} KiB");
         assert_eq!(leftovers(dir.path()), Vec::<String>::new(), "{what}");
         assert!(!conv.exists() && !rend.exists(), "{what} left an output");
