@@ -377,6 +377,31 @@ fn sample_section(
     html
 }
 
+/// The points and kinds of the plotted lights.
+fn light_points(il: &Illuminants) -> (Vec<(f64, f64, usize)>, Vec<&str>) {
+    let pts = il
+        .lights
+        .iter()
+        .map(|l| (l.chroma[0], l.chroma[1], l.kind))
+        .collect();
+    let kinds = il.kinds.iter().map(|s| s.as_str()).collect();
+    (pts, kinds)
+}
+
+/// A plot's SVG, or "not available" in the page and in `summary.warnings` (about `id`,
+/// naming `what`).
+fn svg_or_na(plot: Result<String>, id: &str, what: &str, summary: &mut ReportSummary) -> String {
+    plot.unwrap_or_else(|e| {
+        summary
+            .warnings
+            .push(not_available(id, format!("{what}: {e}")));
+        format!(
+            "<p class=\"na\">not available: {}</p>",
+            escape(&e.to_string())
+        )
+    })
+}
+
 /// The sampled illuminants over the dictionary ellipse, and in CIE xy.
 fn plot_cells(
     ill: Result<Illuminants>,
@@ -384,13 +409,8 @@ fn plot_cells(
     id: &str,
     summary: &mut ReportSummary,
 ) -> [Cell; 2] {
-    let ill_html = match ill.and_then(|il| {
-        let pts: Vec<(f64, f64, usize)> = il
-            .lights
-            .iter()
-            .map(|l| (l.chroma[0], l.chroma[1], l.kind))
-            .collect();
-        let kinds: Vec<&str> = il.kinds.iter().map(|s| s.as_str()).collect();
+    let ill_plot = ill.and_then(|il| {
+        let (pts, kinds) = light_points(&il);
         plot::chromaticity(
             "Sampled illuminants",
             (&il.axes.0, &il.axes.1),
@@ -398,47 +418,20 @@ fn plot_cells(
             &kinds,
             il.ellipse,
         )
-    }) {
-        Ok(svg) => svg,
-        Err(e) => {
-            summary
-                .warnings
-                .push(not_available(id, format!("illuminants: {e}")));
-            format!(
-                "<p class=\"na\">not available: {}</p>",
-                escape(&e.to_string())
-            )
-        }
-    };
+    });
     let ill_cell = Cell {
         title: "Illuminants (over the dictionary ellipse, 1-3 sigma)".into(),
-        html: ill_html,
+        html: svg_or_na(ill_plot, id, "illuminants", summary),
     };
-    let xy_html = match ill_xy.and_then(|il| {
-        let pts: Vec<(f64, f64, usize)> = il
-            .lights
-            .iter()
-            .map(|l| (l.chroma[0], l.chroma[1], l.kind))
-            .collect();
-        let kinds: Vec<&str> = il.kinds.iter().map(|s| s.as_str()).collect();
+    let xy_plot = ill_xy.and_then(|il| {
+        let (pts, kinds) = light_points(&il);
         super::plot_xy::planckian("Lights in CIE xy", &pts, &kinds)
-    }) {
-        Ok(svg) => svg,
-        Err(e) => {
-            summary
-                .warnings
-                .push(not_available(id, format!("illuminants in xy: {e}")));
-            format!(
-                "<p class=\"na\">not available: {}</p>",
-                escape(&e.to_string())
-            )
-        }
-    };
+    });
     let xy_cell = Cell {
         title: "Lights in CIE 1931 xy through the camera's colour matrices, against the \
                     Planckian locus (ticks: CCT; grey: Duv +-0.01)"
             .into(),
-        html: xy_html,
+        html: svg_or_na(xy_plot, id, "illuminants in xy", summary),
     };
     [ill_cell, xy_cell]
 }
