@@ -1,0 +1,158 @@
+"""The experiment's protocol options: which ISP renders the targets, which noise the synthetic
+noisy inputs get, how their ISO is chosen, and whose fold lists split the real scenes.
+
+``--protocol day2night`` (the default) and ``--protocol release`` are presets; each option is
+also a flag of its own, and a flag given explicitly wins over the preset:
+
+==================  ===========================  =================================
+option              day2night                    release
+==================  ===========================  =================================
+``--targets``       the ISP of the real targets  ``release``
+``--noise``         ``day2night``                ``release`` (release_noise.py)
+``--synth-iso``     ``alternate``                ``release``
+``--folds-file``    none (seeded folds)          required: the release's lists
+==================  ===========================  =================================
+
+``--targets`` defaults to the ISP that made the real set's targets: ``release`` when
+``day2night real-pairs`` copied the release's PNGs (the processed ``night_real/`` tree) or
+rendered them with ``--isp release``, else ``day2night``."""
+
+import dataclasses
+import hashlib
+import json
+import pathlib
+
+import numpy as np
+
+TARGETS = ("release", "day2night")
+NOISE = ("day2night", "release")
+SYNTH_ISO = ("alternate", "release")
+PROTOCOLS = ("day2night", "release")
+NOISY_ISOS = (1600, 3200)
+
+
+class ProtocolError(ValueError):
+    """Protocol options that cannot be combined (the message names the flags)."""
+
+
+@dataclasses.dataclass(frozen=True)
+class Protocol:
+    name: str = "day2night"
+    targets: str = "day2night"
+    noise: str = "day2night"
+    synth_iso: str = "alternate"
+    folds_file: str = None
+    folds_sha256: str = None
+
+    def config(self):
+        """The run's recorded options (config.json): a resume must give the same."""
+        return {"protocol": self.name, "targets": self.targets, "noise": self.noise,
+                "synth_iso": self.synth_iso, "folds_file": self.folds_file,
+                "folds_sha256": self.folds_sha256}
+
+
+def _choice(value, choices, flag):
+    if value is not None and value not in choices:
+        raise ProtocolError(f"{flag} {value!r}: use {' or '.join(choices)}")
+    return value
+
+
+def resolve(protocol=None, targets=None, noise=None, synth_iso=None, folds_file=None,
+            real_targets="day2night"):
+    """The Protocol of the flags given (None: not given). ``real_targets``: the ISP of the
+    real set's targets (:func:`real_target_isp`), the default of ``targets``."""
+    name = _choice(protocol, PROTOCOLS, "--protocol") or "day2night"
+    _choice(targets, TARGETS, "--targets")
+    _choice(noise, NOISE, "--noise")
+    _choice(synth_iso, SYNTH_ISO, "--synth-iso")
+    release = name == "release"
+    if release and folds_file is None:
+        raise ProtocolError(
+            "--protocol release needs --folds-file PATH: the release's "
+            "utils/k_fold_indices_saved.p (or its JSON export; docs/experiment.md)"
+        )
+    sha = None
+    if folds_file is not None:
+        path = pathlib.Path(folds_file)
+        try:
+            sha = hashlib.sha256(path.read_bytes()).hexdigest()
+        except OSError as e:
+            raise ProtocolError(f"--folds-file {path}: cannot read it ({e.strerror or e})") \
+                from None
+        folds_file = str(path.resolve())
+    return Protocol(
+        name=name,
+        targets=targets or ("release" if release else real_targets),
+        noise=noise or ("release" if release else "day2night"),
+        synth_iso=synth_iso or ("release" if release else "alternate"),
+        folds_file=folds_file,
+        folds_sha256=sha,
+    )
+
+
+def _json_lines(path):
+    try:
+        text = path.read_text(encoding="utf-8")
+    except OSError:
+        return []
+    out = []
+    for line in text.splitlines():
+        try:
+            out.append(json.loads(line))
+        except ValueError:
+            continue  # realset.read_real reports a damaged manifest; here it counts for nothing
+    return out
+
+
+def scene_target_isp(root, rec):
+    """``"release"`` or ``"day2night"``: the ISP of one real-pairs record's target PNG."""
+    if "copy_target_png" in (rec.get("stages") or []):
+        return "release"  # the processed night_real tree's clean/NNN.png, copied
+    meta = pathlib.Path(root) / "real" / "meta" / f"{rec.get('scene')}.json"
+    try:
+        target = json.loads(meta.read_text(encoding="utf-8")).get("target") or {}
+    except (OSError, ValueError, AttributeError):
+        target = {}
+    if target.get("png") == "copied" or target.get("isp") == "release":
+        return "release"
+    return "day2night"
+
+
+def real_target_isps(real_dir):
+    """{scene id: "release" | "day2night"} of a real-pairs output folder (scenes whose record
+    is not ``ok`` are left out; realset.read_real reports them)."""
+    root = pathlib.Path(real_dir)
+    out = {}
+    for rec in _json_lines(root / "manifest.jsonl"):
+        if rec.get("kind", "real") == "real" and rec.get("status") == "ok" and rec.get("scene"):
+            out[str(rec["scene"])] = scene_target_isp(root, rec)
+    return out
+
+
+def real_target_isp(real_dir):
+    """The default of ``--targets``: ``release`` when every real target came from the release's
+    ISP, else ``day2night``."""
+    isps = set(real_target_isps(real_dir).values())
+    return "release" if isps == {"release"} else "day2night"
+
+
+def release_isos(names, seed, isos=NOISY_ISOS):
+    """{day image: ISO} drawn as the release's prepare_data.py draws them: one ISO per image,
+    uniformly from the list (``iso_list[np.random.randint(2)]``), over the sorted images
+    (training and validation). The release's draws come from numpy's unseeded global stream
+    between its synthesis draws, so only the rule is reproduced; here the draws are
+    ``RandomState(seed).randint(len(isos), size=n)`` (deterministic)."""
+    names = sorted(str(n) for n in names)
+    draws = np.random.RandomState(seed).randint(len(isos), size=len(names))
+    return {n: int(isos[int(k)]) for n, k in zip(names, draws)}
+
+
+def with_isos(slots, isos):
+    """``slots`` (mix.py's dicts) with each synthetic slot's ISO replaced by ``isos[id]``."""
+    out = []
+    for s in slots:
+        s = dict(s)
+        if s["kind"] == "synthetic":
+            s["iso"] = isos[s["id"]]
+        out.append(s)
+    return out

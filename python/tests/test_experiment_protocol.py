@@ -1,0 +1,212 @@
+"""The release's protocol on request (issue 35): its fold lists read from its pickle without
+running pickle code, its noise on synthetic noisy inputs, its ISO draw, and the choice of the
+ISP that renders the targets."""
+
+import json
+import os
+import pickle
+
+import numpy as np
+import pytest
+
+from conftest import ROOT
+from day2night.experiment import folds, protocol, release_folds, release_noise
+
+
+def release_lists(n=105, k=3, val=10):
+    """Lists shaped like the release's k_fold_indices_saved.p: sorted, train and val entries
+    numpy int32 scalars, test entries Python ints."""
+    perm = np.random.RandomState(7).permutation(n)
+    out = {key: [] for key in release_folds.KEYS}
+    for i in range(k):
+        test = sorted(int(j) for j in perm[i::k])
+        rest = [j for j in range(n) if j not in set(test)]
+        vals = sorted(rest[j] for j in np.random.RandomState(i).permutation(len(rest))[:val])
+        train = [j for j in rest if j not in set(vals)]
+        out["train_index_all"].append([np.int32(j) for j in train])
+        out["val_index_all"].append([np.int32(j) for j in vals])
+        out["test_index_all"].append(test)
+    return out
+
+
+def plain(lists):
+    return {k: [[int(j) for j in f] for f in v] for k, v in lists.items()}
+
+
+def test_the_release_pickle_gives_its_lists_mapped_to_scene_ids(tmp_path):
+    lists = release_lists()
+    path = tmp_path / "k_fold_indices_saved.p"
+    path.write_bytes(pickle.dumps(lists))
+    read = release_folds.read_release_folds(path)
+    assert read == plain(lists)
+    assert [len(f) for f in read["train_index_all"]] == [60, 60, 60]
+    assert [len(f) for f in read["val_index_all"]] == [10, 10, 10]
+    assert [len(f) for f in read["test_index_all"]] == [35, 35, 35]
+    scenes = ["%03d" % j for j in range(105)]
+    m = release_folds.to_manifest(read, scenes, source=path)
+    folds.check_folds(m)
+    for i, s in enumerate(m["splits"]):
+        for key, part in release_folds.PARTS.items():
+            assert s[part] == ["%03d" % j for j in lists[key][i]]
+    # every pickle protocol the release's Python could have written (2 adds _codecs)
+    for proto in (3, 4, 5):
+        path.write_bytes(pickle.dumps(lists, protocol=proto))
+        assert release_folds.read_release_folds(path) == plain(lists)
+
+
+class _Evil:
+    def __init__(self, flag):
+        self.flag = flag
+
+    def __reduce__(self):
+        return (os.system, (f"touch {self.flag}",))
+
+
+def test_a_pickle_with_any_other_global_is_refused_without_running_it(tmp_path):
+    flag = tmp_path / "ran"
+    evil = release_lists()
+    evil["test_index_all"][0][0] = _Evil(flag)
+    path = tmp_path / "evil.p"
+    path.write_bytes(pickle.dumps(evil))
+    with pytest.raises(folds.FoldError, match=r"evil\.p: refused: .*system.*only numpy"):
+        release_folds.read_release_folds(path)
+    assert not flag.exists()
+    path.write_bytes(pickle.dumps({"train_index_all": np.arange(3)}))  # an ndarray: reconstruct
+    with pytest.raises(folds.FoldError, match="refused"):
+        release_folds.read_release_folds(path)
+    path.write_bytes(b"\x80\x04garbage")
+    with pytest.raises(folds.FoldError, match="not a readable fold-index pickle"):
+        release_folds.read_release_folds(path)
+
+
+def test_the_json_export_round_trips(tmp_path):
+    src = tmp_path / "k.p"
+    src.write_bytes(pickle.dumps(release_lists()))
+    out = tmp_path / "k.json"
+    assert release_folds.main(["export", str(src), "-o", str(out)]) == 0
+    data = json.loads(out.read_text())
+    assert data["format"] == release_folds.FORMAT
+    assert release_folds.read_release_folds(out) == release_folds.read_release_folds(src)
+
+
+@pytest.mark.parametrize("edit, msg", [
+    (lambda d: d.pop("val_index_all"), "missing val_index_all"),
+    (lambda d: d.update(extra=1), "unknown extra"),
+    (lambda d: d["test_index_all"].pop(), "different numbers of folds"),
+    (lambda d: d["train_index_all"][0].append(-1), "-1 is not a scene index"),
+    (lambda d: d["train_index_all"][0].append(True), "True is not a scene index"),
+    (lambda d: d["val_index_all"].__setitem__(1, 5), r"val_index_all\[1\] is not a list"),
+])
+def test_malformed_lists_are_named(tmp_path, edit, msg):
+    d = plain(release_lists())
+    edit(d)
+    p = tmp_path / "k.json"
+    p.write_text(json.dumps(d))
+    with pytest.raises(folds.FoldError, match=msg):
+        release_folds.read_release_folds(p)
+
+
+def test_lists_that_do_not_fit_the_real_set_are_named(tmp_path):
+    lists = plain(release_lists())
+    with pytest.raises(folds.FoldError, match="index 104 names scene number 105.*has 100"):
+        release_folds.to_manifest(lists, ["%03d" % j for j in range(100)], source="k.p")
+    lists["test_index_all"][1].append(lists["test_index_all"][0][0])
+    with pytest.raises(folds.FoldError, match="k.p: fold 1: scene"):
+        release_folds.to_manifest(lists, ["%03d" % j for j in range(105)], source="k.p")
+
+
+def test_protocol_presets_and_flags(tmp_path):
+    p = protocol.resolve()
+    assert (p.targets, p.noise, p.synth_iso, p.folds_file) == \
+        ("day2night", "day2night", "alternate", None)
+    assert protocol.resolve(real_targets="release").targets == "release"
+    with pytest.raises(protocol.ProtocolError, match="--protocol release needs --folds-file"):
+        protocol.resolve("release")
+    k = tmp_path / "k.p"
+    k.write_bytes(pickle.dumps(release_lists()))
+    r = protocol.resolve("release", folds_file=k)
+    assert (r.targets, r.noise, r.synth_iso, r.folds_file) == \
+        ("release", "release", "release", str(k.resolve()))
+    assert len(r.folds_sha256) == 64
+    r = protocol.resolve("release", folds_file=k, targets="day2night", synth_iso="alternate")
+    assert (r.targets, r.noise, r.synth_iso) == ("day2night", "release", "alternate")
+    with pytest.raises(protocol.ProtocolError, match="--targets 'srgb'"):
+        protocol.resolve(targets="srgb")
+    with pytest.raises(protocol.ProtocolError, match="cannot read"):
+        protocol.resolve(folds_file=tmp_path / "absent.p")
+    assert set(r.config()) == {"protocol", "targets", "noise", "synth_iso", "folds_file",
+                               "folds_sha256"}
+
+
+def test_the_targets_default_follows_the_real_sets_targets(tmp_path):
+    def record(sid, stages):
+        return json.dumps({"kind": "real", "scene": sid, "status": "ok", "stages": stages})
+
+    (tmp_path / "manifest.jsonl").write_text(
+        record("000", ["clean_raw_png", "check_motion", "write_clean_raw", "copy_target_png"])
+        + "\n" + record("001", ["clean_raw_png", "write_clean_raw", "copy_target_png"]) + "\n")
+    assert protocol.real_target_isp(tmp_path) == "release"
+    with open(tmp_path / "manifest.jsonl", "a") as f:
+        f.write(record("002", ["merge", "check_motion", "write_clean_raw", "render_png"]) + "\n")
+    assert protocol.real_target_isps(tmp_path) == {"000": "release", "001": "release",
+                                                   "002": "day2night"}
+    assert protocol.real_target_isp(tmp_path) == "day2night"
+    # a target real-pairs rendered with the release's ISP (its scene record says so)
+    meta = tmp_path / "real" / "meta"
+    meta.mkdir(parents=True)
+    (meta / "002.json").write_text(json.dumps({"target": {"png": "render", "isp": "release"}}))
+    assert protocol.real_target_isp(tmp_path) == "release"
+
+
+def test_the_iso_is_drawn_per_image_like_the_release():
+    names = [f"day_{i:02d}.dng" for i in range(70)]
+    isos = protocol.release_isos(reversed(names), seed=4)
+    assert list(isos) == names  # sorted, as prepare_data.py loops over the images
+    draws = np.random.RandomState(4).randint(2, size=70)
+    assert [isos[n] for n in names] == [(1600, 3200)[k] for k in draws]
+    assert protocol.release_isos(names, seed=4) == isos
+    assert protocol.release_isos(names, seed=5) != isos
+    slots = [{"kind": "synthetic", "id": names[3], "iso": 1600},
+             {"kind": "real", "id": "007", "iso": 3200}]
+    out = protocol.with_isos(slots, isos)
+    assert out[0]["iso"] == isos[names[3]] and out[1]["iso"] == 3200
+
+
+def test_the_noise_table_is_the_projects_embedded_one():
+    table = json.loads((ROOT / "calibration" / "samsung-s20fe" / "noise.json").read_text())
+    dn = table["dn_table"]
+    assert (dn["black"], dn["white"]) == (64.0, 1023.0)
+    for iso, pos, b1, b2 in dn["rows"]:
+        assert release_noise.DN_TABLE[iso][pos] == (b1, b2)
+    assert len(dn["rows"]) == 4 * len(release_noise.DN_TABLE)
+
+
+def test_release_noise_is_the_tables_variance_clipped_at_1023_and_truncated():
+    n = 1024  # 131072 samples per position on the left: the mean within 0.09 (1 sigma)
+    plane = np.full((n, n), 500, np.uint16)
+    plane[:, n // 2:] = 1020
+    rng = np.random.RandomState(release_noise.noise_key(0, "day.dng", 1600))
+    noisy = release_noise.add_release_noise(plane, 1600, rng)
+    assert noisy.dtype == np.uint16 and noisy.max() <= 1023
+    left = noisy[:, : n // 2].astype(np.float64)
+    for p, (b1, b2) in enumerate(release_noise.DN_TABLE[1600]):
+        i, j = divmod(p, 2)
+        site = left[i::2, j::2]
+        # truncation: the mean is half a code low; the variance is the table's (+1/12)
+        assert site.mean() == pytest.approx(500 - 0.5, abs=0.3)
+        assert site.var() == pytest.approx(b1 * 500 + b2 + 1 / 12, rel=0.02)
+    assert (noisy[:, n // 2:] == 1023).mean() > 0.3  # clipped at 1023
+    again = release_noise.add_release_noise(
+        plane, 1600, np.random.RandomState(release_noise.noise_key(0, "day.dng", 1600)))
+    assert np.array_equal(noisy, again)
+    bright = np.full((4, 4), 4000, np.uint16)  # a 12-bit camera's highlight: the release clips
+    assert (release_noise.add_release_noise(bright, 3200, np.random.RandomState(1)) == 1023).all()
+    with pytest.raises(ValueError, match="ISO 6400"):
+        release_noise.add_release_noise(plane, 6400, rng)
+
+
+def test_release_noise_leaves_the_masked_border():
+    stored = np.full((12, 10), 300, np.uint16)
+    out = release_noise.release_noisy_plane(stored, [2, 4, 12, 10], 3200, 9)
+    assert (out[:2] == 300).all() and (out[:, :4] == 300).all()
+    assert (out[2:, 4:] != 300).any()
