@@ -141,3 +141,16 @@ def read_folds(path):
     except FoldError as e:
         raise FoldError(f"{path}: {e}") from None
     return manifest
+
+
+def make_run_folds(scenes, folds=3, seed=0, folds_file=None):
+    """A run's new fold manifest: seeded (:func:`make_folds`), or the lists of ``folds_file``
+    (the release's ``k_fold_indices_saved.p`` or its JSON export; release_folds.py) mapped
+    onto the sorted ``scenes``, recorded with the run's ``seed``."""
+    if folds_file is None:
+        return make_folds(scenes, folds, seed=seed)
+    from .release_folds import read_release_folds, to_manifest
+
+    manifest = to_manifest(read_release_folds(folds_file), scenes, source=folds_file)
+    manifest["seed"] = int(seed)
+    return manifest

@@ -60,26 +60,90 @@ def _read_dng(path, what):
         raise PairError(f"{what}: cannot read {path}: {e}") from None
 
 
-def real_pair(scene, task_iso):
-    """(x, y) of a real scene: ``task_iso`` None for the clean task, else the noisy ISO."""
+def _input_raw(scene, task_iso):
+    if task_iso is None:
+        return _read_dng(scene.clean_raw, f"scene {scene.id}")
+    if task_iso not in scene.noisy:
+        raise PairError(f"scene {scene.id}: no ISO {task_iso} input")
+    return _read_dng(scene.noisy[task_iso], f"scene {scene.id}")
+
+
+def real_pair(scene, task_iso, targets=None, source=None):
+    """(x, y) of a real scene: ``task_iso`` None for the clean task, else the noisy ISO.
+
+    ``targets``: the run's ISP (``"release"`` or ``"day2night"``; None: the real-pairs PNG,
+    its geometry told by its shape, as before ``--targets``); ``source``: the ISP that made the
+    scene's PNG (protocol.scene_target_isp). The PNG is used when it came from ``targets``'
+    ISP (and, for day2night's, from a clean raw without opcode lists, which its render
+    applies); otherwise the target is rendered again from the scene's clean raw by
+    :func:`real_target`. The input is then cut and turned onto the target's pixel grid."""
     from ..train.preprocess import network_input
 
-    if task_iso is None:
-        raw = _read_dng(scene.clean_raw, f"scene {scene.id}")
-    else:
-        if task_iso not in scene.noisy:
-            raise PairError(f"scene {scene.id}: no ISO {task_iso} input")
-        raw = _read_dng(scene.noisy[task_iso], f"scene {scene.id}")
+    raw = _input_raw(scene, task_iso)
     x = network_input(raw)
-    y = read_png(scene.target)
-    aligned = align(x, y, raw.meta)
+    y, geometry = real_target(scene, targets, source)
+    aligned = align(x, y, raw.meta, geometry)
     if aligned is None:
+        how = GEOMETRY_TEXT.get(geometry, "neither its DefaultCrop + Orientation nor a quarter "
+                                "turn")
         raise PairError(
             f"scene {scene.id}: target {scene.target} is {y.shape[1]}x{y.shape[0]}; the "
             f"network input of {raw.file_name} is {x.shape[1]}x{x.shape[0]} (active area), "
-            "and neither its DefaultCrop + Orientation nor a quarter turn matches the target"
+            f"and {how} matches the target"
         )
     return aligned
+
+
+GEOMETRY_TEXT = {
+    "raw": "the active area itself",
+    "render": "neither its DefaultCrop + Orientation nor a quarter turn",
+    "release": "neither the release's crop + orientation nor a quarter turn",
+}
+
+
+def has_opcodes(meta):
+    """Whether a raw's metadata holds a non-empty DNG opcode list."""
+    return any(meta.get(f"opcode_list{i}") for i in (1, 2, 3))
+
+
+def real_target(scene, targets, source):
+    """(uint8 target, geometry) of a real scene for the run's ``targets`` ISP (see
+    :func:`real_pair`)."""
+    if targets is None:
+        return read_png(scene.target), None
+    if source == targets == "release":
+        return read_png(scene.target), "release"
+    clean = _read_dng(scene.clean_raw, f"scene {scene.id}")
+    if source == targets == "day2night" and not has_opcodes(clean.meta):
+        return read_png(scene.target), "render"
+    neutral = clean.meta.get("as_shot_neutral")
+    return render_target_as(targets, clean, neutral, display=True)
+
+
+def render_target_as(isp, raw, neutral, display):
+    """(uint8 target, geometry) of ``raw`` rendered by ``isp`` with white balance ``neutral``,
+    DNG opcode lists ignored on every path (the network input never applies them; the
+    release ignores them too). ``display``: day2night's target in the geometry real-pairs
+    writes (DefaultCrop, Orientation: geometry "render"), else the active area as stored
+    (geometry "raw"). The release's ISP has one geometry, its own ("release")."""
+    import day2night
+
+    from ..train.targets import srgb8
+
+    if isp == "release":
+        return release_render(raw, neutral), "release"
+    if isp != "day2night":
+        raise PairError(f"targets {isp!r}: use release or day2night")
+    rgb = day2night.render(raw, neutral=neutral, demosaic="mhc", crop=display, orient=display,
+                           opcodes="ignore")
+    return srgb8(rgb), ("render" if display else "raw")
+
+
+def release_render(raw, neutral):
+    """The release ISP's 8-bit target of ``raw`` (its crop and orientation)."""
+    import day2night
+
+    return np.asarray(day2night.render_target(raw, neutral=neutral, isp="release"), np.uint8)
 
 
 def orient(img, orientation):
@@ -98,47 +162,114 @@ def orient(img, orientation):
     }.get(o, img)
 
 
-def align(x, y, meta):
-    """(x, y) with the same pixel grid, or None. The network input ``x`` covers the active
-    area in sensor orientation; a target rendered with the ISP's defaults (as real-pairs
-    writes it) is the DefaultCrop, oriented: ``x`` is cut and turned the same way. A target
-    that is the active area turned a quarter (the release's portrait targets) is turned back,
-    as the release's test.py does."""
-    if x.shape == y.shape:
-        return x, y
+def release_orient(img, orientation):
+    """``img`` turned as the release's ``fix_orientation`` turns it: as the Exif tag for 1, 3,
+    6 and 8, but 2 flips top to bottom and 4 left to right (OpenCV's flip codes 0 and 1), and
+    5 and 7 are each other's Exif turn (transverse and transpose)."""
+    o = int(orientation or 1)
+    swapped = {2: 4, 4: 2, 5: 7, 7: 5}
+    return orient(img, swapped.get(o, o))
+
+
+def release_window(meta, height, width):
+    """(top, left, height, width) of the active area (``height`` x ``width``) that the
+    release's render keeps: rawpy's visible image (the ActiveArea), cropped once more by
+    ``active_area_cropping`` with the ActiveArea's own numbers (unless they are
+    ``[0, 0, height, width]``), as numpy slicing clips them."""
+    area = meta.get("active_area")
+    if not area or [int(v) for v in area] == [0, 0, height, width]:
+        return 0, 0, height, width
+    t, l, b, r = (int(v) for v in area)
+    rows = range(height)[t:b]
+    cols = range(width)[l:r]
+    return t, l, len(rows), len(cols)
+
+
+def _default_crop(x, meta):
     crop = meta.get("default_crop")
-    if crop:
-        top, left, h, w = (int(round(float(v))) for v in crop)
-        xc = orient(x[top : top + h, left : left + w], meta.get("orientation"))
-        if xc.shape == y.shape:
-            return np.ascontiguousarray(xc), y
-    xo = orient(x, meta.get("orientation"))
-    if xo.shape == y.shape:
-        return np.ascontiguousarray(xo), y
-    if np.rot90(y).shape == x.shape:
-        return x, np.ascontiguousarray(np.rot90(y))
+    if not crop:
+        return None
+    top, left, h, w = (int(round(float(v))) for v in crop)
+    return x[top : top + h, left : left + w]
+
+
+def _candidates(x, y, meta, geometry):
+    """The ways ``x`` (active area, stored orientation) may sit on ``y``'s pixel grid, most
+    likely first: each an (x', y') pair."""
+    o = meta.get("orientation")
+    if geometry == "raw":
+        return [(x, y)]
+    out = []
+    if geometry in (None, "render"):
+        xc = _default_crop(x, meta)
+        if xc is not None:
+            out.append((orient(xc, o), y))
+        out.append((orient(x, o), y))  # a render without the DefaultCrop
+    if geometry in (None, "release"):
+        t, l, h, w = release_window(meta, *x.shape[:2])
+        out.append((release_orient(x[t : t + h, l : l + w], o), y))
+    # a target that is the active area turned a quarter (the release's portrait PNGs, which
+    # its test.py turns back)
+    out.append((x, np.rot90(y)))
+    return out
+
+
+def align(x, y, meta, geometry=None):
+    """(x, y) on one pixel grid, or None. The network input ``x`` covers the active area in
+    sensor orientation; ``geometry`` says how the target ``y`` was made:
+
+    - ``"raw"``: the active area as stored (``render(crop=False, orient=False)``);
+    - ``"render"``: day2night's default render (what real-pairs writes): ``x`` is cut to the
+      DefaultCrop and turned by the Orientation (whatever the shapes: a flip or a half turn
+      keeps them), or only turned when the target has no DefaultCrop;
+    - ``"release"``: the release's render: ``x`` is cut to :func:`release_window` and turned
+      by :func:`release_orient`;
+    - None: the first of those whose shape matches (the shape check of the real set).
+
+    A target that is the active area turned a quarter (the release's portrait targets) is
+    turned back, as the release's test.py does."""
+    for xa, ya in _candidates(x, y, meta, geometry):
+        if xa.shape == ya.shape:
+            return np.ascontiguousarray(xa), np.ascontiguousarray(ya)
     return None
 
 
-def synth_pairs(day_path, mode, seed, isos=NOISY_ISOS):
-    """{key: (x, y)} of one day image synthesized in ``mode``: key ``"clean"`` and each ISO."""
+def synth_pairs(day_path, mode, seed, isos=NOISY_ISOS, targets="day2night", noise="day2night"):
+    """{key: (x, y)} of one day image synthesized in ``mode``: key ``"clean"`` and each ISO.
+
+    ``targets``: the ISP of the target (day2night's, with opcodes ignored like the input,
+    or the release's); ``noise``: the noisy inputs' noise (``"day2night"``: the synthesis'
+    own model; ``"release"``: release_noise.py on the clean night raw)."""
     import day2night
 
     from ..train.preprocess import network_input
-    from ..train.targets import render_target
 
     day = _read_dng(day_path, "day image")
+    own_isos = tuple(isos) if noise == "day2night" else ()
     try:
-        out = day2night.synthesize(day, seed=seed, mode=mode, isos=tuple(isos))
+        out = day2night.synthesize(day, seed=seed, mode=mode, isos=own_isos, target=None)
     except ValueError as e:
         raise PairError(f"{day_path}: synthesis ({mode}) failed: {e}") from None
     neutral = tuple(float(v) for v in out["neutral"])
     meta = dict(day.meta)
     meta["as_shot_neutral"] = list(neutral)
     clean = day2night.Raw.from_array(out["clean"], meta, name=day.name)
-    y = render_target(clean, neutral=neutral)
-    pairs = {"clean": (network_input(clean, neutral=neutral), y)}
+    y, geometry = render_target_as(targets, clean, neutral, display=False)
+    planes = {"clean": out["clean"]}
     for iso in isos:
-        noisy = day2night.Raw.from_array(np.asarray(out["noisy"][iso]), meta, name=day.name)
-        pairs[iso] = (network_input(noisy, neutral=neutral), y)
+        if noise == "release":
+            from .release_noise import noise_key, release_noisy_plane
+
+            planes[iso] = release_noisy_plane(out["clean"], day.meta["active_area"], iso,
+                                              noise_key(seed, day.name, iso))
+        else:
+            planes[iso] = np.asarray(out["noisy"][iso])
+    pairs = {}
+    for key, plane in planes.items():
+        raw = clean if key == "clean" else day2night.Raw.from_array(plane, meta, name=day.name)
+        pair = align(network_input(raw, neutral=neutral), y, meta, geometry)
+        if pair is None:
+            raise PairError(f"{day_path}: the {targets} target does not cover the network "
+                            "input's pixel grid")
+        pairs[key] = pair
     return pairs

@@ -148,11 +148,74 @@ def release_isos(names, seed, isos=NOISY_ISOS):
 
 
 def with_isos(slots, isos):
-    """``slots`` (mix.py's dicts) with each synthetic slot's ISO replaced by ``isos[id]``."""
+    """``slots`` (mix.py's dicts) with each synthetic slot's ISO replaced by ``isos[id]``
+    (``isos`` None: unchanged)."""
+    if isos is None:
+        return slots
     out = []
     for s in slots:
         s = dict(s)
         if s["kind"] == "synthetic":
             s["iso"] = isos[s["id"]]
         out.append(s)
+    return out
+
+
+CONFIG_KEYS = ("protocol", "targets", "noise", "synth_iso", "folds_file", "folds_sha256")
+
+
+def for_run(cfg, real_dir, folds=None, **flags):
+    """Resolve the run's protocol (``flags``: protocol, targets, noise, synth_iso, folds_file
+    as given, None when not) into ``cfg`` (its CONFIG_KEYS, and ``folds``: the number of
+    folds, from the fold file when there is one). Returns ({scene: ISP of its target}, the
+    Protocol)."""
+    isps = real_target_isps(real_dir)
+    real = "release" if isps and set(isps.values()) == {"release"} else "day2night"
+    p = resolve(real_targets=real, **flags)
+    count = folds
+    if p.folds_file is not None:
+        from .release_folds import read_release_folds
+
+        count = len(read_release_folds(p.folds_file)["test_index_all"])
+        if folds is not None and int(folds) != count:
+            raise ProtocolError(f"--folds {folds}: the fold file {p.folds_file} holds {count} "
+                                "folds (leave --folds out)")
+    cfg.update(p.config(), folds=int(3 if count is None else count))
+    return isps, p
+
+
+def run_isos(exp):
+    """{day image: ISO} of the run's synthetic noisy inputs under ``synth_iso = release``,
+    else None (mix.py's alternation by slot)."""
+    if exp.cfg.get("synth_iso") != "release":
+        return None
+    return release_isos(exp.days, exp.cfg["seed"])
+
+
+def synthetic_slots(exp, names):
+    """mix.synthetic_slots of ``names`` with the run's synthetic ISOs."""
+    from .mix import synthetic_slots as slots
+
+    return with_isos(slots(names), run_isos(exp))
+
+
+def apply_isos(exp):
+    """Replace the synthetic slots' ISOs of ``exp.mixes`` by the release's draw."""
+    isos = run_isos(exp)
+    if isos:
+        exp.mixes = {r: [with_isos(m, isos) for m in ms] for r, ms in exp.mixes.items()}
+
+
+def notes(exp):
+    """Lines for the run's log about what the protocol does not reach."""
+    out = []
+    fresh = any(r.source == "fresh" for r in exp.rows)
+    if fresh and (exp.cfg["targets"] != "day2night" or exp.cfg["noise"] != "day2night"):
+        out.append("the fresh row synthesizes with day2night's ISP and noise "
+                   "(FreshPatches): --targets/--noise release do not reach it")
+    mixed = set(exp.target_isps.get(s, "day2night") for s in exp.scenes) - {exp.cfg["targets"]}
+    if mixed:
+        n = sum(exp.target_isps.get(s, "day2night") != exp.cfg["targets"] for s in exp.scenes)
+        out.append(f"{n} real target(s) came from the {'/'.join(sorted(mixed))} ISP: rendered "
+                   f"again from their clean raws by the {exp.cfg['targets']} ISP")
     return out

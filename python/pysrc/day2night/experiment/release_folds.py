@@ -158,7 +158,7 @@ def to_manifest(lists, scenes, source=None):
         for k in KEYS:
             s[PARTS[k]] = [ids[j] for j in lists[k][i]]
         splits.append(s)
-    manifest = {"format": folds_mod.FORMAT, "seed": None, "folds": len(splits), "scenes": ids,
+    manifest = {"format": folds_mod.FORMAT, "seed": 0, "folds": len(splits), "scenes": ids,
                 "splits": splits, "source": {"file": str(source), "lists": lists}}
     try:
         folds_mod.check_folds(manifest)

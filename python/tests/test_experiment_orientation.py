@@ -1,0 +1,144 @@
+"""Input and target of a pair on one pixel grid, for each of the 8 Exif orientations (issue 35).
+
+A stand-in scene: a 512 x 384 cut of ``fixtures/day.dng`` (the astronaut photograph: no
+symmetry), without a DefaultCrop, whose DNGs carry the orientation. Its clean raw and ISO 1600
+input go through ``experiment.pairs.real_pair`` against a target rendered the way real-pairs
+renders it (day2night's defaults: the image turned for display), or the way the release
+renders its ``clean/`` PNGs (its crop and its own ``fix_orientation``). The input and target
+patches must line up: on every textured 64 x 64 patch of the stride-64 grid, the edges of the
+input and of the target correlate best at offset (0, 0), and strongly.
+
+Flips and the half turn (2, 3, 4) keep the shape, so a pairing that only looked at shapes
+left those targets flipped against an unturned input."""
+
+import types
+
+import numpy as np
+import pytest
+
+import day2night
+from conftest import FIXTURES
+from day2night.experiment import pairs
+from day2night.experiment.png import write_png
+from day2night.train.targets import srgb8
+
+H, W = 384, 512
+PATCH = 64
+SHIFT = 3
+
+
+def edges(img):
+    """Gradient magnitude of the grey image (float64)."""
+    g = np.asarray(img, np.float64).mean(axis=2)
+    gy, gx = np.gradient(g)
+    return np.hypot(gx, gy)
+
+
+def correlations(a, b):
+    """{(dy, dx): r}: the correlation of ``a``'s centre with ``b``'s window shifted by
+    (dy, dx), for shifts within +-SHIFT."""
+    m = SHIFT
+    core = a[m:-m, m:-m].ravel()
+    return {
+        (dy, dx): np.corrcoef(core, b[m + dy : b.shape[0] - m + dy,
+                                      m + dx : b.shape[1] - m + dx].ravel())[0, 1]
+        for dy in range(-m, m + 1)
+        for dx in range(-m, m + 1)
+    }
+
+
+def assert_one_grid(x, y):
+    """Every textured patch's edges correlate strongly at offset (0, 0), and no shift does
+    clearly better (the two demosaics differ by a few hundredths at image borders); most
+    patches are best at exactly (0, 0)."""
+    assert x.shape == y.shape, (x.shape, y.shape)
+    ex, ey = edges(x), edges(np.asarray(y, np.float64) / 255)
+    checked = exact = 0
+    for top in range(0, x.shape[0] - PATCH + 1, PATCH):
+        for left in range(0, x.shape[1] - PATCH + 1, PATCH):
+            a = ex[top : top + PATCH, left : left + PATCH]
+            b = ey[top : top + PATCH, left : left + PATCH]
+            if a.std() < 0.01:
+                continue  # a flat patch: nothing to line up
+            r = correlations(a, b)
+            best = max(r, key=r.get)
+            assert r[0, 0] > 0.8 and r[0, 0] > r[best] - 0.01, (top, left, best, r[best],
+                                                                  r[0, 0])
+            checked += 1
+            exact += best == (0, 0)
+    assert checked >= 30 and exact >= 0.9 * checked, (checked, exact)
+
+
+def stand_in_raw(orientation):
+    day = day2night.read_dng(str(FIXTURES / "day.dng"))
+    t, l = day.meta["active_area"][:2]
+    data = np.ascontiguousarray(day.data[t + 64 : t + 64 + H, l : l + W])
+    meta = {k: v for k, v in day.meta.items() if v is not None}
+    meta.update(active_area=None, default_crop=None, orientation=orientation, width=W, height=H)
+    return day2night.Raw.from_array(data, meta, name=f"orient{orientation}")
+
+
+def scene(tmp_path, raw, target):
+    clean = tmp_path / "clean.dng"
+    noisy = tmp_path / "noisy_iso1600.dng"
+    day2night.write_dng(raw, str(clean), overwrite=True)
+    day2night.write_dng(raw, str(noisy), overwrite=True)
+    png = tmp_path / "target.png"
+    write_png(png, target)
+    return types.SimpleNamespace(id="s", clean_raw=clean, target=png, noisy={1600: noisy})
+
+
+@pytest.mark.parametrize("orientation", range(1, 9))
+def test_real_pair_of_a_real_pairs_target_is_on_one_grid(tmp_path, orientation):
+    raw = stand_in_raw(orientation)
+    shown = srgb8(day2night.render(raw))  # the bytes real-pairs writes as the target PNG
+    assert shown.shape[:2] == ((H, W) if orientation < 5 else (W, H))
+    sc = scene(tmp_path, raw, shown)
+    for iso in (None, 1600):
+        x, y = pairs.real_pair(sc, iso, targets="day2night", source="day2night")
+        assert np.array_equal(y, shown)  # the PNG itself: the clean raw has no opcode lists
+        assert_one_grid(x, y)
+
+
+@pytest.mark.parametrize("orientation", range(1, 9))
+def test_real_pair_of_a_release_target_is_on_one_grid(tmp_path, orientation):
+    """A stand-in for the release's clean/NNN.png: the active area cropped by the release's
+    window and turned by its fix_orientation (2 and 4, 5 and 7 swapped against Exif)."""
+    raw = stand_in_raw(orientation)
+    meta = dict(raw.meta)
+    meta["active_area"] = [0, 0, H, W]
+    flat = srgb8(day2night.render(raw, crop=False, orient=False))
+    ref = pairs.release_orient(flat, orientation)
+    sc = scene(tmp_path, raw, np.ascontiguousarray(ref))
+    x, y = pairs.real_pair(sc, 1600, targets="release", source="release")
+    assert_one_grid(x, y)
+    if orientation in (2, 4, 5, 7):
+        # the Exif turn would put the release's target the other way round
+        assert not np.array_equal(pairs.orient(flat, orientation), ref)
+
+
+def test_release_orientation_is_its_fix_orientation():
+    """The release's fix_orientation through OpenCV, for each tag value."""
+    cv2 = pytest.importorskip("cv2")
+    img = np.arange(3 * 5 * 3, dtype=np.uint8).reshape(3, 5, 3)
+    ops = {
+        1: lambda a: a,
+        2: lambda a: cv2.flip(a, 0),
+        3: lambda a: cv2.rotate(a, cv2.ROTATE_180),
+        4: lambda a: cv2.flip(a, 1),
+        5: lambda a: cv2.rotate(cv2.flip(a, 0), cv2.ROTATE_90_COUNTERCLOCKWISE),
+        6: lambda a: cv2.rotate(a, cv2.ROTATE_90_CLOCKWISE),
+        7: lambda a: cv2.rotate(cv2.flip(a, 0), cv2.ROTATE_90_CLOCKWISE),
+        8: lambda a: cv2.rotate(a, cv2.ROTATE_90_COUNTERCLOCKWISE),
+    }
+    for o, op in ops.items():
+        assert np.array_equal(pairs.release_orient(img, o), op(img)), o
+
+
+def test_release_window_crops_the_active_area_twice():
+    """fixtures/day.dng: ActiveArea 8,16,520,528 of a 528 x 520 file; the release keeps rows
+    8..511 and columns 16..511 of the 512 x 512 active area (496 x 504, its README)."""
+    meta = {"active_area": [8, 16, 520, 528]}
+    assert pairs.release_window(meta, 512, 512) == (8, 16, 504, 496)
+    assert pairs.release_window({"active_area": [0, 0, 30, 40]}, 30, 40) == (0, 0, 30, 40)
+    assert pairs.release_window({}, 30, 40) == (0, 0, 30, 40)
