@@ -213,6 +213,15 @@ def notes(exp):
     if fresh and (exp.cfg["targets"] != "day2night" or exp.cfg["noise"] != "day2night"):
         out.append("the fresh row synthesizes with day2night's ISP and noise "
                    "(FreshPatches): --targets/--noise release do not reach it")
+    if exp.cfg["noise"] == "release" and exp.days:
+        import day2night
+
+        first = sorted(exp.days)[0]
+        white = day2night.read_dng(str(exp.days[first])).meta.get("white_level")
+        if white is not None and float(white) != 1023:
+            out.append(f"--noise release clips the noisy raws at 1023, as the release does for "
+                       f"its 10-bit phone; {first} has white level {white:g}: its highlights "
+                       "saturate")
     mixed = set(exp.target_isps.get(s, "day2night") for s in exp.scenes) - {exp.cfg["targets"]}
     if mixed:
         n = sum(exp.target_isps.get(s, "day2night") != exp.cfg["targets"] for s in exp.scenes)
