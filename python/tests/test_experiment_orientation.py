@@ -142,3 +142,35 @@ def test_release_window_crops_the_active_area_twice():
     assert pairs.release_window(meta, 512, 512) == (8, 16, 504, 496)
     assert pairs.release_window({"active_area": [0, 0, 30, 40]}, 30, 40) == (0, 0, 30, 40)
     assert pairs.release_window({}, 30, 40) == (0, 0, 30, 40)
+
+
+def warp_list(k1):
+    """An OpcodeList3 holding one WarpRectilinear (kr = 1, k1, 0, 0; centred), big-endian as
+    DNG stores it."""
+    import struct
+
+    params = struct.pack(">I6d2d", 1, 1.0, k1, 0.0, 0.0, 0.0, 0.0, 0.5, 0.5)
+    return struct.pack(">III", 1, 1, 0x01030000) + struct.pack(">II", 0, len(params)) + params
+
+
+def test_opcode_lists_are_ignored_on_both_sides(tmp_path):
+    """A DNG with a WarpRectilinear (corners moved by about 10 pixels): the network input never
+    applies it, so neither does the target: synthetic and real pairs stay on one grid."""
+    raw = stand_in_raw(1)
+    meta = dict(raw.meta)
+    meta["opcode_list3"] = warp_list(0.03)
+    warped = day2night.Raw.from_array(raw.data, meta, name="warped")
+    day = tmp_path / "warped.dng"
+    day2night.write_dng(warped, str(day))
+    assert pairs.has_opcodes(day2night.read_dng(str(day)).meta)
+    applied = srgb8(day2night.render(warped))
+    assert not np.array_equal(applied, srgb8(day2night.render(warped, opcodes="ignore")))
+    x, y = pairs.synth_pairs(day, "day", 1, isos=())["clean"]
+    assert_one_grid(x, y)
+    # real-pairs' PNG applies the lists: the target is rendered again without them
+    sc = scene(tmp_path, warped, applied)
+    x, y = pairs.real_pair(sc, None, targets="day2night", source="day2night")
+    assert np.array_equal(y, srgb8(day2night.render(warped, opcodes="ignore")))
+    assert_one_grid(x, y)
+    with pytest.raises(AssertionError):
+        assert_one_grid(x, applied)  # the warped target is off the input's grid

@@ -116,7 +116,7 @@ def real_target(scene, targets, source):
     clean = _read_dng(scene.clean_raw, f"scene {scene.id}")
     if source == targets == "day2night" and not has_opcodes(clean.meta):
         return read_png(scene.target), "render"
-    neutral = clean.meta.get("as_shot_neutral")
+    neutral = tuple(float(v) for v in clean.meta["as_shot_neutral"])
     return render_target_as(targets, clean, neutral, display=True)
 
 
