@@ -29,12 +29,36 @@ def parse(argv):
     p.add_argument("--epochs", type=int, default=500, help="training epochs (paper: 500)")
     p.add_argument("--device", default="cpu", choices=["cpu", "cuda"])
     p.add_argument("--seed", type=int, default=0)
-    p.add_argument("--folds", type=int, default=3, help="cross-validation folds (paper: 3)")
+    p.add_argument("--folds", type=int, default=None,
+                   help="cross-validation folds (default and paper: 3; with --folds-file: "
+                   "the file's)")
     p.add_argument("--rows", nargs="+", metavar="ROW", help="rows to run (default: all)")
     p.add_argument("--width", type=int, default=32,
                    help="UNet init_features (paper: 32; smaller only for tests and smoke runs)")
     p.add_argument("--show", type=int, default=3, help="test scenes per row in index.html")
+    p.add_argument("--restart-unit", action="append", default=[], metavar="TASK/ROW/FOLD",
+                   help="delete this unit's folder and train it again (repeatable), e.g. "
+                   "clean/ours/all or noisy/supervised/1; for a damaged unit")
+    protocol_flags(p)
     return p.parse_args(argv)
+
+
+def protocol_flags(p):
+    """The release's protocol on request (protocol.py, docs/experiment.md)."""
+    g = p.add_argument_group("protocol (each also set by --protocol release)")
+    g.add_argument("--protocol", choices=["day2night", "release"],
+                   help="preset: release sets the four options below to the release's")
+    g.add_argument("--targets", choices=["release", "day2night"],
+                   help="ISP of every target (default: the one that made the real set's)")
+    g.add_argument("--noise", choices=["day2night", "release"],
+                   help="noise of synthetic noisy inputs: the synthesis' model, or the "
+                   "release's S20 FE table clipped to [0, 1023] and truncated")
+    g.add_argument("--synth-iso", choices=["alternate", "release"],
+                   help="ISO of a synthetic noisy slot: alternate by position, or drawn at "
+                   "random per day image as the release does")
+    g.add_argument("--folds-file", metavar="PATH",
+                   help="the release's utils/k_fold_indices_saved.p or its JSON export: "
+                   "its fold lists instead of seeded folds")
 
 
 def main(argv=None):
@@ -46,9 +70,14 @@ def main(argv=None):
     try:
         exp = Experiment(args.day, args.real, args.output, task=args.task, epochs=args.epochs,
                          device=args.device, seed=args.seed, folds=args.folds, rows_=args.rows,
-                         width=args.width, show=args.show)
+                         width=args.width, show=args.show, restart=args.restart_unit,
+                         protocol=args.protocol, targets=args.targets, noise=args.noise,
+                         synth_iso=args.synth_iso, folds_file=args.folds_file)
         exp.run()
     except (ExperimentError, FoldError, MixError, ValueError) as e:
+        print(f"day2night.experiment: error: {e}", file=sys.stderr)
+        return 2
+    except OSError as e:
         print(f"day2night.experiment: error: {e}", file=sys.stderr)
         return 2
     except ImportError as e:

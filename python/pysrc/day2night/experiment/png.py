@@ -89,6 +89,27 @@ def _unfilter(raw, h, stride, bpp, path):
 
 def read_png(path):
     """An 8-bit PNG as uint8 (H, W, 3) (greyscale is repeated, alpha dropped)."""
+    raw, h, w, c = _inflate(path)
+    img = _unfilter(raw, h, w * c, c, path).reshape(h, w, c)
+    if c == 1:
+        return np.repeat(img, 3, axis=2)
+    return np.ascontiguousarray(img[:, :, :3])
+
+
+def check_png(path):
+    """(H, W) of a PNG :func:`read_png` reads, checked without unfiltering its rows (the
+    chunks, the inflated size and every row's filter type): PngError otherwise."""
+    raw, h, w, c = _inflate(path)
+    filters = np.frombuffer(raw, np.uint8)[:: w * c + 1]
+    bad = np.flatnonzero(filters > 4)
+    if bad.size:
+        raise PngError(f"{path}: row {int(bad[0])} has an unknown filter type "
+                       f"{int(filters[bad[0]])}")
+    return h, w
+
+
+def _inflate(path):
+    """(inflated rows, H, W, channels) of an 8-bit non-interlaced PNG, else PngError."""
     try:
         with open(path, "rb") as f:
             data = f.read()
@@ -122,7 +143,4 @@ def read_png(path):
         raise PngError(f"{path}: truncated or corrupt PNG ({e})") from None
     if len(raw) != h * (w * c + 1):
         raise PngError(f"{path}: pixel data has {len(raw)} bytes, expected {h * (w * c + 1)}")
-    img = _unfilter(raw, h, w * c, c, path).reshape(h, w, c)
-    if c == 1:
-        return np.repeat(img, 3, axis=2)
-    return np.ascontiguousarray(img[:, :, :3])
+    return raw, h, w, c

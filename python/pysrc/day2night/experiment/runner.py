@@ -10,44 +10,26 @@ Run folder (every file written through a temporary file + rename):
     RUN/table.md, table.json, index.html, img/   (table.py, report.py)
 
 A unit is done when its scores.json exists; a rerun skips done units and the trainer resumes
-an interrupted one from its last epoch, so a killed run finishes with the same table."""
+an interrupted one from its last epoch, so a killed run finishes with the same table.
+Every input (day DNGs, real set) and every file an earlier run left in RUN is checked before
+anything is written (runfolder.py: a damaged file is an error naming it and what to do).
 
-import json
+Test hook: D2N_EXPERIMENT_KILL_AT="U:E:S" SIGKILLs the run at step S of epoch E of its U-th
+unit (1-based; the trainer's D2N_TRAIN_KILL_AT set for that unit only), for the resume test."""
+
+import os
 import pathlib
-import sys
 
-from . import folds as folds_mod
 from . import mix as mix_mod
-from . import pairs, realset, report, rows, table
+from . import pairs, prepare, protocol, report, rows, runfolder, table
 from .atomic import write_json
-
-CONFIG_KEYS = ("day", "real", "task", "epochs", "seed", "folds", "width", "device", "rows")
-
-
-class ExperimentError(ValueError):
-    """Bad input of the experiment (the message names the file, scene or option)."""
-
-
-def log(msg):
-    print(f"[experiment] {msg}", file=sys.stderr, flush=True)
-
-
-def day_images(day_dir):
-    root = pathlib.Path(day_dir)
-    if not root.is_dir():
-        raise ExperimentError(f"--day {root}: not a folder of day DNGs")
-    files = sorted(p for p in root.rglob("*") if p.is_file() and p.suffix.lower() == ".dng")
-    if len(files) < 2:
-        raise ExperimentError(
-            f"--day {root}: {len(files)} day DNG(s); synthetic training needs at least 2 "
-            "(the release: 70, the first 60 sorted train and the last 10 validate)"
-        )
-    return {p.relative_to(root).as_posix(): p for p in files}
+from .prepare import CONFIG_KEYS, ExperimentError, day_images, log  # noqa: F401
 
 
 class Experiment:
     def __init__(self, day, real, out, task="both", epochs=500, device="cpu", seed=0,
-                 folds=3, rows_=None, width=32, show=3):
+                 folds=None, rows_=None, width=32, show=3, restart=(), **protocol_flags):
+        """``protocol_flags``: protocol, targets, noise, synth_iso, folds_file (protocol.py)."""
         self.out = pathlib.Path(out)
         self.cfg = {
             "day": str(pathlib.Path(day).resolve()),
@@ -55,7 +37,6 @@ class Experiment:
             "task": task,
             "epochs": int(epochs),
             "seed": int(seed),
-            "folds": int(folds),
             "width": int(width),
             "device": device,
             "rows": [r.id for r in rows.select(rows_ or [])],
@@ -66,30 +47,21 @@ class Experiment:
             raise ExperimentError(f"--width {width}: at least 1 (the paper's network: 32)")
         if device not in ("cpu", "cuda"):
             raise ExperimentError(f"--device {device!r}: use cpu or cuda")
+        if not 0 <= self.cfg["seed"] <= 2**32 - 1:
+            raise ExperimentError(f"--seed {seed}: use 0 to {2**32 - 1} (numpy's RandomState)")
+        if int(show) < 0:
+            raise ExperimentError(f"--show {show}: at least 0 (test scenes on index.html)")
+        self.target_isps, _ = protocol.for_run(self.cfg, real, folds, **protocol_flags)
+        self.restart = list(dict.fromkeys(restart or ()))
         self.tasks = rows.tasks_of(task)
         self.rows = rows.select(rows_ or [])
         self.show = show
         self.smoke = self.cfg["width"] < 32
 
     # ---- setup -------------------------------------------------------------------------
-    def check_config(self):
-        path = self.out / "config.json"
-        if path.is_file():
-            try:
-                old = json.loads(path.read_text(encoding="utf-8"))
-            except ValueError as e:
-                raise ExperimentError(f"{path}: unreadable ({e})") from None
-            diff = [k for k in CONFIG_KEYS if old.get(k) != self.cfg[k]]
-            if diff:
-                k = diff[0]
-                raise ExperimentError(
-                    f"{self.out} holds a run made with {k} = {old.get(k)!r}, not {self.cfg[k]!r}: "
-                    "rerun with the same options to resume, or choose another -o folder"
-                )
-
     def prepare(self):
-        """Read and check every input, then write config, folds and mixes (nothing is
-        written when an input is bad)."""
+        """Read and check every input and what an earlier run left in RUN, then write config,
+        folds and mixes (nothing is written when anything is bad)."""
         try:
             import torch
         except ImportError as e:
@@ -97,42 +69,20 @@ class Experiment:
                 from None
         if self.cfg["device"] == "cuda" and not torch.cuda.is_available():
             raise ExperimentError("--device cuda: torch sees no CUDA device (use --device cpu)")
-        self.check_config()
-        isos = (1600, 3200) if "noisy" in self.tasks else ()
-        try:
-            self.scenes = {s.id: s for s in realset.read_real(self.cfg["real"], isos=isos)}
-        except realset.RealSetError as e:
-            raise ExperimentError(str(e)) from None
-        self.days = day_images(self.cfg["day"])
-        self.day_train, self.day_val = mix_mod.split_day_images(self.days)
-        fpath = self.out / "folds.json"
-        new_folds = not fpath.is_file()
-        if not new_folds:
-            self.folds = folds_mod.read_folds(fpath)
-            if self.folds["scenes"] != sorted(self.scenes):
-                raise ExperimentError(f"{fpath}: its scenes differ from the real set's")
-        else:
-            self.folds = folds_mod.make_folds(
-                sorted(self.scenes), self.cfg["folds"], seed=self.cfg["seed"]
-            )
-        self.mixes = {}
-        for r in self.rows:
-            if r.per_fold:
-                self.mixes[r.id] = [
-                    mix_mod.mix(s["train"], self.day_train, r.percent, seed=mix_mod.RELEASE_SEED)
-                    for s in self.folds["splits"]
-                ]
-        self.out.mkdir(parents=True, exist_ok=True)
-        write_json(self.out / "config.json", self.cfg)
-        if new_folds:
-            folds_mod.write_folds(fpath, self.folds)
-        write_json(self.out / "mixes.json", self.mixes)
+        prepare.check_config(self)
+        prepare.read_inputs(self)
+        prepare.plan_folds(self)
+        protocol.apply_isos(self)
+        prepare.check_run_folder(self)
+        prepare.write_setup(self)
         self.report_scenes = self.folds["splits"][0]["test"][: self.show]
         n = len(self.scenes)
         log(
             f"{n} real scenes, {len(self.days)} day images ({len(self.day_train)} train, "
             f"{len(self.day_val)} val), {self.cfg['folds']} folds, tasks {', '.join(self.tasks)}"
         )
+        for note in protocol.notes(self):
+            log(note)
         if self.smoke:
             log(
                 f"SMOKE RUN: network width {self.cfg['width']} < 32 (the paper's UNet has 32); "
@@ -150,7 +100,8 @@ class Experiment:
 
     def _real_pair(self, scene, iso):
         try:
-            return pairs.real_pair(scene, iso)
+            return pairs.real_pair(scene, iso, targets=self.cfg["targets"],
+                                   source=self.target_isps.get(scene.id, "day2night"))
         except (pairs.PairError, ValueError) as e:
             raise ExperimentError(str(e)) from None
 
@@ -167,7 +118,8 @@ class Experiment:
 
         def make():
             try:
-                return pairs.synth_pairs(self.days[name], mode, seed)
+                return pairs.synth_pairs(self.days[name], mode, seed,
+                                         targets=self.cfg["targets"], noise=self.cfg["noise"])
             except (pairs.PairError, ValueError) as e:
                 raise ExperimentError(str(e)) from None
 
@@ -187,14 +139,23 @@ class Experiment:
         else:
             yield "all", None
 
+    def work(self):
+        """Every unit of the run, in order: (task, row, fold, split)."""
+        return [
+            (task, row, fold, split)
+            for task in self.tasks
+            for row in self.rows
+            for fold, split in self.units(task, row)
+        ]
+
     def train_val(self, task, row, split):
         if row.per_fold:
             fold = split["fold"]
             train = self.mixes[row.id][fold]
             val = mix_mod.real_slots(split["val"])
         else:
-            train = mix_mod.synthetic_slots(self.day_train)
-            val = mix_mod.synthetic_slots(self.day_val)
+            train, val = (protocol.synthetic_slots(self, d) for d in (self.day_train,
+                                                                      self.day_val))
         val_p = [self.slot_pair(s, task, row.mode) for s in val]
         if row.source == "fresh":
             return None, val_p
@@ -213,17 +174,23 @@ class Experiment:
         train_p, val_p = self.train_val(task, row, split)
         test = split["test"] if split else sorted(self.scenes)
         tests = [(sid, k, self.real(sid, k)) for sid in test for k in rows.test_keys(task)]
-        last = udir / "model" / "last.pt"
-        if last.is_file():
-            from ..train.trainer import load_checkpoint
-
-            done_epochs = int(load_checkpoint(str(last))["epoch"]) + 1
+        uid = runfolder.unit_id(task, row.id, fold)
+        done_epochs = runfolder.check_checkpoints(self.out, uid, udir / "model",
+                                                  self.cfg["epochs"])
+        if done_epochs:
             log(f"{where}: resuming after epoch {done_epochs} of {self.cfg['epochs']}")
         else:
             log(f"{where}: training {self.cfg['epochs']} epoch(s)")
-        result = unit.train_unit(self, udir, task, row, train_p, val_p)
-        log(f"{where}: scoring {len(tests)} test input(s)")
-        scored = unit.score_unit(self, udir, task, row, fold, tests, result)
+        from ..train.trainer import CheckpointError
+
+        try:
+            with _KillHook(index):
+                result = unit.train_unit(self, udir, task, row, train_p, val_p)
+            log(f"{where}: scoring {len(tests)} test input(s)")
+            scored = unit.score_unit(self, udir, task, row, fold, tests, result)
+        except CheckpointError as e:
+            raise runfolder.RunFolderError(f"{e}; {runfolder.unit_advice(self.out, uid)}") \
+                from None
         scored["train_pairs"] = "fresh" if train_p is None else len(train_p)
         scored["val_pairs"] = len(val_p)
         scored["test_scenes"] = list(test)
@@ -231,12 +198,7 @@ class Experiment:
 
     def run(self):
         self.prepare()
-        work = [
-            (task, row, fold, split)
-            for task in self.tasks
-            for row in self.rows
-            for fold, split in self.units(task, row)
-        ]
+        work = self.work()
         for i, (task, row, fold, split) in enumerate(work, 1):
             self.run_unit(task, row, fold, split, i, len(work))
         t = table.build(self)
@@ -244,3 +206,20 @@ class Experiment:
         report.write(self, t)
         log(f"wrote {self.out / 'table.md'}, table.json and index.html")
         return t
+
+
+class _KillHook:
+    """Test hook (module docstring): D2N_EXPERIMENT_KILL_AT="U:E:S" sets the trainer's
+    D2N_TRAIN_KILL_AT="E:S" while unit U trains."""
+
+    def __init__(self, index):
+        at = os.environ.get("D2N_EXPERIMENT_KILL_AT", "").split(":", 1)
+        self.at = at[1] if len(at) == 2 and at[0] == str(index) else None
+
+    def __enter__(self):
+        if self.at:
+            os.environ["D2N_TRAIN_KILL_AT"] = self.at
+
+    def __exit__(self, *exc):
+        if self.at:
+            os.environ.pop("D2N_TRAIN_KILL_AT", None)

@@ -6,11 +6,11 @@ images, as the release's test.py; a per-fold row's score is the mean of its fold
 (the paper's "three-fold cross validation"). PSNR of an identical prediction is infinite;
 such a mean is reported as "inf"."""
 
-import json
 import math
 
 from .atomic import write_json, write_text
 from .rows import test_keys
+from .runfolder import read_scores
 
 METRICS = ("psnr", "ssim", "delta_e")
 PAPER = {
@@ -54,7 +54,7 @@ def build(exp):
             units = []
             for fold, _ in exp.units(task, row):
                 path = exp.out / "units" / task / row.id / fold / "scores.json"
-                units.append(json.loads(path.read_text(encoding="utf-8")))
+                units.append(read_scores(exp.out, path, task, row.id, fold, test_keys(task)))
             for u in units:
                 u["mean"] = {
                     str(k): {

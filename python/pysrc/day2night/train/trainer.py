@@ -149,15 +149,38 @@ def save_checkpoint(path, **state):
     os.replace(tmp, path)
 
 
-def load_checkpoint(path, device="cpu"):
-    return torch.load(path, map_location=device, weights_only=False)
+class CheckpointError(ValueError):
+    """A checkpoint that cannot be used (the message names the file and the reason)."""
+
+
+#: What ``last.pt`` holds for resuming (``best.pt``: model, config, epoch, history).
+RESUME_STATE = ("model", "optimizer", "scheduler", "config", "epoch", "history", "best_val")
+
+
+def load_checkpoint(path, device="cpu", keys=("model", "config", "epoch")):
+    """The dict of a checkpoint; a file torch cannot read whole (truncated, garbage) or one
+    without ``keys`` is a :class:`CheckpointError` naming it."""
+    try:
+        ck = torch.load(path, map_location=device, weights_only=False)
+    except Exception as e:  # torch raises RuntimeError, EOFError, UnpicklingError, OSError...
+        first = str(e).strip().splitlines()[0] if str(e).strip() else ""
+        raise CheckpointError(f"{path}: damaged checkpoint, torch cannot read it "
+                              f"({type(e).__name__}: {first})") from None
+    missing = [k for k in keys if not isinstance(ck, dict) or k not in ck]
+    if missing:
+        raise CheckpointError(f"{path}: damaged checkpoint, it holds no {', '.join(missing)}")
+    return ck
 
 
 def load_model(path, device="cpu"):
     """The UNet of a checkpoint (``best.pt``/``last.pt``), in eval mode on ``device``."""
     ck = load_checkpoint(path, "cpu")
-    model = UNet(3, 3, ck["config"]["init_features"])
-    model.load_state_dict(ck["model"])
+    try:
+        model = UNet(3, 3, ck["config"]["init_features"])
+        model.load_state_dict(ck["model"])
+    except (KeyError, TypeError, ValueError, RuntimeError) as e:
+        raise CheckpointError(f"{path}: damaged checkpoint, its model does not load "
+                              f"({type(e).__name__}: {str(e)[:200]})") from None
     return model.to(device).eval()
 
 
@@ -270,7 +293,11 @@ RESUME_KEYS = ("epochs", "batch_size", "lr", "decay_at", "decay", "init_features
 
 
 def _check_resume(path, ck, cfg):
-    """A checkpoint resumed with other settings would not give the run it claims: refuse."""
+    """A checkpoint resumed with other settings would not give the run it claims: refuse.
+    One without the state a resume needs is a CheckpointError."""
+    missing = [k for k in RESUME_STATE if k not in ck]
+    if missing:
+        raise CheckpointError(f"{path}: damaged checkpoint, it holds no {', '.join(missing)}")
     old = ck.get("config", {})
     diff = [f"{k} {old.get(k)!r} -> {getattr(cfg, k)!r}" for k in RESUME_KEYS
             if old.get(k) != getattr(cfg, k)]
