@@ -162,39 +162,7 @@ class Experiment:
         return [self.slot_pair(s, task, row.mode) for s in train], val_p
 
     def run_unit(self, task, row, fold, split, index, total):
-        from . import unit
-
-        udir = self.out / "units" / task / row.id / fold
-        done = udir / "scores.json"
-        where = f"unit {index}/{total}: task {task}, row {row.id} ({row.label}), fold {fold}"
-        if done.is_file():
-            log(f"{where}: done (scores.json), skipped")
-            return
-        log(f"{where}: preparing data")
-        train_p, val_p = self.train_val(task, row, split)
-        test = split["test"] if split else sorted(self.scenes)
-        tests = [(sid, k, self.real(sid, k)) for sid in test for k in rows.test_keys(task)]
-        uid = runfolder.unit_id(task, row.id, fold)
-        done_epochs = runfolder.check_checkpoints(self.out, uid, udir / "model",
-                                                  self.cfg["epochs"])
-        if done_epochs:
-            log(f"{where}: resuming after epoch {done_epochs} of {self.cfg['epochs']}")
-        else:
-            log(f"{where}: training {self.cfg['epochs']} epoch(s)")
-        from ..train.trainer import CheckpointError
-
-        try:
-            with _KillHook(index):
-                result = unit.train_unit(self, udir, task, row, train_p, val_p)
-            log(f"{where}: scoring {len(tests)} test input(s)")
-            scored = unit.score_unit(self, udir, task, row, fold, tests, result)
-        except CheckpointError as e:
-            raise runfolder.RunFolderError(f"{e}; {runfolder.unit_advice(self.out, uid)}") \
-                from None
-        scored["train_pairs"] = "fresh" if train_p is None else len(train_p)
-        scored["val_pairs"] = len(val_p)
-        scored["test_scenes"] = list(test)
-        write_json(done, scored)
+        run_unit(self, task, row, fold, split, index, total)
 
     def run(self):
         self.prepare()
@@ -206,6 +174,43 @@ class Experiment:
         report.write(self, t)
         log(f"wrote {self.out / 'table.md'}, table.json and index.html")
         return t
+
+
+def run_unit(exp, task, row, fold, split, index, total):
+    """Train (or resume) and score one unit; skipped when its scores.json exists."""
+    from . import unit
+
+    udir = exp.out / "units" / task / row.id / fold
+    done = udir / "scores.json"
+    where = f"unit {index}/{total}: task {task}, row {row.id} ({row.label}), fold {fold}"
+    if done.is_file():
+        log(f"{where}: done (scores.json), skipped")
+        return
+    log(f"{where}: preparing data")
+    train_p, val_p = exp.train_val(task, row, split)
+    test = split["test"] if split else sorted(exp.scenes)
+    tests = [(sid, k, exp.real(sid, k)) for sid in test for k in rows.test_keys(task)]
+    uid = runfolder.unit_id(task, row.id, fold)
+    done_epochs = runfolder.check_checkpoints(exp.out, uid, udir / "model",
+                                              exp.cfg["epochs"])
+    if done_epochs:
+        log(f"{where}: resuming after epoch {done_epochs} of {exp.cfg['epochs']}")
+    else:
+        log(f"{where}: training {exp.cfg['epochs']} epoch(s)")
+    from ..train.trainer import CheckpointError
+
+    try:
+        with _KillHook(index):
+            result = unit.train_unit(exp, udir, task, row, train_p, val_p)
+        log(f"{where}: scoring {len(tests)} test input(s)")
+        scored = unit.score_unit(exp, udir, task, row, fold, tests, result)
+    except CheckpointError as e:
+        raise runfolder.RunFolderError(f"{e}; {runfolder.unit_advice(exp.out, uid)}") \
+            from None
+    scored["train_pairs"] = "fresh" if train_p is None else len(train_p)
+    scored["val_pairs"] = len(val_p)
+    scored["test_scenes"] = list(test)
+    write_json(done, scored)
 
 
 class _KillHook:
