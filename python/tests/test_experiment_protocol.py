@@ -210,3 +210,94 @@ def test_release_noise_leaves_the_masked_border():
     out = release_noise.release_noisy_plane(stored, [2, 4, 12, 10], 3200, 9)
     assert (out[:2] == 300).all() and (out[:, :4] == 300).all()
     assert (out[2:, 4:] != 300).any()
+
+
+def tiny_real_set(root, n):
+    """A real set of ``n`` scenes ``000``.. in real-pairs' layout (16 x 16 stand-ins: one
+    DNG and its default render, copied), with a manifest of sizes and SHA-256."""
+    import hashlib
+    import shutil
+
+    import day2night
+    from conftest import FIXTURES
+    from day2night.experiment.png import write_png
+    from day2night.train.targets import srgb8
+
+    day = day2night.read_dng(str(FIXTURES / "day.dng"))
+    t, l = day.meta["active_area"][:2]
+    meta = {k: v for k, v in day.meta.items() if v is not None}
+    meta.update(active_area=None, default_crop=None, width=16, height=16)
+    raw = day2night.Raw.from_array(np.ascontiguousarray(day.data[t:t + 16, l:l + 16]), meta,
+                                   name="s")
+    (root / "src").mkdir(parents=True)
+    dng, png = root / "src" / "s.dng", root / "src" / "s.png"
+    day2night.write_dng(raw, str(dng))
+    write_png(png, srgb8(day2night.render(raw)))
+    lines = []
+    for j in range(n):
+        sid = "%03d" % j
+        outs = []
+        for kind, src, rel in (("clean_raw", dng, f"real/clean_raw/{sid}.dng"),
+                               ("target", png, f"real/target/{sid}.png")):
+            (root / rel).parent.mkdir(parents=True, exist_ok=True)
+            shutil.copy(src, root / rel)
+            data = (root / rel).read_bytes()
+            outs.append({"kind": kind, "path": rel, "bytes": len(data),
+                         "sha256": hashlib.sha256(data).hexdigest()})
+        lines.append(json.dumps({"kind": "real", "scene": sid, "status": "ok", "outputs": outs,
+                                 "stages": ["clean_raw_png", "write_clean_raw",
+                                            "copy_target_png"]}))
+    (root / "manifest.jsonl").write_text("\n".join(lines) + "\n")
+    days = root / "days"
+    days.mkdir()
+    for k in range(3):
+        shutil.copy(dng, days / f"day{k}.dng")
+    return root, days
+
+
+def test_folds_file_writes_the_release_lists_and_the_options_are_recorded(tmp_path):
+    pytest.importorskip("torch")
+    from day2night.experiment.runner import Experiment, ExperimentError
+
+    real, days = tiny_real_set(tmp_path / "real", 105)
+    lists = release_lists()
+    k = tmp_path / "k_fold_indices_saved.p"
+    k.write_bytes(pickle.dumps(lists))
+    run = tmp_path / "run"
+    exp = Experiment(days, real, run, task="clean", epochs=1, width=4, rows_=["mix5"],
+                     protocol="release", folds_file=k)
+    exp.prepare()
+    saved = json.loads((run / "folds.json").read_text())
+    assert [[int(s) for s in sp[part]] for sp in saved["splits"]
+            for part in ("train", "val", "test")] == \
+        [[int(j) for j in lists[key][i]] for i in range(3) for key in release_folds.KEYS]
+    cfg = json.loads((run / "config.json").read_text())
+    assert (cfg["protocol"], cfg["targets"], cfg["noise"], cfg["synth_iso"], cfg["folds"]) == \
+        ("release", "release", "release", "release", 3)
+    assert cfg["folds_sha256"] == __import__("hashlib").sha256(k.read_bytes()).hexdigest()
+    # the synthetic slots' ISOs are the release-style draw per day image
+    isos = protocol.release_isos(["day0.dng", "day1.dng", "day2.dng"], 0)
+    mixes = json.loads((run / "mixes.json").read_text())
+    synth = [s for s in mixes["mix5"][0] if s["kind"] == "synthetic"]
+    assert synth and all(s["iso"] == isos[s["id"]] for s in synth)
+    # a rerun with another option is refused before anything is written
+    with pytest.raises(ExperimentError, match="targets = 'release', not 'day2night'"):
+        Experiment(days, real, run, task="clean", epochs=1, width=4, rows_=["mix5"],
+                   protocol="release", folds_file=k, targets="day2night").prepare()
+    with pytest.raises(ExperimentError, match="folds_sha256"):
+        k.write_bytes(pickle.dumps(release_lists(val=11)))
+        Experiment(days, real, run, task="clean", epochs=1, width=4, rows_=["mix5"],
+                   protocol="release", folds_file=k).prepare()
+    with pytest.raises(protocol.ProtocolError, match="--folds 4: the fold file"):
+        Experiment(days, real, tmp_path / "run2", folds=4, folds_file=k)
+
+
+def test_the_targets_default_to_the_release_for_copied_pngs(tmp_path):
+    from day2night.experiment.runner import Experiment
+
+    real, days = tiny_real_set(tmp_path / "real", 6)
+    exp = Experiment(days, real, tmp_path / "run", task="clean")
+    assert (exp.cfg["targets"], exp.cfg["noise"], exp.cfg["synth_iso"], exp.cfg["folds"]) == \
+        ("release", "day2night", "alternate", 3)
+    exp = Experiment(days, real, tmp_path / "run", task="clean", targets="day2night")
+    assert exp.cfg["targets"] == "day2night"
