@@ -138,6 +138,28 @@ def test_truncated_checkpoint_is_a_clear_error_and_restart_unit_retrains(base, t
     assert (out / "table.json").read_bytes() == (base["run"] / "table.json").read_bytes()
 
 
+@pytest.mark.parametrize("damage", ["best-missing", "model-is-a-file", "epoch-past-the-end"])
+def test_unusable_model_folder_is_a_clear_error(base, tmp_path, damage):
+    import torch
+
+    out = copy_run(base, tmp_path)
+    unit = out / "units" / UNIT
+    (unit / "scores.json").unlink()
+    if damage == "best-missing":
+        (unit / "model" / "best.pt").unlink()
+        needle = unit / "model" / "best.pt"
+    elif damage == "model-is-a-file":
+        shutil.rmtree(unit / "model")
+        (unit / "model").write_text("x")
+        needle = unit / "model"
+    else:
+        ck = torch.load(unit / "model" / "last.pt", weights_only=False)
+        ck["epoch"] = 5
+        torch.save(ck, unit / "model" / "last.pt")
+        needle = "epoch 5"
+    assert_clear_error(rerun(base, out), needle, f"--restart-unit {UNIT}")
+
+
 def test_restart_unit_must_name_a_unit_of_the_run(base, tmp_path):
     out = copy_run(base, tmp_path)
     r = rerun(base, out, "--restart-unit", "noisy/ours/all")

@@ -199,9 +199,16 @@ def check_checkpoints(out, uid, model_dir, epochs):
 
     advice = (f"no earlier checkpoint is kept to fall back to; "
               f"{unit_advice(out, uid)}")
+    model_dir = pathlib.Path(model_dir)
+    if model_dir.exists() and not model_dir.is_dir():
+        raise RunFolderError(f"{model_dir}: not a folder of checkpoints; {unit_advice(out, uid)}")
+    if (model_dir / "last.pt").is_file() and not (model_dir / "best.pt").is_file():
+        raise RunFolderError(
+            f"{model_dir / 'best.pt'}: missing beside last.pt (the trainer writes it first); "
+            f"{advice}")
     done = 0
     for name, keys in (("last.pt", RESUME_STATE), ("best.pt", ("model", "config"))):
-        path = pathlib.Path(model_dir) / name
+        path = model_dir / name
         if not path.is_file():
             continue
         try:
