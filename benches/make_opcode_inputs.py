@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """Write the opcode-path benchmark inputs of issue 26 (docs/benchmarks.md, "DNG opcodes:
-work and memory") with tifffile + imagecodecs (lossless JPEG XL tiles, as the issue's files).
+work and memory") with tifffile + imagecodecs and the day2night wheel (lossless JPEG XL tiles, as the issue's files).
 
 usage: make_opcode_inputs.py OUT_DIR [--size WxH]
 
@@ -22,6 +22,9 @@ import struct
 
 import numpy as np
 import tifffile
+# XYZ (D65) -> linear sRGB, the library's tabulated matrix (day2night::color::xyz): the
+# ColorMatrix1 of the inputs. The venv of scripts/test.sh has the day2night wheel.
+from day2night._native import XYZ_TO_SRGB
 
 
 def opcode(op_id, params):
@@ -60,8 +63,7 @@ def srational(vals):
 
 
 def tags(w, h, lists, orientation=1):
-    cm = [3.2404542, -1.5371385, -0.4985314, -0.9692660, 1.8760108, 0.0415560,
-          0.0556434, -0.2040259, 1.0572252]
+    cm = [v for row in XYZ_TO_SRGB for v in row]
     t = [
         (50706, "B", 4, (1, 7, 0, 0), True),  # DNGVersion
         (50707, "B", 4, (1, 4, 0, 0), True),  # DNGBackwardVersion

@@ -11,8 +11,8 @@
 #   D2N_BIN=/path/to/old/day2night benches/opcodes_memory.sh   # another build
 #   RUNS=5 WORK=/tmp/d2n-op benches/opcodes_memory.sh
 #   SKIP='4096' benches/opcodes_memory.sh           # skip the rows whose name matches
-# Needs GNU time (Debian package `time`) and the validators' Python (tifffile, imagecodecs)
-# in D2N_PYTHON (default: python3) to make the inputs once into $WORK/in.
+# Needs GNU time (Debian package `time`) and the validators' Python (tifffile, imagecodecs,
+# the day2night wheel) in D2N_PYTHON (default: python3) to make the inputs once into $WORK/in.
 set -euo pipefail
 RUNS=${RUNS:-3}
 ROOT=$(cd "$(dirname "$0")/.." && pwd)

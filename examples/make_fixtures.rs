@@ -111,12 +111,9 @@ fn make_synthetic(s: &Spec) -> RawImage {
     }
 }
 
+/// The inverse sRGB curve (the library's, in f64).
 fn srgb_to_linear(c: f64) -> f64 {
-    if c <= 0.04045 {
-        c / 12.92
-    } else {
-        ((c + 0.055) / 1.055).powf(2.4)
-    }
+    day2night::color::srgb::eotf_f64(c)
 }
 
 /// The default day image: astronaut.png -> linear sRGB -> XYZ -> camera (CM1) -> RGGB mosaic,

@@ -80,18 +80,13 @@ impl Grey {
         let img = image::open(&p)
             .unwrap_or_else(|e| panic!("{}: {e}", p.display()))
             .to_rgb8();
-        let lin = |c: u8| {
-            let c = c as f64 / 255.0;
-            if c <= 0.04045 {
-                c / 12.92
-            } else {
-                ((c + 0.055) / 1.055).powf(2.4)
-            }
-        };
+        let lin = |c: u8| day2night::color::srgb::eotf_f64(c as f64 / 255.0);
+        // luminance: the Y row of linear sRGB -> XYZ
+        let y = day2night::color::xyz::SRGB_TO_XYZ[1];
         let (w, h) = (img.width() as usize, img.height() as usize);
         let v = img
             .pixels()
-            .map(|p| 0.2126 * lin(p[0]) + 0.7152 * lin(p[1]) + 0.0722 * lin(p[2]))
+            .map(|p| y[0] * lin(p[0]) + y[1] * lin(p[1]) + y[2] * lin(p[2]))
             .collect();
         Grey { w, h, v }
     }

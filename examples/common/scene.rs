@@ -13,11 +13,8 @@ use day2night::raw::Bayer;
 pub const CM1: [f64; 9] = [
     0.4716, 0.0603, -0.0830, -0.7798, 1.5474, 0.2480, -0.1496, 0.1937, 0.6651,
 ];
-/// Linear sRGB -> XYZ (D65).
-pub const SRGB_TO_XYZ: [f64; 9] = [
-    0.4124564, 0.3575761, 0.1804375, 0.2126729, 0.7151522, 0.0721750, 0.0193339, 0.1191920,
-    0.9503041,
-];
+/// Linear sRGB -> XYZ (D65): the library's tabulated 7-digit matrix.
+pub const SRGB_TO_XYZ: [f64; 9] = day2night::color::xyz::SRGB_TO_XYZ_TABULATED;
 
 /// 3x3 matrix (row-major) times vector.
 pub fn mat_vec(m: &[f64; 9], v: [f64; 3]) -> [f64; 3] {

@@ -25,6 +25,14 @@ pub const XYZ_TO_SRGB: [f64; 9] = [
     1.0572252,
 ];
 
+/// Linear sRGB -> XYZ (D65), the tabulated 7-digit matrix paired with [`XYZ_TO_SRGB`]
+/// (Lindbloom's), row-major: the synthetic scene of the example generators
+/// (examples/common/scene.rs), and so the committed fixtures made from it.
+pub const SRGB_TO_XYZ_TABULATED: [f64; 9] = [
+    0.4124564, 0.3575761, 0.1804375, 0.2126729, 0.7151522, 0.0721750, 0.0193339, 0.1191920,
+    0.9503041,
+];
+
 /// Linear sRGB -> XYZ (D65) with the 4-digit values of IEC 61966-2-1 (as colour-science's
 /// `sRGB_to_XYZ`): the CIELAB conversion of the colour-difference metric.
 pub const SRGB_TO_XYZ: Mat3 = [

@@ -3,7 +3,7 @@
 //! (exit 1, a named error, little memory, no temporary file left; the time is printed, not
 //! asserted), and the pixel limit is enforced and can be raised (--max-pixels,
 //! D2N_MAX_PIXELS).
-//! The bomb files are generated here (tests/dngbuild), never committed.
+//! The bomb files are generated here (tests/it/dngbuild), never committed.
 
 use crate::common;
 use crate::dngbuild;

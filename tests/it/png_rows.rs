@@ -1,6 +1,6 @@
-//! The own 8-bit PNG encoder (src/png_rows.rs): files of several sizes, tones and row-group
-//! heights decode in OpenImageIO and scikit-image (tests/validators/png_rows.py) to exactly
-//! the samples written, with the colour-space chunk readers expect.
+//! The own 8-bit PNG encoder (src/encode/png_rows.rs): files of several sizes, tones and
+//! row-group heights decode in OpenImageIO and scikit-image (tests/validators/png_rows.py) to
+//! exactly the samples written, with the colour-space chunk readers expect.
 use crate::common;
 
 use day2night::deflate::Encoder;

@@ -468,7 +468,7 @@ fn raw_data_unique_id(
     h.finalize()[..UNIQUE_ID_LEN].to_vec()
 }
 
-/// Entries of an IFD that the writer will carry (helper for docs/tests).
+/// Entries of an IFD that the writer will carry (a helper for the docs and the tests).
 pub fn carried(entries: &[Entry]) -> Vec<&Entry> {
     entries.iter().filter(|e| !is_dropped(e.tag)).collect()
 }

@@ -3,8 +3,9 @@
 //! it lands in, and how its value sets a [`JobConfig`]. The command line's `synth` and
 //! `dataset` flags (src/cli/synth.rs), Python's keyword arguments (python/src/synth_options.rs)
 //! and the option lists of docs/cli.md and docs/python.md are made from this table, and a
-//! test (tests/it/option_table.rs) fails when one of them differs from it. The model is
-//! ripgrep's flag definitions: one definition per flag, read by the parser and the docs.
+//! test (tests/it/cli_options.rs, python/tests/test_options_table.py) fails when one of them
+//! differs from it. The model is ripgrep's flag definitions: one definition per flag, read
+//! by the parser and the docs.
 //! docs/architecture.md ("Adding a synthesis option") shows what adding one touches.
 //!
 //! Values arrive as [`Value`]s (the parser of each front end checks the type and, for
