@@ -192,11 +192,27 @@ impl TempRegistry {
     /// after `grace`; returns how many were removed.
     pub fn close_and_remove_within(&self, grace: Duration) -> usize {
         let t0 = Instant::now();
-        let mut st = self.lock();
-        while st.sets_open > 0 && t0.elapsed() < grace {
-            drop(st);
+        self.close_and_remove_after(|| {
+            if t0.elapsed() >= grace {
+                return false;
+            }
             std::thread::sleep(Duration::from_millis(2));
+            true
+        })
+    }
+
+    /// [`close_and_remove_within`](Self::close_and_remove_within) with its wait for the open
+    /// sets as `wait`: called without the registry's lock while a set is open, it returns
+    /// false to stop waiting (the tests' seam: they wait on an event, not on a clock).
+    fn close_and_remove_after(&self, mut wait: impl FnMut() -> bool) -> usize {
+        let mut st = self.lock();
+        while st.sets_open > 0 {
+            drop(st);
+            let again = wait();
             st = self.lock();
+            if !again {
+                break;
+            }
         }
         st.closed = true;
         let mut n = 0;
@@ -795,29 +811,58 @@ mod tests {
     }
 
     #[test]
-    fn close_waits_for_an_open_set_within_its_grace() {
+    fn close_waits_for_an_open_set_until_it_completes() {
         let dir = tempfile::tempdir().unwrap();
         let reg = Arc::new(TempRegistry::new());
         reg.open_set().unwrap();
         let side = dir.path().join("s.json");
         let (tmp, side2, reg2) = (dir.path().join(".s.json.tmp-1"), side.clone(), reg.clone());
-        let writer = std::thread::spawn(move || {
-            std::thread::sleep(Duration::from_millis(50));
+        // The set's last file (its sidecar) is written only once the close is waiting.
+        let (go, started) = std::sync::mpsc::channel::<()>();
+        let mut writer = Some(std::thread::spawn(move || {
+            started.recv().unwrap();
             reg2.create(&tmp).unwrap();
             reg2.commit_all(vec![(tmp, side2)], |_| Ok(())).unwrap();
             reg2.close_set();
+        }));
+        let mut waits = 0;
+        reg.close_and_remove_after(|| {
+            waits += 1;
+            if let Some(w) = writer.take() {
+                go.send(()).unwrap();
+                // the registry stayed open for the set: its file was created and renamed
+                w.join().unwrap();
+            }
+            true
         });
-        // the close waits for the set's last file (its sidecar), then refuses new ones
-        reg.close_and_remove_within(Duration::from_secs(5));
+        assert_eq!(waits, 1);
         assert!(side.exists());
-        writer.join().unwrap();
+        // then the close refuses new sets and files
         assert!(matches!(reg.open_set(), Err(Error::Interrupted)));
-        // a set that never completes delays the close by the grace only
+    }
+
+    #[test]
+    fn close_stops_waiting_for_a_set_that_never_completes() {
+        let dir = tempfile::tempdir().unwrap();
         let reg = TempRegistry::new();
         reg.open_set().unwrap();
-        let t0 = Instant::now();
-        reg.close_and_remove_within(Duration::from_millis(30));
-        let waited = t0.elapsed();
-        assert!(waited >= Duration::from_millis(30) && waited < Duration::from_secs(2));
+        let t = dir.path().join(".a.tmp-1");
+        reg.create(&t).unwrap();
+        let mut waits = 0;
+        let removed = reg.close_and_remove_after(|| {
+            waits += 1;
+            waits < 3
+        });
+        assert_eq!((waits, removed), (3, 1));
+        assert!(!t.exists());
+        assert!(matches!(
+            reg.create(&dir.path().join(".b.tmp-1")),
+            Err(Error::Interrupted)
+        ));
+        // the grace as a clock: none at all does not wait for the open set
+        let reg = TempRegistry::new();
+        reg.open_set().unwrap();
+        assert_eq!(reg.close_and_remove_within(Duration::ZERO), 0);
+        assert!(matches!(reg.open_set(), Err(Error::Interrupted)));
     }
 }
