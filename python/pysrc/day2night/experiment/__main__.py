@@ -3,6 +3,7 @@
 import argparse
 import sys
 
+from . import presets
 from .rows import ROWS
 
 EPILOG = """rows: """ + ", ".join(f"{r.id} ({r.label})" for r in ROWS) + """
@@ -26,21 +27,26 @@ def parse(argv):
                    help="real night pairs written by `day2night real-pairs`")
     p.add_argument("-o", "--output", required=True, metavar="RUN", help="run folder")
     p.add_argument("--task", default="both", choices=["clean", "noisy", "both"])
-    p.add_argument("--epochs", type=int, default=500, help="training epochs (paper: 500)")
+    p.add_argument("--epochs", type=int, default=None,
+                   help="training epochs (paper and default: 500; --preset mini: 60)")
     p.add_argument("--device", default="cpu", choices=["cpu", "cuda"])
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--folds", type=int, default=None,
                    help="cross-validation folds (default and paper: 3; with --folds-file: "
                    "the file's)")
     p.add_argument("--rows", nargs="+", metavar="ROW", help="rows to run (default: all)")
-    p.add_argument("--width", type=int, default=32,
-                   help="UNet init_features (paper: 32; smaller only for tests and smoke runs)")
+    p.add_argument("--width", type=int, default=None,
+                   help="UNet init_features (paper and default: 32; smaller for tests, smoke "
+                   "runs and --preset mini: 8)")
     p.add_argument("--show", type=int, default=3, help="test scenes per row in index.html")
     p.add_argument("--restart-unit", action="append", default=[], metavar="TASK/ROW/FOLD",
                    help="delete this unit's folder and train it again (repeatable), e.g. "
                    "clean/ours/all or noisy/supervised/1; for a damaged unit")
     protocol_flags(p)
-    return p.parse_args(argv)
+    presets.flags(p)
+    args = p.parse_args(argv)
+    args.train_opts = presets.resolve(args)
+    return args
 
 
 def protocol_flags(p):
@@ -72,7 +78,8 @@ def main(argv=None):
                          device=args.device, seed=args.seed, folds=args.folds, rows_=args.rows,
                          width=args.width, show=args.show, restart=args.restart_unit,
                          protocol=args.protocol, targets=args.targets, noise=args.noise,
-                         synth_iso=args.synth_iso, folds_file=args.folds_file)
+                         synth_iso=args.synth_iso, folds_file=args.folds_file,
+                         train_opts=args.train_opts)
         exp.run()
     except (ExperimentError, FoldError, MixError, ValueError) as e:
         print(f"day2night.experiment: error: {e}", file=sys.stderr)

@@ -8,14 +8,18 @@
   the synthesis reports (the average night illuminant under local relighting: the release's
   ``--wb-illum avg``), the target the clean night raw rendered with the same neutral.
 
-Each pair is stored as ``<name>.x.npy`` (float32 H x W x 3) and ``<name>.y.npy`` (uint8
-H x W x 3), written through a temporary file + rename; an existing pair is reused."""
+Each pair is stored as ``<name>.in.npy`` (the input in ``day2night.train.cache``'s exact
+store: 14-bit CFA codes, about 2 bytes per pixel) and ``<name>.y.npy`` (uint8 H x W x 3),
+written through a temporary file + rename; an existing pair is reused. A pair of the first
+cache format (``<name>.x.npy``, float32 H x W x 3) is migrated on first use: stored again,
+checked bit for bit, and the old file removed."""
 
 import io
 import pathlib
 
 import numpy as np
 
+from ..train import cache as input_cache
 from .atomic import write_bytes
 from .png import read_png
 
@@ -34,21 +38,65 @@ def _npy_bytes(a):
 
 def cached(folder, names, make):
     """{key: (x_path, y_path)} of stored pairs named ``names[key]``; ``make() -> {key: (x, y)}``
-    runs when any of them is absent (one synthesis gives every key of a day image)."""
+    runs when any of them is absent (one synthesis gives every key of a day image). ``x_path``
+    is the ``.in.npy`` store: read it with ``load``."""
     folder = pathlib.Path(folder)
-    paths = {k: (folder / f"{n}.x.npy", folder / f"{n}.y.npy") for k, n in names.items()}
+    paths = {k: (folder / f"{n}.in.npy", folder / f"{n}.y.npy") for k, n in names.items()}
+    for xp, yp in paths.values():
+        _migrate(xp, yp)
     if not all(xp.is_file() and yp.is_file() for xp, yp in paths.values()):
         made = make()
         for k, (xp, yp) in paths.items():
             x, y = made[k]
             # y first: x present means the pair is complete
             write_bytes(yp, _npy_bytes(np.ascontiguousarray(y, np.uint8)))
-            write_bytes(xp, _npy_bytes(np.ascontiguousarray(x, np.float32)))
+            write_bytes(xp, _npy_bytes(input_cache.encode(x)))
     return paths
 
 
+def _migrate(xp, yp):
+    """An input of the first format (``<name>.x.npy``, float32) stored again as ``xp``."""
+    old = xp.with_name(xp.name[: -len(".in.npy")] + ".x.npy")
+    if xp.is_file() or not (old.is_file() and yp.is_file()):
+        return
+    try:
+        x = np.load(old, allow_pickle=False)
+    except (OSError, ValueError) as e:
+        raise PairError(f"{old}: an input of the first cache format that cannot be read "
+                        f"({e}); delete it to have it made again") from None
+    if x.dtype != np.float32 or x.ndim != 3 or x.shape[2] != 3:
+        raise PairError(f"{old}: {x.dtype} {x.shape} is not a float32 H x W x 3 input of the "
+                        "first cache format; delete it to have it made again")
+    enc = input_cache.encode(x)
+    if not np.array_equal(input_cache.decode(enc).view(np.uint32), x.view(np.uint32)):
+        raise PairError(f"{old}: migrating it did not give the same bits")  # pragma: no cover
+    write_bytes(xp, _npy_bytes(enc))
+    old.unlink()
+
+
 def load(path):
-    return np.load(path, mmap_mode="r", allow_pickle=False)
+    """A stored array: the float32 H x W x 3 input of an ``.in.npy`` store, else the array
+    itself (memory-mapped)."""
+    a = np.load(path, mmap_mode="r", allow_pickle=False)
+    if input_cache.is_encoded(a):
+        return input_cache.decode(a, str(path))
+    return a
+
+
+def check_cached(xp, yp):
+    """A cached pair whose input store and uint8 H x W x 3 target agree (for the run-folder
+    checks): a ValueError naming the file otherwise. Returns (H, W)."""
+    try:
+        a = np.load(xp, mmap_mode="r", allow_pickle=False)
+        head = input_cache.info(a, str(xp))
+        y = np.load(yp, mmap_mode="r", allow_pickle=False)
+    except (OSError, ValueError) as e:
+        raise ValueError(f"damaged cached pair: {e}") from None
+    hw = (head["height"], head["width"])
+    if y.dtype != np.uint8 or y.shape != (*hw, 3):
+        raise ValueError(f"{yp}: {y.dtype} {y.shape}, expected uint8 {hw[0]} x {hw[1]} x 3 "
+                         f"(its input {xp.name})")
+    return hw
 
 
 def _read_dng(path, what):

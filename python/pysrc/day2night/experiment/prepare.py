@@ -14,7 +14,8 @@ from . import realset, rows, runfolder
 from .atomic import write_json
 
 CONFIG_KEYS = ("day", "real", "task", "epochs", "seed", "folds", "width", "device", "rows",
-               "protocol", "targets", "noise", "synth_iso", "folds_file", "folds_sha256")
+               "protocol", "targets", "noise", "synth_iso", "folds_file", "folds_sha256",
+               "patch", "batch", "lr", "amp", "channels_last")
 
 
 class ExperimentError(ValueError):
@@ -56,11 +57,13 @@ def check_config(exp):
     path = exp.out / "config.json"
     if path.is_file():
         old = runfolder.read_config(path)
-        diff = [k for k in CONFIG_KEYS if old.get(k) != exp.cfg[k]]
+        # (training options absent from both: the paper's; presets.config)
+        diff = [k for k in CONFIG_KEYS if old.get(k) != exp.cfg.get(k)]
         if diff:
             k = diff[0]
             raise ExperimentError(
-                f"{exp.out} holds a run made with {k} = {old.get(k)!r}, not {exp.cfg[k]!r}: "
+                f"{exp.out} holds a run made with {k} = {old.get(k)!r}, "
+                f"not {exp.cfg.get(k)!r}: "
                 "rerun with the same options to resume, or choose another -o folder"
             )
 

@@ -1,8 +1,10 @@
-"""RUN/index.html: the table and a few test scenes per row (input, prediction, target,
-Delta E 2000 map, as PNGs under RUN/img/)."""
+"""RUN/index.html: the table, the validation L1 per epoch of every row (inline SVG, also
+RUN/val_l1_<task>.svg) and a few test scenes per row (input, prediction, target, Delta E 2000
+map, as PNGs under RUN/img/)."""
 
 import html
 
+from . import curves
 from .atomic import write_text
 from .table import markdown
 
@@ -21,6 +23,18 @@ def _scores(unit, sid, key):
     return None
 
 
+def _curves(exp, t):
+    """Validation L1 per epoch of each row (curves.py), inline and as RUN/val_l1_<task>.svg."""
+    out = []
+    for task in exp.tasks:
+        chart = curves.svg(t, task)
+        if chart is not None:
+            write_text(exp.out / f"val_l1_{task}.svg", chart)
+            out += [f"<h2>Validation L1 per epoch ({html.escape(task)} task)</h2>",
+                    chart]
+    return out
+
+
 def write(exp, t):
     parts = [
         "<!doctype html><meta charset=utf-8><title>day2night experiment</title>",
@@ -30,6 +44,7 @@ def write(exp, t):
         f"<pre>{html.escape(markdown(t))}</pre>",
         "<p>Delta E maps: CIEDE2000 per pixel, black 0, white 10 or more.</p>",
     ]
+    parts += _curves(exp, t)
     for r in t["rows"]:
         task, row = r["task"], r["row"]
         parts.append(f"<h2>{html.escape(r['label'])} ({task} task)</h2>")

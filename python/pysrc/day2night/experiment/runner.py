@@ -21,15 +21,16 @@ import os
 import pathlib
 
 from . import mix as mix_mod
-from . import pairs, prepare, protocol, report, rows, runfolder, table
+from . import pairs, prepare, presets, protocol, report, rows, runfolder, table
 from .atomic import write_json
 from .prepare import CONFIG_KEYS, ExperimentError, day_images, log  # noqa: F401
 
 
 class Experiment:
     def __init__(self, day, real, out, task="both", epochs=500, device="cpu", seed=0,
-                 folds=None, rows_=None, width=32, show=3, restart=(), **protocol_flags):
-        """``protocol_flags``: protocol, targets, noise, synth_iso, folds_file (protocol.py)."""
+                 folds=None, rows_=None, width=32, show=3, restart=(), train_opts=None,
+                 **protocol_flags):
+        """``protocol_flags``: protocol.for_run's; ``train_opts``: presets.apply's."""
         self.out = pathlib.Path(out)
         self.cfg = {
             "day": str(pathlib.Path(day).resolve()),
@@ -41,6 +42,7 @@ class Experiment:
             "device": device,
             "rows": [r.id for r in rows.select(rows_ or [])],
         }
+        self.workers = presets.apply(self.cfg, train_opts)
         if self.cfg["epochs"] < 1:
             raise ExperimentError(f"--epochs {epochs}: at least 1")
         if self.cfg["width"] < 1:

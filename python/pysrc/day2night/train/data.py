@@ -3,8 +3,10 @@
 - ``FixedPatches``: the release's fixed training set, every non-overlapping ``patch`` x
   ``patch`` crop on a stride grid of fixed (input, target) pairs (no augmentation). The
   images are kept once (per-image arrays or memory-mapped ``.npy`` files, see
-  ``save_pair``/``FixedPatches.from_dir``) and a patch is cut when it is asked for: memory is
-  the images' size, not the patches' (the release materializes every patch in RAM). The
+  ``save_pair``/``FixedPatches.from_dir``: float32 arrays or ``cache`` stores, whose patch is
+  demosaiced from its codes and a 1-pixel margin when asked for, the same bits) and a patch
+  is cut when it is asked for: memory is the images' size, not the patches' (the release
+  materializes every patch in RAM). The
   release also drops the first ``len % batch`` patches so that the count is a multiple of
   the batch; here the loader's last batch is simply smaller (``drop_last`` is not used).
 - ``FreshPatches``: beyond the release, fresh synthesis every epoch. An item is one
@@ -28,25 +30,40 @@ import os
 
 import numpy as np
 
-from . import preprocess, targets
+from . import cache, preprocess, targets
 from ._torch import torch
 
 
 def _load(a, mmap):
     if isinstance(a, (str, os.PathLike)):
-        return np.load(os.fspath(a), mmap_mode="r" if mmap else None)
+        return np.load(os.fspath(a), mmap_mode="r" if mmap else None, allow_pickle=False)
     return np.asarray(a)
+
+
+def _shape(a, name):
+    """H x W x 3 of an input array or of an input store (``cache``)."""
+    if cache.is_encoded(a):
+        i = cache.info(a, name)
+        return (i["height"], i["width"], 3)
+    return a.shape
+
+
+def _window(a, top, left, p):
+    if cache.is_encoded(a):
+        return cache.decode_window(a, top, left, p, p)
+    return np.asarray(a[top:top + p, left:left + p], dtype=np.float32)
 
 
 def save_pair(folder, name, x, y):
     """Store one fixed pair for ``FixedPatches.from_dir``: ``<name>_x.npy`` (the network
-    input, H x W x 3 float32) and ``<name>_y.npy`` (the target, H x W x 3 uint8)."""
+    input, H x W x 3 float32, in ``cache``'s exact store: about 2 bytes per pixel) and
+    ``<name>_y.npy`` (the target, H x W x 3 uint8)."""
     os.makedirs(folder, exist_ok=True)
     x, y = np.asarray(x, dtype=np.float32), np.asarray(y)
     if y.dtype != np.uint8 or x.shape != y.shape or x.ndim != 3 or x.shape[2] != 3:
         raise ValueError(f"{name}: need x float32 H x W x 3 and y uint8 of the same shape, "
                          f"got {x.dtype} {x.shape} and {y.dtype} {y.shape}")
-    for suffix, a in (("_x.npy", x), ("_y.npy", y)):
+    for suffix, a in (("_x.npy", cache.encode(x)), ("_y.npy", y)):
         path = os.path.join(folder, name + suffix)
         tmp = path + ".tmp.npy"
         np.save(tmp, a)
@@ -72,14 +89,13 @@ class FixedPatches(torch.utils.data.Dataset):
         self.names = list(names) if names is not None else [str(i) for i in range(len(inputs))]
         counts = []
         for k, (x, y) in enumerate(zip(self.inputs, self.targets)):
-            if x.shape != y.shape or x.ndim != 3 or x.shape[2] != 3:
-                raise ValueError(f"pair {self.names[k]}: input {x.shape} and target {y.shape} "
+            xs = _shape(x, self.names[k])
+            if xs != y.shape or len(xs) != 3 or xs[2] != 3:
+                raise ValueError(f"pair {self.names[k]}: input {xs} and target {y.shape} "
                                  "must both be H x W x 3 of the same size")
             if y.dtype != np.uint8:
                 raise ValueError(f"pair {self.names[k]}: the target must be uint8 sRGB, got {y.dtype}")
-            rows = (x.shape[0] - self.patch) // self.stride + 1 if x.shape[0] >= self.patch else 0
-            cols = (x.shape[1] - self.patch) // self.stride + 1 if x.shape[1] >= self.patch else 0
-            counts.append((rows, cols))
+            counts.append(grid(xs[0], xs[1], self.patch, self.stride))
         self.grid = counts
         self.offsets = np.concatenate([[0], np.cumsum([r * c for r, c in counts])]).astype(np.int64)
         if self.offsets[-1] == 0:
@@ -112,10 +128,19 @@ class FixedPatches(torch.utils.data.Dataset):
     def __getitem__(self, index):
         k, top, left = self.locate(int(index))
         p = self.patch
-        x = np.asarray(self.inputs[k][top:top + p, left:left + p], dtype=np.float32)
+        x = _window(self.inputs[k], top, left, p)
         y = np.asarray(self.targets[k][top:top + p, left:left + p], dtype=np.float32) / np.float32(255)
         return (torch.from_numpy(np.ascontiguousarray(x.transpose(2, 0, 1))),
                 torch.from_numpy(np.ascontiguousarray(y.transpose(2, 0, 1))))
+
+
+def grid(h, w, patch, stride=None):
+    """(rows, cols) of the ``patch`` x ``patch`` crops on a ``stride`` grid of an h x w image
+    (every non-overlapping crop when ``stride`` = ``patch``, the release's patches)."""
+    stride = patch if stride is None else stride
+    rows = (h - patch) // stride + 1 if h >= patch else 0
+    cols = (w - patch) // stride + 1 if w >= patch else 0
+    return rows, cols
 
 
 def cut(a, patch):
@@ -135,20 +160,41 @@ class FreshPatches(torch.utils.data.Dataset):
 
     def __init__(self, day_dir, crop=512, patch=64, isos=(1600, 3200), seed=0,
                  crops_per_image=1, task="noisy", gamma=preprocess.GAMMA, mode="local",
-                 **options):
+                 items_per_image=None, **options):
         from ..pairs import NightPairs
         if task not in ("noisy", "clean"):
             raise ValueError(f"task {task!r}: use 'noisy' or 'clean'")
         if crop % patch or crop < patch:
             raise ValueError(f"crop {crop} must be a multiple of the patch {patch}")
+        counts = None if items_per_image is None else [int(n) for n in items_per_image]
+        if counts is not None:
+            if any(n < 0 for n in counts) or not sum(counts):
+                raise ValueError(f"items_per_image {counts}: need counts >= 0, not all 0")
+            crops_per_image = max(counts)
         self.pairs = NightPairs(day_dir, crop=crop, isos=isos, seed=seed,
                                 crops_per_image=crops_per_image, mode=mode, **options)
+        if counts is not None and len(counts) != len(self.pairs.files):
+            raise ValueError(f"items_per_image has {len(counts)} counts for "
+                             f"{len(self.pairs.files)} day images in {day_dir}")
+        self.counts = counts
+        self.starts = None if counts is None else np.cumsum([0] + counts)
         self.task, self.patch, self.gamma = task, int(patch), gamma
         self.mode, self.options, self.seed = mode, dict(options), seed
         self.patches_per_item = (crop // patch) ** 2
 
     def __len__(self):
-        return len(self.pairs)
+        return len(self.pairs) if self.counts is None else int(self.starts[-1])
+
+    def pair_index(self, index):
+        """The ``NightPairs`` item of item ``index``: with ``items_per_image``, the j-th item
+        of image k is ``NightPairs`` item k * max(counts) + j (its draws: (seed, epoch, that
+        index)), so an item never depends on the loader's workers or order."""
+        if not 0 <= index < len(self):
+            raise IndexError(f"item {index} out of range for {len(self)} items")
+        if self.counts is None:
+            return index
+        k = int(np.searchsorted(self.starts, index, side="right") - 1)
+        return k * self.pairs.crops_per_image + int(index - self.starts[k])
 
     def set_epoch(self, epoch):
         self.pairs.set_epoch(epoch)
@@ -159,7 +205,7 @@ class FreshPatches(torch.utils.data.Dataset):
 
     def _pair(self, index, patch):
         from .._native import fresh_pair
-        q = self.pairs.place(index)
+        q = self.pairs.place(self.pair_index(index))
         return fresh_pair(q["raw"], q["crop"], q["iso"], seed=self.seed, variant=q["variant"],
                           mode=self.mode, task=self.task, table=preprocess._table(self.gamma),
                           patch=patch, **self.options)
@@ -173,7 +219,7 @@ class FreshPatches(torch.utils.data.Dataset):
         ``preprocess.network_input_array`` and ``targets.srgb8`` in numpy (the same numbers;
         for tests and benches)."""
         from .._native import synthesize
-        q = self.pairs.place(index)
+        q = self.pairs.place(self.pair_index(index))
         raw, (top, left, h, w) = q["raw"], q["crop"]
         out = synthesize(raw, seed=self.seed, variant=q["variant"], mode=self.mode,
                          isos=(q["iso"],), crop=q["crop"], **self.options)
@@ -184,6 +230,26 @@ class FreshPatches(torch.utils.data.Dataset):
     def __getitem__(self, index):
         xs, ys = self._pair(int(index), self.patch)
         return torch.from_numpy(xs), torch.from_numpy(ys)
+
+
+def fresh_budget(shapes, patch=64, sides=(), max_crop=512, tolerance=0.05):
+    """(crop, items per image) for fresh synthesis to train on as many patches per epoch as
+    the fixed set of the same images: ``shapes`` are the fixed inputs' (H, W), whose
+    stride-``patch`` grids hold the fixed patches; ``sides`` the largest square crop each
+    image allows (its DefaultCrop). The largest crop (a multiple of ``patch``, at most
+    ``max_crop``) whose rounded counts give the fixed total within ``tolerance`` wins; a
+    crop of one patch always matches exactly."""
+    fixed = [r * c for r, c in (grid(h, w, patch) for h, w in shapes)]
+    total = sum(fixed)
+    if not total:
+        raise ValueError(f"no {patch}x{patch} patch fits in any of the {len(shapes)} images")
+    side = min([max_crop, *sides, *(min(h, w) for h, w in shapes)])
+    for crop in range(side // patch * patch, patch - 1, -patch):
+        per = (crop // patch) ** 2
+        items = [int(np.floor(n / per + 0.5)) for n in fixed]
+        if sum(items) and abs(sum(items) * per - total) <= tolerance * total:
+            return crop, items
+    raise ValueError(f"images smaller than one {patch}x{patch} patch")
 
 
 def collate(batch):

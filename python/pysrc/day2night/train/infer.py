@@ -12,6 +12,8 @@ off): oneDNN chooses its kernels by tensor size, which changes the last bit of s
 outputs between a tile and the whole image, and a truncated byte with it.
 """
 
+import contextlib
+
 import numpy as np
 
 from ._torch import torch
@@ -34,15 +36,21 @@ def _pad(x):
     return x
 
 
-def _run(model, x, device, exact):
+def _run(model, x, device, exact, amp=None, channels_last=False):
     t = torch.from_numpy(np.ascontiguousarray(x.transpose(2, 0, 1)))[None].to(device)
+    if channels_last:
+        model.to(memory_format=torch.channels_last)
+        t = t.contiguous(memory_format=torch.channels_last)
+    dev = torch.device(device).type
+    cast = (torch.autocast(device_type=dev, dtype=torch.bfloat16) if amp == "bf16"
+            else contextlib.nullcontext())
     # exact: PyTorch's own CPU convolution (oneDNN off) and cuDNN without autotuning. oneDNN
     # picks its kernels by tensor size, so a tile and the whole image can differ in the last
     # bit (and then in a truncated byte); the native path gives the same bits for both.
     with torch.no_grad(), torch.backends.mkldnn.flags(enabled=not exact), \
-            torch.backends.cudnn.flags(enabled=True, benchmark=False, deterministic=exact):
+            torch.backends.cudnn.flags(enabled=True, benchmark=False, deterministic=exact), cast:
         y = model(t)
-    return y[0].permute(1, 2, 0).cpu().numpy()
+    return y[0].float().permute(1, 2, 0).contiguous().cpu().numpy()
 
 
 #: Images up to this many pixels run whole under ``tile="auto"``; larger ones in tiles of
@@ -52,12 +60,15 @@ AUTO_WHOLE = 1 << 20
 AUTO_TILE = 512
 
 
-def predict_float(model, x, tile="auto", halo=None, device=None, exact=True):
+def predict_float(model, x, tile="auto", halo=None, device=None, exact=True, amp=None,
+                  channels_last=False):
     """The network's float output (H x W x 3) for the network input ``x`` (H x W x 3).
 
     ``tile``: ``"auto"`` (whole up to 1 MP, else 512), None (whole) or a multiple of 16.
     ``exact=False`` lets PyTorch use oneDNN (faster on CPU; tiles may then differ from the
-    whole image in the last bit)."""
+    whole image in the last bit). ``amp="bf16"``: the forward in bfloat16 autocast;
+    ``channels_last``: NHWC memory format (both for GPUs; close to, not equal to, float32:
+    python/tests/test_train_amp.py states the tolerance)."""
     x = np.asarray(x, dtype=np.float32)
     if x.ndim != 3 or x.shape[2] != 3:
         raise ValueError(f"the network input must be H x W x 3, got {x.shape}")
@@ -70,7 +81,7 @@ def predict_float(model, x, tile="auto", halo=None, device=None, exact=True):
     if tile == "auto":
         tile = None if H * W <= AUTO_WHOLE else AUTO_TILE
     if tile is None or (tile >= H and tile >= W):
-        return _run(model, xp, device, exact)[:h, :w]
+        return _run(model, xp, device, exact, amp, channels_last)[:h, :w]
     if tile % M or tile < M:
         raise ValueError(f"tile {tile} must be a positive multiple of {M}")
     halo = default_halo() if halo is None else int(halo)
@@ -81,7 +92,7 @@ def predict_float(model, x, tile="auto", halo=None, device=None, exact=True):
         for left in range(0, W, tile):
             t0, l0 = max(0, top - halo), max(0, left - halo)
             t1, l1 = min(H, top + tile + halo), min(W, left + tile + halo)
-            y = _run(model, xp[t0:t1, l0:l1], device, exact)
+            y = _run(model, xp[t0:t1, l0:l1], device, exact, amp, channels_last)
             bh, bw = min(tile, H - top), min(tile, W - left)
             out[top:top + bh, left:left + bw] = y[top - t0:top - t0 + bh, left - l0:left - l0 + bw]
     return out[:h, :w]
@@ -92,10 +103,11 @@ def to_u8(y):
     return (255 * np.clip(y, 0, 1)).astype(np.uint8)
 
 
-def predict(model, x, tile="auto", halo=None, device=None, exact=True):
+def predict(model, x, tile="auto", halo=None, device=None, exact=True, amp=None,
+            channels_last=False):
     """uint8 H x W x 3 sRGB prediction of the network input ``x`` (``preprocess``): the
     release's quantization of ``predict_float``."""
-    return to_u8(predict_float(model, x, tile, halo, device, exact))
+    return to_u8(predict_float(model, x, tile, halo, device, exact, amp, channels_last))
 
 
 def write_png(path, img):

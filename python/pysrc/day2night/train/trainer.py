@@ -17,6 +17,7 @@ Small pure pieces: ``make_model``, ``make_loader``, ``train_epoch``, ``evaluate`
   validation sums are all-reduced, and only rank 0 writes checkpoints.
 """
 
+import contextlib
 import dataclasses
 import json
 import math
@@ -46,6 +47,11 @@ class TrainConfig:
     progress: bool = True
     #: Write the sample indices each rank trained on (out_dir/shards/), for checks.
     record_shards: bool = False
+    #: Mixed precision: None (float32) or "bf16" (forward and backward under
+    #: ``torch.autocast`` in bfloat16; weights, optimizer and loss stay float32).
+    amp: str = None
+    #: Channels-last (NHWC) memory format for the model and batches (faster on GPUs).
+    channels_last: bool = False
 
     def check(self):
         if self.epochs < 1:
@@ -60,6 +66,8 @@ class TrainConfig:
             raise ValueError(f"device {self.device!r}: use cpu or cuda")
         if self.device.startswith("cuda") and not torch.cuda.is_available():
             raise ValueError(f"device {self.device!r}: torch sees no CUDA device")
+        if self.amp not in (None, "bf16"):
+            raise ValueError(f"amp {self.amp!r}: use None (float32) or 'bf16'")
 
     def milestone(self):
         """The epoch (0-based) from which the rate is multiplied by ``decay``."""
@@ -100,15 +108,30 @@ def _kill_hook(epoch, step):
         os.kill(os.getpid(), signal.SIGKILL)
 
 
-def train_epoch(model, loader, optimizer, device, epoch, progress=None):
+def autocast(cfg, device):
+    """The forward's precision context: bfloat16 autocast under ``amp="bf16"``."""
+    if cfg is not None and cfg.amp == "bf16":
+        return torch.autocast(device_type=torch.device(device).type, dtype=torch.bfloat16)
+    return contextlib.nullcontext()
+
+
+def to_device(x, device, cfg=None):
+    """A batch on ``device``, channels-last when ``cfg.channels_last``."""
+    fmt = torch.channels_last if cfg is not None and cfg.channels_last else torch.contiguous_format
+    return x.to(device, non_blocking=True, memory_format=fmt)
+
+
+def train_epoch(model, loader, optimizer, device, epoch, progress=None, cfg=None):
     """One pass of L1 training; returns the mean loss over this rank's patches."""
     model.train()
     total, count = 0.0, 0
     for step, (x, y) in enumerate(loader):
         _kill_hook(epoch, step)
-        x, y = x.to(device, non_blocking=True), y.to(device, non_blocking=True)
+        x, y = to_device(x, device, cfg), y.to(device, non_blocking=True)
         optimizer.zero_grad(set_to_none=True)
-        loss = torch.nn.functional.l1_loss(model(x), y)
+        with autocast(cfg, device):
+            p = model(x)
+        loss = torch.nn.functional.l1_loss(p.float(), y)
         loss.backward()
         optimizer.step()
         total += float(loss.detach()) * x.shape[0]
@@ -119,14 +142,16 @@ def train_epoch(model, loader, optimizer, device, epoch, progress=None):
 
 
 @torch.no_grad()
-def evaluate(model, loader, device, world):
+def evaluate(model, loader, device, world, cfg=None):
     """(mean L1, PSNR in dB of the mean squared error) over the validation patches, summed
     over all ranks."""
     model.eval()
     sums = torch.zeros(3, dtype=torch.float64, device=device)
     for x, y in loader:
-        x, y = x.to(device), y.to(device)
-        p = model(x)
+        x, y = to_device(x, device, cfg), y.to(device)
+        with autocast(cfg, device):
+            p = model(x)
+        p = p.float()
         sums[0] += torch.nn.functional.l1_loss(p, y, reduction="sum").double()
         sums[1] += torch.nn.functional.mse_loss(p, y, reduction="sum").double()
         sums[2] += y.numel()
@@ -222,74 +247,106 @@ def _setup(cfg):
 
 def train(cfg, train_set, val_set):
     """Train (or resume from ``cfg.out_dir/last.pt``) and return ``{"best", "last",
-    "history"}``: the paths of the best-validation and last checkpoints and one dict per
-    epoch (``epoch``, ``loss``, ``val_loss``, ``val_psnr``, ``lr``, ``seconds``)."""
+    "history", "initial"}``: the paths of the best-validation and last checkpoints, one dict
+    per epoch (``epoch``, ``loss``, ``val_loss`` = validation L1, ``val_psnr``, ``lr``,
+    ``seconds``; also ``history.json``) and the untrained weights' ``val_loss``/``val_psnr``."""
     cfg.check()
     rank, world, device = _setup(cfg)
     os.makedirs(cfg.out_dir, exist_ok=True)
-    last, best = os.path.join(cfg.out_dir, "last.pt"), os.path.join(cfg.out_dir, "best.pt")
-    model = make_model(cfg).to(device)
-    optimizer = torch.optim.Adam(model.parameters(), lr=cfg.lr)
-    scheduler = torch.optim.lr_scheduler.MultiStepLR(optimizer, [cfg.milestone()], cfg.decay)
-    history, best_val, start = [], float("inf"), 0
-    if os.path.isfile(last):
-        ck = load_checkpoint(last, device)
-        _check_resume(last, ck, cfg)
-        model.load_state_dict(ck["model"])
-        optimizer.load_state_dict(ck["optimizer"])
-        scheduler.load_state_dict(ck["scheduler"])
-        history, best_val, start = ck["history"], ck["best_val"], ck["epoch"] + 1
-    if world > 1:
-        model = torch.nn.parallel.DistributedDataParallel(
-            model, device_ids=[device.index] if device.type == "cuda" else None)
+    run = _Run(cfg, rank, world, device)
+    run.start(val_set)
     loader, sampler = make_loader(train_set, cfg, rank, world, shuffle=True)
-    val_loader, _ = make_loader(val_set, cfg, rank, world, shuffle=False)
-    bar = _Bar(cfg.progress and rank == 0, cfg.epochs)
-    if history:
-        bar.val = history[-1]["val_psnr"]
-    for epoch in range(start, cfg.epochs):
-        t0 = time.monotonic()
+    run.val_loader, _ = make_loader(val_set, cfg, rank, world, shuffle=False)
+    for epoch in range(run.first, cfg.epochs):
         sampler.set_epoch(epoch)
         for ds in (train_set, val_set):
             if hasattr(ds, "set_epoch"):
                 ds.set_epoch(epoch)
         if cfg.record_shards:
             _record(cfg, rank, epoch, list(iter(sampler)))
-        lr = optimizer.param_groups[0]["lr"]
-        loss, n = train_epoch(model, loader, optimizer, device, epoch,
-                              lambda s, S, lo, e=epoch: bar.step(e, s, S, lo))
-        if world > 1:
-            t = torch.tensor([loss * n, n], dtype=torch.float64, device=device)
+        run.epoch(epoch, loader)
+    if rank == 0:
+        path = os.path.join(cfg.out_dir, "history.json")
+        with open(path + ".tmp", "w") as f:
+            json.dump(run.history, f, indent=1)
+        os.replace(path + ".tmp", path)
+    return {"best": run.best, "last": run.last, "history": run.history,
+            "initial": run.initial}
+
+
+class _Run:
+    """The state of one training run: model, optimizer, schedule, history, checkpoints."""
+
+    def __init__(self, cfg, rank, world, device):
+        self.cfg, self.rank, self.world, self.device = cfg, rank, world, device
+        self.last = os.path.join(cfg.out_dir, "last.pt")
+        self.best = os.path.join(cfg.out_dir, "best.pt")
+        self.model = make_model(cfg).to(device)
+        if cfg.channels_last:
+            self.model = self.model.to(memory_format=torch.channels_last)
+        self.optimizer = torch.optim.Adam(self.model.parameters(), lr=cfg.lr)
+        self.scheduler = torch.optim.lr_scheduler.MultiStepLR(
+            self.optimizer, [cfg.milestone()], cfg.decay)
+        self.history, self.best_val, self.first, self.initial = [], float("inf"), 0, None
+        self.bar = _Bar(cfg.progress and rank == 0, cfg.epochs)
+        self.val_loader = None
+
+    def start(self, val_set):
+        """Resume from last.pt, or score the untrained weights (``initial``)."""
+        if os.path.isfile(self.last):
+            ck = load_checkpoint(self.last, self.device)
+            _check_resume(self.last, ck, self.cfg)
+            self.model.load_state_dict(ck["model"])
+            self.optimizer.load_state_dict(ck["optimizer"])
+            self.scheduler.load_state_dict(ck["scheduler"])
+            self.history, self.best_val = ck["history"], ck["best_val"]
+            self.first, self.initial = ck["epoch"] + 1, ck.get("initial")
+            if self.history:
+                self.bar.val = self.history[-1]["val_psnr"]
+        else:
+            loader, _ = make_loader(val_set, self.cfg, self.rank, self.world, shuffle=False)
+            vl, vp = evaluate(self.model, loader, self.device, self.world, self.cfg)
+            self.initial = {"val_loss": vl, "val_psnr": vp}
+        if self.world > 1:
+            dev = self.device
+            self.model = torch.nn.parallel.DistributedDataParallel(
+                self.model, device_ids=[dev.index] if dev.type == "cuda" else None)
+
+    def epoch(self, epoch, loader):
+        cfg, t0 = self.cfg, time.monotonic()
+        lr = self.optimizer.param_groups[0]["lr"]
+        loss, n = train_epoch(self.model, loader, self.optimizer, self.device, epoch,
+                              lambda s, S, lo, e=epoch: self.bar.step(e, s, S, lo), cfg)
+        if self.world > 1:
+            t = torch.tensor([loss * n, n], dtype=torch.float64, device=self.device)
             torch.distributed.all_reduce(t)
             loss = float(t[0] / max(float(t[1]), 1.0))
-        scheduler.step()
-        val_loss, val_psnr = evaluate(model, val_loader, device, world)
+        self.scheduler.step()
+        val_loss, val_psnr = evaluate(self.model, self.val_loader, self.device, self.world, cfg)
         row = {"epoch": epoch, "loss": loss, "val_loss": val_loss, "val_psnr": val_psnr,
                "lr": lr, "seconds": time.monotonic() - t0}
-        history.append(row)
-        improved = val_loss < best_val
-        best_val = min(best_val, val_loss)
-        if rank == 0:
-            state = _state(model)
-            meta = {"config": dataclasses.asdict(cfg), "epoch": epoch, "history": history,
-                    "best_val": best_val, "writer_rank": rank, "world_size": world}
+        self.history.append(row)
+        improved = val_loss < self.best_val
+        self.best_val = min(self.best_val, val_loss)
+        if self.rank == 0:
+            state = _state(self.model)
+            meta = {"config": dataclasses.asdict(cfg), "epoch": epoch, "history": self.history,
+                    "best_val": self.best_val, "initial": self.initial,
+                    "writer_rank": self.rank, "world_size": self.world}
             if improved:
-                save_checkpoint(best, model=state, **meta)
-            save_checkpoint(last, model=state, optimizer=optimizer.state_dict(),
-                            scheduler=scheduler.state_dict(), **meta)
-        bar.end(epoch, loss, val_loss, val_psnr, row["seconds"])
-        if world > 1:
+                save_checkpoint(self.best, model=state, **meta)
+            save_checkpoint(self.last, model=state, optimizer=self.optimizer.state_dict(),
+                            scheduler=self.scheduler.state_dict(), **meta)
+        self.bar.end(epoch, loss, val_loss, val_psnr, row["seconds"])
+        if self.world > 1:
             torch.distributed.barrier()
-    if rank == 0:
-        with open(os.path.join(cfg.out_dir, "history.json.tmp"), "w") as f:
-            json.dump(history, f, indent=1)
-        os.replace(os.path.join(cfg.out_dir, "history.json.tmp"),
-                   os.path.join(cfg.out_dir, "history.json"))
-    return {"best": best, "last": last, "history": history}
 
 
 #: Settings a run cannot change when it resumes.
-RESUME_KEYS = ("epochs", "batch_size", "lr", "decay_at", "decay", "init_features", "seed")
+RESUME_KEYS = ("epochs", "batch_size", "lr", "decay_at", "decay", "init_features", "seed",
+               "amp", "channels_last")
+#: What a checkpoint written before a setting existed ran with.
+_RESUME_DEFAULTS = {"amp": None, "channels_last": False}
 
 
 def _check_resume(path, ck, cfg):
@@ -299,8 +356,8 @@ def _check_resume(path, ck, cfg):
     if missing:
         raise CheckpointError(f"{path}: damaged checkpoint, it holds no {', '.join(missing)}")
     old = ck.get("config", {})
-    diff = [f"{k} {old.get(k)!r} -> {getattr(cfg, k)!r}" for k in RESUME_KEYS
-            if old.get(k) != getattr(cfg, k)]
+    diff = [f"{k} {old.get(k, _RESUME_DEFAULTS.get(k))!r} -> {getattr(cfg, k)!r}"
+            for k in RESUME_KEYS if old.get(k, _RESUME_DEFAULTS.get(k)) != getattr(cfg, k)]
     if diff:
         raise ValueError(f"{path}: written by a run with other settings ({'; '.join(diff)}); "
                          "use another out_dir or the same settings")
