@@ -6,6 +6,7 @@ Needs `ray[data]` (scripts/test.sh installs it from python/tests/requirements-ra
 wheel exists, and then sets D2N_REQUIRE_RAY=1 so that a broken install fails instead of
 skipping)."""
 
+import fcntl
 import os
 import pathlib
 import re
@@ -16,6 +17,7 @@ import time
 
 import pytest
 
+import day2night
 from dataset_trees import assert_same_tree, days  # noqa: F401 (a fixture)
 
 EXAMPLE = pathlib.Path(__file__).resolve().parents[1] / "examples" / "ray_dataset.py"
@@ -72,17 +74,26 @@ def test_ray_killed_then_rerun_completes_the_tree(cli, days, tmp_path):  # noqa:
     a, b = tmp_path / "cli", tmp_path / "ray"
     cli("dataset", days, "-o", a, "--quiet", *ARGS)
     journal = b / ".day2night-units"
-    p = example(days, b, "--num-cpus", "1")
-    deadline = time.time() + 600
-    while p.poll() is None and time.time() < deadline:
-        if journal.is_dir() and any(journal.iterdir()):
-            break
+    # The last unit of an input is locked as another process writing it would (the lock
+    # file of src/output.rs's OutputSetLock, flock'ed): the run (--wait) completes the
+    # units before it in its task, and maybe other tasks, then waits for it, so it cannot
+    # finish before the kill, and no clock decides anything. --overwrite: the lock file
+    # makes the new OUT non-empty.
+    units = day2night.dataset_units(days, None, variants=2, val=1, seed=7)
+    locked = day2night.group_units(units)[0][-1]["id"]
+    b.mkdir()
+    lock = open(b / f".{locked}.lock", "w")
+    fcntl.flock(lock, fcntl.LOCK_EX)
+    p = example(days, b, "--num-cpus", "1", "--wait", "--overwrite")
+    # A unit's record in the journal: some unit is complete. (A poll, with no deadline:
+    # the run cannot end while the lock is held, unless it fails.)
+    while not (journal.is_dir() and any(journal.iterdir())):
+        assert p.poll() is None, f"ray_dataset.py ended ({p.returncode}):\n{p.communicate()[1][-4000:]}"
         time.sleep(0.02)
-    killed = p.poll() is None
-    if killed:
-        os.killpg(p.pid, signal.SIGKILL)
+    os.killpg(p.pid, signal.SIGKILL)
     p.communicate()
-    assert killed, "the run finished before it could be killed"
+    lock.close()
+    (b / f".{locked}.lock").unlink()
     done = len(list(journal.iterdir()))
     assert 1 <= done < 6 and not (b / "manifest.jsonl").exists()
     # What a kill can also leave: a temporary file of a unit being written.

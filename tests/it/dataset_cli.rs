@@ -300,31 +300,44 @@ fn killed_run_then_rerun_equals_an_uninterrupted_run() {
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
 
     let out = tempfile::tempdir().unwrap();
+    // The last input's unit is locked as if another process were writing it: the run
+    // (--wait, one worker, inputs in name order) completes the others, then waits for it
+    // and cannot finish before the kill. --overwrite: the lock file makes OUT non-empty.
+    let held =
+        day2night::output::OutputSetLock::acquire(out.path(), "phone__IMG_07", false).unwrap();
     let mut child = common::bin()
         .arg("dataset")
         .arg(day.path())
         .arg("-o")
         .arg(out.path())
-        .args(["--val", "2", "--jobs", "1", "--quiet"])
+        .args(["--val", "2", "--jobs", "1", "--wait", "--overwrite"])
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::piped())
         .spawn()
         .unwrap();
-    let manifest: PathBuf = out.path().join("manifest.jsonl");
-    let t0 = std::time::Instant::now();
-    while std::fs::read_to_string(&manifest)
-        .map(|t| t.lines().count())
-        .unwrap_or(0)
-        < 1
-    {
-        assert!(t0.elapsed().as_secs() < 120, "no progress");
-        std::thread::sleep(std::time::Duration::from_millis(2));
+    // Its progress (one line per input, stderr not being a terminal) says when the first
+    // input is in the manifest: no clock.
+    let stderr = std::io::BufReader::new(child.stderr.take().unwrap());
+    let mut said = Vec::new();
+    for line in std::io::BufRead::lines(stderr) {
+        let line = line.unwrap();
+        let first = line.starts_with("dataset: [1/8]");
+        said.push(line);
+        if first {
+            break;
+        }
     }
+    assert!(
+        child.try_wait().unwrap().is_none(),
+        "the run ended before the kill:\n{}",
+        said.join("\n")
+    );
     child.kill().unwrap();
     child.wait().unwrap();
+    drop(held);
+    let manifest: PathBuf = out.path().join("manifest.jsonl");
     let partial = std::fs::read_to_string(&manifest).unwrap().lines().count();
-    assert!(
-        partial < 8,
-        "the run finished before the kill ({partial} records)"
-    );
+    assert!((1..8).contains(&partial), "{partial} records");
 
     let o = dataset(day.path(), out.path(), &["--val", "2"]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));

@@ -245,27 +245,56 @@ fn refuses_foreign_nonempty_output_and_name_clashes() {
     assert!(err.to_string().contains("both be named"), "{err}");
 }
 
-/// Child side of the interruption test: runs slowly on the folders named through the
-/// environment. Not a check of its own: ignored, and started with `--ignored` by the test
-/// below.
+/// What the child of the interruption test prints once it holds: every unit it will ever
+/// complete is in its manifest.
+const CHILD_HOLDS: &str = "d2n-child: holding";
+
+/// Holds the run after its first [`GATE_AT`] inputs: the worker that reports the
+/// `GATE_AT`-th finished input says so on stdout, and every worker then blocks for good
+/// when it reports a finished input, so no further input starts (the parent kills it).
+struct Gate;
+
+const GATE_AT: usize = 5;
+
+impl dataset::Progress for Gate {
+    fn input_done(&self, e: &dataset::InputDone<'_>) {
+        if e.index < GATE_AT {
+            return;
+        }
+        if e.index == GATE_AT {
+            use std::io::Write;
+            let mut out = std::io::stdout().lock();
+            writeln!(out, "{CHILD_HOLDS}").unwrap();
+            out.flush().unwrap();
+        }
+        loop {
+            std::thread::park();
+        }
+    }
+}
+
+/// Child side of the interruption test: runs on the folders named through the environment
+/// and holds after [`GATE_AT`] inputs. Not a check of its own: ignored, and started with
+/// `--ignored` by the test below.
 #[test]
-#[ignore = "child process of killed_run_then_rerun_equals_an_uninterrupted_run"]
-fn child_slow_run() {
+#[ignore = "child process of killed_run_resumes_to_the_uninterrupted_result"]
+fn child_held_run() {
     let (Some(day), Some(out)) = (
         std::env::var_os("D2N_CHILD_DAY"),
         std::env::var_os("D2N_CHILD_OUT"),
     ) else {
         panic!("the child run needs D2N_CHILD_DAY and D2N_CHILD_OUT");
     };
-    let mut f = Fake::new("x");
-    f.delay_ms = 15;
     let mut o = opts(Path::new(&day), Path::new(&out));
     o.split = SplitRule::LastN(3);
-    let _ = dataset::run(&o, &f);
+    o.progress = dataset::ProgressSink::new(Gate);
+    let _ = dataset::run(&o, &Fake::new("x"));
+    panic!("the run ended: the gate did not hold it");
 }
 
 #[test]
 fn killed_run_resumes_to_the_uninterrupted_result() {
+    use std::io::BufRead;
     let day = make_day_dir(40);
     let reference = tempfile::tempdir().unwrap();
     let mut o = opts(day.path(), reference.path());
@@ -277,34 +306,40 @@ fn killed_run_resumes_to_the_uninterrupted_result() {
     let mut child = std::process::Command::new(exe)
         .args([
             "--exact",
-            "dataset_core::child_slow_run",
+            "dataset_core::child_held_run",
             "--ignored",
             "--test-threads=1",
             "--nocapture",
         ])
         .env("D2N_CHILD_DAY", day.path())
         .env("D2N_CHILD_OUT", out.path())
-        .stdout(std::process::Stdio::null())
+        .stdout(std::process::Stdio::piped())
         .spawn()
         .unwrap();
-    let manifest_path: PathBuf = out.path().join("manifest.jsonl");
-    let t0 = std::time::Instant::now();
-    loop {
-        let n = std::fs::read_to_string(&manifest_path)
-            .map(|t| t.lines().count())
-            .unwrap_or(0);
-        if n >= 5 {
+    // Wait for the child's word (no clock: its stdout ends if it dies first).
+    let stdout = std::io::BufReader::new(child.stdout.take().unwrap());
+    let mut seen = Vec::new();
+    for line in stdout.lines() {
+        let line = line.unwrap();
+        // (after the harness's "test ... " without a line break)
+        if line.ends_with(CHILD_HOLDS) {
             break;
         }
-        assert!(t0.elapsed().as_secs() < 60, "child made no progress");
-        std::thread::sleep(std::time::Duration::from_millis(5));
+        seen.push(line);
     }
+    assert!(
+        child.try_wait().unwrap().is_none(),
+        "the child ended before holding:\n{}",
+        seen.join("\n")
+    );
+    let manifest_path: PathBuf = out.path().join("manifest.jsonl");
     child.kill().unwrap();
     child.wait().unwrap();
+    // GATE_AT inputs completed, plus at most the one the other worker was on (jobs = 2).
     let partial = manifest::read(&manifest_path).unwrap().records.len();
     assert!(
-        partial < 40,
-        "the child finished before it was killed ({partial} records)"
+        (GATE_AT..=GATE_AT + 1).contains(&partial),
+        "{partial} records"
     );
 
     let f = Fake::new("x");

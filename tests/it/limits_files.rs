@@ -14,7 +14,6 @@ use day2night::metrics::{mean_delta_e_2000, psnr, ssim, SsimOptions, SsimWindow}
 use day2night::output::OutputPolicy;
 use day2night::tiff::value::Value;
 use std::path::Path;
-use std::time::{Duration, Instant};
 
 fn pattern(w: usize, h: usize, seed: u32) -> RgbImage {
     let mut img = RgbImage::new(w, h);
@@ -148,7 +147,6 @@ fn exr_chunks_sharing_an_offset_are_refused_before_decoding() {
     assert!(e.contains("chunks 0 and 1 share the offset"), "{e}");
     let e = open_bands(&bomb).err().unwrap().to_string();
     assert!(e.contains("share the offset"), "{e}");
-    let t0 = Instant::now();
     let o = common::bin()
         .arg("eval")
         .arg(&bomb)
@@ -161,7 +159,6 @@ fn exr_chunks_sharing_an_offset_are_refused_before_decoding() {
         err.contains("bomb.exr") && err.contains("share the offset"),
         "{err}"
     );
-    assert!(t0.elapsed() < Duration::from_secs(5));
     // Overlapping (not equal) offsets: chunk 1 starts inside chunk 0.
     let mut bytes = std::fs::read(&good).unwrap();
     let o0 = u64::from_le_bytes(bytes[t..t + 8].try_into().unwrap());
@@ -250,12 +247,12 @@ fn hostile_replay_sidecars_are_refused_at_once_naming_the_field() {
         edit(&mut v);
         let bad = dir.path().join("bad.json");
         std::fs::write(&bad, serde_json::to_string(&v).unwrap()).unwrap();
-        let t0 = Instant::now();
+        let again = dir.path().join("again");
         let o = common::bin()
             .arg("synth")
             .arg(&day)
             .arg("-o")
-            .arg(dir.path().join("again"))
+            .arg(&again)
             .arg("--replay")
             .arg(&bad)
             .output()
@@ -263,11 +260,11 @@ fn hostile_replay_sidecars_are_refused_at_once_naming_the_field() {
         let err = String::from_utf8_lossy(&o.stderr);
         assert_eq!(o.status.code(), Some(1), "{want}: {err}");
         assert!(err.contains(want), "expected {want:?} in {err}");
-        assert!(
-            t0.elapsed() < Duration::from_secs(5),
-            "{want}: {:?}",
-            t0.elapsed()
-        );
+        // Refused before any work: nothing was written (the work done is bounded, not timed).
+        let written: Vec<_> = std::fs::read_dir(&again)
+            .map(|d| d.flatten().map(|e| e.file_name()).collect())
+            .unwrap_or_default();
+        assert!(written.is_empty(), "{want}: wrote {written:?}");
     }
     // The untouched sidecar still replays.
     let o = common::bin()
@@ -467,7 +464,6 @@ fn slow_eval_of_two_134_megapixel_exrs_stays_under_2_gib() {
         .unwrap();
         paths.push(p);
     }
-    let t0 = Instant::now();
     let o = std::process::Command::new(time)
         .arg("-v")
         .arg(env!("CARGO_BIN_EXE_day2night"))
@@ -485,9 +481,15 @@ fn slow_eval_of_two_134_megapixel_exrs_stays_under_2_gib() {
         })
         .and_then(|v| v.trim().parse().ok())
         .unwrap();
+    let wall = err
+        .lines()
+        .find_map(|l| {
+            l.trim()
+                .strip_prefix("Elapsed (wall clock) time (h:mm:ss or m:ss): ")
+        })
+        .unwrap_or("?");
     eprintln!(
-        "eval 134 MP x2: {:?}, peak RSS {} MiB\n{}",
-        t0.elapsed(),
+        "eval 134 MP x2: {wall}, peak RSS {} MiB\n{}",
         kib / 1024,
         String::from_utf8_lossy(&o.stdout)
     );

@@ -16,7 +16,6 @@ pub struct Fake {
     pub option: String,
     pub loads: AtomicUsize,
     pub units: AtomicUsize,
-    pub delay_ms: u64,
 }
 
 impl Fake {
@@ -25,7 +24,6 @@ impl Fake {
             option: option.into(),
             loads: AtomicUsize::new(0),
             units: AtomicUsize::new(0),
-            delay_ms: 0,
         }
     }
 }
@@ -60,9 +58,6 @@ impl Processor for Fake {
             Ok(())
         })?;
         for iso in [1600, 3200] {
-            if self.delay_ms > 0 {
-                std::thread::sleep(std::time::Duration::from_millis(self.delay_ms));
-            }
             sink.write(Kind::NoisyRaw, &format!("_iso{iso}.dng"), |w| {
                 Ok(w.write_all(format!("{body}|{iso}").as_bytes())?)
             })?;
