@@ -2,6 +2,8 @@
 
     python benches/train_bench.py train  [--features 32] [--batch 128] [--steps 5] [--runs 3]
     python benches/train_bench.py fresh  DAY.dng [--crop 512] [--items 40] [--runs 3] [--train-steps 1]
+    python benches/train_bench.py loader DAY.dng [--crop 512] [--items 40] [--batch 128] [--runs 3]
+    python benches/train_bench.py cache  DAY.dng [--tiles 6x8] [--runs 3]
     python benches/train_bench.py noise  DAY.dng [--calls 200] [--runs 3]
     python benches/train_bench.py infer  DAY.dng [--features 32] [--tile 512] [--check-features 4]
 
@@ -194,10 +196,76 @@ def bench_infer(a):
             "identical": tiled["sha256"] == whole["sha256"]}
 
 
+def bench_loader(a):
+    """Patches/s of the training loader of "Ours, fresh synthesis" (``trainer.make_loader``
+    over ``FreshPatches``, --crop crops, batches of --batch patches) with 0, 1 and 2 worker
+    processes, each over the same --items items of one epoch (median of --runs); then the
+    trainer's own consumption (training steps/s x batch at --features, this process's
+    torch threads) unless --train-steps 0."""
+    import torch
+    from day2night.train import data, trainer
+    d = tempfile.mkdtemp()
+    os.symlink(os.path.abspath(a.dng), os.path.join(d, "day.dng"))
+    ds = data.FreshPatches(d, crop=a.crop, patch=64, isos=(1600, 3200), seed=0,
+                           items_per_image=[a.items])
+    out = {"bench": "loader", "crop": a.crop, "items": a.items, "batch": a.batch,
+           "patches_per_item": ds.patches_per_item, "workers": {}}
+    for workers in (0, 1, 2):
+        cfg = trainer.TrainConfig(out_dir=d, batch_size=a.batch, workers=workers)
+        loader, sampler = trainer.make_loader(ds, cfg, 0, 1, shuffle=True)
+        rates = []
+        for run in range(a.runs):
+            sampler.set_epoch(run)
+            ds.set_epoch(run)
+            t, n = time.perf_counter(), 0
+            for x, _ in loader:
+                n += x.shape[0]
+            rates.append(n / (time.perf_counter() - t))
+        out["workers"][workers] = {"patches_per_s": statistics.median(rates), "runs": rates}
+        print(f"workers {workers}: {statistics.median(rates):.0f} patches/s", file=sys.stderr)
+    if a.train_steps:
+        a.steps, a.runs = a.train_steps, 1
+        out["trainer"] = bench_train(a)
+    return out
+
+
+def bench_cache(a):
+    """The input store (day2night.train.cache) of the network input of the DNG's active area
+    tiled --tiles (an even tile keeps the CFA phase; 512 x 512 x 6 x 8 is 12.6 MP): bytes per
+    pixel against float32's 12, encode, full decode and per-patch decode times (one thread,
+    median of --runs), and whether the bits come back."""
+    import day2night
+    from day2night.train import cache, preprocess
+    raw = day2night.read_dng(a.dng)
+    ty, tx = (int(v) for v in a.tiles.split("x"))
+    plane = np.tile(preprocess.active_plane(raw), (ty, tx))
+    x = preprocess.network_input_array(plane, raw.meta)
+    h, w = x.shape[:2]
+    enc, dec, win = [], [], []
+    for _ in range(a.runs):
+        t = time.perf_counter()
+        e = cache.encode(x)
+        enc.append(time.perf_counter() - t)
+        t = time.perf_counter()
+        d = cache.decode(e)
+        dec.append(time.perf_counter() - t)
+        t = time.perf_counter()
+        for k in range(200):
+            cache.decode_window(e, 64 * (k % (h // 64)), 64 * (k // (h // 64) % (w // 64)), 64, 64)
+        win.append((time.perf_counter() - t) / 200)
+    return {"bench": "cache", "size": [w, h], "megapixels": w * h / 1e6,
+            "encoding": cache.ENCODINGS[cache.info(e)["encoding"]],
+            "bytes_per_pixel": e.nbytes / (w * h), "float32_bytes_per_pixel": x.nbytes / (w * h),
+            "exact": bool(np.array_equal(d.view(np.uint32), x.view(np.uint32))),
+            "encode_s": statistics.median(enc), "decode_s": statistics.median(dec),
+            "patch64_decode_ms": 1e3 * statistics.median(win)}
+
+
 def main():
     p = argparse.ArgumentParser(description=__doc__,
                                 formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("what", choices=("train", "fresh", "noise", "infer", "infer-child"))
+    p.add_argument("what", choices=("train", "fresh", "loader", "cache", "noise", "infer",
+                                      "infer-child"))
     p.add_argument("dng", nargs="?")
     p.add_argument("--features", type=int, default=32)
     p.add_argument("--check-features", type=int, default=4)
@@ -209,13 +277,14 @@ def main():
     p.add_argument("--train-steps", type=int, default=1)
     p.add_argument("--calls", type=int, default=200)
     p.add_argument("--tile", type=int, default=512)
+    p.add_argument("--tiles", default="6x8", help="cache: the input tiled rows x columns")
     a = p.parse_args()
     if a.what != "train" and not a.dng:
         p.error(f"{a.what} needs a DNG")
     if a.what == "infer-child":
         return _infer_child(a)
-    res = {"train": bench_train, "fresh": bench_fresh, "noise": bench_noise,
-           "infer": bench_infer}[a.what](a)
+    res = {"train": bench_train, "fresh": bench_fresh, "loader": bench_loader, "cache": bench_cache,
+           "noise": bench_noise, "infer": bench_infer}[a.what](a)
     print(json.dumps(res, indent=1))
 
 
