@@ -105,7 +105,7 @@ def test_damaged_scores_is_a_clear_error(base, tmp_path, kind):
 
 
 def first_cached(out):
-    return sorted((out / "data" / "real").glob("*.x.npy"))[0]
+    return sorted((out / "data" / "real").glob("*.in.npy"))[0]
 
 
 @pytest.mark.parametrize("damage", ["empty", "truncated", "empty-target"])
@@ -114,7 +114,7 @@ def test_damaged_cached_array_is_a_clear_error(base, tmp_path, damage):
     (out / "units" / UNIT / "scores.json").unlink()  # the unit reads the cache again
     path = first_cached(out)
     if damage == "empty-target":
-        path = path.with_name(path.name.replace(".x.npy", ".y.npy"))
+        path = path.with_name(path.name.replace(".in.npy", ".y.npy"))
     data = path.read_bytes()
     path.write_bytes(b"" if damage.startswith("empty") else data[: len(data) // 2])
     r = rerun(base, out)

@@ -85,18 +85,26 @@ def load(path):
 
 def check_cached(xp, yp):
     """A cached pair whose input store and uint8 H x W x 3 target agree (for the run-folder
-    checks): a ValueError naming the file otherwise. Returns (H, W)."""
+    checks): a ValueError whose message starts with the damaged file's path and says
+    "damaged cached array". Returns (H, W)."""
     try:
-        a = np.load(xp, mmap_mode="r", allow_pickle=False)
-        head = input_cache.info(a, str(xp))
+        head = input_cache.info(np.load(xp, mmap_mode="r", allow_pickle=False), str(xp))
+    except (OSError, ValueError, EOFError) as e:
+        raise ValueError(f"{xp}: damaged cached array ({_first_line(e)})") from None
+    try:
         y = np.load(yp, mmap_mode="r", allow_pickle=False)
-    except (OSError, ValueError) as e:
-        raise ValueError(f"damaged cached pair: {e}") from None
+    except (OSError, ValueError, EOFError) as e:
+        raise ValueError(f"{yp}: damaged cached array ({_first_line(e)})") from None
     hw = (head["height"], head["width"])
     if y.dtype != np.uint8 or y.shape != (*hw, 3):
-        raise ValueError(f"{yp}: {y.dtype} {y.shape}, expected uint8 {hw[0]} x {hw[1]} x 3 "
-                         f"(its input {xp.name})")
+        raise ValueError(f"{yp}: damaged cached array: {y.dtype} {y.shape}, expected uint8 "
+                         f"{hw[0]} x {hw[1]} x 3 (its input {xp.name})")
     return hw
+
+
+def _first_line(e):
+    text = str(e).strip()
+    return text.splitlines()[0] if text else type(e).__name__
 
 
 def _read_dng(path, what):
@@ -188,10 +196,11 @@ def render_target_as(isp, raw, neutral, display):
 
 
 def release_render(raw, neutral):
-    """The release ISP's 8-bit target of ``raw`` (its crop and orientation)."""
-    import day2night
+    """The release ISP's 8-bit target of ``raw`` (``render --isp release``: its crop and its
+    orientation, opcode lists ignored)."""
+    from ..train.targets import render_target
 
-    return np.asarray(day2night.render_target(raw, neutral=neutral, isp="release"), np.uint8)
+    return np.asarray(render_target(raw, neutral=neutral, isp="release"), np.uint8)
 
 
 def orient(img, orientation):

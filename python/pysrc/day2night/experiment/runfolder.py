@@ -6,7 +6,9 @@ do (delete the file or the unit folder, or rerun with ``--restart-unit TASK/ROW/
 - ``config.json``, ``folds.json``, ``units/.../scores.json``: a JSON object of the expected
   shape (a list, a number or garbage is refused);
 - ``data/**/*.npy``: a complete ``.npy`` file (the header's shape and dtype times the item
-  size is the file's size), float32 H x W x 3 inputs beside uint8 H x W x 3 targets;
+  size is the file's size), input stores (``.in.npy``, ``day2night.train.cache``: header,
+  version and size) or float32 H x W x 3 inputs of the first format beside uint8 H x W x 3
+  targets of the same size;
 - ``units/.../model/last.pt`` and ``best.pt`` of a unit not done yet: a checkpoint torch reads
   whole (``day2night.train.trainer.load_checkpoint``). There is no earlier checkpoint to fall
   back to (``last.pt`` is replaced after every epoch), so a damaged one is an error."""
@@ -184,12 +186,19 @@ def check_pair(xp, yp):
 
 def check_data(out):
     """Every complete cached pair under RUN/data (a target without its input is the trace of
-    an interrupted write: it is made again)."""
-    for xp in sorted(pathlib.Path(out, "data").rglob("*.x.npy")):
-        yp = xp.with_name(xp.name[: -len(".x.npy")] + ".y.npy")
-        if not yp.is_file():
-            raise RunFolderError(f"{xp}: its target {yp.name} is missing; {DATA_ADVICE}")
-        check_pair(xp, yp)
+    an interrupted write: it is made again): ``.in.npy`` input stores (pairs.check_cached)
+    and inputs of the first format (``.x.npy``, migrated when used)."""
+    from .pairs import check_cached
+
+    for suffix in (".x.npy", ".in.npy"):
+        for xp in sorted(pathlib.Path(out, "data").rglob("*" + suffix)):
+            yp = xp.with_name(xp.name[: -len(suffix)] + ".y.npy")
+            if not yp.is_file():
+                raise RunFolderError(f"{xp}: its target {yp.name} is missing; {DATA_ADVICE}")
+            try:
+                check_pair(xp, yp) if suffix == ".x.npy" else check_cached(xp, yp)
+            except ValueError as e:
+                raise RunFolderError(f"{e}; {DATA_ADVICE}") from None
 
 
 def check_checkpoints(out, uid, model_dir, epochs):
