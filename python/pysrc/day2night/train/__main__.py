@@ -32,6 +32,9 @@ def parser():
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--device", default="cpu", help="cpu or cuda")
     p.add_argument("--workers", type=int, default=0, help="DataLoader worker processes")
+    p.add_argument("--amp", choices=["bf16"], help="bfloat16 mixed precision (for GPUs)")
+    p.add_argument("--channels-last", action="store_true",
+                   help="channels-last memory format (for GPUs)")
     p.add_argument("--no-progress", action="store_true", help="no progress line on stderr")
     p.add_argument("--record-shards", action="store_true",
                    help="write each rank's sample indices to OUT/shards/ (checks)")
@@ -50,7 +53,7 @@ def main(argv=None):
             out_dir=args.out, epochs=args.epochs, batch_size=args.batch_size, lr=args.lr,
             decay_at=args.decay_at, init_features=args.init_features, seed=args.seed,
             device=args.device, workers=args.workers, progress=not args.no_progress,
-            record_shards=args.record_shards)
+            record_shards=args.record_shards, amp=args.amp, channels_last=args.channels_last)
         if args.train:
             train_set = data.FixedPatches.from_dir(args.train, args.patch, args.patch)
         else:
