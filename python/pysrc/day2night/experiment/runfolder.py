@@ -196,7 +196,10 @@ def check_data(out):
             if not yp.is_file():
                 raise RunFolderError(f"{xp}: its target {yp.name} is missing; {DATA_ADVICE}")
             try:
-                check_pair(xp, yp) if suffix == ".x.npy" else check_cached(xp, yp)
+                if suffix == ".x.npy":
+                    check_pair(xp, yp)
+                else:
+                    check_cached(xp, yp)
             except ValueError as e:
                 raise RunFolderError(f"{e}; {DATA_ADVICE}") from None
 
