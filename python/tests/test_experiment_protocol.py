@@ -301,3 +301,74 @@ def test_the_targets_default_to_the_release_for_copied_pngs(tmp_path):
         ("release", "day2night", "alternate", 3)
     exp = Experiment(days, real, tmp_path / "run", task="clean", targets="day2night")
     assert exp.cfg["targets"] == "day2night"
+
+
+def processed_tree(cli, root):
+    """The release's processed night_real/ tree made from the tests' stand-in bursts
+    (experiment_mini): clean_raw/NNN.png (the truncated mean of the ISO 50 frames, 16-bit),
+    clean/NNN.png (that mean rendered by the release's ISP), dng/iso_*/NNN.dng."""
+    import shutil
+
+    cv2 = pytest.importorskip("cv2")
+    import day2night
+    import experiment_mini as em
+    from conftest import FIXTURES
+    from day2night.experiment.png import write_png
+    from day2night.train.targets import render_target
+
+    days = em.day_dir(root / "days", FIXTURES / "day.dng")
+    release, _ = em.bursts(cli, root / "captures", FIXTURES / "day.dng", frames=2)
+    tree = root / "night_real"
+    for d in ("clean_raw", "clean", "dng/iso_50", "dng/iso_1600", "dng/iso_3200"):
+        (tree / d).mkdir(parents=True)
+    for i, scene in enumerate(sorted(p.name for p in release.iterdir())):
+        sid = "%03d" % i
+        frames = {iso: sorted((release / scene).glob(f"RAW_0_00{iso:04d}_*.dng"))
+                  for iso in (50, 1600, 3200)}
+        for iso, fs in frames.items():
+            shutil.copy(fs[0], tree / "dng" / f"iso_{iso}" / f"{sid}.dng")
+        raws = [day2night.read_dng(str(f)) for f in frames[50]]
+        mean = (sum(r.data.astype(np.uint32) for r in raws) // len(raws)).astype(np.uint16)
+        cv2.imwrite(str(tree / "clean_raw" / f"{sid}.png"), mean)
+        meta = {k: v for k, v in raws[0].meta.items() if v is not None}
+        clean = day2night.Raw.from_array(mean, meta, name=sid)
+        write_png(tree / "clean" / f"{sid}.png", render_target(clean, isp="release"))
+    return days, tree
+
+
+def test_the_release_protocol_end_to_end(tmp_path, cli):
+    """real-pairs copies the release's PNGs from a processed tree; the experiment then runs
+    with the release's targets (synthetic ones rendered by its ISP), its fold lists and its
+    noise, from one command."""
+    import experiment_mini as em
+
+    from day2night.experiment import pairs
+
+    days, tree = processed_tree(cli, tmp_path)
+    real = tmp_path / "real"
+    cli("real-pairs", tree, "-o", real, "-q")
+    assert protocol.real_target_isp(real) == "release"
+    lists = {"train_index_all": [[2, 3, 5], [0, 1, 5], [0, 1, 3]],
+             "val_index_all": [[4], [4], [2]],
+             "test_index_all": [[0, 1], [2, 3], [4, 5]]}
+    (tmp_path / "folds.json").write_text(json.dumps(lists))
+    run = tmp_path / "run"
+    env = dict(os.environ, OMP_NUM_THREADS="1")
+    em.run_experiment(run, days, real, "--epochs", 1, "--width", 4, "--task", "clean",
+                      "--rows", "ours", "supervised", "--protocol", "release",
+                      "--folds-file", tmp_path / "folds.json", env=env)
+    cfg = json.loads((run / "config.json").read_text())
+    assert (cfg["targets"], cfg["noise"], cfg["synth_iso"]) == ("release",) * 3
+    saved = json.loads((run / "folds.json").read_text())
+    assert [sp["test"] for sp in saved["splits"]] == [["000", "001"], ["002", "003"],
+                                                       ["004", "005"]]
+    # a real target is the release's PNG; a synthetic one the release ISP's render
+    assert np.array_equal(np.load(run / "data" / "real" / "000.y.npy"),
+                          pairs.read_png(tree / "clean" / "000.png"))
+    y = np.load(run / "data" / "synth-local" / "day_00.y.npy")
+    _, want = pairs.synth_pairs(days / "day_00.dng", "local", 0, isos=(),
+                                targets="release")["clean"]
+    assert np.array_equal(y, want)
+    _, theirs = pairs.synth_pairs(days / "day_00.dng", "local", 0, isos=())["clean"]
+    assert not np.array_equal(y, theirs)  # day2night's ISP renders another target
+    assert (run / "table.json").is_file()
