@@ -12,6 +12,7 @@ from . import folds as folds_mod
 from . import mix as mix_mod
 from . import realset, rows, runfolder
 from .atomic import write_json
+from .presets import DEFAULTS  # the paper's training options, absent from config.json
 
 CONFIG_KEYS = ("day", "real", "task", "epochs", "seed", "folds", "width", "device", "rows",
                "protocol", "targets", "noise", "synth_iso", "folds_file", "folds_sha256",
@@ -62,8 +63,8 @@ def check_config(exp):
         if diff:
             k = diff[0]
             raise ExperimentError(
-                f"{exp.out} holds a run made with {k} = {old.get(k)!r}, "
-                f"not {exp.cfg.get(k)!r}: "
+                f"{exp.out} holds a run made with {k} = {old.get(k, DEFAULTS.get(k))!r}, "
+                f"not {exp.cfg.get(k, DEFAULTS.get(k))!r}: "
                 "rerun with the same options to resume, or choose another -o folder"
             )
 
