@@ -325,6 +325,119 @@ pub(crate) fn crop(v: &Bound<'_, PyAny>, aw: usize, ah: usize) -> PyResult<Crop>
 /// A bound parameter's value, None when the call did not give it.
 pub(crate) type Given<'py> = Option<Bound<'py, PyAny>>;
 
+/// A default of a [`Param`].
+#[derive(Debug, Clone, Copy)]
+pub(crate) enum ParamDefault {
+    /// None.
+    None,
+    /// An int.
+    Int(u64),
+    /// A str.
+    Str(&'static str),
+    /// A bool.
+    Bool(bool),
+    /// The Python default of the table's option of that name
+    /// ([`crate::synth_options::python_default`]).
+    Table(&'static str),
+}
+
+/// A parameter of a function that binds its arguments itself ([`bind_params`]): its name,
+/// its default and whether it is keyword-only. The one spelling of both: the binding
+/// applies the default, and `day2night._native.PARAMETERS` gives them to the signature
+/// Python shows (python/pysrc/day2night/signatures.py).
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Param {
+    pub name: &'static str,
+    pub default: ParamDefault,
+    pub keyword_only: bool,
+}
+
+impl Param {
+    /// A positional-or-keyword parameter.
+    pub const fn pos(name: &'static str, default: ParamDefault) -> Param {
+        Param {
+            name,
+            default,
+            keyword_only: false,
+        }
+    }
+
+    /// A keyword-only parameter.
+    pub const fn kw(name: &'static str, default: ParamDefault) -> Param {
+        Param {
+            name,
+            default,
+            keyword_only: true,
+        }
+    }
+
+    /// The default as a Python value.
+    pub fn default_value<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        Ok(match self.default {
+            ParamDefault::None => py.None().into_bound(py),
+            ParamDefault::Int(n) => n.into_pyobject(py)?.into_any(),
+            ParamDefault::Str(s) => s.into_pyobject(py)?.into_any(),
+            ParamDefault::Bool(b) => pyo3::types::PyBool::new(py, b).to_owned().into_any(),
+            ParamDefault::Table(name) => {
+                let d = day2night::synth::options::find(name)
+                    .ok_or_else(|| value_err(format!("no option {name:?}")))?;
+                crate::synth_options::python_default(py, d)?
+            }
+        })
+    }
+}
+
+/// A function's signature as `day2night._native.PARAMETERS` lists it: the required
+/// positional parameters, then `params`; each as (name, "POSITIONAL_OR_KEYWORD" or
+/// "KEYWORD_ONLY", default, or no default when required).
+pub(crate) fn signature_list<'py>(
+    py: Python<'py>,
+    required: &[&str],
+    params: &[Param],
+) -> PyResult<Bound<'py, pyo3::types::PyList>> {
+    let list = pyo3::types::PyList::empty(py);
+    for r in required {
+        list.append((*r, "POSITIONAL_OR_KEYWORD", false, py.None()))?;
+    }
+    for p in params {
+        let kind = if p.keyword_only {
+            "KEYWORD_ONLY"
+        } else {
+            "POSITIONAL_OR_KEYWORD"
+        };
+        list.append((p.name, kind, true, p.default_value(py)?))?;
+    }
+    Ok(list)
+}
+
+/// [`bind`] with `params`' names (their positions allowed while positional), each value
+/// given or its default; the other keyword arguments when `rest`.
+pub(crate) fn bind_params<'py>(
+    func: &str,
+    params: &[Param],
+    args: &Bound<'py, pyo3::types::PyTuple>,
+    kwargs: Option<&Bound<'py, PyDict>>,
+    rest: bool,
+) -> PyResult<(Vec<Bound<'py, PyAny>>, Bound<'py, PyDict>)> {
+    let names: Vec<&str> = params.iter().map(|p| p.name).collect();
+    let positional = params.iter().take_while(|p| !p.keyword_only).count();
+    if args.len() > positional {
+        return Err(PyTypeError::new_err(format!(
+            "{func}() takes at most {positional} positional arguments after the first but {} were given",
+            args.len()
+        )));
+    }
+    let (given, others) = bind(func, &names, args, kwargs, rest)?;
+    let mut values = Vec::with_capacity(params.len());
+    for (g, p) in given.into_iter().zip(params) {
+        values.push(match g {
+            Some(v) => v,
+            None => p.default_value(args.py())?,
+        });
+    }
+    Ok((values, others))
+}
+
 /// The parameters `names` of the Python function `func`, bound from its positional `args`
 /// (in order) and its keyword arguments `kwargs`, as Python binds a signature of
 /// positional-or-keyword parameters (a value given twice, or too many positional values,
@@ -371,15 +484,4 @@ pub(crate) fn bind<'py>(
         }
     }
     Ok((values, others))
-}
-
-/// A bound parameter's value extracted, or `default` when it was not given.
-pub(crate) fn or_default<'py, T: for<'a> FromPyObject<'a, 'py, Error = PyErr>>(
-    v: &Given<'py>,
-    default: T,
-) -> PyResult<T> {
-    match v {
-        Some(v) => v.extract::<T>(),
-        None => Ok(default),
-    }
 }

@@ -3,7 +3,7 @@
 //! `day2night::dataset::units` does the work; this file converts Python values (the CLI's
 //! option names and values, in snake case) to the library's types and back.
 
-use crate::args::{self, Seed, Val, Variants, SEED, VARIANTS};
+use crate::args::{self, Param, ParamDefault, Seed, Val, Variants, SEED, VARIANTS};
 use crate::convert::json_obj;
 use crate::errors::{py_err, value_err};
 use crate::pool::on_pool;
@@ -75,6 +75,18 @@ fn parse_shard(shard: Option<&str>) -> PyResult<Shard> {
     }
 }
 
+/// `dataset_units`' parameters after `day_dir`: `out_dir`, then the keyword-only ones,
+/// with their defaults (their one spelling).
+pub(crate) const PARAMS: &[Param] = &[
+    Param::pos("out_dir", ParamDefault::None),
+    Param::kw("variants", ParamDefault::Int(1)),
+    Param::kw("val", ParamDefault::None),
+    Param::kw("val_fraction", ParamDefault::None),
+    Param::kw("seed", ParamDefault::Table("seed")),
+    Param::kw("shard", ParamDefault::None),
+    Param::kw("overwrite", ParamDefault::Bool(false)),
+];
+
 /// The (input, split, variant) units ``day2night dataset DAY_DIR -o OUT_DIR`` makes with
 /// the same options, in its order, as dicts: ``input`` (path relative to ``day_dir``, the
 /// unit's identity), ``path``, ``split`` ("train" | "val"), ``variant`` (1-based),
@@ -88,10 +100,7 @@ fn parse_shard(shard: Option<&str>) -> PyResult<Shard> {
 ///
 /// >>> units = day2night.dataset_units("day/", "night/", variants=2, val=10, seed=1)
 #[pyfunction]
-#[pyo3(
-    signature = (day_dir, out_dir=None, **kwargs),
-    text_signature = "(day_dir, out_dir=None, *, variants=1, val=None, val_fraction=None, seed=0, shard=None, overwrite=False)"
-)]
+#[pyo3(signature = (day_dir, out_dir=None, **kwargs))]
 pub fn dataset_units<'py>(
     py: Python<'py>,
     day_dir: PathBuf,
@@ -99,21 +108,19 @@ pub fn dataset_units<'py>(
     kwargs: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyList>> {
     // Keyword-only parameters, bound by name (Python's errors for an unknown one).
-    let names = [
-        "variants",
-        "val",
-        "val_fraction",
-        "seed",
-        "shard",
-        "overwrite",
-    ];
-    let (p, _) = args::bind("dataset_units", &names, &PyTuple::empty(py), kwargs, false)?;
-    let variants = args::or_default(&p[0], Variants(1))?.0;
-    let val = args::or_default::<Option<Val>>(&p[1], None)?.map(|v| v.0);
-    let val_fraction = args::or_default::<Option<f64>>(&p[2], None)?;
-    let seed = args::or_default(&p[3], Seed(0))?.0;
-    let shard = args::or_default::<Option<String>>(&p[4], None)?;
-    let overwrite = args::or_default(&p[5], false)?;
+    let (p, _) = args::bind_params(
+        "dataset_units",
+        &PARAMS[1..],
+        &PyTuple::empty(py),
+        kwargs,
+        false,
+    )?;
+    let variants = p[0].extract::<Variants>()?.0;
+    let val = p[1].extract::<Option<Val>>()?.map(|v| v.0);
+    let val_fraction = p[2].extract::<Option<f64>>()?;
+    let seed = p[3].extract::<Seed>()?.0;
+    let shard = p[4].extract::<Option<String>>()?;
+    let overwrite = p[5].extract::<bool>()?;
     let opts = UnitsOptions {
         day_dir,
         out_dir,
@@ -237,10 +244,9 @@ fn processor_for(cfg: &JobConfig) -> Result<Arc<SynthProcessor>, Error> {
 /// ``status`` "failed" and the ``error``, as ``dataset`` records it.
 ///
 /// Options are ``dataset``'s synthesis and output flags in snake case, same values and
-/// defaults: iso ("1600,3200", "none" or a list of ints), mode, relight_formula, bulbs,
-/// lights, illuminants, covariance, brightness, noise_model, day_neutral, mask_eval, target
-/// ("exr" | "png" | "both" | "none"), input_exr, compression ("none" | "ljpeg"),
-/// exr_compression, exr_zip_level, truncate, compat. ``overwrite`` recomputes an up-to-date
+/// defaults: every option of the table but the seed (a unit carries it), as the signature
+/// lists them (``inspect.signature(day2night.write_unit)``; docs/python.md, generated from
+/// it, gives each one's values). ``overwrite`` recomputes an up-to-date
 /// unit, ``wait`` waits for another process writing the same unit. With ``reason=True``
 /// returns ``(record, reason)``: why the unit was computed ("new", "outputs missing or
 /// altered", ...) or None when it was skipped.

@@ -44,6 +44,8 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(synthesize::write_outputs, m)?)?;
     m.add_function(wrap_pyfunction!(render::render, m)?)?;
     m.add_function(wrap_pyfunction!(render::encode_u8, m)?)?;
+    m.add_function(wrap_pyfunction!(render::render_release_u8, m)?)?;
+    m.add_function(wrap_pyfunction!(render::release_window, m)?)?;
     m.add_function(wrap_pyfunction!(metrics::psnr, m)?)?;
     m.add_function(wrap_pyfunction!(metrics::ssim, m)?)?;
     m.add_function(wrap_pyfunction!(metrics::delta_e2000, m)?)?;
@@ -53,6 +55,19 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(raw::write_dng, m)?)?;
     m.add("BOUNDS", args::bounds_dict(m.py())?)?;
     m.add("SYNTH_OPTIONS", synth_options::table_dict(m.py())?)?;
+    m.add("KEYWORDS", synth_options::keywords_dict(m.py())?)?;
+    m.add("SYNTH_CONSTANTS", synth_options::constants_list(m.py())?)?;
+    // The parameters of the functions that bind their arguments themselves (the others'
+    // are in their text signatures): python/pysrc/day2night/signatures.py.
+    let params = pyo3::types::PyDict::new(m.py());
+    for (name, required, list) in [
+        ("synthesize", &["raw"][..], synthesize::PARAMS),
+        ("fresh_pair", &["raw", "crop", "iso"][..], patches::PARAMS),
+        ("dataset_units", &["day_dir"][..], dataset_units::PARAMS),
+    ] {
+        params.set_item(name, args::signature_list(m.py(), required, list)?)?;
+    }
+    m.add("PARAMETERS", params)?;
     // Every warning code with its summary (day2night.diagnostics makes a class of each).
     let codes: Vec<(&str, &str)> = day2night::Code::ALL
         .iter()

@@ -2,7 +2,7 @@
 //! network input and the 8-bit target), whole or cut into patches, in one call
 //! (`day2night.train.FreshPatches`; `day2night::synth::patches`).
 
-use crate::args::{self, Iso, Seed, Variant};
+use crate::args::{self, Iso, Param, ParamDefault, Seed, Variant};
 use crate::diagnostics::warn_plan;
 use crate::errors::{py_err, value_err};
 use crate::pool::on_pool;
@@ -15,6 +15,18 @@ use numpy::ndarray::{Array3, Array4};
 use numpy::{IntoPyArray, PyReadonlyArray1};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyTuple};
+
+/// `fresh_pair`'s parameters after `iso` (positional or keyword; its other keyword
+/// arguments are the table's options): their one spelling, with their defaults.
+pub(crate) const PARAMS: &[Param] = &[
+    Param::pos("seed", ParamDefault::Table("seed")),
+    Param::pos("variant", ParamDefault::Int(0)),
+    Param::pos("mode", ParamDefault::Table("mode")),
+    Param::pos("task", ParamDefault::Str("noisy")),
+    Param::pos("table", ParamDefault::None),
+    Param::pos("patch", ParamDefault::None),
+    Param::pos("tone", ParamDefault::Str("srgb")),
+];
 
 /// `fresh_pair`'s parameters after `iso`, bound as Python binds them (positional or
 /// keyword), and its other keyword arguments (the synthesis options).
@@ -31,23 +43,16 @@ struct PairCall<'py> {
 
 impl<'py> PairCall<'py> {
     fn bind(args: &Bound<'py, PyTuple>, kwargs: Option<&Bound<'py, PyDict>>) -> PyResult<Self> {
-        let names = ["seed", "variant", "mode", "task", "table", "patch", "tone"];
-        let (p, options) = args::bind("fresh_pair", &names, args, kwargs, true)?;
-        let text = |v: &args::Given<'py>, name: &str, default: &str| -> PyResult<String> {
-            match v {
-                Some(v) => args::string(v, name),
-                None => Ok(default.into()),
-            }
-        };
-        let opt = |v: &args::Given<'py>| v.as_ref().filter(|v| !v.is_none()).cloned();
+        let (p, options) = args::bind_params("fresh_pair", PARAMS, args, kwargs, true)?;
+        let opt = |v: &Bound<'py, PyAny>| Some(v.clone()).filter(|v| !v.is_none());
         Ok(PairCall {
-            seed: args::or_default(&p[0], Seed(0))?,
-            variant: args::or_default(&p[1], Variant(0))?,
-            mode: text(&p[2], "mode", "local")?,
-            task: text(&p[3], "task", "noisy")?,
+            seed: p[0].extract()?,
+            variant: p[1].extract()?,
+            mode: args::string(&p[2], "mode")?,
+            task: args::string(&p[3], "task")?,
             table: opt(&p[4]).map(|t| t.extract()).transpose()?,
             patch: opt(&p[5]).map(|t| t.extract()).transpose()?,
-            tone: text(&p[6], "tone", "srgb")?,
+            tone: args::string(&p[6], "tone")?,
             options,
         })
     }
@@ -74,10 +79,7 @@ impl<'py> PairCall<'py> {
 /// >>> x.shape, y.shape
 /// ((64, 3, 64, 64), (64, 3, 64, 64))
 #[pyfunction]
-#[pyo3(
-    signature = (raw, crop, iso, *args, **kwargs),
-    text_signature = "(raw, crop, iso, seed=0, variant=0, mode='local', task='noisy', table=None, patch=None, tone='srgb', **options)"
-)]
+#[pyo3(signature = (raw, crop, iso, *args, **kwargs))]
 pub(crate) fn fresh_pair<'py>(
     py: Python<'py>,
     raw: &Bound<'py, Raw>,

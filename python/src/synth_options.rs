@@ -17,7 +17,7 @@ use day2night::synth::options::{
 use day2night::Error;
 use pyo3::exceptions::PyTypeError;
 use pyo3::prelude::*;
-use pyo3::types::PyDict;
+use pyo3::types::{PyBool, PyDict, PyList, PyTuple};
 use std::collections::HashMap;
 use std::path::PathBuf;
 use std::sync::{Arc, Mutex, OnceLock};
@@ -36,8 +36,99 @@ pub(crate) enum Scope {
 fn accepts(d: &OptionDef, scope: Scope) -> bool {
     match d.python {
         Python::Keyword => true,
-        Python::Files | Python::Parameter(_) => scope == Scope::Files,
+        Python::Files | Python::Parameter => scope == Scope::Files,
         Python::Absent(_) => false,
+    }
+}
+
+/// The keyword options `scope`'s functions take, with their Python defaults, in the table's
+/// order: `day2night._native.KEYWORDS[scope]`, the keyword-only parameters of their
+/// signatures (python/pysrc/day2night/signatures.py).
+fn keywords(py: pyo3::Python<'_>, scope: Scope) -> PyResult<Bound<'_, PyList>> {
+    let list = PyList::empty(py);
+    for d in OPTIONS.iter().filter(|d| accepts(d, scope)) {
+        list.append((d.python_name(), python_default(py, d)?))?;
+    }
+    Ok(list)
+}
+
+/// `day2night._native.KEYWORDS`: `in_memory` (`synthesize`, `night_pair`, `fresh_pair`,
+/// `NightPairs`) and `files` (`write_unit`, `write_units`).
+pub(crate) fn keywords_dict(py: pyo3::Python<'_>) -> PyResult<Bound<'_, PyDict>> {
+    let d = PyDict::new(py);
+    d.set_item("in_memory", keywords(py, Scope::InMemory)?)?;
+    d.set_item("files", keywords(py, Scope::Files)?)?;
+    Ok(d)
+}
+
+/// The option's default as a Python value, made from the table's default text by its kind:
+/// an int, a float, a tuple of numbers or ISOs, a str, False for a switch; None when the
+/// option is unset by default (or `iso="none"`).
+pub(crate) fn python_default<'py>(
+    py: pyo3::Python<'py>,
+    d: &OptionDef,
+) -> PyResult<Bound<'py, PyAny>> {
+    let bad = |t: &str| value_err(format!("option {}: default {t:?} is not its kind", d.name));
+    let Some(t) = d.default else {
+        return Ok(match d.kind {
+            Kind::Switch => PyBool::new(py, false).to_owned().into_any(),
+            _ => py.None().into_bound(py),
+        });
+    };
+    Ok(match d.kind {
+        Kind::Switch => PyBool::new(py, t == "true").to_owned().into_any(),
+        Kind::Int { .. } => t
+            .parse::<u64>()
+            .map_err(|_| bad(t))?
+            .into_pyobject(py)?
+            .into_any(),
+        Kind::Float => t
+            .parse::<f64>()
+            .map_err(|_| bad(t))?
+            .into_pyobject(py)?
+            .into_any(),
+        Kind::Isos if t == "none" => py.None().into_bound(py),
+        Kind::Isos => {
+            let v = t
+                .split(',')
+                .map(|i| i.trim().parse::<u32>())
+                .collect::<Result<Vec<_>, _>>()
+                .map_err(|_| bad(t))?;
+            PyTuple::new(py, v)?.into_any()
+        }
+        Kind::Numbers(_) => {
+            let v = t
+                .split(',')
+                .map(|i| i.trim().parse::<f64>())
+                .collect::<Result<Vec<_>, _>>()
+                .map_err(|_| bad(t))?;
+            PyTuple::new(py, v)?.into_any()
+        }
+        Kind::Text | Kind::Path | Kind::Choice(_) => t.into_pyobject(py)?.into_any(),
+    })
+}
+
+/// `day2night._native.SYNTH_CONSTANTS`: the synthesis fields that are not options, as
+/// (sidecar field, value, why) (`day2night::synth::options::CONSTANTS`).
+pub(crate) fn constants_list(py: pyo3::Python<'_>) -> PyResult<Bound<'_, PyList>> {
+    let list = PyList::empty(py);
+    for c in options::CONSTANTS {
+        list.append((c.field, c.value, c.why))?;
+    }
+    Ok(list)
+}
+
+/// The kind's name in `SYNTH_OPTIONS` (`kind`).
+fn kind_name(k: &Kind) -> &'static str {
+    match k {
+        Kind::Switch => "switch",
+        Kind::Int { .. } => "int",
+        Kind::Float => "float",
+        Kind::Text => "text",
+        Kind::Isos => "isos",
+        Kind::Numbers(_) => "numbers",
+        Kind::Path => "path",
+        Kind::Choice(_) => "choice",
     }
 }
 
@@ -50,10 +141,12 @@ pub(crate) fn known(scope: Scope) -> Vec<String> {
         .collect()
 }
 
-/// `day2night._native.SYNTH_OPTIONS`: every option of the table by its keyword: its flag
-/// and where Python takes it (`keyword`: every synthesis function; `files`: `write_unit`
-/// and `write_units`; `parameter`: a parameter of `synthesize` and `night_pair`, a keyword
-/// of the writers; `absent`: not in Python).
+/// `day2night._native.SYNTH_OPTIONS`: every option of the table by its keyword: its flag,
+/// where Python takes it (`keyword`: every synthesis function; `files`: `write_unit` and
+/// `write_units`; `parameter`: a parameter of the in-memory functions (their signatures
+/// spell it), a keyword of the writers; `absent`: not in Python, `note` says why), its
+/// `default` as the command line types it and `python_default` as Python's value, `kind`,
+/// `choices` (names), `range` ((lo, hi) of an integer), `alias`, `help` and `value_name`.
 pub(crate) fn table_dict(py: pyo3::Python<'_>) -> PyResult<Bound<'_, PyDict>> {
     let d = PyDict::new(py);
     for o in OPTIONS {
@@ -62,12 +155,27 @@ pub(crate) fn table_dict(py: pyo3::Python<'_>) -> PyResult<Bound<'_, PyDict>> {
         let (scope, note) = match o.python {
             Python::Keyword => ("keyword", None),
             Python::Files => ("files", None),
-            Python::Parameter(p) => ("parameter", Some(p)),
+            Python::Parameter => ("parameter", None),
             Python::Absent(why) => ("absent", Some(why)),
         };
         e.set_item("python", scope)?;
         e.set_item("note", note)?;
         e.set_item("default", o.default)?;
+        e.set_item("python_default", python_default(py, o)?)?;
+        e.set_item("kind", kind_name(&o.kind))?;
+        let choices = match o.kind {
+            Kind::Choice(c) => Some(c.iter().map(|c| c.name).collect::<Vec<_>>()),
+            _ => None,
+        };
+        e.set_item("choices", choices)?;
+        let range = match o.kind {
+            Kind::Int { lo, hi, .. } => Some((lo, hi)),
+            _ => None,
+        };
+        e.set_item("range", range)?;
+        e.set_item("alias", o.python_alias)?;
+        e.set_item("help", o.help)?;
+        e.set_item("value_name", o.value_name)?;
         d.set_item(o.python_name(), e)?;
     }
     Ok(d)
@@ -83,10 +191,13 @@ fn option_err(e: OptionError) -> PyErr {
 
 /// The Python value `v` of the option `d` (called `key`) as the table's [`Value`].
 fn value(d: &OptionDef, key: &str, v: &Bound<'_, PyAny>) -> PyResult<Value> {
-    let none_ok = !matches!(
-        d.kind,
-        Kind::Switch | Kind::Float | Kind::Int { late: true, .. }
-    );
+    // None is the unset state of an option unset by default (the default its signature
+    // shows), and of the texts and paths whose setters take it.
+    let none_ok = (d.default.is_none() && d.kind != Kind::Switch)
+        || !matches!(
+            d.kind,
+            Kind::Switch | Kind::Float | Kind::Int { late: true, .. }
+        );
     if none_ok && v.is_none() {
         return Ok(Value::Unset);
     }

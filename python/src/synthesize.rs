@@ -1,7 +1,7 @@
 //! `synthesize` (one night variant in memory, whole frame or crop) and `write_outputs` (its
 //! files, as `day2night synth` writes them).
 
-use crate::args::{self, Isos, Seed, Variant};
+use crate::args::{self, Isos, Param, ParamDefault, Seed, Variant};
 use crate::convert::{json_obj, raw_image_from, rgb_array, u16_array};
 use crate::diagnostics::warn_plan;
 use crate::errors::{py_err, value_err};
@@ -36,6 +36,17 @@ pub(crate) struct Synthesis {
     sha256: String,
 }
 
+/// `synthesize`'s parameters after `raw` (positional or keyword; its other keyword
+/// arguments are the table's options): their one spelling, with their defaults.
+pub(crate) const PARAMS: &[Param] = &[
+    Param::pos("seed", ParamDefault::Table("seed")),
+    Param::pos("variant", ParamDefault::Int(0)),
+    Param::pos("mode", ParamDefault::Table("mode")),
+    Param::pos("isos", ParamDefault::Table("iso")),
+    Param::pos("target", ParamDefault::Str("linear")),
+    Param::pos("crop", ParamDefault::None),
+];
+
 /// `synthesize`'s parameters after `raw`, bound as its signature says (positional or by
 /// keyword), and its other keyword arguments (the synthesis options).
 struct SynthCall<'py> {
@@ -50,22 +61,17 @@ struct SynthCall<'py> {
 
 impl<'py> SynthCall<'py> {
     fn bind(args: &Bound<'py, PyTuple>, kwargs: Option<&Bound<'py, PyDict>>) -> PyResult<Self> {
-        let names = ["seed", "variant", "mode", "isos", "target", "crop"];
-        let (p, options) = args::bind("synthesize", &names, args, kwargs, true)?;
+        let (p, options) = args::bind_params("synthesize", PARAMS, args, kwargs, true)?;
         Ok(SynthCall {
-            seed: args::or_default(&p[0], Seed(0))?.0,
-            variant: args::or_default(&p[1], Variant(0))?.0,
-            mode: match &p[2] {
-                Some(v) => args::string(v, "mode")?,
-                None => "local".into(),
-            },
-            isos: args::or_default(&p[3], Isos(vec![1600, 3200]))?.0,
+            seed: p[0].extract::<Seed>()?.0,
+            variant: p[1].extract::<Variant>()?.0,
+            mode: args::string(&p[2], "mode")?,
+            isos: p[3].extract::<Isos>()?.0,
             target: match &p[4] {
-                None => Some("linear".into()),
-                Some(v) if v.is_none() => None,
-                Some(v) => Some(args::string(v, "target")?),
+                v if v.is_none() => None,
+                v => Some(args::string(v, "target")?),
             },
-            crop: p[5].clone(),
+            crop: Some(p[5].clone()),
             options,
         })
     }
@@ -84,9 +90,10 @@ impl<'py> SynthCall<'py> {
 /// target (before orientation) and ``noisy`` carries the model's noise from the crop's own
 /// random stream (keyed by the noise seed and the crop).
 ///
-/// Options: the command line's synthesis flags in snake case, with their values and
-/// defaults (``relight_formula``, ``bulbs``, ``lights``, ``illuminants``, ``noise_model``,
-/// ...: the option table, listed in docs/python.md and ``day2night._native.SYNTH_OPTIONS``);
+/// ``target``: ``"linear"`` (the float32 linear target) or None (no target). Options: the
+/// command line's synthesis flags in snake case, with their values and defaults
+/// (``relight_formula``, ``bulbs``, ``lights``, ``illuminants``, ``noise_model``, ...: the
+/// option table, in the signature, docs/python.md and ``day2night._native.SYNTH_OPTIONS``);
 /// ``illuminants`` defaults to the paper phone's dictionary for the S20 FE and under
 /// ``compat="release"``, the CIE lamps through each file's colour matrices otherwise.
 ///
@@ -117,10 +124,7 @@ impl<'py> SynthCall<'py> {
 /// >>> out["noisy"][1600].shape, out["target"].shape
 /// ((512, 512), (512, 512, 3))
 #[pyfunction]
-#[pyo3(
-    signature = (raw, *args, **kwargs),
-    text_signature = "(raw, seed=0, variant=0, mode='local', isos=(1600, 3200), target='linear', crop=None, **options)"
-)]
+#[pyo3(signature = (raw, *args, **kwargs))]
 pub(crate) fn synthesize<'py>(
     raw: &Bound<'py, Raw>,
     args: &Bound<'py, PyTuple>,

@@ -23,7 +23,6 @@ from ._native import (  # noqa: F401
     Raw,
     Synthesis,
     check_int,
-    dataset_units,
     delta_e2000,
     encode_u8,
     psnr,
@@ -31,14 +30,11 @@ from ._native import (  # noqa: F401
     render,
     set_threads,
     ssim,
-    synthesize,
     threads,
     version,
     write_dng,
     write_manifest,
     write_outputs,
-    write_unit,
-    write_units,
 )
 from . import diagnostics  # noqa: F401
 from .diagnostics import (  # noqa: F401
@@ -50,6 +46,16 @@ from .diagnostics import (  # noqa: F401
 from .pairs import NightPairs, pack_bayer  # noqa: F401
 from .rawpy_meta import from_rawpy  # noqa: F401
 from .units import group_units  # noqa: F401
+from . import _native, signatures
+
+# The synthesis functions with the signatures the option table gives them
+# (``inspect.signature`` lists every option with its default: signatures.py).
+synthesize = signatures.signed(_native.synthesize)
+night_pair = signatures.signed(_native.night_pair)
+write_unit = signatures.signed(_native.write_unit)
+write_units = signatures.signed(_native.write_units)
+dataset_units = signatures.signed(_native.dataset_units)
+signatures.sign_class(NightPairs)
 
 __version__ = version()
 
@@ -68,6 +74,7 @@ __all__ = [
     "encode_u8",
     "from_rawpy",
     "group_units",
+    "night_pair",
     "pack_bayer",
     "psnr",
     "read_dng",

@@ -17,6 +17,7 @@ about) and ``message`` (the text the command line prints after
 >>> warnings.simplefilter("ignore", day2night.NoiseExtrapolatedWarning)  # silence one code
 """
 
+import sys as _sys
 import warnings as _warnings
 
 from ._native import WARNING_CODES
@@ -60,6 +61,15 @@ def warning_class(code):
     return WARNING_CLASSES.get(code, Day2NightWarning)
 
 
+# Code of Python wrappers of native functions (signatures.py) that a warning passes through
+# to the wrapper's caller.
+PASS_THROUGH = set()
+
+
 def _emit(code, subject, message, stacklevel):
     """Raise one warning of the extension (called from Rust, python/src/convert.rs)."""
+    frame = _sys._getframe(stacklevel - 1)
+    while frame is not None and frame.f_code in PASS_THROUGH:
+        frame = frame.f_back
+        stacklevel += 1
     _warnings.warn(warning_class(code)(message, subject), stacklevel=stacklevel)

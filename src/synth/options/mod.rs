@@ -84,9 +84,10 @@ pub enum Python {
     /// A keyword argument of the functions that write files (`write_unit`, `write_units`);
     /// the in-memory functions have no files to set it for.
     Files,
-    /// A named parameter of `synthesize` and `night_pair` (spelled as given), and a keyword
+    /// A parameter of its own of the in-memory functions, each spelling it as its signature
+    /// says (`synthesize(..., isos=...)`, `night_pair(..., iso, ...)`), and a keyword
     /// argument of `write_unit` and `write_units`.
-    Parameter(&'static str),
+    Parameter,
     /// Not an option in Python: the reason (where Python takes it instead).
     Absent(&'static str),
 }

@@ -46,7 +46,7 @@ carries its seed)",
         kind: Kind::Isos,
         default: Some("1600,3200"),
         help: "ISOs of the noisy outputs, comma-separated, or `none`",
-        python: Python::Parameter("isos"),
+        python: Python::Parameter,
         python_alias: None,
         synth_only: false,
         sidecar: Some("isos"),
@@ -82,7 +82,7 @@ carries its seed)",
         ]),
         default: Some("local"),
         help: "Relighting mode",
-        python: Python::Parameter("mode"),
+        python: Python::Parameter,
         python_alias: None,
         synth_only: false,
         sidecar: Some("mode"),
@@ -429,7 +429,7 @@ camera, the default)",
         synth_only: false,
         sidecar: Some("burst.motion"),
         set: |d, v| {
-            d.burst.motion = Some(text(&v)?);
+            d.burst.motion = opt(v, |v| text(&v))?;
             Ok(())
         },
     },
@@ -445,7 +445,7 @@ pixels [default: 0.6]",
         synth_only: false,
         sidecar: Some("burst.shake.step_px"),
         set: |d, v| {
-            d.burst.shake_step = Some(float(&v)?);
+            d.burst.shake_step = opt(v, |v| float(&v))?;
             Ok(())
         },
     },
@@ -461,7 +461,7 @@ pixels [default: 0.6]",
         synth_only: false,
         sidecar: Some("burst.shake.roll_deg"),
         set: |d, v| {
-            d.burst.shake_roll = Some(float(&v)?);
+            d.burst.shake_roll = opt(v, |v| float(&v))?;
             Ok(())
         },
     },
@@ -476,7 +476,7 @@ pixels [default: 0.6]",
         synth_only: false,
         sidecar: Some("burst.interp"),
         set: |d, v| {
-            d.burst.warp_interp = Some(text(&v)?);
+            d.burst.warp_interp = opt(v, |v| text(&v))?;
             Ok(())
         },
     },
@@ -503,7 +503,7 @@ pixels [default: 0.6]",
         ]),
         default: Some("exr"),
         help: "Targets to render from the clean night raw",
-        python: Python::Parameter("target"),
+        python: Python::Files,
         python_alias: None,
         synth_only: false,
         sidecar: None,
@@ -636,6 +636,14 @@ fn text(v: &Value) -> Result<String> {
     match v {
         Value::Text(s) => Ok(s.clone()),
         v => Err(Error::invalid(format!("{} is not text", shown(v)))),
+    }
+}
+
+/// None for [`Value::Unset`] (the option's default), else the value `f` reads.
+fn opt<T>(v: Value, f: impl FnOnce(Value) -> Result<T>) -> Result<Option<T>> {
+    match v {
+        Value::Unset => Ok(None),
+        v => f(v).map(Some),
     }
 }
 
