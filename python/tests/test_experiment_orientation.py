@@ -232,3 +232,20 @@ def test_the_release_window_is_the_release_isps():
         raw = day2night.read_dng(str(FIXTURES / name))
         t, l, b, r = raw.meta["active_area"]
         assert pairs.release_window(raw.meta, b - t, r - l) == tuple(release_window(raw)), name
+
+
+@pytest.mark.parametrize("orientation", [1, 2, 6])
+def test_a_real_target_of_the_other_isp_is_rendered_again(tmp_path, orientation):
+    """--targets release on a real set whose PNGs day2night rendered: the target is the
+    release ISP's render of the scene's clean raw, on the input's grid."""
+    from day2night.train.targets import render_target
+
+    raw = stand_in_raw(orientation)
+    sc = scene(tmp_path, raw, srgb8(day2night.render(raw)))
+    x, y = pairs.real_pair(sc, 1600, targets="release", source="day2night")
+    clean = day2night.read_dng(str(sc.clean_raw))
+    assert np.array_equal(y, render_target(clean, isp="release"))
+    assert_one_grid(x, y)
+    x, y = pairs.real_pair(sc, None, targets="day2night", source="release")
+    assert np.array_equal(y, srgb8(day2night.render(clean, opcodes="ignore")))
+    assert_one_grid(x, y)

@@ -172,8 +172,9 @@ def real_target(scene, targets, source):
     clean = _read_dng(scene.clean_raw, f"scene {scene.id}")
     if source == targets == "day2night" and not has_opcodes(clean.meta):
         return read_png(scene.target), "render"
-    neutral = tuple(float(v) for v in clean.meta["as_shot_neutral"])
-    return render_target_as(targets, clean, neutral, display=True)
+    # neutral None: the clean raw's own AsShotNeutral, read as each ISP reads it (the
+    # release's as stored)
+    return render_target_as(targets, clean, None, display=True)
 
 
 def render_target_as(isp, raw, neutral, display):
