@@ -106,8 +106,11 @@ def _json_lines(path):
 
 def scene_target_isp(root, rec):
     """``"release"`` or ``"day2night"``: the ISP of one real-pairs record's target PNG."""
-    if "copy_target_png" in (rec.get("stages") or []):
+    stages = [str(st) for st in rec.get("stages") or []]
+    if "copy_target_png" in stages:
         return "release"  # the processed night_real tree's clean/NNN.png, copied
+    if any(st.startswith("render_png") and "release" in st for st in stages):
+        return "release"  # real-pairs --isp release, if its stage says so
     meta = pathlib.Path(root) / "real" / "meta" / f"{rec.get('scene')}.json"
     try:
         target = json.loads(meta.read_text(encoding="utf-8")).get("target") or {}
