@@ -161,6 +161,9 @@ codes! {
     /// `real-pairs`: a scene without a high-ISO frame.
     RealNoNoisyFrame = "real-no-noisy-frame",
         "real-pairs: the scene has no high-ISO frame (clean task only)";
+    /// `real-pairs`: a frame whose motion cannot be measured (featureless).
+    RealMotionUnmeasured = "real-motion-unmeasured",
+        "real-pairs: a frame's motion cannot be measured (no signal, or no structure to align)";
     /// Python `Raw.from_array`: a metadata default used.
     MetadataDefault = "metadata-default",
         "Python Raw.from_array: a metadata value was not given and a default is used";

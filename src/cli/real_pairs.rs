@@ -95,7 +95,7 @@ pub fn run(args: RealPairsArgs) -> CmdResult {
     if !(args.max_motion.is_finite() && args.max_motion >= 0.0) {
         return Err(usage(format!(
             "--max-motion {}: expected a number of pixels >= 0",
-            args.max_motion
+            realpairs::motion::px_text(args.max_motion)
         )));
     }
     let jobs = match args.jobs {
@@ -119,6 +119,7 @@ pub fn run(args: RealPairsArgs) -> CmdResult {
         jobs,
         overwrite: args.overwrite,
         on_scene: (!args.quiet).then_some(scene_line as fn(&realpairs::SceneDone<'_>)),
+        checkpoint: None,
     };
     let summary = realpairs::run(&opts, &pairs)?;
     eprintln!("{}", summary.describe());

@@ -155,9 +155,12 @@ pub fn find_scenes(
         LayoutChoice::Auto => Layout::Simple, // refined below from the frame names
     };
     if layout == Layout::ReleaseProcessed {
-        return Ok((layout, processed_scenes(root)?));
+        let scenes = processed_scenes(root)?;
+        check_unique_ids(root, &scenes)?;
+        return Ok((layout, scenes));
     }
     let scenes = scene_folders(root, exclude)?;
+    check_unique_ids(root, &scenes)?;
     let named = scenes
         .iter()
         .flat_map(|s| &s.files)
@@ -167,6 +170,31 @@ pub fn find_scenes(
         _ => layout,
     };
     Ok((layout, scenes))
+}
+
+/// Error when two scenes would write the same output id ([`scene_id`]: `a/b` and `a__b`
+/// both give `a__b`), or ids that differ only in letter case (one file on a case-insensitive
+/// file system): checked before anything is written, naming both folders.
+fn check_unique_ids(root: &Path, scenes: &[SceneDir]) -> Result<()> {
+    let mut seen: BTreeMap<String, &SceneDir> = BTreeMap::new();
+    for s in scenes {
+        if let Some(first) = seen.insert(s.id.to_lowercase(), s) {
+            let how = if first.id == s.id {
+                format!("both map to the output id {:?}", s.id)
+            } else {
+                format!(
+                    "their output ids {:?} and {:?} differ only in letter case",
+                    first.id, s.id
+                )
+            };
+            return Err(Error::invalid(format!(
+                "scenes {:?} and {:?}: {how} ('/' becomes '__'), so one would overwrite the other: rename one of the folders",
+                first.rel, s.rel
+            ))
+            .in_file(root));
+        }
+    }
+    Ok(())
 }
 
 fn file_name(rel: &str) -> &str {
@@ -262,11 +290,13 @@ fn scene_folders(root: &Path, exclude: &[PathBuf]) -> Result<Vec<SceneDir>> {
     Ok(out)
 }
 
-/// The scenes of the processed tree: every `NNN` of `clean_raw/NNN.png` or
-/// `dng/iso_<low>/NNN.dng`, with whatever files of it exist.
+/// The scenes of the processed tree: every `NNN` of a `clean_raw/NNN.png`, a `clean/NNN.png`
+/// or a `dng/<folder>/NNN.dng`, with every such file of it; [`plan_scene`] decides what each
+/// file is for (a scene without its clean raw fails there, as a burst folder without its
+/// low-ISO frames does) and lists the files no rule uses as ignored.
 fn processed_scenes(root: &Path) -> Result<Vec<SceneDir>> {
     let mut scenes: BTreeMap<String, Vec<Listed>> = BTreeMap::new();
-    let mut add = |sub: &str, ext: &str, key_only: bool| -> Result<()> {
+    let mut add = |sub: &str, ext: &str| -> Result<()> {
         let dir = root.join(sub);
         if !dir.is_dir() {
             return Ok(());
@@ -279,33 +309,24 @@ fn processed_scenes(root: &Path) -> Result<Vec<SceneDir>> {
             if is_dir || stem.is_empty() {
                 continue;
             }
-            let listed = Listed {
+            scenes.entry(stem.to_string()).or_default().push(Listed {
                 rel: format!("{sub}/{name}"),
                 path,
-            };
-            match scenes.get_mut(stem) {
-                Some(v) => v.push(listed),
-                None if !key_only => {
-                    scenes.insert(stem.to_string(), vec![listed]);
-                }
-                None => {}
-            }
+            });
         }
         Ok(())
     };
-    add("clean_raw", ".png", false)?;
-    add(&format!("dng/iso_{RELEASE_LOW_ISO}"), ".dng", false)?;
-    add("clean", ".png", true)?;
-    let dng = root.join("dng");
-    for (name, _, is_dir) in read_dir_sorted(&dng)? {
-        if is_dir && processed_iso(&name).is_some_and(|i| i != RELEASE_LOW_ISO) {
-            add(&format!("dng/{name}"), ".dng", true)?;
+    add("clean_raw", ".png")?;
+    add("clean", ".png")?;
+    for (name, _, is_dir) in read_dir_sorted(&root.join("dng"))? {
+        if is_dir {
+            add(&format!("dng/{name}"), ".dng")?;
         }
     }
     if scenes.is_empty() {
-        return Err(Error::invalid(format!(
-            "no scene found: neither clean_raw/*.png nor dng/iso_{RELEASE_LOW_ISO}/*.dng exists"
-        ))
+        return Err(Error::invalid(
+            "no scene found: no clean_raw/*.png, clean/*.png or dng/<folder>/*.dng",
+        )
         .in_file(root));
     }
     Ok(scenes
@@ -383,7 +404,7 @@ pub fn plan_scene(
     match layout {
         Layout::Release => plan_release(&mut plan, refs, release_isos)?,
         Layout::Simple => plan_simple(&mut plan, refs)?,
-        Layout::ReleaseProcessed => plan_processed(&mut plan, refs)?,
+        Layout::ReleaseProcessed => plan_processed(&mut plan, refs, release_isos)?,
     }
     Ok(plan)
 }
@@ -392,6 +413,15 @@ pub fn plan_scene(
 fn dng_iso(path: &Path) -> Result<u32> {
     let bytes = fs::read(path).map_err(Error::Io).in_file(path)?;
     let info = crate::dng::read::inspect_bytes(&bytes).in_file(path)?;
+    // The real reason a frame is unusable (e.g. WhiteLevel below BlackLevel, an all-zero
+    // AsShotNeutral), not a missing ISO.
+    let refused = match (&info.error, &info.raw, &info.reason) {
+        (Some(e), _, _) | (None, None, Some(e)) => Some(e),
+        _ => None,
+    };
+    if let Some(e) = refused {
+        return Err(Error::invalid(format!("not a usable raw DNG: {e}")).in_file(path));
+    }
     info.raw.and_then(|r| r.meta.exif.iso).ok_or_else(|| {
         Error::invalid(
             "no ISO in the DNG (Exif ISOSpeedRatings): the simple layout groups frames by it",
@@ -470,19 +500,35 @@ fn plan_simple(plan: &mut ScenePlan, refs: Vec<FileRef>) -> Result<()> {
     Ok(())
 }
 
-fn plan_processed(plan: &mut ScenePlan, refs: Vec<FileRef>) -> Result<()> {
-    let (mut clean_raw, mut target, mut meta_dng) = (None, None, None);
-    let mut noisy = Vec::new();
+fn plan_processed(plan: &mut ScenePlan, refs: Vec<FileRef>, isos: &[u32]) -> Result<()> {
+    let (mut clean_raw, mut target, mut meta_dng): (Option<FileRef>, _, _) = (None, None, None);
+    let mut noisy: BTreeMap<u32, FileRef> = BTreeMap::new();
     for r in refs {
-        if r.name.starts_with("clean_raw/") {
-            clean_raw = Some(r);
-        } else if r.name.starts_with("clean/") {
-            target = Some(r);
-        } else if r.iso == RELEASE_LOW_ISO {
-            meta_dng = Some(r);
-        } else {
-            noisy.push(r);
+        let folder = r.name.rsplit_once('/').map_or("", |(d, _)| d);
+        let iso = folder.strip_prefix("dng/").and_then(processed_iso);
+        let slot = match (folder, iso) {
+            ("clean_raw", _) => &mut clean_raw,
+            ("clean", _) => &mut target,
+            (_, Some(RELEASE_LOW_ISO)) => &mut meta_dng,
+            (_, Some(i)) if isos.contains(&i) => match noisy.entry(i) {
+                std::collections::btree_map::Entry::Vacant(v) => {
+                    v.insert(r);
+                    continue;
+                }
+                std::collections::btree_map::Entry::Occupied(o) => {
+                    return Err(two_files(&o.get().name, &r.name));
+                }
+            },
+            _ => {
+                // dng/iso_<ISO not in --iso>, dng/<not iso_N>: no rule uses it.
+                plan.ignored.push(r.name);
+                continue;
+            }
+        };
+        if let Some(prev) = slot.as_ref() {
+            return Err(two_files(&prev.name, &r.name));
         }
+        *slot = Some(r);
     }
     let Some(clean_raw) = clean_raw else {
         return Err(Error::invalid(format!(
@@ -496,18 +542,32 @@ fn plan_processed(plan: &mut ScenePlan, refs: Vec<FileRef>) -> Result<()> {
             plan.rel
         )));
     };
-    noisy.sort_by_key(|r| r.iso);
     plan.frames.insert(RELEASE_LOW_ISO, 1);
-    for r in &noisy {
-        plan.frames.insert(r.iso, 1);
+    for &iso in isos {
+        let Some(mut r) = noisy.remove(&iso) else {
+            return Err(Error::invalid(format!(
+                "no dng/iso_{iso}/{}.dng (the ISO {iso} input; --iso lists the noisy ISOs expected)",
+                plan.rel
+            )));
+        };
+        r.iso = iso;
+        plan.frames.insert(iso, 1);
+        plan.noisy.push(r);
     }
-    plan.noisy = noisy;
+    plan.noisy.sort_by_key(|r| r.iso);
     plan.processed = Some(ProcessedFiles {
         clean_raw,
         target,
         meta_dng,
     });
     Ok(())
+}
+
+/// Two files of a processed scene for one role (e.g. `clean/007.png` and `clean/007.PNG`).
+fn two_files(a: &str, b: &str) -> Error {
+    Error::invalid(format!(
+        "{a} and {b} are both this scene's file for one role: keep one"
+    ))
 }
 
 #[cfg(test)]

@@ -28,7 +28,7 @@ pub mod scene;
 use serde::Serialize;
 
 pub use discover::{Layout, LayoutChoice};
-pub use run::{run, RunOptions, SceneDone, Summary};
+pub use run::{run, Checkpoint, RunOptions, SceneDone, Summary};
 
 /// The ISO of the release's clean bursts (`RAW_0_000050*`).
 pub const RELEASE_LOW_ISO: u32 = 50;

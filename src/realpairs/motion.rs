@@ -12,6 +12,13 @@
 //!    the mean squared difference over the overlap (at least half of each axis).
 //!
 //! The result is in raw pixels (plane pixels times the plane's scale).
+//!
+//! 3. What cannot be measured is said, never guessed ([`Motion::Unmeasurable`]): a plane
+//!    with no signal above the black level (mean <= 0), planes with no structure (the cost
+//!    at the coarsest level is below [`MIN_COST`] everywhere in the search window: flat or
+//!    identical featureless frames), and costs without a distinct minimum (the best cost is
+//!    not below [`DISTINCT`] times the window's median: noise only, or a frame with no
+//!    content against a textured one).
 
 use crate::error::{Error, Result};
 use crate::normalize::{normalize, NormalizeOptions};
@@ -23,6 +30,20 @@ pub const MAX_SIDE: usize = 2048;
 pub const SEARCH: i64 = 6;
 /// The pyramid stops halving below this many pixels on the short side.
 const COARSEST: usize = 48;
+/// Below this median cost (mean squared difference of mean-1 planes over the coarsest
+/// search window) the frames hold no structure to align.
+pub const MIN_COST: f64 = 1e-10;
+/// The best cost must be below this fraction of the window's median cost.
+pub const DISTINCT: f64 = 0.5;
+
+/// The outcome of a motion measurement.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Motion {
+    /// The translation `(dx, dy)` in raw pixels.
+    Shift(f64, f64),
+    /// No translation can be measured, and why.
+    Unmeasurable(String),
+}
 
 /// A frame's green plane, mean-normalized.
 #[derive(Debug, Clone, PartialEq)]
@@ -35,6 +56,9 @@ pub struct GreenPlane {
     pub data: Vec<f32>,
     /// Raw pixels per plane pixel.
     pub scale: f64,
+    /// False when the plane's mean is not above 0 (nothing above the black level): it was
+    /// not normalized and no motion can be measured against it.
+    pub signal: bool,
 }
 
 impl GreenPlane {
@@ -72,7 +96,8 @@ impl GreenPlane {
         let f = bw.max(bh).div_ceil(MAX_SIDE).max(1);
         let (mut plane, w, h) = box_down(&block, bw, bh, f);
         let mean = plane.iter().map(|&x| x as f64).sum::<f64>() / plane.len() as f64;
-        if mean.is_finite() && mean.abs() > 1e-12 {
+        let signal = mean.is_finite() && mean > 1e-9;
+        if signal {
             let k = (1.0 / mean) as f32;
             plane.iter_mut().for_each(|x| *x *= k);
         }
@@ -81,6 +106,7 @@ impl GreenPlane {
             height: h,
             data: plane,
             scale: 2.0 * f as f64,
+            signal,
         })
     }
 }
@@ -107,13 +133,21 @@ fn box_down(src: &[f32], w: usize, h: usize, f: usize) -> (Vec<f32>, usize, usiz
 }
 
 /// The translation `(dx, dy)` in raw pixels that best maps `a` onto `b`
-/// (`b(x + dx, y + dy) ~ a(x, y)`). Errors when the planes differ in size.
-pub fn shift(a: &GreenPlane, b: &GreenPlane) -> Result<(f64, f64)> {
+/// (`b(x + dx, y + dy) ~ a(x, y)`), or why none can be measured (see the module
+/// documentation). Errors when the planes differ in size.
+pub fn shift(a: &GreenPlane, b: &GreenPlane) -> Result<Motion> {
     if (a.width, a.height) != (b.width, b.height) || a.scale != b.scale {
         return Err(Error::invalid(format!(
             "green planes of {}x{} and {}x{} cannot be compared",
             a.width, a.height, b.width, b.height
         )));
+    }
+    for (p, which) in [(a, "the reference"), (b, "this frame")] {
+        if !p.signal {
+            return Ok(Motion::Unmeasurable(format!(
+                "{which} has no signal above the black level"
+            )));
+        }
     }
     let mut pa = vec![(a.data.clone(), a.width, a.height)];
     let mut pb = vec![(b.data.clone(), b.width, b.height)];
@@ -140,6 +174,7 @@ pub fn shift(a: &GreenPlane, b: &GreenPlane) -> Result<(f64, f64)> {
         };
         let (cx, cy) = (dx, dy);
         let mut best = f64::INFINITY;
+        let mut all = Vec::new();
         for sy in cy - r..=cy + r {
             for sx in cx - r..=cx + r {
                 let c = cost(da, db, w, h, sx, sy);
@@ -147,6 +182,12 @@ pub fn shift(a: &GreenPlane, b: &GreenPlane) -> Result<(f64, f64)> {
                     best = c;
                     (dx, dy) = (sx, sy);
                 }
+                all.push(c);
+            }
+        }
+        if lvl + 1 == levels {
+            if let Some(why) = indistinct(best, all) {
+                return Ok(Motion::Unmeasurable(why));
             }
         }
     }
@@ -169,7 +210,47 @@ pub fn shift(a: &GreenPlane, b: &GreenPlane) -> Result<(f64, f64)> {
         cost(da, db, w, h, dx, dy - 1),
         cost(da, db, w, h, dx, dy + 1),
     );
-    Ok(((dx as f64 + fx) * a.scale, (dy as f64 + fy) * a.scale))
+    Ok(Motion::Shift(
+        (dx as f64 + fx) * a.scale,
+        (dy as f64 + fy) * a.scale,
+    ))
+}
+
+/// Why the coarsest level's costs (`best` their least) show no measurable translation, if
+/// they do not (see the module documentation).
+fn indistinct(best: f64, mut all: Vec<f64>) -> Option<String> {
+    all.retain(|c| c.is_finite());
+    all.sort_by(f64::total_cmp);
+    let median = all.get(all.len() / 2).copied().unwrap_or(0.0);
+    if !(median >= MIN_COST) {
+        return Some(
+            "the frames hold no structure to align (flat or featureless at the search scale)"
+                .into(),
+        );
+    }
+    if !(best < DISTINCT * median) {
+        return Some(format!(
+            "no distinct match: the best alignment differs from the others by too little (best cost {:.3} of the median), e.g. a frame with no content or noise only",
+            best / median
+        ));
+    }
+    None
+}
+
+/// A length in pixels as a short text: plain decimals from 0.001 up to 1e6, exponent
+/// notation outside (a tiny `--max-motion` does not print 300 digits).
+pub fn px_text(v: f64) -> String {
+    if v == 0.0 || (1e-3..1e6).contains(&v.abs()) {
+        let t = format!("{v:.3}");
+        let t = t.trim_end_matches('0').trim_end_matches('.');
+        if t.is_empty() || t == "-" {
+            "0".into()
+        } else {
+            t.to_string()
+        }
+    } else {
+        format!("{v:e}")
+    }
 }
 
 /// Mean squared difference of `a(x, y)` and `b(x + sx, y + sy)` over their overlap;
@@ -227,25 +308,64 @@ mod tests {
             height: h,
             data,
             scale: 2.0,
+            signal: true,
+        }
+    }
+
+    fn xy(m: Motion) -> (f64, f64) {
+        match m {
+            Motion::Shift(x, y) => (x, y),
+            Motion::Unmeasurable(w) => panic!("unmeasurable: {w}"),
         }
     }
 
     #[test]
     fn finds_integer_and_subpixel_shifts() {
         let a = plane(300, 200, 0.0, 0.0);
-        let s = shift(&a, &a).unwrap();
+        let s = xy(shift(&a, &a).unwrap());
         assert_eq!(s, (0.0, 0.0));
         // b(x + 7, y - 3) = a(x, y): the content moved by (+7, -3) plane px = (14, -6) raw px.
         let b = plane(300, 200, 7.0, -3.0);
-        let (dx, dy) = shift(&a, &b).unwrap();
+        let (dx, dy) = xy(shift(&a, &b).unwrap());
         assert!(
             (dx - 14.0).abs() < 0.3 && (dy + 6.0).abs() < 0.3,
             "{dx} {dy}"
         );
         let c = plane(300, 200, 0.5, 0.0);
-        let (dx, dy) = shift(&a, &c).unwrap();
+        let (dx, dy) = xy(shift(&a, &c).unwrap());
         assert!((dx - 1.0).abs() < 0.3 && dy.abs() < 0.3, "{dx} {dy}");
         assert!(magnitude((3.0, 4.0)) == 5.0);
         assert!(shift(&a, &plane(30, 20, 0.0, 0.0)).is_err());
+    }
+
+    #[test]
+    fn featureless_planes_are_unmeasurable() {
+        let a = plane(300, 200, 0.0, 0.0);
+        let flat = GreenPlane {
+            data: vec![1.0; 300 * 200],
+            ..a.clone()
+        };
+        let black = GreenPlane {
+            data: vec![0.0; 300 * 200],
+            signal: false,
+            ..a.clone()
+        };
+        for (p, q) in [
+            (&flat, &flat),
+            (&a, &flat),
+            (&flat, &a),
+            (&a, &black),
+            (&black, &black),
+        ] {
+            assert!(
+                matches!(shift(p, q).unwrap(), Motion::Unmeasurable(_)),
+                "{:?}",
+                shift(p, q)
+            );
+        }
+        assert_eq!(px_text(1.0), "1");
+        assert_eq!(px_text(0.25), "0.25");
+        assert_eq!(px_text(1e-300), "1e-300");
+        assert_eq!(px_text(0.0), "0");
     }
 }

@@ -1,12 +1,16 @@
-//! Writing a checked scene through the dataset's [`Sink`] (each file atomically, hashed for
-//! the manifest): the clean raw DNG, the target(s), the noisy inputs copied byte for byte and,
-//! last, the per-scene record `real/meta/<id>.json`.
+//! Writing a checked scene through the dataset's [`Sink`] (each file hashed for the
+//! manifest): the clean raw DNG, the target(s), the noisy inputs copied byte for byte and
+//! the per-scene record `real/meta/<id>.json`. Every file is written to its temporary file
+//! first, and all of them are renamed into place together, in one step that an interrupt
+//! waits for ([`crate::output::DeferredSyncs`]), so a scene is on disk whole or not at all,
+//! even when a second signal ends the process at once (docs/concurrency.md).
 //!
 //! The target is `day2night render CLEAN.dng -o T.png` (and `-o T.exr`): the software ISP's
 //! defaults (MHC demosaic, opcodes applied, DefaultCrop, Orientation), white balance by the
 //! clean raw's AsShotNeutral, which is the first low-ISO frame's; 8-bit sRGB samples are
 //! `(encode(v) * 255 + 0.5) as u8` (docs/real-pairs.md, "Target"). In the release-processed
-//! layout the release's own target `clean/NNN.png` is copied instead when present.
+//! layout the release's own target `clean/NNN.png` is copied instead when present (checked
+//! by [`super::scene::prepare`]).
 
 use super::discover::{FileRef, ScenePlan};
 use super::scene::{FrameCheck, Prepared};
@@ -16,9 +20,10 @@ use crate::dataset::{Kind, Sink, UnitInfo};
 use crate::dng::write::{write_dng, WriteOptions};
 use crate::encode::exr::{standard_attributes, write_exr, ExrOptions};
 use crate::encode::png::{write_png, PngOptions};
-use crate::error::{Error, Result, ResultExt};
+use crate::error::{Error, Result};
 use crate::isp::opcodes::check::check_render;
-use crate::isp::render::{render_linear, resolve_neutral, RenderOptions};
+use crate::isp::render::{render_linear, RenderOptions};
+use crate::output::{DeferredSyncs, OutputPolicy};
 use serde::Serialize;
 
 /// Format tag of the per-scene record.
@@ -84,7 +89,9 @@ pub struct TargetInfo {
     pub demosaic: &'static str,
 }
 
-/// Write every output of a checked scene; returns the manifest's unit info.
+/// Write every output of a checked scene; returns the manifest's unit info. `sink` must
+/// defer its renames to `syncs` ([`crate::output::OutputPolicy::deferring`]): nothing is in
+/// place until [`commit_scene`].
 pub fn write_scene(
     plan: &ScenePlan,
     prep: &Prepared,
@@ -92,7 +99,7 @@ pub fn write_scene(
     sink: &Sink,
 ) -> Result<UnitInfo> {
     let clean = &prep.clean;
-    let neutral = resolve_neutral(&clean.meta, None)?;
+    let neutral = prep.neutral;
     let mut stages = vec![match prep.merge {
         Some(_) => "merge".to_string(),
         None => "clean_raw_png".to_string(),
@@ -101,17 +108,15 @@ pub fn write_scene(
     let dng = sink.path(Kind::CleanRaw, ".dng");
     crate::dataset::ensure_parent(&dng)?;
     write_dng(clean, &dng, &WriteOptions::default(), sink.policy())?;
-    sink.adopt(Kind::CleanRaw, ".dng")?;
     stages.push("write_clean_raw".into());
 
-    let copied = match (&plan.processed, opts.target.png()) {
-        (Some(p), true) => p.target.as_ref(),
+    let copied = match (&prep.target_png, opts.target.png()) {
+        (Some(bytes), true) => Some(bytes),
         _ => None,
     };
     let render_png = opts.target.png() && copied.is_none();
-    if let Some(t) = copied {
-        let bytes = std::fs::read(&t.path).map_err(Error::Io).in_file(&t.path)?;
-        sink.write(Kind::Target, ".png", |w| Ok(w.write_all(&bytes)?))?;
+    if let Some(bytes) = copied {
+        sink.write(Kind::Target, ".png", |w| Ok(w.write_all(bytes)?))?;
         stages.push("copy_target_png".into());
     }
     let ropts = RenderOptions {
@@ -125,7 +130,6 @@ pub fn write_scene(
             let p = sink.path(Kind::Target, ".png");
             crate::dataset::ensure_parent(&p)?;
             write_png(&rgb, &p, &PngOptions::default(), sink.policy())?;
-            sink.adopt(Kind::Target, ".png")?;
             stages.push("render_png".into());
         }
         if opts.target.exr() {
@@ -133,7 +137,6 @@ pub fn write_scene(
             crate::dataset::ensure_parent(&p)?;
             let attrs = standard_attributes(&dng, neutral);
             write_exr(&rgb, &p, &ExrOptions::default(), &attrs, sink.policy())?;
-            sink.adopt(Kind::Target, ".exr")?;
             stages.push("render_exr".into());
         }
     }
@@ -189,6 +192,27 @@ pub fn write_scene(
         night_neutral: Some(neutral),
         stages,
     })
+}
+
+/// Rename every file [`write_scene`] staged into place, together (`policy`: the sink's
+/// policy without the deferral), then hash the files it wrote through the encoders for the
+/// manifest. The scene's set stays open for an interrupt until `syncs` is dropped.
+pub fn commit_scene(
+    sink: &Sink,
+    syncs: &DeferredSyncs,
+    policy: &OutputPolicy,
+    target: TargetKind,
+    copied_png: bool,
+) -> Result<()> {
+    syncs.finish(policy)?;
+    sink.adopt(Kind::CleanRaw, ".dng")?;
+    if target.png() && !copied_png {
+        sink.adopt(Kind::Target, ".png")?;
+    }
+    if target.exr() {
+        sink.adopt(Kind::Target, ".exr")?;
+    }
+    Ok(())
 }
 
 /// The manifest's `frames` field: frames found per ISO, keys as decimal strings.

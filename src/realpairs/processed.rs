@@ -6,6 +6,13 @@
 //! same size, else its ActiveArea (the samples outside it are then the iso_50 frame's). Any
 //! other size is an error naming both sizes. Values are the release's truncated mean in the
 //! frame's own DN scale, so the frame's levels apply unchanged.
+//!
+//! The release's target `clean/NNN.png` is checked before it is copied
+//! ([`read_target_png`]): an 8-bit RGB PNG (what `cv2.imwrite` writes) whose size is the
+//! scene's rendered size, as the layout defines it: the active area (the release's ISP crops
+//! it) or the DefaultCrop (day2night's `render`), or the clean_raw PNG's size, each with
+//! width and height swapped when the iso_50 frame's Orientation turns the image by 90
+//! degrees (5 to 8), as both ISPs do.
 
 use crate::error::{Error, Result};
 use crate::raw::RawImage;
@@ -74,4 +81,52 @@ pub fn clean_raw(png: (usize, usize, Vec<u16>), frame: &RawImage) -> Result<RawI
     img.meta.storage = None;
     img.validate()?;
     Ok(img)
+}
+
+/// The sizes a target of the scene may have (see the module documentation), `(w, h)`.
+pub fn target_sizes(frame: &RawImage, png: (usize, usize)) -> Vec<(usize, usize)> {
+    let a = frame.active_area();
+    let mut v = vec![(a.width(), a.height()), png];
+    if let Some([w, h]) = frame.meta.default_crop_size {
+        if w.is_finite() && h.is_finite() && w >= 1.0 && h >= 1.0 {
+            v.push((w.round() as usize, h.round() as usize));
+        }
+    }
+    if (5..=8).contains(&frame.meta.orientation) {
+        v.iter_mut().for_each(|s| *s = (s.1, s.0));
+    }
+    v.dedup();
+    v
+}
+
+/// Read and check the release's target `clean/NNN.png` (see the module documentation):
+/// its bytes, to be copied as they are.
+pub fn read_target_png(path: &Path, frame: &RawImage, png: (usize, usize)) -> Result<Vec<u8>> {
+    let bytes = std::fs::read(path).map_err(Error::Io)?;
+    let reader = || {
+        let mut r = image::ImageReader::new(std::io::Cursor::new(&bytes));
+        r.set_format(image::ImageFormat::Png);
+        r
+    };
+    let (w, h) = reader()
+        .into_dimensions()
+        .map_err(|e| Error::malformed(format!("the target is not a readable PNG: {e}")))?;
+    let sizes = target_sizes(frame, png);
+    if !sizes.contains(&(w as usize, h as usize)) {
+        let list: Vec<String> = sizes.iter().map(|(a, b)| format!("{a}x{b}")).collect();
+        return Err(Error::invalid(format!(
+            "the target PNG is {w}x{h}, not the scene's size ({})",
+            list.join(" or ")
+        )));
+    }
+    let img = reader()
+        .decode()
+        .map_err(|e| Error::malformed(format!("the target is not a readable PNG: {e}")))?;
+    if !matches!(img, image::DynamicImage::ImageRgb8(_)) {
+        return Err(Error::invalid(format!(
+            "the target must be an 8-bit RGB PNG (the release's render), this one is {:?}",
+            img.color()
+        )));
+    }
+    Ok(bytes)
 }

@@ -5,8 +5,8 @@
 //! at the end, as `dataset` does. A failing scene gets a `failed` record with its reason; the
 //! other scenes are still done.
 
-use super::discover::{find_scenes, hash_scene, plan_scene, Layout, SceneDir};
-use super::outputs::{frames_field, write_scene};
+use super::discover::{find_scenes, hash_scene, plan_scene, Layout, SceneDir, ScenePlan};
+use super::outputs::{commit_scene, frames_field, write_scene};
 use super::scene::prepare;
 use super::PairOptions;
 use crate::dataset::manifest::{self, Appender, Record, Status};
@@ -14,15 +14,15 @@ use crate::dataset::resume::{decide, Decision, Want};
 use crate::dataset::run::{
     blank_record, check_out_dir, remove_replaced_outputs, remove_stale_temp_files_of,
 };
-use crate::dataset::{sha256_hex, Sink, Split, Unit};
+use crate::dataset::{sha256_hex, Kind, Sink, Split, Unit};
 use crate::diagnostics::{Diagnostics, Warning};
 use crate::error::{Error, Result, ResultExt};
-use crate::output::{stop_requested, OutputPolicy, OutputSetLock};
+use crate::output::{stop_requested, DeferredSyncs, OutputPolicy, OutputSetLock};
 use serde::Serialize;
 use std::collections::{BTreeMap, HashSet};
 use std::path::PathBuf;
 use std::sync::atomic::{AtomicUsize, Ordering};
-use std::sync::Mutex;
+use std::sync::{Arc, Mutex};
 use std::time::Instant;
 
 /// What a run needs besides the pair options.
@@ -39,6 +39,18 @@ pub struct RunOptions {
     /// Called once per finished scene, for the caller's progress display (the library
     /// itself prints nothing); `None`: no progress.
     pub on_scene: Option<fn(&SceneDone<'_>)>,
+    /// Called with the scene's id at each [`Checkpoint`] of its writing (a seam for tests
+    /// that interrupt a run at a known point); `None` in the command.
+    pub checkpoint: Option<fn(&str, Checkpoint)>,
+}
+
+/// A point of a scene's writing, told to [`RunOptions::checkpoint`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Checkpoint {
+    /// Every file of the scene is written to its temporary file; none is in place.
+    Staged,
+    /// Every file of the scene is in place; its manifest record is not yet appended.
+    Committed,
 }
 
 /// One finished scene, as [`RunOptions::on_scene`] receives it.
@@ -117,12 +129,22 @@ struct Outcome {
     record: Record,
     computed: Option<&'static str>,
     warnings: Diagnostics,
+    /// The scene's committed files, held open for an interrupt until the record is
+    /// appended (dropped then).
+    set: Option<Arc<DeferredSyncs>>,
 }
 
 /// Run `real-pairs`.
 pub fn run(opts: &RunOptions, pairs: &PairOptions) -> Result<Summary> {
     let start = Instant::now();
     let out_dir = &opts.out_dir;
+    let canon = |p: &std::path::Path| std::fs::canonicalize(p).ok();
+    if canon(out_dir).is_some() && canon(out_dir) == canon(&opts.scenes_dir) {
+        return Err(Error::invalid(
+            "the output folder is the scenes folder SCENES: give OUT a folder of its own (outside the scenes)",
+        )
+        .in_file(out_dir));
+    }
     let (layout, scenes) = find_scenes(
         &opts.scenes_dir,
         std::slice::from_ref(out_dir),
@@ -168,6 +190,8 @@ pub fn run(opts: &RunOptions, pairs: &PairOptions) -> Result<Summary> {
                         o.record.error = Some(format!("writing the manifest: {e}"));
                     }
                 }
+                // The set is whole on disk and recorded: an interrupt need not wait for it.
+                drop(o.set.take());
                 let k = count.fetch_add(1, Ordering::SeqCst) + 1;
                 if let Some(on_scene) = opts.on_scene {
                     on_scene(&SceneDone {
@@ -253,13 +277,22 @@ fn one_scene(
     let mut rec = blank_record(&unit, "", options_sha);
     rec.kind = Some("real".into());
     rec.scene = Some(scene.id.clone());
-    let failed = |mut rec: Record, e: Error, reason: &'static str| Outcome {
-        record: {
-            rec.error = Some(format!("scene {}: {e}", scene.rel));
-            rec
-        },
-        computed: Some(reason),
-        warnings: Diagnostics::new(),
+    let failed = |mut rec: Record, e: Error, reason: &'static str| {
+        if let Some(p) = prev {
+            if stop_requested().is_none() {
+                // A failed scene lists no files: those of its last good run go (docs).
+                if let Ok(_lock) = OutputSetLock::acquire(&opts.out_dir, &scene.id, false) {
+                    remove_replaced_outputs(&opts.out_dir, p, &rec);
+                }
+            }
+        }
+        rec.error = Some(format!("scene {}: {e}", scene.rel));
+        Outcome {
+            record: rec,
+            computed: Some(reason),
+            warnings: Diagnostics::new(),
+            set: None,
+        }
     };
     let (hashes, input_sha) = match hash_scene(scene) {
         Ok(h) => h,
@@ -279,6 +312,7 @@ fn one_scene(
                     record: p.clone(),
                     computed: None,
                     warnings: Diagnostics::new(),
+                    set: None,
                 };
             }
             "new"
@@ -295,11 +329,27 @@ fn one_scene(
         inputs: vec![],
         ..OutputPolicy::default()
     };
-    let sink = Sink::new(&opts.out_dir, Split::Real, &scene.id, policy);
+    let syncs = Arc::new(DeferredSyncs::default());
+    let sink = Sink::new(
+        &opts.out_dir,
+        Split::Real,
+        &scene.id,
+        policy.deferring(&syncs),
+    );
+    let committing = std::cell::Cell::new(false);
     let res = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
         let _lock = OutputSetLock::acquire(&opts.out_dir, &scene.id, false)?;
         let prep = prepare(&plan, pairs.max_motion_px)?;
         let info = write_scene(&plan, &prep, pairs, &sink)?;
+        if let Some(f) = opts.checkpoint {
+            f(&scene.id, Checkpoint::Staged);
+        }
+        let copied = prep.target_png.is_some();
+        committing.set(true);
+        commit_scene(&sink, &syncs, &policy, pairs.target, copied)?;
+        if let Some(f) = opts.checkpoint {
+            f(&scene.id, Checkpoint::Committed);
+        }
         Ok::<_, Error>((info, prep.warnings))
     }));
     match res {
@@ -316,12 +366,18 @@ fn one_scene(
                 record: rec,
                 computed: Some(reason),
                 warnings,
+                set: Some(syncs),
             }
         }
         other => {
-            // Nothing half-written: the files this attempt wrote go.
-            for o in sink.into_outputs() {
-                let _ = std::fs::remove_file(opts.out_dir.join(&o.path));
+            // Nothing half-written: staged files were never renamed into place (dropping
+            // the queue removes them); a commit that failed part way removes the scene's
+            // files.
+            drop(syncs);
+            if committing.get() {
+                for p in scene_paths(&sink, &plan) {
+                    let _ = std::fs::remove_file(p);
+                }
             }
             let e = match other {
                 Ok(Err(e)) => e,
@@ -330,4 +386,18 @@ fn one_scene(
             failed(rec, e, reason)
         }
     }
+}
+
+/// Every file a scene may have in OUT.
+fn scene_paths(sink: &Sink, plan: &ScenePlan) -> Vec<PathBuf> {
+    let mut v = vec![
+        sink.path(Kind::CleanRaw, ".dng"),
+        sink.path(Kind::Target, ".png"),
+        sink.path(Kind::Target, ".exr"),
+        sink.path(Kind::Meta, ".json"),
+    ];
+    for f in &plan.noisy {
+        v.push(sink.path(Kind::NoisyRaw, &format!("_iso{}.dng", f.iso)));
+    }
+    v
 }

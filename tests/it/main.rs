@@ -57,6 +57,7 @@ mod noise_estimate;
 mod noise_physics;
 mod png_rows;
 mod real_pairs;
+mod real_pairs_bad;
 mod release_compat;
 mod release_version;
 mod release_workflow;

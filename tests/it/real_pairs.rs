@@ -14,14 +14,14 @@ use std::process::Output;
 
 const ISOS: [u32; 3] = [50, 1600, 3200];
 
-fn ok(o: &Output) -> String {
+pub(crate) fn ok(o: &Output) -> String {
     let err = String::from_utf8_lossy(&o.stderr).into_owned();
     assert!(o.status.success(), "{err}");
     err
 }
 
 /// `synth --burst n` of the fixture at ISO 50, 1600 and 3200 into `dir`.
-fn synth(dir: &Path, n: u32, extra: &[&str]) {
+pub(crate) fn synth(dir: &Path, n: u32, extra: &[&str]) {
     let mut c = common::bin();
     c.arg("synth")
         .arg(common::fixtures().join("day.dng"))
@@ -34,7 +34,7 @@ fn synth(dir: &Path, n: u32, extra: &[&str]) {
 }
 
 /// The frames synth wrote for `iso`, sorted.
-fn frames(synth_dir: &Path, iso: u32) -> Vec<PathBuf> {
+pub(crate) fn frames(synth_dir: &Path, iso: u32) -> Vec<PathBuf> {
     let mut v: Vec<PathBuf> = std::fs::read_dir(synth_dir)
         .unwrap()
         .map(|e| e.unwrap().path())
@@ -48,7 +48,7 @@ fn frames(synth_dir: &Path, iso: u32) -> Vec<PathBuf> {
 }
 
 /// A scene in the simple layout: the frames under their synth names.
-fn simple_scene(dir: &Path, synth_dir: &Path) {
+pub(crate) fn simple_scene(dir: &Path, synth_dir: &Path) {
     std::fs::create_dir_all(dir).unwrap();
     for iso in ISOS {
         for f in frames(synth_dir, iso) {
@@ -58,7 +58,7 @@ fn simple_scene(dir: &Path, synth_dir: &Path) {
 }
 
 /// A scene in the release layout: `RAW_0_00<ISO 4 digits>_<frame>.dng`.
-fn release_scene(dir: &Path, synth_dir: &Path) {
+pub(crate) fn release_scene(dir: &Path, synth_dir: &Path) {
     std::fs::create_dir_all(dir).unwrap();
     for iso in ISOS {
         for (k, f) in frames(synth_dir, iso).iter().enumerate() {
@@ -69,7 +69,7 @@ fn release_scene(dir: &Path, synth_dir: &Path) {
 
 /// The processed tree of one scene `NNN`: clean_raw/NNN.png = the truncated mean of the ISO
 /// 50 frames' active area (rawpy's visible raw), clean/NNN.png = a render, dng/iso_<ISO>/.
-fn processed_scene(root: &Path, nnn: &str, synth_dir: &Path) {
+pub(crate) fn processed_scene(root: &Path, nnn: &str, synth_dir: &Path) {
     for sub in [
         "clean_raw",
         "clean",
@@ -101,11 +101,11 @@ fn processed_scene(root: &Path, nnn: &str, synth_dir: &Path) {
     }
 }
 
-fn real_pairs(scenes: &Path, out: &Path, extra: &[&str]) -> Output {
+pub(crate) fn real_pairs(scenes: &Path, out: &Path, extra: &[&str]) -> Output {
     common::cli("real-pairs", scenes, out, extra)
 }
 
-fn manifest(out: &Path) -> Vec<Value> {
+pub(crate) fn manifest(out: &Path) -> Vec<Value> {
     std::fs::read_to_string(out.join("manifest.jsonl"))
         .unwrap()
         .lines()
@@ -318,7 +318,7 @@ fn three_layouts_make_the_pairs() {
 type Alter = Box<dyn FnOnce(&mut RawImage)>;
 
 /// A copy of `src` changed by `f`, written as `dst`.
-fn altered(src: &Path, dst: &Path, f: impl FnOnce(&mut RawImage)) {
+pub(crate) fn altered(src: &Path, dst: &Path, f: impl FnOnce(&mut RawImage)) {
     let mut img = read_dng(src).unwrap();
     img.meta.storage = None;
     f(&mut img);
