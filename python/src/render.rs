@@ -2,7 +2,7 @@
 
 use crate::convert::rgb_array;
 use crate::diagnostics::warn_lines;
-use crate::errors::py_err;
+use crate::errors::{py_err, value_err};
 use crate::pool::on_pool;
 use crate::raw::Raw;
 use day2night::isp::render::{render_linear, RenderOptions};
@@ -16,9 +16,16 @@ use pyo3::prelude::*;
 /// shading, distortion) are applied unless ``opcodes="ignore"``. A LinearRaw raw (already
 /// demosaiced) is rendered without demosaicing (``demosaic`` is not used).
 ///
+/// ``isp="release"`` renders as the authors' release does instead (``day2night render --isp
+/// release``, docs/isp.md): its linear sRGB before its gamma, in its own image window
+/// (``release_window``) and orientation (``orient=False``: before it); ``demosaic``,
+/// ``opcodes`` may then only name what it does (``"menon"``, ``"ignore"``) and ``crop``
+/// must stay true.
+///
 /// >>> rgb = day2night.render(raw)
 #[pyfunction]
-#[pyo3(signature = (raw, neutral=None, demosaic="mhc", crop=true, orient=true, opcodes="apply"))]
+#[pyo3(signature = (raw, neutral=None, demosaic="mhc", crop=true, orient=true, opcodes="apply", isp="day2night"))]
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn render<'py>(
     py: Python<'py>,
     raw: &Bound<'py, Raw>,
@@ -27,7 +34,30 @@ pub(crate) fn render<'py>(
     crop: bool,
     orient: bool,
     opcodes: &str,
+    isp: &str,
 ) -> PyResult<Bound<'py, PyAny>> {
+    if release_isp(isp)? {
+        release_conflicts(&[
+            ("demosaic", demosaic, "mhc", "menon"),
+            ("opcodes", opcodes, "apply", "ignore"),
+        ])?;
+        if !crop {
+            return Err(value_err(
+                "crop=False: isp='release' crops as the release does",
+            ));
+        }
+        let day = raw.get().day.clone();
+        let neutral = neutral.map(|(r, g, b)| [r, g, b]);
+        let img = py
+            .detach(move || {
+                on_pool(move || {
+                    let l = day2night::isp::release::render_linear(&day.raw, neutral, orient)?;
+                    Ok(l.to_rgb_image())
+                })
+            })
+            .map_err(py_err)?;
+        return rgb_array(py, img);
+    }
     let method: Demosaic = demosaic.parse().map_err(py_err)?;
     let opcodes: day2night::isp::opcodes::OpcodeMode = opcodes.parse().map_err(py_err)?;
     let day = raw.get().day.clone();
@@ -81,4 +111,66 @@ pub(crate) fn encode_u8<'py>(
     let arr = numpy::ndarray::Array3::from_shape_vec((h, w, 3), bytes)
         .map_err(|e| crate::errors::value_err(e.to_string()))?;
     Ok(numpy::IntoPyArray::into_pyarray(arr, py).into_any())
+}
+
+/// Whether `isp` names the release's ISP (`"release"`) rather than day2night's.
+fn release_isp(isp: &str) -> PyResult<bool> {
+    match isp {
+        "release" => Ok(true),
+        "day2night" => Ok(false),
+        other => Err(value_err(format!(
+            "isp={other:?}: use \"day2night\" or \"release\""
+        ))),
+    }
+}
+
+/// Keywords that `isp="release"` fixes: (name, value, default, the release's own); any
+/// other value is a ValueError naming the keyword.
+fn release_conflicts(fixed: &[(&str, &str, &str, &str)]) -> PyResult<()> {
+    for (name, value, default, own) in fixed {
+        if value != default && value != own {
+            return Err(value_err(format!(
+                "{name}={value:?}: isp='release' uses {name}={own:?} (leave it out)"
+            )));
+        }
+    }
+    Ok(())
+}
+
+/// The release's 8-bit target of a raw (``day2night render --isp release -o x.png``, byte
+/// for byte): uint8 HxWx3 in the release's image window and orientation (``orient=False``:
+/// before it). ``neutral`` replaces the raw's AsShotNeutral for white balance and the
+/// colour matrix. ``day2night.train.targets.render_target(raw, isp="release")`` calls it.
+///
+/// >>> day2night.render_release_u8(raw).dtype
+/// dtype('uint8')
+#[pyfunction]
+#[pyo3(signature = (raw, neutral=None, orient=true))]
+pub(crate) fn render_release_u8<'py>(
+    py: Python<'py>,
+    raw: &Bound<'py, Raw>,
+    neutral: Option<(f64, f64, f64)>,
+    orient: bool,
+) -> PyResult<Bound<'py, PyAny>> {
+    let day = raw.get().day.clone();
+    let neutral = neutral.map(|(r, g, b)| [r, g, b]);
+    let (w, h, bytes) = py
+        .detach(move || {
+            on_pool(move || day2night::isp::release::render_u8(&day.raw, neutral, orient))
+        })
+        .map_err(py_err)?;
+    let arr = numpy::ndarray::Array3::from_shape_vec((h, w, 3), bytes)
+        .map_err(|e| value_err(e.to_string()))?;
+    Ok(numpy::IntoPyArray::into_pyarray(arr, py).into_any())
+}
+
+/// The release's image window of a raw in active-area coordinates, before its orientation:
+/// ``(top, left, height, width)``. The release crops the active area again by the
+/// ActiveArea rectangle (when the raw is in IFD0), so its targets can be smaller than the
+/// active area (docs/isp.md).
+///
+/// >>> top, left, h, w = day2night.release_window(raw)
+#[pyfunction]
+pub(crate) fn release_window(raw: &Bound<'_, Raw>) -> PyResult<(usize, usize, usize, usize)> {
+    day2night::isp::release::window(&raw.get().day.raw).map_err(py_err)
 }

@@ -73,6 +73,13 @@ pub struct RenderArgs {
     /// Replace an existing output.
     #[arg(long)]
     pub overwrite: bool,
+    /// ISP: day2night (default) or release, the authors' release's target render reproduced
+    /// (docs/isp.md): Menon demosaic, its colour matrices, gamma 2.2 + s-curve, its own crop
+    /// and orientation, opcodes and DefaultCrop ignored. With release, --demosaic, --tone and
+    /// --opcodes may only name what it does (menon, release, ignore); --camera-rgb,
+    /// --no-crop, --bits 16 and TIFF are refused; .exr gets its linear sRGB.
+    #[arg(long, default_value = "day2night", value_name = "ISP")]
+    pub isp: String,
 }
 
 enum Format {
@@ -112,6 +119,11 @@ fn output_format(args: &RenderArgs) -> Result<(Format, bool), super::Failure> {
 
 /// Run `day2night render`.
 pub fn run(args: RenderArgs) -> CmdResult {
+    match args.isp.as_str() {
+        "day2night" => {}
+        "release" => return run_release(&args),
+        other => return Err(usage(format!("--isp {other}: use day2night or release"))),
+    }
     let demosaic: Demosaic = args.demosaic.parse().map_err(usage)?;
     let neutral = args
         .neutral
@@ -242,6 +254,94 @@ pub fn run(args: RenderArgs) -> CmdResult {
         .map_err(lib)?,
     }
     Ok(())
+}
+
+/// The flags `--isp release` fixes, with the one value each may name: a contradiction is a
+/// usage error naming the flag.
+fn release_conflicts(args: &RenderArgs) -> Option<String> {
+    let fixed = [
+        ("--demosaic", args.demosaic.as_str(), ["mhc", "menon"]),
+        ("--tone", args.tone.as_str(), ["srgb", "release"]),
+        ("--opcodes", args.opcodes.as_str(), ["apply", "ignore"]),
+    ];
+    for (flag, value, [default, own]) in fixed {
+        if value != default && value != own {
+            return Some(format!(
+                "{flag} {value}: --isp release uses {flag} {own} (leave it out)"
+            ));
+        }
+    }
+    let refused = [
+        ("--camera-rgb", args.camera_rgb),
+        ("--no-crop", args.no_crop),
+        ("--bits 16", args.bits == Some(16)),
+    ];
+    refused
+        .iter()
+        .find(|(_, set)| *set)
+        .map(|(flag, _)| format!("{flag}: --isp release renders as the release does (its own crop, 8-bit PNG or linear EXR)"))
+}
+
+/// `render --isp release`: the release's 8-bit PNG, or its linear sRGB as EXR.
+fn run_release(args: &RenderArgs) -> CmdResult {
+    if let Some(msg) = release_conflicts(args) {
+        return Err(usage(msg));
+    }
+    let (format, _) = output_format(args)?;
+    if matches!(format, Format::Tiff) {
+        return Err(usage(format!(
+            "{}: --isp release writes .png (the release's 8-bit render) or .exr",
+            args.output.display()
+        )));
+    }
+    let neutral = args
+        .neutral
+        .as_deref()
+        .map(parse_neutral)
+        .transpose()
+        .map_err(usage)?;
+    let compression: ExrCompression = args.exr_compression.parse().map_err(usage)?;
+    let zip_level = parse_zip_level(args.exr_zip_level)?;
+    let policy = OutputPolicy {
+        overwrite: args.overwrite,
+        inputs: vec![args.input.clone()],
+        ..OutputPolicy::default()
+    };
+    policy.check(&args.output).map_err(lib)?;
+    let img = day2night::dng::read::read_dng(&args.input).map_err(lib)?;
+    super::print_meta_warnings(&args.input, &img.meta);
+    let in_file = |e: day2night::Error| lib(e.in_file(&args.input));
+    let linear =
+        day2night::isp::release::render_linear(&img, neutral, !args.no_orient).map_err(in_file)?;
+    match format {
+        Format::Exr => {
+            let meta = day2night::isp::release::ReleaseMeta::of(&img, neutral).map_err(in_file)?;
+            let mut attrs = standard_attributes(&args.input, meta.neutral);
+            attrs.push(("day2night:isp".into(), "release".into()));
+            attrs.push((
+                "day2night:content".into(),
+                "the release's linear sRGB (before its gamma and s-curve)".into(),
+            ));
+            let opts = ExrOptions {
+                half: !args.float,
+                compression,
+                zip_level,
+            };
+            write_exr(&linear.to_rgb_image(), &args.output, &opts, &attrs, &policy).map_err(lib)
+        }
+        _ => {
+            let bytes = linear.to_u8();
+            day2night::encode::png_rows::write_png_rgb8(
+                &bytes,
+                linear.width,
+                linear.height,
+                DisplayTone::Release,
+                &args.output,
+                &policy,
+            )
+            .map_err(lib)
+        }
+    }
 }
 
 /// Render band by band into the files `open` makes once the output size is known (`synth`'s

@@ -2,6 +2,8 @@
 //! isotemperature lines (`dng_temperature`), and the temperatures the SDK assigns to the EXIF
 //! LightSource codes of CalibrationIlluminant1/2. These pick and interpolate a camera's
 //! colour matrices; [`super::planck`] measures light colours (CCT and Duv from the locus).
+//! [`release_xyz_to_cct`] is the authors' release's own walk along the same lines (its
+//! target ISP, docs/isp.md).
 
 /// Correlated colour temperature (kelvin) of an EXIF LightSource code, as the DNG SDK
 /// assigns them; `None` for unknown/other codes.
@@ -80,6 +82,74 @@ pub fn xy_to_cct(xy: [f64; 2]) -> f64 {
     5000.0
 }
 
+/// Reciprocal temperatures (1/K) of the [`ROBERTSON`] lines as the authors' release lists
+/// them (its first is the smallest positive double instead of 0).
+const RELEASE_RECIPROCAL_K: [f64; 31] = [
+    f64::MIN_POSITIVE,
+    10.0e-6,
+    20.0e-6,
+    30.0e-6,
+    40.0e-6,
+    50.0e-6,
+    60.0e-6,
+    70.0e-6,
+    80.0e-6,
+    90.0e-6,
+    100.0e-6,
+    125.0e-6,
+    150.0e-6,
+    175.0e-6,
+    200.0e-6,
+    225.0e-6,
+    250.0e-6,
+    275.0e-6,
+    300.0e-6,
+    325.0e-6,
+    350.0e-6,
+    375.0e-6,
+    400.0e-6,
+    425.0e-6,
+    450.0e-6,
+    475.0e-6,
+    500.0e-6,
+    525.0e-6,
+    550.0e-6,
+    575.0e-6,
+    600.0e-6,
+];
+
+/// Correlated colour temperature of an XYZ triple as the authors' release computes it (the
+/// `XYZtoCCT` of Lindbloom's C code on the same Robertson lines, in its own arithmetic): the
+/// signed distances to the lines are walked until they change sign; when they never do, the
+/// last two lines are used anyway (an extrapolation). `None` for XYZ all below 1e-20 (the
+/// release's -1).
+pub fn release_xyz_to_cct(xyz: [f64; 3]) -> Option<f64> {
+    if xyz.iter().all(|v| *v < 1.0e-20) {
+        return None;
+    }
+    let den = xyz[0] + 15.0 * xyz[1] + 3.0 * xyz[2];
+    let us = (4.0 * xyz[0]) / den;
+    let vs = (6.0 * xyz[1]) / den;
+    let (mut di, mut dm) = (0.0, 0.0);
+    let mut i = 0;
+    while i < ROBERTSON.len() {
+        let [_, u, v, t] = ROBERTSON[i];
+        di = (vs - v) - t * (us - u);
+        if i > 0 && ((di < 0.0 && dm >= 0.0) || (di >= 0.0 && dm < 0.0)) {
+            break;
+        }
+        dm = di;
+        i += 1;
+    }
+    // A walk with no sign change leaves the last line (the release's loop variable).
+    let i = i.min(ROBERTSON.len() - 1).max(1);
+    let di = di / (1.0 + ROBERTSON[i][3] * ROBERTSON[i][3]).sqrt();
+    let dm = dm / (1.0 + ROBERTSON[i - 1][3] * ROBERTSON[i - 1][3]).sqrt();
+    let p = dm / (dm - di);
+    let (a, b) = (RELEASE_RECIPROCAL_K[i - 1], RELEASE_RECIPROCAL_K[i]);
+    Some(1.0 / ((b - a) * p + a))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -123,5 +193,18 @@ mod tests {
             assert!(c < last && close(c, t, 0.01 * t), "{t}: {c}");
             last = c;
         }
+    }
+
+    #[test]
+    fn release_cct_of_standard_whites() {
+        // D65 and illuminant A as XYZ with Y = 1: within a few kelvin of their CCTs.
+        let xyz = |xy: [f64; 2]| [xy[0] / xy[1], 1.0, (1.0 - xy[0] - xy[1]) / xy[1]];
+        let d65 = release_xyz_to_cct(xyz(D65_XY)).unwrap();
+        assert!(close(d65, 6504.0, 5.0), "{d65}");
+        let a = release_xyz_to_cct(xyz([0.44757, 0.40745])).unwrap();
+        assert!(close(a, 2856.0, 5.0), "{a}");
+        assert_eq!(release_xyz_to_cct([0.0; 3]), None);
+        // Far beyond the last line (bluer than any): extrapolated, still finite.
+        assert!(release_xyz_to_cct([0.2, 0.1, 2.0]).unwrap().is_finite());
     }
 }

@@ -6,6 +6,7 @@
 //! sRGB/Rec.709 (D65) per DNG chapter 6 ([`color`], on the maths of [`crate::color`]),
 //! DefaultCrop and orientation. Display encodings (the sRGB OETF of
 //! [`crate::color::srgb`], the release's gamma + smoothstep tone) are in [`tone`].
+//! [`release`] is the authors' release ISP itself, stage for stage (`render --isp release`).
 
 pub(crate) mod bands;
 pub mod color;
@@ -14,6 +15,7 @@ pub mod flat;
 pub mod geometry;
 pub mod opcodes;
 pub(crate) mod place;
+pub mod release;
 pub mod release_input;
 pub mod render;
 pub mod render_bands;

@@ -4,12 +4,13 @@
 ``srgb8`` is the command line's own quantizer (Rust, through ``day2night.encode_u8``): the
 sRGB OETF of each sample clamped to [0, 1], ``* 255 + 0.5`` truncated, byte for byte the PNG
 files. The network learns ``srgb8(...) / 255`` (the release's ``clean/*.png / 255``).
+``render_target(raw, isp="release")`` is the release's own target ISP instead.
 No torch here.
 """
 
 import numpy as np
 
-from .._native import encode_u8, render
+from .._native import encode_u8, release_window, render, render_release_u8  # noqa: F401
 
 
 def srgb8(linear, tone="srgb"):
@@ -23,11 +24,29 @@ def srgb8(linear, tone="srgb"):
     return encode_u8(np.ascontiguousarray(a), tone)
 
 
-def render_target(raw, neutral=None, demosaic="mhc", tone="srgb"):
-    """The 8-bit sRGB target of a raw aligned pixel for pixel with
+def render_target(raw, neutral=None, demosaic="mhc", tone="srgb", isp="day2night", orient=True):
+    """The 8-bit sRGB target of a raw.
+
+    ``isp="day2night"`` (default): aligned pixel for pixel with
     ``preprocess.network_input(raw)``: the software ISP's render of the active area, with no
     DefaultCrop and no orientation (``render(raw, crop=False, orient=False)``), encoded by
-    ``srgb8``. ``neutral`` defaults to the raw's AsShotNeutral."""
+    ``srgb8``; ``orient`` is not used.
+
+    ``isp="release"``: the authors' release's target, byte for byte ``day2night render --isp
+    release`` (docs/isp.md): its image window (``release_window(raw)``, inside the active
+    area) and its orientation (``orient=False``: before it). ``demosaic`` and ``tone`` may
+    only name what it does (``"menon"``, ``"release"``) or be left out.
+
+    ``neutral`` defaults to the raw's AsShotNeutral."""
+    if isp == "release":
+        for name, value, default, own in (("demosaic", demosaic, "mhc", "menon"),
+                                          ("tone", tone, "srgb", "release")):
+            if value not in (default, own):
+                raise ValueError(f"{name}={value!r}: isp='release' uses {name}={own!r} "
+                                 "(leave it out)")
+        return render_release_u8(raw, neutral=neutral, orient=orient)
+    if isp != "day2night":
+        raise ValueError(f"isp={isp!r}: use 'day2night' or 'release'")
     return srgb8(render(raw, neutral=neutral, demosaic=demosaic, crop=False, orient=False), tone)
 
 

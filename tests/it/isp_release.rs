@@ -1,0 +1,150 @@
+//! `render --isp release`: the authors' release ISP reproduced. Against the release's own
+//! renders of the fixtures (shared data, `release-isp/`: same size, at least 99.9 % of the
+//! samples within 1 code), and on the fixtures alone: deterministic bytes, the release's
+//! image window, and contradictory flags refused with the flag named.
+
+use crate::common::{self, cli};
+use std::path::{Path, PathBuf};
+
+/// Decode an 8-bit RGB PNG: (width, height, bytes).
+fn rgb8(p: &Path) -> (u32, u32, Vec<u8>) {
+    let img = image::open(p)
+        .unwrap_or_else(|e| panic!("{}: {e}", p.display()))
+        .to_rgb8();
+    (img.width(), img.height(), img.into_raw())
+}
+
+fn render_release(input: &Path, out: &Path, extra: &[&str]) -> std::process::Output {
+    let mut args = vec!["--isp", "release"];
+    args.extend_from_slice(extra);
+    cli("render", input, out, &args)
+}
+
+/// The DNG a reference was rendered from: the fixture of that name, else the DNG beside it.
+fn source_of(refs: &Path, name: &str) -> PathBuf {
+    let fixture = common::fixtures().join(format!("{name}.dng"));
+    if fixture.is_file() {
+        fixture
+    } else {
+        refs.join(format!("{name}.dng"))
+    }
+}
+
+#[test]
+#[cfg_attr(
+    d2n_missing = "shared-data",
+    ignore = "needs the release's reference renders (absent at build time)"
+)]
+fn matches_the_release_renders() {
+    let refs = common::shared_data().join("release-isp");
+    let mut names: Vec<String> = std::fs::read_dir(&refs)
+        .unwrap_or_else(|e| panic!("{}: {e}", refs.display()))
+        .filter_map(|e| {
+            let n = e.ok()?.file_name().into_string().ok()?;
+            n.strip_suffix("_release.png").map(str::to_string)
+        })
+        .collect();
+    names.sort();
+    assert!(!names.is_empty(), "no *_release.png in {}", refs.display());
+    let dir = tempfile::tempdir().unwrap();
+    let mut report = Vec::new();
+    for name in &names {
+        let src = source_of(&refs, name);
+        assert!(src.is_file(), "{}: no source DNG", src.display());
+        let out = dir.path().join(format!("{name}.png"));
+        let o = render_release(&src, &out, &[]);
+        assert!(
+            o.status.success(),
+            "{name}: {}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+        let (w, h, ours) = rgb8(&out);
+        let (rw, rh, theirs) = rgb8(&refs.join(format!("{name}_release.png")));
+        assert_eq!((w, h), (rw, rh), "{name}: image size");
+        let off: Vec<u8> = ours
+            .iter()
+            .zip(&theirs)
+            .map(|(a, b)| a.abs_diff(*b))
+            .collect();
+        let within = off.iter().filter(|d| **d <= 1).count() as f64 / off.len() as f64;
+        let max = off.iter().copied().max().unwrap_or(0);
+        report.push(format!(
+            "{name}: {:.4} % within 1 code, max {max}",
+            100.0 * within
+        ));
+        assert!(
+            within >= 0.999,
+            "{name}: only {:.3} % within 1 code",
+            100.0 * within
+        );
+    }
+    eprintln!("{}", report.join("\n"));
+}
+
+#[test]
+fn deterministic_with_the_release_window() {
+    let day = common::fixtures().join("day.dng");
+    let dir = tempfile::tempdir().unwrap();
+    let (a, b) = (dir.path().join("a.png"), dir.path().join("b.png"));
+    for out in [&a, &b] {
+        let o = render_release(&day, out, &[]);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    }
+    assert_eq!(std::fs::read(&a).unwrap(), std::fs::read(&b).unwrap());
+    // day.dng: a 512x512 active area at (8, 16) of the stored 528x520; the release crops
+    // it again by ActiveArea's rows 8..520 and columns 16..528, clamped: 496 x 504.
+    let (w, h, _) = rgb8(&a);
+    assert_eq!((w, h), (496, 504));
+    // The flags that mean what the release does are accepted, and change nothing.
+    let c = dir.path().join("c.png");
+    let same = [
+        "--demosaic",
+        "menon",
+        "--tone",
+        "release",
+        "--opcodes",
+        "ignore",
+    ];
+    let o = render_release(&day, &c, &same);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_eq!(std::fs::read(&a).unwrap(), std::fs::read(&c).unwrap());
+    // A neutral changes the render; a linear EXR is written.
+    let n = dir.path().join("n.png");
+    assert!(render_release(&day, &n, &["--neutral", "0.6,1,0.5"])
+        .status
+        .success());
+    assert_ne!(rgb8(&a).2, rgb8(&n).2);
+    let exr = dir.path().join("x.exr");
+    assert!(render_release(&day, &exr, &[]).status.success());
+    assert!(exr.is_file());
+}
+
+#[test]
+fn contradictory_flags_are_refused() {
+    let day = common::fixtures().join("day.dng");
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("x.png");
+    let cases: [(&[&str], &str); 6] = [
+        (&["--demosaic", "bilinear"], "--demosaic"),
+        (&["--tone", "gamma22"], "--tone"),
+        (&["--opcodes", "warn"], "--opcodes"),
+        (&["--no-crop"], "--no-crop"),
+        (&["--camera-rgb"], "--camera-rgb"),
+        (&["--bits", "16"], "--bits 16"),
+    ];
+    for (extra, flag) in cases {
+        let o = render_release(&day, &out, extra);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success(), "{extra:?} was accepted");
+        assert!(
+            err.contains(flag) && err.contains("--isp release"),
+            "{extra:?}: {err}"
+        );
+        assert!(!out.exists(), "{extra:?} wrote an output");
+    }
+    let tif = dir.path().join("x.tif");
+    let o = render_release(&day, &tif, &[]);
+    assert!(!o.status.success() && !tif.exists());
+    let o = cli("render", &day, &out, &["--isp", "libraw"]);
+    assert!(String::from_utf8_lossy(&o.stderr).contains("--isp libraw"));
+}
