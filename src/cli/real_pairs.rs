@@ -40,7 +40,8 @@ pub struct RealPairsArgs {
     /// Input layout: auto, release, release-processed or simple.
     #[arg(long, default_value = "auto", value_name = "LAYOUT")]
     pub layout: String,
-    /// Release layout: the noisy ISOs expected (frames RAW_0_00<ISO, 4 digits>*).
+    /// Release layouts: the noisy ISOs expected (frames RAW_0_00<ISO, 4 digits>*, or
+    /// dng/iso_<ISO>/NNN.dng in the processed tree); a missing one is an error.
     #[arg(long, default_value = "1600,3200", value_name = "ISO,ISO")]
     pub iso: String,
     /// Largest motion accepted between the burst's frames, or between the merged raw and a

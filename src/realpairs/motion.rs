@@ -222,13 +222,13 @@ fn indistinct(best: f64, mut all: Vec<f64>) -> Option<String> {
     all.retain(|c| c.is_finite());
     all.sort_by(f64::total_cmp);
     let median = all.get(all.len() / 2).copied().unwrap_or(0.0);
-    if !(median >= MIN_COST) {
+    if median < MIN_COST {
         return Some(
             "the frames hold no structure to align (flat or featureless at the search scale)"
                 .into(),
         );
     }
-    if !(best < DISTINCT * median) {
+    if best.partial_cmp(&(DISTINCT * median)) != Some(std::cmp::Ordering::Less) {
         return Some(format!(
             "no distinct match: the best alignment differs from the others by too little (best cost {:.3} of the median), e.g. a frame with no content or noise only",
             best / median
