@@ -51,6 +51,11 @@ pub struct RealPairsArgs {
     /// Targets: png (8-bit sRGB), exr (linear) or both.
     #[arg(long, default_value = "png", value_name = "KIND")]
     pub target: String,
+    /// ISP of the rendered targets: day2night (default) or release, the authors' release
+    /// ISP as `render --isp release` does it (its own crop and orientation; docs/isp.md).
+    /// A target copied from the release's processed tree is copied either way.
+    #[arg(long, default_value = "day2night", value_name = "ISP")]
+    pub isp: String,
     /// Scenes processed in parallel; default: number of CPUs.
     #[arg(long, value_name = "N")]
     pub jobs: Option<usize>,
@@ -87,6 +92,11 @@ pub fn run(args: RealPairsArgs) -> CmdResult {
         .layout
         .parse()
         .map_err(|e| usage(format!("--layout: {e}")))?;
+    let release_isp = match args.isp.as_str() {
+        "day2night" => false,
+        "release" => true,
+        i => return Err(usage(format!("--isp {i:?}: use day2night or release"))),
+    };
     let target = match args.target.as_str() {
         "png" => TargetKind::Png,
         "exr" => TargetKind::Exr,
@@ -113,6 +123,7 @@ pub fn run(args: RealPairsArgs) -> CmdResult {
         release_isos: parse_isos(&args.iso)?,
         max_motion_px: args.max_motion,
         target,
+        release_isp,
     };
     let opts = RunOptions {
         scenes_dir: args.scenes.clone(),

@@ -22,6 +22,7 @@ pub mod discover;
 pub mod motion;
 pub mod outputs;
 pub mod processed;
+pub mod release_targets;
 pub mod run;
 pub mod scene;
 
@@ -81,6 +82,10 @@ pub struct PairOptions {
     pub max_motion_px: f64,
     /// Targets written.
     pub target: TargetKind,
+    /// Targets rendered by the authors' release ISP (`--isp release`) instead of
+    /// day2night's. Left out of the fingerprint when false, so earlier outputs still match.
+    #[serde(skip_serializing_if = "std::ops::Not::not")]
+    pub release_isp: bool,
 }
 
 impl Default for PairOptions {
@@ -90,6 +95,7 @@ impl Default for PairOptions {
             release_isos: RELEASE_NOISY_ISOS.to_vec(),
             max_motion_px: DEFAULT_MAX_MOTION_PX,
             target: TargetKind::Png,
+            release_isp: false,
         }
     }
 }

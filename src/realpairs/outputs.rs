@@ -10,7 +10,8 @@
 //! clean raw's AsShotNeutral, which is the first low-ISO frame's; 8-bit sRGB samples are
 //! `(encode(v) * 255 + 0.5) as u8` (docs/real-pairs.md, "Target"). In the release-processed
 //! layout the release's own target `clean/NNN.png` is copied instead when present (checked
-//! by [`super::scene::prepare`]).
+//! by [`super::scene::prepare`]). With `--isp release` the rendered targets are the
+//! release ISP's ([`super::release_targets`]).
 
 use super::discover::{FileRef, ScenePlan};
 use super::scene::{FrameCheck, Prepared};
@@ -123,7 +124,10 @@ pub fn write_scene(
         neutral: Some(neutral),
         ..RenderOptions::default()
     };
-    if render_png || opts.target.exr() {
+    let which = (render_png, opts.target.exr());
+    if opts.release_isp && (render_png || opts.target.exr()) {
+        super::release_targets::write(clean, neutral, &dng, which, sink, &mut stages)?;
+    } else if render_png || opts.target.exr() {
         check_render(clean, ropts.opcodes, ropts.crop, ropts.orient)?;
         let rgb = render_linear(clean, &ropts)?;
         if render_png {

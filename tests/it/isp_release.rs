@@ -148,3 +148,45 @@ fn contradictory_flags_are_refused() {
     let o = cli("render", &day, &out, &["--isp", "libraw"]);
     assert!(String::from_utf8_lossy(&o.stderr).contains("--isp libraw"));
 }
+
+/// Every file under `dir` whose name ends with `suffix`.
+fn files_ending(dir: &Path, suffix: &str) -> Vec<PathBuf> {
+    let mut out = Vec::new();
+    for e in std::fs::read_dir(dir).unwrap() {
+        let p = e.unwrap().path();
+        if p.is_dir() {
+            out.extend(files_ending(&p, suffix));
+        } else if p.to_string_lossy().ends_with(suffix) {
+            out.push(p);
+        }
+    }
+    out
+}
+
+/// `real-pairs --isp release`: the target is `render --isp release` of the clean raw it
+/// wrote (same neutral), byte for byte in its pixels; the default ISP's target differs.
+#[test]
+fn real_pairs_render_targets_with_the_release_isp() {
+    use crate::real_pairs::{ok, real_pairs, simple_scene, synth};
+    let d = tempfile::tempdir().unwrap();
+    let s = d.path().join("synth");
+    synth(&s, 2, &["--motion", "none"]);
+    let scenes = d.path().join("scenes");
+    simple_scene(&scenes.join("night/a"), &s);
+    let (rel, own) = (d.path().join("rel"), d.path().join("own"));
+    ok(&real_pairs(&scenes, &rel, &["--isp", "release"]));
+    ok(&real_pairs(&scenes, &own, &[]));
+    let targets = files_ending(&rel, ".png");
+    assert_eq!(targets.len(), 1, "{targets:?}");
+    let clean = files_ending(&rel, ".dng")
+        .into_iter()
+        .find(|p| !p.to_string_lossy().contains("iso"))
+        .expect("the clean raw");
+    let again = d.path().join("again.png");
+    ok(&render_release(&clean, &again, &[]));
+    assert_eq!(rgb8(&targets[0]), rgb8(&again));
+    let theirs = files_ending(&own, ".png");
+    assert_ne!(rgb8(&targets[0]), rgb8(&theirs[0]));
+    let o = real_pairs(&scenes, &d.path().join("x"), &["--isp", "libraw"]);
+    assert!(String::from_utf8_lossy(&o.stderr).contains("--isp"));
+}
