@@ -452,3 +452,43 @@ fn a_second_signal_leaves_a_whole_scene_or_none() {
         }
     }
 }
+
+#[test]
+fn saturated_sites_are_white_counted_and_documented() {
+    let d = tempfile::tempdir().unwrap();
+    let s = d.path().join("synth");
+    synth(&s, 3, &["--motion", "none"]);
+    let root = d.path().join("scenes");
+    simple_scene(&root.join("a"), &s);
+    // Three sites clipped in one frame of the burst only.
+    let f = frames(&s, 50)[1].clone();
+    let img = day2night::dng::read_dng(&f).unwrap();
+    let a = img.active_area();
+    let sites: Vec<usize> = (0..3)
+        .map(|k| (a.top as usize + 40 + 2 * k) * img.width + a.left as usize + 40)
+        .collect();
+    let white = img.meta.levels.white as u16;
+    let clipped = sites.clone();
+    altered(&f, &root.join("a").join(f.file_name().unwrap()), move |i| {
+        for &k in &clipped {
+            i.data[k] = white;
+        }
+    });
+    let out = d.path().join("out");
+    ok(&real_pairs(&root, &out, &[]));
+    let merged = day2night::dng::read_dng(&out.join("real/clean_raw/a.dng")).unwrap();
+    let m = meta(&out, "a");
+    let count = m["merge"]["saturated_sites"].as_u64().unwrap();
+    assert!(count >= 3, "{m}");
+    for &k in &sites {
+        // White, not the mean of one clipped and two unclipped samples.
+        assert_eq!(merged.data[k] as f64, merged.meta.levels.white, "site {k}");
+    }
+    let doc =
+        std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("docs/real-pairs.md"))
+            .unwrap();
+    assert!(
+        doc.contains("**Saturated sites.**") && doc.contains("`merge.saturated_sites`"),
+        "docs/real-pairs.md does not say what happens at saturated sites"
+    );
+}
