@@ -2,9 +2,9 @@
 //! `write_unit`, `write_units`), parsed through the library's option table
 //! (`day2night::synth::options::OPTIONS`, the one declaration of each option that the
 //! command line's flags are also made from), and the jobs built from them, cached per
-//! process. Each value is type checked here (a `TypeError` naming the keyword), integers
-//! against the table's range (a `ValueError` naming the keyword, the value and the range);
-//! the table's setter parses the rest (a `ValueError` naming the keyword, the value and
+//! process. Each value is type checked here (a `TypeError` naming the keyword); the table
+//! checks an integer against its range (a `ValueError` naming the keyword, the value and
+//! the range) and its setter parses the rest (a `ValueError` naming the keyword, the value and
 //! what it accepts). An unknown keyword lists the keywords the function takes.
 
 use crate::args;
@@ -205,11 +205,8 @@ fn value(d: &OptionDef, key: &str, v: &Bound<'_, PyAny>) -> PyResult<Value> {
         Kind::Switch => Value::Switch(v.extract::<bool>().map_err(|_| {
             PyTypeError::new_err(format!("{key} must be a bool (got {})", type_name(v)))
         })?),
-        Kind::Int { lo, hi, late, .. } => Value::Int(if late {
-            args::integer(v, key, lo, hi)?
-        } else {
-            i128::from(args::in_range::<u64>(v, key, lo, hi)?)
-        }),
+        // the type here; the range is the table's check (Draft::set, or Draft::finish)
+        Kind::Int { lo, hi, .. } => Value::Int(args::integer(v, key, lo, hi)?),
         Kind::Float => Value::Float(args::float(v, key)?),
         Kind::Text | Kind::Choice(_) => Value::Text(args::string(v, key)?),
         Kind::Path => Value::Path(v.extract::<PathBuf>().map_err(|_| {

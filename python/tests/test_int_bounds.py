@@ -93,7 +93,7 @@ def test_lights_and_bulbs(raw, cli, tmp_path, name, flag):
     cli("synth", raw.path, "-o", tmp_path / "a", flag, LIGHTS_MAX, "--iso", "none",
         "--target", "none")
     r = cli("synth", raw.path, "-o", tmp_path / "b", flag, LIGHTS_MAX + 1, check=False)
-    assert r.returncode != 0 and f"at most {LIGHTS_MAX}" in r.stderr
+    assert r.returncode != 0 and f"{flag}: {LIGHTS_MAX + 1} is outside 0..={LIGHTS_MAX}" in r.stderr
 
 
 def test_crop(raw):

@@ -21,7 +21,7 @@ pub struct SynthOpts {
 
 /// The clap argument of one option.
 fn arg(d: &'static OptionDef) -> Arg {
-    let a = Arg::new(d.name).long(d.name).help(d.help);
+    let a = Arg::new(d.name).long(d.name).help(d.help_text());
     if d.kind == Kind::Switch {
         return a.action(ArgAction::SetTrue);
     }

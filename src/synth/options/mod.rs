@@ -66,6 +66,17 @@ pub enum Width {
     U64,
 }
 
+impl Width {
+    /// The type's largest value.
+    pub fn max(self) -> u64 {
+        match self {
+            Width::U8 => u64::from(u8::MAX),
+            Width::U32 => u64::from(u32::MAX),
+            Width::U64 => u64::MAX,
+        }
+    }
+}
+
 /// One value of a [`Kind::Choice`] option.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Choice {
@@ -125,6 +136,18 @@ impl OptionDef {
     /// The Python keyword.
     pub fn python_name(&self) -> String {
         self.name.replace('-', "_")
+    }
+
+    /// The help text with what the kind says of the value: an integer's range when it is
+    /// narrower than its type (`[range: 1..=64]`). The range is written once, in the kind:
+    /// [`Draft::set`] checks it and the help shows it.
+    pub fn help_text(&self) -> String {
+        match self.kind {
+            Kind::Int { lo, hi, width, .. } if (lo, hi) != (0, width.max()) => {
+                format!("{} [range: {lo}..={hi}]", self.help)
+            }
+            _ => self.help.to_string(),
+        }
     }
 
     /// This option's name as `spelling` writes it.
@@ -231,17 +254,34 @@ impl Draft {
         d
     }
 
-    /// Apply `value` to the option `def`; an error names the option in `spelling`.
+    /// Apply `value` to the option `def`; an error names the option in `spelling`. An
+    /// integer is checked against its kind's range here (the one check of it; a `late`
+    /// range is part of a check of several options in [`Draft::finish`]).
     pub fn set(
         &mut self,
         def: &OptionDef,
         value: Value,
         spelling: Spelling,
     ) -> std::result::Result<(), OptionError> {
-        (def.set)(self, value).map_err(|error| OptionError {
+        let named = |error| OptionError {
             option: Some(def.spelled(spelling)),
             error,
-        })
+        };
+        if let (
+            Kind::Int {
+                lo,
+                hi,
+                late: false,
+                ..
+            },
+            Value::Int(n),
+        ) = (def.kind, &value)
+        {
+            if *n < i128::from(lo) || *n > i128::from(hi) {
+                return Err(named(Error::invalid(format!("{n} is outside {lo}..={hi}"))));
+            }
+        }
+        (def.set)(self, value).map_err(named)
     }
 
     /// The configuration: the release preset applied (it checks the options it fixes),

@@ -176,3 +176,45 @@ fn new_options_set_their_fields() {
     assert_eq!(o.bulb_gain, [10.0, 20.0]);
     assert_eq!(o.dim_range, [0.2, 0.3]);
 }
+
+#[test]
+fn ranges_are_written_once() {
+    for d in OPTIONS {
+        if let Kind::Int { lo, hi, late, .. } = d.kind {
+            // the help shows the kind's range: the text does not spell it again
+            for spelled in [format!("{lo} to {hi}"), format!("{lo}..={hi}")] {
+                assert!(
+                    !d.help.contains(&spelled),
+                    "{}: {spelled} in its help",
+                    d.name
+                );
+            }
+            if late {
+                continue;
+            }
+            // and Draft::set checks it, naming the option
+            let mut draft = Draft::new(1);
+            let e = draft
+                .set(d, Value::Int(i128::from(hi) + 1), Spelling::Python)
+                .unwrap_err()
+                .to_string();
+            assert_eq!(
+                e,
+                format!(
+                    "{}: {} is outside {lo}..={hi}",
+                    d.python_name(),
+                    u128::from(hi) + 1
+                )
+            );
+            draft
+                .set(d, Value::Int(i128::from(hi)), Spelling::Cli)
+                .unwrap();
+        }
+    }
+    let burst = find("burst").unwrap();
+    assert!(burst.help_text().ends_with(" [range: 1..=64]"));
+    assert_eq!(
+        find("seed").unwrap().help_text(),
+        find("seed").unwrap().help
+    );
+}
