@@ -372,3 +372,26 @@ def test_the_release_protocol_end_to_end(tmp_path, cli):
     _, theirs = pairs.synth_pairs(days / "day_00.dng", "local", 0, isos=())["clean"]
     assert not np.array_equal(y, theirs)  # day2night's ISP renders another target
     assert (run / "table.json").is_file()
+
+
+def test_real_pairs_isp_release_targets_make_release_the_default(tmp_path, cli):
+    """real-pairs --isp release renders the bursts' targets with the release's ISP: the
+    experiment's --targets then defaults to release, and the pairs line up."""
+    import experiment_mini as em
+    from conftest import FIXTURES
+
+    from day2night.experiment import pairs, realset
+
+    release, _ = em.bursts(cli, tmp_path / "captures", FIXTURES / "day.dng", frames=2)
+    real = tmp_path / "real"
+    cli("real-pairs", release, "-o", real, "--isp", "release", "-q")
+    assert protocol.real_target_isp(real) == "release"
+    scene = realset.read_real(real)[0]
+    x, y = pairs.real_pair(scene, None, targets="release", source="release")
+    from test_experiment_orientation import correlations, edges
+
+    r = correlations(edges(x), edges(np.asarray(y, np.float64) / 255))
+    assert max(r, key=r.get) == (0, 0) and r[0, 0] > 0.8, r[0, 0]
+    plain = tmp_path / "plain"
+    cli("real-pairs", release, "-o", plain, "-q")
+    assert protocol.real_target_isp(plain) == "day2night"
