@@ -243,7 +243,7 @@ pub fn px_text(v: f64) -> String {
     if v == 0.0 || (1e-3..1e6).contains(&v.abs()) {
         let t = format!("{v:.3}");
         let t = t.trim_end_matches('0').trim_end_matches('.');
-        if t.is_empty() || t == "-" {
+        if t.is_empty() || t == "-" || t == "-0" {
             "0".into()
         } else {
             t.to_string()

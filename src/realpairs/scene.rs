@@ -115,8 +115,8 @@ fn check_motion(c: &FrameCheck, limit: f64, against: &str, w: &mut Diagnostics) 
     if m > limit || !m.is_finite() {
         let [dx, dy] = c.motion_px.unwrap_or([f64::NAN; 2]);
         return Err(Error::invalid(format!(
-            "{} moved {:.2} px (dx {:.2}, dy {:.2}) against {against}: more than --max-motion {} px (a target merged or paired with it would be blurred or misaligned)",
-            c.name, m, dx, dy, px_text(limit)
+            "{} moved {} px (dx {}, dy {}) against {against}: more than --max-motion {} px (a target merged or paired with it would be blurred or misaligned)",
+            c.name, px_text(m), px_text(dx), px_text(dy), px_text(limit)
         )));
     }
     Ok(())
