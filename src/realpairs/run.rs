@@ -95,6 +95,9 @@ pub struct Summary {
     pub manifest: PathBuf,
     /// Wall time in seconds.
     pub seconds: f64,
+    /// Scenes (inputs) the previous manifest recorded that SCENES no longer holds: their
+    /// records are dropped, their files left in place (as `dataset` does).
+    pub dropped: Vec<String>,
 }
 
 impl Summary {
@@ -114,6 +117,13 @@ impl Summary {
             s.push_str(&format!(
                 "\nreal-pairs: work done, by reason: {}",
                 parts.join(", ")
+            ));
+        }
+        if !self.dropped.is_empty() {
+            s.push_str(&format!(
+                "\nreal-pairs: dropped the manifest records of {} scenes no longer in SCENES (their files were left in place): {}",
+                self.dropped.len(),
+                self.dropped.join(", ")
             ));
         }
         // Each error already starts with "scene <input>: ".
@@ -240,6 +250,12 @@ pub fn run(opts: &RunOptions, pairs: &PairOptions) -> Result<Summary> {
         }
     }
     summary.failures.sort();
+    let here: HashSet<&str> = scenes.iter().map(|s| s.rel.as_str()).collect();
+    summary.dropped = previous
+        .keys()
+        .filter(|(rel, _)| !here.contains(rel.as_str()))
+        .map(|(rel, _)| rel.clone())
+        .collect();
     summary
         .warnings
         .sort_by(|a, b| (&a.subject, &a.message).cmp(&(&b.subject, &b.message)));

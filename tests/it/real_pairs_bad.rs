@@ -492,3 +492,28 @@ fn saturated_sites_are_white_counted_and_documented() {
         "docs/real-pairs.md does not say what happens at saturated sites"
     );
 }
+
+#[test]
+fn a_scene_gone_from_scenes_is_listed_with_its_files_left() {
+    let d = tempfile::tempdir().unwrap();
+    let s = d.path().join("synth");
+    synth(&s, 2, &["--motion", "none"]);
+    let root = d.path().join("scenes");
+    simple_scene(&root.join("a"), &s);
+    simple_scene(&root.join("b"), &s);
+    let out = d.path().join("out");
+    ok(&real_pairs(&root, &out, &[]));
+    std::fs::remove_dir_all(root.join("b")).unwrap();
+    let o = real_pairs(&root, &out, &["--json"]);
+    let err = ok(&o);
+    assert!(
+        err.contains("dropped the manifest records of 1 scenes no longer in SCENES")
+            && err.contains(": b"),
+        "{err}"
+    );
+    let sum: Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(sum["dropped"], serde_json::json!(["b"]));
+    let recs = manifest(&out);
+    assert_eq!(recs.len(), 1);
+    assert!(out.join("real/clean_raw/b.dng").is_file());
+}
