@@ -124,3 +124,61 @@ pub fn to_srgb(cam_to_xyz: &Mat3, xyz_to_srgb: &Mat3, rgb: [f64; 3]) -> [f64; 3]
     let xyz = apply(cam_to_xyz, rgb).map(|v| v.clamp(0.0, 1.0));
     apply(xyz_to_srgb, xyz).map(|v| v.clamp(0.0, 1.0))
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::isp::release::meta::{Black, ReleaseMeta};
+
+    fn meta(cm1: [f64; 9], cm2: [f64; 9], neutral: [f64; 3]) -> ReleaseMeta {
+        ReleaseMeta {
+            black: Black::Scalar(0.0),
+            white: 1.0,
+            cfa: [0, 1, 1, 2],
+            neutral,
+            cm1,
+            cm2,
+            orientation: 1,
+            second_crop: None,
+        }
+    }
+
+    const EYE: [f64; 9] = [1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0];
+
+    #[test]
+    fn srgb_rows_sum_to_one() {
+        for row in xyz_to_srgb() {
+            assert!((row.iter().sum::<f64>() - 1.0).abs() < 1e-15);
+        }
+    }
+
+    /// Identity matrices and a flat neutral: XYZ (1, 1, 1), illuminant E (about 5455 K), and
+    /// the identity back whatever the mix.
+    #[test]
+    fn identity_camera() {
+        let (m, cct) = camera_to_xyz(&meta(EYE, EYE, [1.0; 3])).unwrap();
+        assert!((cct - 5455.0).abs() < 10.0, "{cct}");
+        for (i, row) in m.iter().enumerate() {
+            for (j, v) in row.iter().enumerate() {
+                assert!((v - f64::from(u8::from(i == j))).abs() < 1e-12);
+            }
+        }
+        let px = to_srgb(&m, &xyz_to_srgb(), [2.0, -1.0, 0.5]);
+        assert!(px.iter().all(|v| (0.0..=1.0).contains(v)));
+    }
+
+    /// The release's missing ColorMatrix2 (all ones) mixes in only below 6500 K: a neutral
+    /// that the search puts at a low CCT gives another matrix than ColorMatrix1 alone.
+    #[test]
+    fn missing_second_matrix_mixes_in_at_low_cct() {
+        let cm1 = [
+            0.4716, 0.0603, -0.083, -0.7798, 1.5474, 0.248, -0.1496, 0.1937, 0.6651,
+        ];
+        let ones = [1.0; 9];
+        let (_, daylight) = camera_to_xyz(&meta(cm1, ones, [0.39, 1.0, 0.72])).unwrap();
+        let (warm, t) = camera_to_xyz(&meta(cm1, ones, [0.8, 1.0, 0.3])).unwrap();
+        let (alone, _) = camera_to_xyz(&meta(cm1, cm1, [0.8, 1.0, 0.3])).unwrap();
+        assert!(t < daylight, "{t} vs {daylight}");
+        assert!((warm[0][0] - alone[0][0]).abs() > 1e-3);
+    }
+}

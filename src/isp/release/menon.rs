@@ -317,3 +317,55 @@ where
     });
     out
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn mirror_reflects_about_the_edge_samples() {
+        let m: Vec<usize> = (-3..8).map(|i| mirror(i, 5)).collect();
+        assert_eq!(m, vec![3, 2, 1, 0, 1, 2, 3, 4, 3, 2, 1]);
+        assert_eq!(mirror(-4, 1), 0);
+        assert_eq!(mirror(9, 2), 1);
+    }
+
+    /// A mosaic of one colour comes back as that colour everywhere, borders included, for
+    /// each Bayer phase (the filters' taps sum to 1 and the mirror keeps the CFA phase).
+    #[test]
+    fn one_colour_is_kept_exactly() {
+        let rgb = [5000u16, 9000, 2000];
+        for cfa in [[0, 1, 1, 2], [1, 0, 2, 1], [1, 2, 0, 1], [2, 1, 1, 0]] {
+            let (w, h) = (9, 6);
+            let codes: Vec<u16> = (0..w * h)
+                .map(|i| rgb[cfa[(((i / w) & 1) << 1) | ((i % w) & 1)] as usize])
+                .collect();
+            let out = demosaic(&codes, w, h, cfa);
+            for px in out.chunks_exact(3) {
+                assert_eq!(px, [5000.0, 9000.0, 2000.0], "{cfa:?}");
+            }
+        }
+    }
+
+    /// The sites' own samples are kept where the refining step does not touch them (green
+    /// at green sites), and an edge picks the direction along it.
+    #[test]
+    fn greens_kept_and_edges_followed() {
+        let (w, h) = (8, 8);
+        // Vertical stripes: columns 0-3 dark, 4-7 bright.
+        let codes: Vec<u16> = (0..w * h)
+            .map(|i| if i % w < 4 { 1000 } else { 12000 })
+            .collect();
+        let out = demosaic(&codes, w, h, [0, 1, 1, 2]);
+        for r in 0..h {
+            for c in 0..w {
+                if (r + c) % 2 == 1 {
+                    assert_eq!(out[3 * (r * w + c) + 1], f64::from(codes[r * w + c]));
+                }
+            }
+        }
+        // Away from the edge the flat areas stay flat.
+        assert_eq!(out[3 * (3 * w) + 1], 1000.0);
+        assert_eq!(out[3 * (3 * w + 7)], 12000.0);
+    }
+}

@@ -87,3 +87,59 @@ pub fn codes(raw: &RawImage, meta: &ReleaseMeta) -> Result<Codes> {
         data,
     })
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::raw::{Bayer, RawMeta, Rect};
+
+    fn raw(w: usize, h: usize, meta: RawMeta) -> RawImage {
+        RawImage {
+            width: w,
+            height: h,
+            data: (0..w * h).map(|i| (i * 37 % 4096) as u16).collect(),
+            meta,
+        }
+    }
+
+    /// The window is the active area cut again by ActiveArea's own numbers, clamped; the
+    /// codes follow the stated arithmetic site by site (float32 with one black level).
+    #[test]
+    fn second_crop_and_codes() {
+        let mut m = RawMeta::new_bayer(Bayer::GRBG, 12, 100.0, 4000.0);
+        m.active_area = Some(Rect {
+            top: 2,
+            left: 4,
+            bottom: 12,
+            right: 16,
+        });
+        let r = raw(16, 12, m);
+        let meta = ReleaseMeta::of(&r, Some([0.5, 1.0, 0.8])).unwrap();
+        // Active area 12 x 10; cut by rows 2..12, columns 4..16 -> rows 2..10, columns 4..12.
+        assert_eq!(window(&r, &meta).unwrap(), (2, 4, 8, 8));
+        let c = codes(&r, &meta).unwrap();
+        assert_eq!((c.width, c.height), (8, 8));
+        for (i, code) in c.data.iter().enumerate() {
+            let (y, x) = (i / 8, i % 8);
+            let v = r.get(2 + 2 + y, 4 + 4 + x);
+            let n = [0.5f32, 1.0, 0.8][Bayer::GRBG.color_at(y, x) as usize];
+            let want = ((v as f32 - 100.0).max(0.0) / 3900.0 / n).clamp(0.0, 1.0);
+            assert_eq!(*code, (f64::from(want) * 16383.0) as u16);
+        }
+    }
+
+    #[test]
+    fn a_crop_that_leaves_nothing_is_an_error() {
+        let mut m = RawMeta::new_bayer(Bayer::RGGB, 12, 0.0, 4095.0);
+        m.active_area = Some(Rect {
+            top: 6,
+            left: 0,
+            bottom: 8,
+            right: 8,
+        });
+        let r = raw(8, 8, m);
+        let meta = ReleaseMeta::of(&r, None).unwrap();
+        let e = window(&r, &meta).unwrap_err().to_string();
+        assert!(e.contains("release"), "{e}");
+    }
+}
