@@ -9,8 +9,10 @@
 //!
 //! The release's target `clean/NNN.png` is checked before it is copied
 //! ([`read_target_png`]): an 8-bit RGB PNG (what `cv2.imwrite` writes) whose size is the
-//! scene's rendered size, as the layout defines it: the active area (the release's ISP crops
-//! it) or the DefaultCrop (day2night's `render`), or the clean_raw PNG's size, each with
+//! scene's rendered size, as the layout defines it: the release ISP's window (the active
+//! area cropped once more by NumPy's slicing with the ActiveArea rectangle,
+//! [`crate::isp::release::window`]), the active area, the DefaultCrop (day2night's
+//! `render`), or the clean_raw PNG's size, each with
 //! width and height swapped when the iso_50 frame's Orientation turns the image by 90
 //! degrees (5 to 8), as both ISPs do.
 
@@ -87,6 +89,9 @@ pub fn clean_raw(png: (usize, usize, Vec<u16>), frame: &RawImage) -> Result<RawI
 pub fn target_sizes(frame: &RawImage, png: (usize, usize)) -> Vec<(usize, usize)> {
     let a = frame.active_area();
     let mut v = vec![(a.width(), a.height()), png];
+    if let Ok((_, _, h, w)) = crate::isp::release::window(frame) {
+        v.push((w, h));
+    }
     if let Some([w, h]) = frame.meta.default_crop_size {
         if w.is_finite() && h.is_finite() && w >= 1.0 && h >= 1.0 {
             v.push((w.round() as usize, h.round() as usize));
@@ -95,7 +100,12 @@ pub fn target_sizes(frame: &RawImage, png: (usize, usize)) -> Vec<(usize, usize)
     if (5..=8).contains(&frame.meta.orientation) {
         v.iter_mut().for_each(|s| *s = (s.1, s.0));
     }
-    v.dedup();
+    let mut seen = Vec::new();
+    v.retain(|s| {
+        let new = !seen.contains(s);
+        seen.push(*s);
+        new
+    });
     v
 }
 

@@ -517,3 +517,51 @@ fn a_scene_gone_from_scenes_is_listed_with_its_files_left() {
     assert_eq!(recs.len(), 1);
     assert!(out.join("real/clean_raw/b.dng").is_file());
 }
+
+/// The release's own renders (shared data `release-isp/`, Orientation 3 and 6, a second
+/// crop by the ActiveArea) are targets of the scene's size: a processed tree of each, with
+/// the frame's visible raw as its clean raw, is accepted and its target copied.
+#[test]
+#[cfg_attr(
+    d2n_missing = "shared-data",
+    ignore = "needs ../shared/data (release-isp/): the release's own renders"
+)]
+fn the_release_renders_are_targets_of_the_scenes_size() {
+    let d = tempfile::tempdir().unwrap();
+    let root = d.path().join("night_real");
+    let refs = crate::common::shared_data().join("release-isp");
+    for (nnn, o) in [("003", 3), ("006", 6)] {
+        let dng = refs.join(format!("day_orient{o}.dng"));
+        let img = day2night::dng::read_dng(&dng).unwrap();
+        let a = img.active_area();
+        let mut vis = Vec::new();
+        for r in a.top as usize..a.bottom as usize {
+            vis.extend_from_slice(&img.data[r * img.width + a.left as usize..][..a.width()]);
+        }
+        let png: image::ImageBuffer<image::Luma<u16>, Vec<u16>> =
+            image::ImageBuffer::from_raw(a.width() as u32, a.height() as u32, vis).unwrap();
+        for sub in [
+            "clean_raw",
+            "clean",
+            "dng/iso_50",
+            "dng/iso_1600",
+            "dng/iso_3200",
+        ] {
+            std::fs::create_dir_all(root.join(sub)).unwrap();
+        }
+        png.save(root.join(format!("clean_raw/{nnn}.png"))).unwrap();
+        let target = refs.join(format!("day_orient{o}_release.png"));
+        std::fs::copy(&target, root.join(format!("clean/{nnn}.png"))).unwrap();
+        for iso in [50, 1600, 3200] {
+            std::fs::copy(&dng, root.join(format!("dng/iso_{iso}/{nnn}.dng"))).unwrap();
+        }
+    }
+    let out = d.path().join("out");
+    ok(&real_pairs(&root, &out, &[]));
+    for (nnn, o) in [("003", 3), ("006", 6)] {
+        assert_eq!(
+            std::fs::read(out.join(format!("real/target/{nnn}.png"))).unwrap(),
+            std::fs::read(refs.join(format!("day_orient{o}_release.png"))).unwrap()
+        );
+    }
+}
