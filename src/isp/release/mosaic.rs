@@ -32,10 +32,13 @@ pub fn window(raw: &RawImage, meta: &ReleaseMeta) -> Result<(usize, usize, usize
     };
     let (h, w) = (bottom.saturating_sub(top), right.saturating_sub(left));
     if h < 2 || w < 2 {
+        let by = match meta.second_crop {
+            Some(r) => format!(", cropped again by ActiveArea {r:?},"),
+            None => String::new(),
+        };
         return Err(Error::unsupported(format!(
-            "--isp release: the release's crop of the {aw}x{ah} active area by ActiveArea \
-             {:?} leaves {w}x{h} pixels (need at least 2x2)",
-            meta.second_crop
+            "--isp release: the {aw}x{ah} active area{by} leaves {w}x{h} pixels (the \
+             release needs at least 2x2)"
         )));
     }
     Ok((top, left, h, w))
