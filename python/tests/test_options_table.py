@@ -126,3 +126,21 @@ def test_parameters_bind_as_before(raw, day_dng, tmp_path):
         day2night.dataset_units(tmp_path, variants=0)
     with pytest.raises(TypeError):
         day2night.dataset_units(tmp_path, None, 2)
+
+
+def test_noise_gain_scales_the_noise(raw):
+    """--noise-gain K: the noise model's S and O times K^2 (its standard deviation times K),
+    the clean raw unchanged; K = 1 is the model as calibrated."""
+    base = day2night.synthesize(raw, isos=(1600,), crop=(0, 0, 32, 32), target=None)
+    one = day2night.synthesize(raw, isos=(1600,), crop=(0, 0, 32, 32), target=None,
+                               noise_gain=1)
+    two = day2night.synthesize(raw, isos=(1600,), crop=(0, 0, 32, 32), target=None,
+                               noise_gain=2)
+    assert one["noise_profile"] == base["noise_profile"]
+    assert (one["noisy"][1600] == base["noisy"][1600]).all()
+    for (s1, o1), (s2, o2) in zip(base["noise_profile"][1600], two["noise_profile"][1600]):
+        assert s2 == pytest.approx(4 * s1) and o2 == pytest.approx(4 * o1)
+    assert (two["clean"] == base["clean"]).all()
+    assert not (two["noisy"][1600] == base["noisy"][1600]).all()
+    with pytest.raises(ValueError, match="noise gain must be > 0"):
+        day2night.synthesize(raw, isos=(1600,), crop=(0, 0, 32, 32), noise_gain=0)

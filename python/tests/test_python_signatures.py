@@ -249,18 +249,18 @@ NEEDS = {"motion": {"burst": 2}, "shake_step": {"burst": 2}, "shake_roll": {"bur
 VALID = {"ambient_gain": 0.1, "bulb_gain": (60, 80), "dim_range": (0.3, 0.5),
          "day_neutral": (0.5, 1.0, 0.6), "mask_eval": "truncated:3", "opcodes": "ignore",
          "motion": "none", "shake_step": 0.3, "shake_roll": 0.01, "warp_interp": "bilinear",
-         "exr_compression": "piz", "iso": "800"}
+         "exr_compression": "piz", "iso": "800", "noise_gain": 2.0}
 INVALID = {"ambient_gain": -1.0, "bulb_gain": (100, 50), "dim_range": (0.9, 0.5),
            "day_neutral": (1, 2), "mask_eval": "fast", "opcodes": "sometimes",
            "motion": "walk", "shake_step": -1.0, "shake_roll": float("nan"),
            "warp_interp": "nearest", "exr_compression": "jpeg", "iso": "0",
            "illuminants": "nowhere.json", "brightness": "nowhere.json",
-           "noise_model": "nowhere.json"}
+           "noise_model": "nowhere.json", "noise_gain": 0.0}
 # What an error of each says when it is not the keyword (the options checked together).
 NAMED = {"dim_range": "dimming range", "bulb_gain": "bulb gain", "ambient_gain": "ambient gain",
          "illuminants": "nowhere.json", "brightness": "nowhere.json",
          "noise_model": "nowhere.json", "shake_step": "shake", "shake_roll": "shake",
-         "iso": "ISO"}
+         "iso": "ISO", "noise_gain": "noise gain"}
 
 
 def samples(key, files):

@@ -21,6 +21,17 @@ impl NoiseParams {
             positions: [[s, o]; 4],
         }
     }
+    /// The model with its standard deviation multiplied by `gain` (`S` and `O` by
+    /// `gain^2`); itself, bit for bit, for a gain of 1.
+    pub fn with_gain(self, gain: f64) -> NoiseParams {
+        if gain == 1.0 {
+            return self;
+        }
+        let g2 = gain * gain;
+        NoiseParams {
+            positions: self.positions.map(|[s, o]| [s * g2, o * g2]),
+        }
+    }
     /// Variance of normalized `y` at 2x2 position `pos`: `max(0, S*y + O)` (0 for NaN).
     #[inline]
     pub fn var_norm(&self, pos: usize, y: f64) -> f64 {

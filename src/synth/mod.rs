@@ -173,6 +173,18 @@ pub struct SynthOptions {
     /// single frame, so single-frame sidecars and dataset fingerprints are unchanged.
     #[serde(default, skip_serializing_if = "burst::BurstOptions::is_single")]
     pub burst: burst::BurstOptions,
+    /// Factor on the noise model's standard deviation at every ISO (`--noise-gain`; 1: the
+    /// model as calibrated, absent from serialized options).
+    #[serde(default = "one", skip_serializing_if = "is_one")]
+    pub noise_gain: f64,
+}
+
+fn one() -> f64 {
+    1.0
+}
+
+fn is_one(x: &f64) -> bool {
+    *x == 1.0
 }
 
 impl Default for SynthOptions {
@@ -196,6 +208,7 @@ impl Default for SynthOptions {
             compat: Compat::default(),
             opcodes: OpcodeMode::Apply,
             burst: burst::BurstOptions::default(),
+            noise_gain: 1.0,
         }
     }
 }
@@ -269,6 +282,9 @@ impl SynthOptions {
         if !fin(&self.bulb_gain) || self.bulb_gain[0] < 0.0 || self.bulb_gain[0] > self.bulb_gain[1]
         {
             return Err(Error::invalid("bulb gain range must satisfy 0 <= lo <= hi"));
+        }
+        if !(self.noise_gain > 0.0 && self.noise_gain.is_finite()) {
+            return Err(Error::invalid("noise gain must be > 0"));
         }
         if !(self.ambient_gain >= 0.0 && self.ambient_gain.is_finite()) {
             return Err(Error::invalid("ambient gain must be >= 0"));

@@ -528,6 +528,11 @@ fn plan_noise(
     let choice = choose_noise_model(img, cal, opts, img.bayer()?, estimate)?;
     warnings.extend(choice.warnings);
     let model = choice.model;
+    if model.physics.is_some() && opts.noise_gain != 1.0 {
+        return Err(Error::invalid(
+            "--noise-gain scales a Gaussian noise model (S, O); a physics model is refused",
+        ));
+    }
     let clean_iso = img.meta.iso_or_default();
     // Physics model: its equivalent Gaussian at this image's levels (the NoiseProfile).
     let scale = img.meta.levels.white - img.meta.levels.black_max();
@@ -571,7 +576,7 @@ fn plan_noise(
         entries.push(NoisePlan {
             iso,
             seed: rng.next_u64(),
-            params: e.params,
+            params: e.params.with_gain(opts.noise_gain),
             extrapolated: e.extrapolated,
             physics,
         });

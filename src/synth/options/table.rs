@@ -279,6 +279,23 @@ embedded paper phone table with a warning. See docs/noise.md",
         },
     },
     OptionDef {
+        name: "noise-gain",
+        value_name: "K",
+        kind: Kind::Float,
+        default: Some("1"),
+        help: "Factor on the noise model's standard deviation at every ISO (> 0; S and O times \
+K^2; a Gaussian model only): noisier or cleaner inputs than the calibrated camera at the same \
+Exif ISO, for a network robust to a noise calibration that is off",
+        python: Python::Keyword,
+        python_alias: None,
+        synth_only: false,
+        sidecar: Some("noise_gain"),
+        set: |d, v| {
+            d.config.options.noise_gain = float(&v)?;
+            Ok(())
+        },
+    },
+    OptionDef {
         name: "replay",
         value_name: "SIDECAR.json",
         kind: Kind::Path,

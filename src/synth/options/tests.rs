@@ -70,6 +70,7 @@ fn serialized() -> serde_json::Value {
     o.local_lights = Some(1);
     o.day_neutral = Some([0.5, 1.0, 0.5]);
     o.opcodes = crate::isp::opcodes::OpcodeMode::Ignore;
+    o.noise_gain = 2.0;
     serde_json::to_value(&o).unwrap()
 }
 
