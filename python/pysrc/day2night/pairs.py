@@ -16,6 +16,7 @@ from collections import OrderedDict
 import numpy as np
 
 from ._native import check_int, night_pair, read_dng
+from .isos import NOISY_ISOS
 
 
 def pack_bayer(plane, meta, top=0, left=0):
@@ -78,7 +79,7 @@ class NightPairs:
     ...     for batch in loader: ...
     """
 
-    def __init__(self, day_dir, crop=512, isos=(1600, 3200), seed=0, crops_per_image=1,
+    def __init__(self, day_dir, crop=512, isos=NOISY_ISOS, seed=0, crops_per_image=1,
                  mode="local", cache=4, **options):
         self.day_dir = os.fspath(day_dir)
         if not os.path.isdir(self.day_dir):

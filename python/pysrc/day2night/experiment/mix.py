@@ -22,8 +22,9 @@ import numbers
 
 import numpy as np
 
+from ..isos import NOISY_ISOS
+
 RELEASE_SEED = 101
-NOISY_ISOS = (1600, 3200)
 
 
 class MixError(ValueError):

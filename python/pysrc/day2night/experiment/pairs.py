@@ -19,11 +19,11 @@ import pathlib
 
 import numpy as np
 
+from ..isos import NOISY_ISOS
 from ..train import cache as input_cache
 from .atomic import write_bytes
 from .png import read_png
 
-NOISY_ISOS = (1600, 3200)
 
 
 class PairError(ValueError):

@@ -8,6 +8,7 @@ import pathlib
 import shutil
 import sys
 
+from ..isos import NOISY_ISOS
 from . import folds as folds_mod
 from . import mix as mix_mod
 from . import realset, rows, runfolder
@@ -72,7 +73,7 @@ def check_config(exp):
 def read_inputs(exp):
     """The real set (its manifest, then every file the tasks read: sizes, SHA-256, DNGs,
     target PNGs) and the day DNGs, all read and checked."""
-    isos = (1600, 3200) if "noisy" in exp.tasks else ()
+    isos = NOISY_ISOS if "noisy" in exp.tasks else ()
     exp.days = day_images(exp.cfg["day"])
     try:
         scenes = realset.read_real(exp.cfg["real"], isos=isos)

@@ -24,11 +24,12 @@ import pathlib
 
 import numpy as np
 
+from ..isos import NOISY_ISOS  # noqa: F401  (re-exported)
+
 TARGETS = ("release", "day2night")
 NOISE = ("day2night", "release")
 SYNTH_ISO = ("alternate", "release")
 PROTOCOLS = ("day2night", "release")
-NOISY_ISOS = (1600, 3200)
 
 
 class ProtocolError(ValueError):

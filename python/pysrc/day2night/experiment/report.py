@@ -4,6 +4,7 @@ map, as PNGs under RUN/img/)."""
 
 import html
 
+from ..isos import NOISY_ISOS
 from . import curves
 from .atomic import write_text
 from .table import markdown
@@ -48,7 +49,7 @@ def write(exp, t):
     for r in t["rows"]:
         task, row = r["task"], r["row"]
         parts.append(f"<h2>{html.escape(r['label'])} ({task} task)</h2>")
-        keys = ["clean"] if task == "clean" else [1600, 3200]
+        keys = ["clean"] if task == "clean" else list(NOISY_ISOS)
         for sid in exp.report_scenes:
             unit = next((u for u in r["units"] if sid in u.get("test_scenes", [])), None)
             if unit is None:

@@ -20,6 +20,7 @@ unit (1-based; the trainer's D2N_TRAIN_KILL_AT set for that unit only), for the 
 import os
 import pathlib
 
+from ..isos import NOISY_ISOS
 from . import mix as mix_mod
 from . import pairs, prepare, presets, protocol, report, rows, runfolder, table
 from .atomic import write_json
@@ -115,7 +116,7 @@ class Experiment:
         if "clean" in self.tasks:
             names["clean"] = stem
         if "noisy" in self.tasks:
-            names.update({1600: f"{stem}_1600", 3200: f"{stem}_3200"})
+            names.update({iso: f"{stem}_{iso}" for iso in NOISY_ISOS})
         seed = self.cfg["seed"]
 
         def make():

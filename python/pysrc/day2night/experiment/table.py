@@ -8,6 +8,7 @@ such a mean is reported as "inf"."""
 
 import math
 
+from ..isos import NOISY_ISOS
 from .atomic import write_json, write_text
 from .rows import test_keys
 from .runfolder import read_scores
@@ -137,11 +138,12 @@ def markdown(t):
                          f"{_fmt(m['delta_e'], 4)} | {ps} |")
         lines.append("")
     if "noisy" in by_task:
-        lines += ["## Table 2: noisy (first frame at ISO 1600 and 3200)", "",
-                  "| model | ISO 1600 PSNR | ISO 1600 SSIM | ISO 3200 PSNR | ISO 3200 SSIM | "
+        lo, hi = NOISY_ISOS
+        lines += [f"## Table 2: noisy (first frame at ISO {lo} and {hi})", "",
+                  f"| model | ISO {lo} PSNR | ISO {lo} SSIM | ISO {hi} PSNR | ISO {hi} SSIM | "
                   "paper (same columns) |", "|---|---|---|---|---|---|"]
         for r in by_task["noisy"]:
-            a, b = r["mean"]["1600"], r["mean"]["3200"]
+            a, b = (r["mean"][str(iso)] for iso in NOISY_ISOS)
             p = PAPER["noisy"].get(r["row"])
             ps = f"{p[0]:.2f} / {p[1]:.4f} / {p[2]:.2f} / {p[3]:.4f}" if p else "-"
             lines.append(f"| {r['label']} | {_fmt(a['psnr'], 2)} | {_fmt(a['ssim'], 4)} | "

@@ -5,6 +5,7 @@ import pathlib
 
 import numpy as np
 
+from ..isos import NOISY_ISOS
 from . import deltae, pairs
 from .png import write_png
 
@@ -29,7 +30,7 @@ def _fresh_set(exp, task):
     files = sorted(shapes)  # NightPairs' order
     patch = exp.cfg.get("patch", 64)
     crop, items = fresh_budget([shapes[f] for f in files], patch, [sides[f] for f in files])
-    return FreshPatches(str(folder), crop=crop, patch=patch, isos=(1600, 3200),
+    return FreshPatches(str(folder), crop=crop, patch=patch, isos=NOISY_ISOS,
                         seed=exp.cfg["seed"], task=task, items_per_image=items)
 
 

@@ -12,6 +12,8 @@ resumes from it), best.pt (lowest validation loss) and history.json.
 import argparse
 import sys
 
+from ..isos import NOISY_ISOS
+
 
 def parser():
     p = argparse.ArgumentParser(prog="python -m day2night.train", description=__doc__,
@@ -41,7 +43,7 @@ def parser():
     p.add_argument("--crop", type=int, default=512, help="--fresh: synthesis crop side")
     p.add_argument("--crops-per-image", type=int, default=1, help="--fresh: items per image")
     p.add_argument("--task", choices=("noisy", "clean"), default="noisy", help="--fresh: input")
-    p.add_argument("--iso", default="1600,3200", help="--fresh: ISOs drawn from")
+    p.add_argument("--iso", default=",".join(map(str, NOISY_ISOS)), help="--fresh: ISOs drawn from")
     return p
 
 

@@ -30,6 +30,7 @@ import os
 
 import numpy as np
 
+from ..isos import NOISY_ISOS
 from . import cache, preprocess, targets
 from ._torch import torch
 
@@ -158,7 +159,7 @@ class FreshPatches(torch.utils.data.Dataset):
     "clean" (the clean night raw). ``gamma`` as ``preprocess.network_input``. Other keyword
     arguments are ``synthesize`` options (bulbs, noise_model, ...)."""
 
-    def __init__(self, day_dir, crop=512, patch=64, isos=(1600, 3200), seed=0,
+    def __init__(self, day_dir, crop=512, patch=64, isos=NOISY_ISOS, seed=0,
                  crops_per_image=1, task="noisy", gamma=preprocess.GAMMA, mode="local",
                  items_per_image=None, **options):
         from ..pairs import NightPairs
