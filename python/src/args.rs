@@ -337,7 +337,7 @@ pub(crate) enum ParamDefault {
     /// A bool.
     Bool(bool),
     /// The Python default of the table's option of that name
-    /// ([`crate::synth_options::python_default`]).
+    /// ([`crate::option_default::python_default`]).
     Table(&'static str),
 }
 
@@ -381,7 +381,7 @@ impl Param {
             ParamDefault::Table(name) => {
                 let d = day2night::synth::options::find(name)
                     .ok_or_else(|| value_err(format!("no option {name:?}")))?;
-                crate::synth_options::python_default(py, d)?
+                crate::option_default::python_default(py, d)?
             }
         })
     }

@@ -18,6 +18,7 @@ mod dataset_units;
 mod diagnostics;
 mod errors;
 mod metrics;
+mod option_default;
 mod pairs;
 mod patches;
 mod pool;

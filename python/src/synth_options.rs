@@ -9,6 +9,7 @@
 
 use crate::args;
 use crate::errors::{text, value_err};
+pub(crate) use crate::option_default::python_default;
 use day2night::synth::config::JobConfig;
 use day2night::synth::job::SynthJob;
 use day2night::synth::options::{
@@ -17,7 +18,7 @@ use day2night::synth::options::{
 use day2night::Error;
 use pyo3::exceptions::PyTypeError;
 use pyo3::prelude::*;
-use pyo3::types::{PyBool, PyDict, PyList, PyTuple};
+use pyo3::types::{PyDict, PyList};
 use std::collections::HashMap;
 use std::path::PathBuf;
 use std::sync::{Arc, Mutex, OnceLock};
@@ -59,53 +60,6 @@ pub(crate) fn keywords_dict(py: pyo3::Python<'_>) -> PyResult<Bound<'_, PyDict>>
     d.set_item("in_memory", keywords(py, Scope::InMemory)?)?;
     d.set_item("files", keywords(py, Scope::Files)?)?;
     Ok(d)
-}
-
-/// The option's default as a Python value, made from the table's default text by its kind:
-/// an int, a float, a tuple of numbers or ISOs, a str, False for a switch; None when the
-/// option is unset by default (or `iso="none"`).
-pub(crate) fn python_default<'py>(
-    py: pyo3::Python<'py>,
-    d: &OptionDef,
-) -> PyResult<Bound<'py, PyAny>> {
-    let bad = |t: &str| value_err(format!("option {}: default {t:?} is not its kind", d.name));
-    let Some(t) = d.default else {
-        return Ok(match d.kind {
-            Kind::Switch => PyBool::new(py, false).to_owned().into_any(),
-            _ => py.None().into_bound(py),
-        });
-    };
-    Ok(match d.kind {
-        Kind::Switch => PyBool::new(py, t == "true").to_owned().into_any(),
-        Kind::Int { .. } => t
-            .parse::<u64>()
-            .map_err(|_| bad(t))?
-            .into_pyobject(py)?
-            .into_any(),
-        Kind::Float => t
-            .parse::<f64>()
-            .map_err(|_| bad(t))?
-            .into_pyobject(py)?
-            .into_any(),
-        Kind::Isos if t == "none" => py.None().into_bound(py),
-        Kind::Isos => {
-            let v = t
-                .split(',')
-                .map(|i| i.trim().parse::<u32>())
-                .collect::<Result<Vec<_>, _>>()
-                .map_err(|_| bad(t))?;
-            PyTuple::new(py, v)?.into_any()
-        }
-        Kind::Numbers(_) => {
-            let v = t
-                .split(',')
-                .map(|i| i.trim().parse::<f64>())
-                .collect::<Result<Vec<_>, _>>()
-                .map_err(|_| bad(t))?;
-            PyTuple::new(py, v)?.into_any()
-        }
-        Kind::Text | Kind::Path | Kind::Choice(_) => t.into_pyobject(py)?.into_any(),
-    })
 }
 
 /// `day2night._native.SYNTH_CONSTANTS`: the synthesis fields that are not options, as
