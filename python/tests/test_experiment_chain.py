@@ -27,7 +27,7 @@ except ImportError as e:  # the trainer's tests skip the same way (scripts/test.
 import experiment_mini as mini  # noqa: E402
 from conftest import FIXTURES, cli_path  # noqa: E402
 
-from day2night.experiment.png import read_png  # noqa: E402
+from day2night.png import read_png  # noqa: E402
 
 EPOCHS = 3
 WIDTH = 4

@@ -203,7 +203,7 @@ def set_manifest_output(real, path, **fields):
 
 @pytest.mark.parametrize("damage", ["text", "small", "truncated"])
 def test_unreadable_real_target_writes_nothing(base, tmp_path, damage):
-    from day2night.experiment.png import png_bytes
+    from day2night.png import png_bytes
 
     import numpy as np
 

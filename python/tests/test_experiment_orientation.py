@@ -19,7 +19,7 @@ import pytest
 import day2night
 from conftest import FIXTURES
 from day2night.experiment import pairs
-from day2night.experiment.png import write_png
+from day2night.png import write_png
 from day2night.train.targets import srgb8
 
 H, W = 384, 512
@@ -190,7 +190,7 @@ def test_the_release_geometry_is_the_releases_own_render(name):
     against bilinear demosaicing moves a few weak-edged patches)."""
     from conftest import SHARED_DATA, shared_file
 
-    from day2night.experiment.png import read_png
+    from day2night.png import read_png
     from day2night.train.preprocess import network_input
 
     ref = shared_file(f"release-isp/{name}_release.png")

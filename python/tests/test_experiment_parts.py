@@ -8,7 +8,8 @@ import numpy as np
 import pytest
 
 import day2night
-from day2night.experiment import deltae, pairs, png, realset
+from day2night import png
+from day2night.experiment import deltae, pairs, realset
 
 
 def test_png_round_trip_and_other_writers(tmp_path):

@@ -220,7 +220,7 @@ def tiny_real_set(root, n):
 
     import day2night
     from conftest import FIXTURES
-    from day2night.experiment.png import write_png
+    from day2night.png import write_png
     from day2night.train.targets import srgb8
 
     day = day2night.read_dng(str(FIXTURES / "day.dng"))
@@ -313,7 +313,7 @@ def processed_tree(cli, root):
     import day2night
     import experiment_mini as em
     from conftest import FIXTURES
-    from day2night.experiment.png import write_png
+    from day2night.png import write_png
     from day2night.train.targets import render_target
 
     days = em.day_dir(root / "days", FIXTURES / "day.dng")

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 import day2night
-from day2night.experiment.png import read_png
+from day2night.png import read_png
 from day2night.train.targets import release_window, render_target
 
 from conftest import shared_file

@@ -15,7 +15,7 @@ import json
 
 import numpy as np
 
-from .atomic import write_json
+from ..atomic import write_json
 
 FORMAT = "day2night-folds/1"
 

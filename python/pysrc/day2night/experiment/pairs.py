@@ -21,8 +21,8 @@ import numpy as np
 
 from ..isos import NOISY_ISOS
 from ..train import cache as input_cache
-from .atomic import write_bytes
-from .png import read_png
+from ..atomic import write_bytes
+from ..png import read_png
 
 
 

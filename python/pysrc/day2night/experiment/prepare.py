@@ -12,7 +12,7 @@ from ..isos import NOISY_ISOS
 from . import folds as folds_mod
 from . import mix as mix_mod
 from . import realset, rows, runfolder
-from .atomic import write_json
+from ..atomic import write_json
 from .presets import DEFAULTS  # the paper's training options, absent from config.json
 
 CONFIG_KEYS = ("day", "real", "task", "epochs", "seed", "folds", "width", "device", "rows",

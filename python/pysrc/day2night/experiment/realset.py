@@ -193,7 +193,7 @@ def check_scene(scene, manifest, clean=True, isos=()):
     SHA-256 (:func:`verify_outputs`), the clean raw (``clean``) and the noisy raws of
     ``isos`` as DNGs, the target as a PNG of the network input's size once cut and turned."""
     from . import pairs
-    from .png import PngError, check_png
+    from ..png import PngError, check_png
 
     verify_outputs(scene, manifest)
     raws = ([scene.clean_raw] if clean else []) + [scene.noisy[i] for i in isos]

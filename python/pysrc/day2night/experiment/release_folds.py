@@ -31,7 +31,7 @@ import pickle
 import sys
 
 from . import folds as folds_mod
-from .atomic import write_json
+from ..atomic import write_json
 
 FORMAT = "day2night-release-folds/1"
 KEYS = ("train_index_all", "val_index_all", "test_index_all")

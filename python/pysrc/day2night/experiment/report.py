@@ -6,7 +6,7 @@ import html
 
 from ..isos import NOISY_ISOS
 from . import curves
-from .atomic import write_text
+from ..atomic import write_text
 from .table import markdown
 
 

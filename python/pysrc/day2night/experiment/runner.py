@@ -23,7 +23,7 @@ import pathlib
 from ..isos import NOISY_ISOS
 from . import mix as mix_mod
 from . import pairs, prepare, presets, protocol, report, rows, runfolder, table
-from .atomic import write_json
+from ..atomic import write_json
 from .prepare import CONFIG_KEYS, ExperimentError, day_images, log  # noqa: F401
 
 

@@ -9,7 +9,7 @@ such a mean is reported as "inf"."""
 import math
 
 from ..isos import NOISY_ISOS
-from .atomic import write_json, write_text
+from ..atomic import write_json, write_text
 from .rows import test_keys
 from .runfolder import read_scores
 

@@ -7,7 +7,7 @@ import numpy as np
 
 from ..isos import NOISY_ISOS
 from . import deltae, pairs
-from .png import write_png
+from ..png import write_png
 
 
 def _fresh_set(exp, task):

@@ -30,6 +30,7 @@ import os
 
 import numpy as np
 
+from ..atomic import open_atomic
 from ..isos import NOISY_ISOS
 from . import cache, preprocess, targets
 from ._torch import torch
@@ -65,10 +66,8 @@ def save_pair(folder, name, x, y):
         raise ValueError(f"{name}: need x float32 H x W x 3 and y uint8 of the same shape, "
                          f"got {x.dtype} {x.shape} and {y.dtype} {y.shape}")
     for suffix, a in (("_x.npy", cache.encode(x)), ("_y.npy", y)):
-        path = os.path.join(folder, name + suffix)
-        tmp = path + ".tmp.npy"
-        np.save(tmp, a)
-        os.replace(tmp, path)
+        with open_atomic(os.path.join(folder, name + suffix)) as f:
+            np.save(f, a)
 
 
 class FixedPatches(torch.utils.data.Dataset):

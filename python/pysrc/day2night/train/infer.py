@@ -16,6 +16,7 @@ import contextlib
 
 import numpy as np
 
+from ..png import write_png  # noqa: F401  (the package's one PNG writer)
 from ._torch import torch
 from .unet import UNet, receptive_radius
 
@@ -110,32 +111,3 @@ def predict(model, x, tile="auto", halo=None, device=None, exact=True, amp=None,
     return to_u8(predict_float(model, x, tile, halo, device, exact, amp, channels_last))
 
 
-def write_png(path, img):
-    """Write a uint8 H x W x 3 image as an 8-bit RGB PNG with an sRGB chunk (zlib; through a
-    temporary file and a rename, never half-written)."""
-    import os
-    import struct
-    import tempfile
-    import zlib
-    a = np.ascontiguousarray(np.asarray(img))
-    if a.dtype != np.uint8 or a.ndim != 3 or a.shape[2] != 3:
-        raise ValueError(f"{path}: need a uint8 H x W x 3 image, got {a.dtype} {a.shape}")
-    h, w = a.shape[:2]
-    raw = b"".join(b"\x00" + a[r].tobytes() for r in range(h))
-
-    def chunk(kind, data):
-        return (struct.pack(">I", len(data)) + kind + data
-                + struct.pack(">I", zlib.crc32(kind + data) & 0xFFFFFFFF))
-
-    png = (b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", struct.pack(">IIBBBBB", w, h, 8, 2, 0, 0, 0))
-           + chunk(b"sRGB", b"\x00") + chunk(b"IDAT", zlib.compress(raw, 6)) + chunk(b"IEND", b""))
-    d = os.path.dirname(os.path.abspath(path))
-    fd, tmp = tempfile.mkstemp(dir=d, suffix=".tmp")
-    try:
-        with os.fdopen(fd, "wb") as f:
-            f.write(png)
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise

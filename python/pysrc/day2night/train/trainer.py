@@ -25,6 +25,7 @@ import os
 import sys
 import time
 
+from ..atomic import open_atomic, write_text
 from ._torch import torch
 from .data import collate
 from .unet import UNet
@@ -169,9 +170,8 @@ def _state(model):
 
 def save_checkpoint(path, **state):
     """torch.save to a temporary file, then rename: never a half-written checkpoint."""
-    tmp = f"{path}.tmp"
-    torch.save(state, tmp)
-    os.replace(tmp, path)
+    with open_atomic(path) as f:
+        torch.save(state, f)
 
 
 class CheckpointError(ValueError):
@@ -266,10 +266,7 @@ def train(cfg, train_set, val_set):
             _record(cfg, rank, epoch, list(iter(sampler)))
         run.epoch(epoch, loader)
     if rank == 0:
-        path = os.path.join(cfg.out_dir, "history.json")
-        with open(path + ".tmp", "w") as f:
-            json.dump(run.history, f, indent=1)
-        os.replace(path + ".tmp", path)
+        write_text(os.path.join(cfg.out_dir, "history.json"), json.dumps(run.history, indent=1))
     return {"best": run.best, "last": run.last, "history": run.history,
             "initial": run.initial}
 
