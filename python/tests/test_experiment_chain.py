@@ -193,14 +193,15 @@ def test_same_seed_rerun_gives_the_same_table(small_run, mini_set):
 
 def test_killed_run_resumes_to_the_same_table(small_run, mini_set):
     out = mini_set["root"] / "run_killed"
-    cmd = [sys.executable, "-m", "day2night.experiment", "--day", str(mini_set["day"]),
-           "--real", str(mini_set["real"]), "-o", str(out), "--epochs", str(EPOCHS),
-           "--width", str(WIDTH), *SMALL]
+    args = ["day2night.experiment", "--day", str(mini_set["day"]),
+            "--real", str(mini_set["real"]), "-o", str(out), "--epochs", str(EPOCHS),
+            "--width", str(WIDTH), *SMALL]
+    cmd = [sys.executable, "-m", *args]
     # the 3rd unit (clean, supervised, fold 1) SIGKILLs itself at step 0 of epoch 1 (the
-    # runner's D2N_EXPERIMENT_KILL_AT test hook): always inside the unit, after its first
-    # epoch is checkpointed, whatever the machine's speed
-    killed = dict(env(), D2N_EXPERIMENT_KILL_AT="3:1:0")
-    p = subprocess.run(cmd, capture_output=True, text=True, env=killed)
+    # on_step callback kill_at.py gives the 3rd trainer.train call): always inside the unit,
+    # after its first epoch is checkpointed, whatever the machine's speed
+    kill_at = [sys.executable, str(pathlib.Path(__file__).parent / "kill_at.py"), "3", "1", "0"]
+    p = subprocess.run(kill_at + args, capture_output=True, text=True, env=env())
     assert p.returncode == -signal.SIGKILL, p.stderr
     unit3_dir = out / "units" / "clean" / "supervised" / "1"
     assert (unit3_dir / "model" / "last.pt").is_file()

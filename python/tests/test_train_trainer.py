@@ -71,9 +71,15 @@ def test_loss_falls_and_seed_repeats(tmp_path, sets):
     assert not same_weights(a["last"], c["last"])
 
 
-def cli(args, env=None):
+KILL_AT = os.path.join(os.path.dirname(os.path.abspath(__file__)), "kill_at.py")
+
+
+def cli(args, env=None, kill_at=None):
+    """``python -m day2night.train ARGS``; ``kill_at=(E, S)``: SIGKILLed before step S of
+    epoch E (kill_at.py's on_step callback)."""
     e = dict(os.environ, **(env or {}))
-    return subprocess.run([sys.executable, "-m", "day2night.train", *map(str, args)],
+    head = ["-m"] if kill_at is None else [KILL_AT, "1", *map(str, kill_at)]
+    return subprocess.run([sys.executable, *head, "day2night.train", *map(str, args)],
                           capture_output=True, text=True, env=e, timeout=300)
 
 
@@ -83,7 +89,7 @@ def test_killed_run_resumes_to_the_same_weights(tmp_path, sets):
     whole = cli(common + ["-o", tmp_path / "whole", "--no-progress"])
     assert whole.returncode == 0, whole.stderr
     # SIGKILL at the second step of epoch 2 (0-based): epochs 0 and 1 are checkpointed
-    killed = cli(common + ["-o", tmp_path / "cut"], env={"D2N_TRAIN_KILL_AT": "2:1"})
+    killed = cli(common + ["-o", tmp_path / "cut"], kill_at=(2, 1))
     assert killed.returncode == -9, killed.stderr
     from day2night.train.trainer import load_checkpoint
     assert load_checkpoint(tmp_path / "cut" / "last.pt")["epoch"] == 1

@@ -12,12 +12,8 @@ Run folder (every file written through a temporary file + rename):
 A unit is done when its scores.json exists; a rerun skips done units and the trainer resumes
 an interrupted one from its last epoch, so a killed run finishes with the same table.
 Every input (day DNGs, real set) and every file an earlier run left in RUN is checked before
-anything is written (runfolder.py: a damaged file is an error naming it and what to do).
+anything is written (runfolder.py: a damaged file is an error naming it and what to do)."""
 
-Test hook: D2N_EXPERIMENT_KILL_AT="U:E:S" SIGKILLs the run at step S of epoch E of its U-th
-unit (1-based; the trainer's D2N_TRAIN_KILL_AT set for that unit only), for the resume test."""
-
-import os
 import pathlib
 
 from ..isos import NOISY_ISOS
@@ -203,8 +199,7 @@ def run_unit(exp, task, row, fold, split, index, total):
     from ..train.trainer import CheckpointError
 
     try:
-        with _KillHook(index):
-            result = unit.train_unit(exp, udir, task, row, train_p, val_p)
+        result = unit.train_unit(exp, udir, task, row, train_p, val_p)
         log(f"{where}: scoring {len(tests)} test input(s)")
         scored = unit.score_unit(exp, udir, task, row, fold, tests, result)
     except CheckpointError as e:
@@ -214,20 +209,3 @@ def run_unit(exp, task, row, fold, split, index, total):
     scored["val_pairs"] = len(val_p)
     scored["test_scenes"] = list(test)
     write_json(done, scored)
-
-
-class _KillHook:
-    """Test hook (module docstring): D2N_EXPERIMENT_KILL_AT="U:E:S" sets the trainer's
-    D2N_TRAIN_KILL_AT="E:S" while unit U trains."""
-
-    def __init__(self, index):
-        at = os.environ.get("D2N_EXPERIMENT_KILL_AT", "").split(":", 1)
-        self.at = at[1] if len(at) == 2 and at[0] == str(index) else None
-
-    def __enter__(self):
-        if self.at:
-            os.environ["D2N_TRAIN_KILL_AT"] = self.at
-
-    def __exit__(self, *exc):
-        if self.at:
-            os.environ.pop("D2N_TRAIN_KILL_AT", None)

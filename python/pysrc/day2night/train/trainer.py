@@ -100,15 +100,6 @@ def make_loader(dataset, cfg, rank, world, shuffle):
     return loader, sampler
 
 
-def _kill_hook(epoch, step):
-    """Test hook: D2N_TRAIN_KILL_AT="E:S" SIGKILLs the process at step S of epoch E (a real
-    kill mid-training, for the resume test)."""
-    at = os.environ.get("D2N_TRAIN_KILL_AT")
-    if at and at == f"{epoch}:{step}":
-        import signal
-        os.kill(os.getpid(), signal.SIGKILL)
-
-
 def autocast(cfg, device):
     """The forward's precision context: bfloat16 autocast under ``amp="bf16"``."""
     if cfg is not None and cfg.amp == "bf16":
@@ -122,12 +113,15 @@ def to_device(x, device, cfg=None):
     return x.to(device, non_blocking=True, memory_format=fmt)
 
 
-def train_epoch(model, loader, optimizer, device, epoch, progress=None, cfg=None):
-    """One pass of L1 training; returns the mean loss over this rank's patches."""
+def train_epoch(model, loader, optimizer, device, epoch, progress=None, cfg=None,
+                on_step=None):
+    """One pass of L1 training; returns the mean loss over this rank's patches.
+    ``on_step(epoch, step)``, when given, is called before each step (the caller's hook)."""
     model.train()
     total, count = 0.0, 0
     for step, (x, y) in enumerate(loader):
-        _kill_hook(epoch, step)
+        if on_step is not None:
+            on_step(epoch, step)
         x, y = to_device(x, device, cfg), y.to(device, non_blocking=True)
         optimizer.zero_grad(set_to_none=True)
         with autocast(cfg, device):
@@ -245,7 +239,7 @@ def _setup(cfg):
     return rank, world, device
 
 
-def train(cfg, train_set, val_set):
+def train(cfg, train_set, val_set, on_step=None):
     """Train (or resume from ``cfg.out_dir/last.pt``) and return ``{"best", "last",
     "history", "initial"}``: the paths of the best-validation and last checkpoints, one dict
     per epoch (``epoch``, ``loss``, ``val_loss`` = validation L1, ``val_psnr``, ``lr``,
@@ -253,7 +247,7 @@ def train(cfg, train_set, val_set):
     cfg.check()
     rank, world, device = _setup(cfg)
     os.makedirs(cfg.out_dir, exist_ok=True)
-    run = _Run(cfg, rank, world, device)
+    run = _Run(cfg, rank, world, device, on_step)
     run.start(val_set)
     loader, sampler = make_loader(train_set, cfg, rank, world, shuffle=True)
     run.val_loader, _ = make_loader(val_set, cfg, rank, world, shuffle=False)
@@ -274,8 +268,9 @@ def train(cfg, train_set, val_set):
 class _Run:
     """The state of one training run: model, optimizer, schedule, history, checkpoints."""
 
-    def __init__(self, cfg, rank, world, device):
+    def __init__(self, cfg, rank, world, device, on_step=None):
         self.cfg, self.rank, self.world, self.device = cfg, rank, world, device
+        self.on_step = on_step  # train's hook: on_step(epoch, step) before each step
         self.last = os.path.join(cfg.out_dir, "last.pt")
         self.best = os.path.join(cfg.out_dir, "best.pt")
         self.model = make_model(cfg).to(device)
@@ -313,7 +308,8 @@ class _Run:
         cfg, t0 = self.cfg, time.monotonic()
         lr = self.optimizer.param_groups[0]["lr"]
         loss, n = train_epoch(self.model, loader, self.optimizer, self.device, epoch,
-                              lambda s, S, lo, e=epoch: self.bar.step(e, s, S, lo), cfg)
+                              lambda s, S, lo, e=epoch: self.bar.step(e, s, S, lo), cfg,
+                              self.on_step)
         if self.world > 1:
             t = torch.tensor([loss * n, n], dtype=torch.float64, device=self.device)
             torch.distributed.all_reduce(t)
