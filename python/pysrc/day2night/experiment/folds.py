@@ -29,6 +29,25 @@ def default_val(train_part: int) -> int:
     return max(1, int(round(train_part / 7)))
 
 
+def _check_count(ids, folds):
+    """``folds`` as an int, else FoldError: not an integer, under 2, more than the scenes,
+    or duplicate scene ids."""
+    if isinstance(folds, bool) or not isinstance(folds, (int, np.integer)):
+        raise FoldError(f"folds must be an integer, got {folds!r}")
+    folds = int(folds)
+    if folds < 2:
+        raise FoldError(f"folds = {folds}: cross-validation needs at least 2 folds")
+    dup = sorted({s for s in ids if ids.count(s) > 1})
+    if dup:
+        raise FoldError(f"scene ids appear more than once in the real set: {', '.join(dup)}")
+    if folds > len(ids):
+        raise FoldError(
+            f"{folds} folds need at least {folds} scenes (one per test fold); "
+            f"the real set has {len(ids)}"
+        )
+    return folds
+
+
 def make_folds(scenes, folds=3, seed=0, val=None):
     """The k-fold manifest (a dict) over ``scenes`` (scene ids, any order).
 
@@ -37,20 +56,8 @@ def make_folds(scenes, folds=3, seed=0, val=None):
     or a real set too small to leave every fold at least one training and one validation
     scene."""
     ids = [str(s) for s in scenes]
-    if isinstance(folds, bool) or not isinstance(folds, (int, np.integer)):
-        raise FoldError(f"folds must be an integer, got {folds!r}")
-    folds = int(folds)
+    folds = _check_count(ids, folds)
     n = len(ids)
-    if folds < 2:
-        raise FoldError(f"folds = {folds}: cross-validation needs at least 2 folds")
-    dup = sorted({s for s in ids if ids.count(s) > 1})
-    if dup:
-        raise FoldError(f"scene ids appear more than once in the real set: {', '.join(dup)}")
-    if folds > n:
-        raise FoldError(
-            f"{folds} folds need at least {folds} scenes (one per test fold); "
-            f"the real set has {n}"
-        )
     ids.sort()
     sizes = [n // folds + (1 if i < n % folds else 0) for i in range(folds)]
     smallest_part = n - max(sizes)
