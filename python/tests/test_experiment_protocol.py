@@ -395,3 +395,22 @@ def test_real_pairs_isp_release_targets_make_release_the_default(tmp_path, cli):
     plain = tmp_path / "plain"
     cli("real-pairs", release, "-o", plain, "-q")
     assert protocol.real_target_isp(plain) == "day2night"
+
+
+def test_resume_reads_a_config_from_before_the_protocol_options(tmp_path):
+    """A run folder whose config.json predates --protocol/--targets/--noise/--synth-iso/
+    --folds-file resumes under the options that reproduce what it ran with, and only those."""
+    import json
+    import types
+
+    from day2night.experiment import prepare, protocol
+
+    old = {"day": "d", "real": "r", "task": "clean", "epochs": 2, "seed": 0, "folds": 3,
+           "width": 8, "device": "cpu", "rows": ["ours"]}
+    (tmp_path / "config.json").write_text(json.dumps(old))
+    new = dict(old, **protocol.resolve().config())
+    prepare.check_config(types.SimpleNamespace(out=tmp_path, cfg=new))  # accepted
+    for key, value in [("noise", "release"), ("synth_iso", "release"),
+                       ("targets", "release"), ("protocol", "release")]:
+        with pytest.raises(prepare.ExperimentError, match=f"{key} = "):
+            prepare.check_config(types.SimpleNamespace(out=tmp_path, cfg=dict(new, **{key: value})))

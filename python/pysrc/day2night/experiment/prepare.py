@@ -13,6 +13,7 @@ from . import folds as folds_mod
 from . import mix as mix_mod
 from . import realset, rows, runfolder
 from ..atomic import write_json
+from .protocol import LEGACY_CONFIG
 from .presets import DEFAULTS  # the paper's training options, absent from config.json
 
 CONFIG_KEYS = ("day", "real", "task", "epochs", "seed", "folds", "width", "device", "rows",
@@ -58,7 +59,8 @@ def check_day_images(days):
 def check_config(exp):
     path = exp.out / "config.json"
     if path.is_file():
-        old = runfolder.read_config(path)
+        # a key missing from a run made before the protocol options: the value that ran then
+        old = {**LEGACY_CONFIG, **runfolder.read_config(path)}
         # (training options absent from both: the paper's; presets.config)
         diff = [k for k in CONFIG_KEYS if old.get(k) != exp.cfg.get(k)]
         if diff:

@@ -166,6 +166,10 @@ def with_isos(slots, isos):
 
 
 CONFIG_KEYS = ("protocol", "targets", "noise", "synth_iso", "folds_file", "folds_sha256")
+# What a config.json written before these options ran with (resume reads a missing key as
+# this): day2night's protocol, targets, noise and alternating ISOs, no fold file.
+LEGACY_CONFIG = {"protocol": "day2night", "targets": "day2night", "noise": "day2night",
+                 "synth_iso": "alternate", "folds_file": None, "folds_sha256": None}
 
 
 def for_run(cfg, real_dir, folds=None, **flags):
