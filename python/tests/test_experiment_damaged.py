@@ -239,3 +239,17 @@ def test_out_of_range_option_names_the_option(base, tmp_path, option, value):
     r = rerun(base, out, option, value)
     assert_clear_error(r, f"{option} {value}")
     assert_nothing_written(out)
+
+
+@pytest.mark.parametrize("line", ["[]", "7", '"scene"'])
+def test_manifest_line_that_is_not_an_object_is_a_clear_error(base, tmp_path, line):
+    """A real set's manifest.jsonl line that is valid JSON but not an object is refused with
+    the manifest's name (it once crashed in the --targets default, before the real set's own
+    checks ran)."""
+    real = real_copy(base, tmp_path)
+    m = real / "manifest.jsonl"
+    m.write_text(line + "\n" + m.read_text(encoding="utf-8"), encoding="utf-8")
+    out = tmp_path / "run"
+    r = rerun(base, out, real=real)
+    assert_clear_error(r, "manifest.jsonl")
+    assert_nothing_written(out)

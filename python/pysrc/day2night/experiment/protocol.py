@@ -128,6 +128,8 @@ def real_target_isps(real_dir):
     root = pathlib.Path(real_dir)
     out = {}
     for rec in _json_lines(root / "manifest.jsonl"):
+        if not isinstance(rec, dict):
+            continue  # realset.read_real refuses it, naming the file and the line
         if rec.get("kind", "real") == "real" and rec.get("status") == "ok" and rec.get("scene"):
             out[str(rec["scene"])] = scene_target_isp(root, rec)
     return out
