@@ -17,14 +17,9 @@ pub struct DatasetArgs {
     /// Folder of day DNGs (searched recursively for *.dng in any letter case).
     #[arg(value_name = "DAY_DIR")]
     pub day_dir: PathBuf,
-    /// Output folder (train/ and val/ layouts, manifest.jsonl).
-    #[arg(
-        short = 'o',
-        long = "output",
-        visible_alias = "out",
-        value_name = "OUT_DIR"
-    )]
-    pub out_dir: PathBuf,
+    /// -o/--output OUT_DIR (shared with `real-pairs`).
+    #[command(flatten)]
+    pub out: OutFolder,
     /// Put the last N inputs (by sorted relative path) in val, as the paper (60/10).
     #[arg(long, value_name = "N", conflicts_with = "val_fraction")]
     pub val: Option<usize>,
@@ -37,12 +32,9 @@ pub struct DatasetArgs {
     /// Process only shard I of N (0-based), by a stable hash of each input's path.
     #[arg(long, value_name = "I/N")]
     pub shard: Option<String>,
-    /// Inputs processed in parallel (= images in memory); default: number of CPUs.
-    #[arg(long, value_name = "N")]
-    pub jobs: Option<usize>,
-    /// Recompute everything, ignoring the manifest (and accept a non-empty OUT_DIR).
-    #[arg(long)]
-    pub overwrite: bool,
+    /// --jobs, --overwrite, --json, --quiet (shared with `real-pairs`).
+    #[command(flatten)]
+    pub run: RunFlags,
     /// When another day2night process is writing a unit's outputs, wait for it instead of
     /// failing the unit.
     #[arg(long)]
@@ -50,15 +42,84 @@ pub struct DatasetArgs {
     /// Also write the HTML report (OUT_DIR/report/index.html) at the end.
     #[arg(long)]
     pub report: bool,
+    /// Synthesis and output options: `synth`'s, with the same names, values and defaults.
+    #[command(flatten)]
+    pub synth: Box<SynthOpts>,
+}
+
+/// The output folder of `dataset` and `real-pairs` (`real-pairs` names it OUT, with its
+/// own help line).
+#[derive(Debug, clap::Args)]
+pub struct OutFolder {
+    /// Output folder (train/ and val/ layouts, manifest.jsonl).
+    #[arg(
+        short = 'o',
+        long = "output",
+        visible_alias = "out",
+        value_name = "OUT_DIR"
+    )]
+    pub out_dir: PathBuf,
+}
+
+impl OutFolder {
+    /// Exit code 1 when `failed` of the run's `total` units (or scenes: `what`) failed.
+    pub fn fail_on(&self, failed: usize, total: usize, what: &str) -> CmdResult {
+        if failed == 0 {
+            return Ok(());
+        }
+        Err(Failure {
+            code: 1,
+            error: anyhow::anyhow!(
+                "{}: {failed} of {total} {what} failed (see the summary above and the manifest)",
+                self.out_dir.display()
+            ),
+        })
+    }
+}
+
+/// The flags of a whole-folder run, the same in `dataset` and `real-pairs`.
+#[derive(Debug, clap::Args)]
+pub struct RunFlags {
+    /// Inputs (scenes for `real-pairs`) processed in parallel (= images in memory);
+    /// default: number of CPUs.
+    #[arg(long, value_name = "N")]
+    pub jobs: Option<usize>,
+    /// Recompute everything, ignoring the manifest (and accept a non-empty output folder
+    /// without one).
+    #[arg(long)]
+    pub overwrite: bool,
     /// Print the run summary as JSON on stdout.
     #[arg(long)]
     pub json: bool,
     /// No progress output (the summary is still printed on stderr).
     #[arg(long, short = 'q')]
     pub quiet: bool,
-    /// Synthesis and output options: `synth`'s, with the same names, values and defaults.
-    #[command(flatten)]
-    pub synth: Box<SynthOpts>,
+}
+
+impl RunFlags {
+    /// Worker threads: --jobs (checked), else the number of CPUs.
+    pub fn jobs(&self) -> Result<usize, Failure> {
+        match self.jobs {
+            Some(n) => {
+                day2night::bounds::jobs("--jobs", n).map_err(usage)?;
+                Ok(n)
+            }
+            None => Ok(std::thread::available_parallelism()
+                .map(|n| n.get())
+                .unwrap_or(1)),
+        }
+    }
+
+    /// The summary's text on stderr, and with --json the summary as JSON on stdout.
+    pub fn print_summary<S: serde::Serialize>(&self, text: &str, summary: &S) -> CmdResult {
+        eprintln!("{text}");
+        if self.json {
+            let json = serde_json::to_string_pretty(summary)
+                .map_err(|e| anyhow::anyhow!("summary JSON: {e}"))?;
+            println!("{json}");
+        }
+        Ok(())
+    }
 }
 
 /// The synthesis processor: `synth`'s job from the same options (`--replay` excluded).
@@ -95,27 +156,19 @@ pub fn run(args: DatasetArgs) -> CmdResult {
     if args.variants == 0 {
         return Err(usage("--variants must be at least 1"));
     }
-    let jobs = match args.jobs {
-        Some(n) => {
-            day2night::bounds::jobs("--jobs", n).map_err(usage)?;
-            n
-        }
-        None => std::thread::available_parallelism()
-            .map(|n| n.get())
-            .unwrap_or(1),
-    };
+    let jobs = args.run.jobs()?;
     let proc = processor(&args.synth, args.variants)?;
     let opts = RunOptions {
         day_dir: args.day_dir.clone(),
-        out_dir: args.out_dir.clone(),
+        out_dir: args.out.out_dir.clone(),
         split,
         variants: args.variants,
         seed: args.synth.seed(),
         shard,
         jobs,
-        overwrite: args.overwrite,
+        overwrite: args.run.overwrite,
         wait: args.wait,
-        progress: super::progress::dataset_progress(args.quiet),
+        progress: super::progress::dataset_progress(args.run.quiet),
     };
     let summary = match dataset::run(&opts, &proc) {
         Ok(s) => s,
@@ -133,26 +186,11 @@ pub fn run(args: DatasetArgs) -> CmdResult {
             });
         }
     };
-    eprintln!("{}", summary.describe());
-    if args.json {
-        let text = serde_json::to_string_pretty(&summary)
-            .map_err(|e| anyhow::anyhow!("summary JSON: {e}"))?;
-        println!("{text}");
-    }
+    args.run.print_summary(&summary.describe(), &summary)?;
     if args.report {
-        let r = super::report::build_report(&args.out_dir, Some(args.day_dir.clone()), 12, 320)?;
+        let r =
+            super::report::build_report(&args.out.out_dir, Some(args.day_dir.clone()), 12, 320)?;
         eprintln!("dataset: report written to {}", r.page.display());
     }
-    if summary.failed > 0 {
-        return Err(Failure {
-            code: 1,
-            error: anyhow::anyhow!(
-                "{}: {} of {} units failed (see the summary above and the manifest)",
-                args.out_dir.display(),
-                summary.failed,
-                summary.units
-            ),
-        });
-    }
-    Ok(())
+    args.out.fail_on(summary.failed, summary.units, "units")
 }

@@ -1,4 +1,5 @@
 //! `day2night real-pairs`: real night test/training pairs from captures (docs/real-pairs.md).
+use super::dataset::{OutFolder, RunFlags};
 use super::{usage, CmdResult, Failure};
 use day2night::realpairs::{self, LayoutChoice, PairOptions, RunOptions, TargetKind};
 use std::path::PathBuf;
@@ -6,6 +7,7 @@ use std::path::PathBuf;
 /// Arguments of `day2night real-pairs`.
 #[derive(Debug, clap::Args)]
 #[command(
+    mut_arg("out_dir", |a| a.value_name("OUT").help("Output folder (manifest.jsonl and real/)")),
     after_help = "Per scene: the low-ISO burst is merged into OUT/real/clean_raw/<id>.dng \
 (metadata of its first frame), rendered with that frame's white balance into \
 OUT/real/target/<id>.png, and the first frame of each high-ISO burst is copied to \
@@ -29,14 +31,9 @@ pub struct RealPairsArgs {
     /// Folder of scenes (or the release's night_real/ folder).
     #[arg(value_name = "SCENES")]
     pub scenes: PathBuf,
-    /// Output folder (manifest.jsonl and real/).
-    #[arg(
-        short = 'o',
-        long = "output",
-        visible_alias = "out",
-        value_name = "OUT"
-    )]
-    pub out_dir: PathBuf,
+    /// -o/--output OUT (shared with `dataset`).
+    #[command(flatten)]
+    pub out: OutFolder,
     /// Input layout: auto, release, release-processed or simple.
     #[arg(long, default_value = "auto", value_name = "LAYOUT")]
     pub layout: String,
@@ -56,32 +53,20 @@ pub struct RealPairsArgs {
     /// A target copied from the release's processed tree is copied either way.
     #[arg(long, default_value = "day2night", value_name = "ISP")]
     pub isp: String,
-    /// Scenes processed in parallel; default: number of CPUs.
-    #[arg(long, value_name = "N")]
-    pub jobs: Option<usize>,
-    /// Remake every scene (and accept a non-empty OUT without a manifest).
-    #[arg(long)]
-    pub overwrite: bool,
-    /// Print the run summary as JSON on stdout.
-    #[arg(long)]
-    pub json: bool,
-    /// No per-scene progress lines (the summary is still printed on stderr).
-    #[arg(long, short = 'q')]
-    pub quiet: bool,
+    /// --jobs, --overwrite, --json, --quiet (shared with `dataset`).
+    #[command(flatten)]
+    pub run: RunFlags,
 }
 
+/// `--iso`: `synth`'s ISO list ([`day2night::synth::config::parse_isos`]: duplicates
+/// dropped, order kept), less `none` and the clean burst's ISO.
 fn parse_isos(s: &str) -> Result<Vec<u32>, Failure> {
-    let mut v = Vec::new();
-    for t in s.split(',') {
-        match t.trim().parse::<u32>() {
-            Ok(i) if i > 0 && i != realpairs::RELEASE_LOW_ISO && !v.contains(&i) => v.push(i),
-            _ => {
-                return Err(usage(format!(
-                    "--iso {s:?}: expected distinct ISOs above 0 other than {} (the clean burst's), separated by commas",
-                    realpairs::RELEASE_LOW_ISO
-                )))
-            }
-        }
+    let v = day2night::synth::config::parse_isos(s).map_err(|e| usage(format!("--iso: {e}")))?;
+    if v.is_empty() || v.contains(&realpairs::RELEASE_LOW_ISO) {
+        return Err(usage(format!(
+            "--iso {s:?}: expected noisy ISOs other than {} (the clean burst's), separated by commas",
+            realpairs::RELEASE_LOW_ISO
+        )));
     }
     Ok(v)
 }
@@ -109,15 +94,7 @@ pub fn run(args: RealPairsArgs) -> CmdResult {
             realpairs::motion::px_text(args.max_motion)
         )));
     }
-    let jobs = match args.jobs {
-        Some(n) => {
-            day2night::bounds::jobs("--jobs", n).map_err(usage)?;
-            n
-        }
-        None => std::thread::available_parallelism()
-            .map(|n| n.get())
-            .unwrap_or(1),
-    };
+    let jobs = args.run.jobs()?;
     let pairs = PairOptions {
         layout,
         release_isos: parse_isos(&args.iso)?,
@@ -127,31 +104,15 @@ pub fn run(args: RealPairsArgs) -> CmdResult {
     };
     let opts = RunOptions {
         scenes_dir: args.scenes.clone(),
-        out_dir: args.out_dir.clone(),
+        out_dir: args.out.out_dir.clone(),
         jobs,
-        overwrite: args.overwrite,
-        on_scene: (!args.quiet).then_some(scene_line as fn(&realpairs::SceneDone<'_>)),
+        overwrite: args.run.overwrite,
+        on_scene: (!args.run.quiet).then_some(scene_line as fn(&realpairs::SceneDone<'_>)),
         checkpoint: None,
     };
     let summary = realpairs::run(&opts, &pairs)?;
-    eprintln!("{}", summary.describe());
-    if args.json {
-        let text = serde_json::to_string_pretty(&summary)
-            .map_err(|e| anyhow::anyhow!("summary JSON: {e}"))?;
-        println!("{text}");
-    }
-    if summary.failed > 0 {
-        return Err(Failure {
-            code: 1,
-            error: anyhow::anyhow!(
-                "{}: {} of {} scenes failed (see the summary above and the manifest)",
-                args.out_dir.display(),
-                summary.failed,
-                summary.scenes
-            ),
-        });
-    }
-    Ok(())
+    args.run.print_summary(&summary.describe(), &summary)?;
+    args.out.fail_on(summary.failed, summary.scenes, "scenes")
 }
 
 /// One scene's progress lines on stderr (a closed stderr drops them: EPIPE must not panic).

@@ -22,6 +22,7 @@
 pub mod discover;
 pub mod journal;
 pub mod manifest;
+pub mod pool;
 pub mod progress;
 pub mod resume;
 pub mod run;

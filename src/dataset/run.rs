@@ -1,7 +1,7 @@
 //! The driver: discover, split, shard, decide (resume), then process the inputs in parallel
-//! on a rayon pool of `jobs` threads, with at most `jobs` inputs in flight (each worker
-//! takes the next input only when it has finished the previous one), appending a manifest
-//! record as each unit completes. One failing input never stops the run.
+//! on `jobs` threads with at most `jobs` inputs in flight ([`super::pool`], the pool
+//! `real-pairs` shares), appending a manifest record as each unit completes. One failing
+//! input never stops the run.
 
 use super::discover::{discover, sample_stem, Input};
 use super::manifest::{self, Appender, Record, Status};
@@ -13,6 +13,7 @@ use crate::error::{Error, Result, ResultExt};
 use crate::output::{stop_requested, OutputPolicy, OutputSetLock};
 use serde::Serialize;
 use std::collections::{BTreeMap, HashMap};
+use std::ops::ControlFlow;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::Mutex;
@@ -88,17 +89,7 @@ impl Summary {
             self.images, self.train, self.val, self.found, self.units, self.done,
             self.skipped, self.failed, self.outputs_written, self.outputs_total, self.seconds
         );
-        if !self.recomputed.is_empty() {
-            let parts: Vec<String> = self
-                .recomputed
-                .iter()
-                .map(|(k, v)| format!("{v} {k}"))
-                .collect();
-            s.push_str(&format!(
-                "\ndataset: work done, by reason: {}",
-                parts.join(", ")
-            ));
-        }
+        s.push_str(&reasons_line("dataset", &self.recomputed));
         if self.stale_records_dropped > 0 {
             s.push_str(&format!(
                 "\ndataset: dropped {} manifest records of inputs/variants no longer in the dataset (their files were left in place)",
@@ -238,6 +229,16 @@ fn tally(st: &mut Summary, outcome: &[(Record, Did)]) -> (usize, usize, usize) {
     (done, skipped, failed)
 }
 
+/// The summary's "work done, by reason" line (with its leading newline) of `command`
+/// (`dataset`, `real-pairs`); empty when nothing was (re)made.
+pub fn reasons_line(command: &str, recomputed: &BTreeMap<String, usize>) -> String {
+    if recomputed.is_empty() {
+        return String::new();
+    }
+    let parts: Vec<String> = recomputed.iter().map(|(k, v)| format!("{v} {k}")).collect();
+    format!("\n{command}: work done, by reason: {}", parts.join(", "))
+}
+
 /// Run the dataset generation with `processor`.
 pub fn run<P: Processor>(opts: &RunOptions, processor: &P) -> Result<Summary> {
     let start = Instant::now();
@@ -283,52 +284,37 @@ pub fn run<P: Processor>(opts: &RunOptions, processor: &P) -> Result<Summary> {
     let progress = &opts.progress;
     progress.start(tasks.len());
     let finished = AtomicUsize::new(0);
-    let next = AtomicUsize::new(0);
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(jobs)
-        .thread_name(|i| format!("dataset-{i}"))
-        .build()
-        .map_err(|e| Error::invalid(format!("cannot start {jobs} worker threads: {e}")))?;
-    pool.scope(|s| {
-        for _ in 0..jobs {
-            s.spawn(|_| loop {
-                // Interrupted: start no new input (see crate::output::request_stop).
-                if stop_requested().is_some() {
-                    break;
-                }
-                let i = next.fetch_add(1, Ordering::SeqCst);
-                let Some(task) = tasks.get(i) else { break };
-                let t0 = Instant::now();
-                let outcome = process_input(
-                    task,
-                    opts,
-                    processor,
-                    &previous,
-                    &options_sha,
-                    &policy,
-                    &appender,
-                );
-                let (done, skipped, failed) = tally(
-                    &mut stats.lock().unwrap_or_else(|e| e.into_inner()),
-                    &outcome,
-                );
-                progress.input_done(&InputDone {
-                    index: finished.fetch_add(1, Ordering::SeqCst) + 1,
-                    total: tasks.len(),
-                    split: task.split.name(),
-                    input: &task.input.rel,
-                    done,
-                    skipped,
-                    failed,
-                    secs: t0.elapsed().as_secs_f64(),
-                });
-                final_records
-                    .lock()
-                    .unwrap_or_else(|e| e.into_inner())
-                    .extend(outcome.into_iter().map(|(r, _)| r));
-            });
-        }
-    });
+    super::pool::for_each(&tasks, jobs, "dataset", |task| {
+        let t0 = Instant::now();
+        let outcome = process_input(
+            task,
+            opts,
+            processor,
+            &previous,
+            &options_sha,
+            &policy,
+            &appender,
+        );
+        let (done, skipped, failed) = tally(
+            &mut stats.lock().unwrap_or_else(|e| e.into_inner()),
+            &outcome,
+        );
+        progress.input_done(&InputDone {
+            index: finished.fetch_add(1, Ordering::SeqCst) + 1,
+            total: tasks.len(),
+            split: task.split.name(),
+            input: &task.input.rel,
+            done,
+            skipped,
+            failed,
+            secs: t0.elapsed().as_secs_f64(),
+        });
+        final_records
+            .lock()
+            .unwrap_or_else(|e| e.into_inner())
+            .extend(outcome.into_iter().map(|(r, _)| r));
+        ControlFlow::Continue(())
+    })?;
     progress.finish();
     drop(appender);
     if stop_requested().is_some() {

@@ -1,4 +1,5 @@
-//! The driver of `real-pairs`: find the scenes, then on `jobs` threads hash each scene's
+//! The driver of `real-pairs`: find the scenes, then on `jobs` threads (the pool
+//! `dataset` uses, [`crate::dataset::pool`]) hash each scene's
 //! files, decide by the manifest whether it is up to date ([`crate::dataset::resume`]), and
 //! if not plan, check and write it under its output lock; one `manifest.jsonl` record per
 //! scene ([`crate::dataset::manifest`]), appended as each scene completes and rewritten sorted
@@ -12,7 +13,7 @@ use super::PairOptions;
 use crate::dataset::manifest::{self, Appender, Record, Status};
 use crate::dataset::resume::{decide, Decision, Want};
 use crate::dataset::run::{
-    blank_record, check_out_dir, remove_replaced_outputs, remove_stale_temp_files_of,
+    blank_record, check_out_dir, reasons_line, remove_replaced_outputs, remove_stale_temp_files_of,
 };
 use crate::dataset::{sha256_hex, Kind, Sink, Split, Unit};
 use crate::diagnostics::{Diagnostics, Warning};
@@ -20,6 +21,7 @@ use crate::error::{Error, Result, ResultExt};
 use crate::output::{stop_requested, DeferredSyncs, OutputPolicy, OutputSetLock};
 use serde::Serialize;
 use std::collections::{BTreeMap, HashSet};
+use std::ops::ControlFlow;
 use std::path::PathBuf;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::{Arc, Mutex};
@@ -108,17 +110,7 @@ impl Summary {
             self.scenes, self.layout, self.done, self.skipped, self.failed,
             self.outputs_written, self.seconds
         );
-        if !self.recomputed.is_empty() {
-            let parts: Vec<String> = self
-                .recomputed
-                .iter()
-                .map(|(k, v)| format!("{v} {k}"))
-                .collect();
-            s.push_str(&format!(
-                "\nreal-pairs: work done, by reason: {}",
-                parts.join(", ")
-            ));
-        }
+        s.push_str(&reasons_line("real-pairs", &self.recomputed));
         if !self.dropped.is_empty() {
             s.push_str(&format!(
                 "\nreal-pairs: dropped the manifest records of {} scenes no longer in SCENES (their files were left in place): {}",
@@ -171,52 +163,37 @@ pub fn run(opts: &RunOptions, pairs: &PairOptions) -> Result<Summary> {
     let ids: HashSet<String> = scenes.iter().map(|s| s.id.clone()).collect();
     remove_stale_temp_files_of(out_dir, &ids, &[Split::Real]);
     let options_sha = sha256_hex(pairs.fingerprint().as_bytes());
-    let jobs = opts.jobs.max(1);
-    let next = AtomicUsize::new(0);
     let count = AtomicUsize::new(0);
     let results: Mutex<Vec<Outcome>> = Mutex::new(Vec::new());
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(jobs)
-        .thread_name(|i| format!("real-pairs-{i}"))
-        .build()
-        .map_err(|e| Error::invalid(format!("cannot start {jobs} worker threads: {e}")))?;
-    pool.scope(|s| {
-        for _ in 0..jobs {
-            s.spawn(|_| loop {
-                if stop_requested().is_some() {
-                    break;
-                }
-                let i = next.fetch_add(1, Ordering::SeqCst);
-                let Some(scene) = scenes.get(i) else { break };
-                let t0 = Instant::now();
-                let prev = previous.get(&(scene.rel.clone(), 1));
-                let mut o = one_scene(scene, layout, pairs, prev, &options_sha, opts);
-                if o.record.status != Status::Ok && stop_requested().is_some() {
-                    break;
-                }
-                if o.computed.is_some() {
-                    if let Err(e) = appender.append(&o.record) {
-                        o.record.status = Status::Failed;
-                        o.record.error = Some(format!("writing the manifest: {e}"));
-                    }
-                }
-                // The set is whole on disk and recorded: an interrupt need not wait for it.
-                drop(o.set.take());
-                let k = count.fetch_add(1, Ordering::SeqCst) + 1;
-                if let Some(on_scene) = opts.on_scene {
-                    on_scene(&SceneDone {
-                        index: k,
-                        total: scenes.len(),
-                        scene: &scene.rel,
-                        state: state(&o),
-                        warnings: &o.warnings,
-                        secs: t0.elapsed().as_secs_f64(),
-                    });
-                }
-                results.lock().unwrap_or_else(|e| e.into_inner()).push(o);
+    crate::dataset::pool::for_each(&scenes, opts.jobs, "real-pairs", |scene| {
+        let t0 = Instant::now();
+        let prev = previous.get(&(scene.rel.clone(), 1));
+        let mut o = one_scene(scene, layout, pairs, prev, &options_sha, opts);
+        if o.record.status != Status::Ok && stop_requested().is_some() {
+            return ControlFlow::Break(());
+        }
+        if o.computed.is_some() {
+            if let Err(e) = appender.append(&o.record) {
+                o.record.status = Status::Failed;
+                o.record.error = Some(format!("writing the manifest: {e}"));
+            }
+        }
+        // The set is whole on disk and recorded: an interrupt need not wait for it.
+        drop(o.set.take());
+        let k = count.fetch_add(1, Ordering::SeqCst) + 1;
+        if let Some(on_scene) = opts.on_scene {
+            on_scene(&SceneDone {
+                index: k,
+                total: scenes.len(),
+                scene: &scene.rel,
+                state: state(&o),
+                warnings: &o.warnings,
+                secs: t0.elapsed().as_secs_f64(),
             });
         }
-    });
+        results.lock().unwrap_or_else(|e| e.into_inner()).push(o);
+        ControlFlow::Continue(())
+    })?;
     drop(appender);
     if stop_requested().is_some() {
         return Err(Error::Interrupted.in_file(out_dir));
