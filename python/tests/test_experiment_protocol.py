@@ -414,3 +414,23 @@ def test_resume_reads_a_config_from_before_the_protocol_options(tmp_path):
                        ("targets", "release"), ("protocol", "release")]:
         with pytest.raises(prepare.ExperimentError, match=f"{key} = "):
             prepare.check_config(types.SimpleNamespace(out=tmp_path, cfg=dict(new, **{key: value})))
+
+
+def test_the_fresh_row_stays_out_of_a_release_table():
+    """FreshPatches synthesizes with day2night's ISP and noise: under release targets or
+    noise it would bring a second ISP into the table, so it is left out by default and
+    refused when named; with day2night's targets and noise it runs."""
+    from day2night.experiment import rows
+
+    every = rows.select([])
+    ours = {"targets": "day2night", "noise": "day2night"}
+    assert [r.id for r in protocol.fresh_rows(every, ours, False)] == [r.id for r in every]
+    assert "fresh" in [r.id for r in every]
+    for cfg in ({"targets": "release", "noise": "day2night"},
+                {"targets": "day2night", "noise": "release"}):
+        kept = [r.id for r in protocol.fresh_rows(every, cfg, False)]
+        assert kept == [r.id for r in every if r.id != "fresh"]
+        with pytest.raises(protocol.ProtocolError, match="--rows fresh"):
+            protocol.fresh_rows(rows.select(["ours", "fresh"]), cfg, True)
+        named = protocol.fresh_rows(rows.select(["ours"]), cfg, True)
+        assert [r.id for r in named] == ["ours"]

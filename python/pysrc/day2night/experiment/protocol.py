@@ -216,13 +216,27 @@ def apply_isos(exp):
         exp.mixes = {r: [with_isos(m, isos) for m in ms] for r, ms in exp.mixes.items()}
 
 
+def fresh_rows(selected, cfg, named):
+    """The rows to run once ``cfg``'s targets and noise are resolved. The fresh row
+    synthesizes with day2night's ISP and noise (``FreshPatches`` has no release option), so
+    under ``--targets release`` or ``--noise release`` it would put a second ISP into the
+    table: it is left out of the default rows then, and refused when named."""
+    if cfg["targets"] == "day2night" and cfg["noise"] == "day2night":
+        return selected
+    if named and any(r.source == "fresh" for r in selected):
+        raise ProtocolError(
+            "--rows fresh: the fresh row synthesizes with day2night's ISP and noise, and this "
+            f"run has --targets {cfg['targets']} --noise {cfg['noise']}: drop it from --rows, "
+            "or pass --targets day2night --noise day2night")
+    return [r for r in selected if r.source != "fresh"]
+
+
 def notes(exp):
     """Lines for the run's log about what the protocol does not reach."""
     out = []
-    fresh = any(r.source == "fresh" for r in exp.rows)
-    if fresh and (exp.cfg["targets"] != "day2night" or exp.cfg["noise"] != "day2night"):
-        out.append("the fresh row synthesizes with day2night's ISP and noise "
-                   "(FreshPatches): --targets/--noise release do not reach it")
+    if exp.cfg["targets"] != "day2night" or exp.cfg["noise"] != "day2night":
+        out.append("the fresh row is left out: it synthesizes with day2night's ISP and noise "
+                   "(FreshPatches), and this run's targets or noise are the release's")
     if exp.cfg["noise"] == "release" and exp.days:
         import day2night
 

@@ -37,7 +37,6 @@ class Experiment:
             "seed": int(seed),
             "width": int(width),
             "device": device,
-            "rows": [r.id for r in rows.select(rows_ or [])],
         }
         self.workers = presets.apply(self.cfg, train_opts)
         if self.cfg["epochs"] < 1:
@@ -53,7 +52,8 @@ class Experiment:
         self.target_isps, _ = protocol.for_run(self.cfg, real, folds, **protocol_flags)
         self.restart = list(dict.fromkeys(restart or ()))
         self.tasks = rows.tasks_of(task)
-        self.rows = rows.select(rows_ or [])
+        self.rows = protocol.fresh_rows(rows.select(rows_ or []), self.cfg, bool(rows_))
+        self.cfg["rows"] = [r.id for r in self.rows]
         self.show = show
         self.smoke = self.cfg["width"] < 32
 
