@@ -255,16 +255,25 @@ def tiny_real_set(root, n):
     return root, days
 
 
+def experiment(day, real, out, **options):
+    """A runner.Experiment of these options (config.ExperimentConfig's fields)."""
+    from day2night.experiment.config import ExperimentConfig
+    from day2night.experiment.runner import Experiment
+
+    return Experiment(ExperimentConfig(day=str(day), real=str(real), output=str(out),
+                                       **options))
+
+
 def test_folds_file_writes_the_release_lists_and_the_options_are_recorded(tmp_path):
     pytest.importorskip("torch")
-    from day2night.experiment.runner import Experiment, ExperimentError
+    from day2night.experiment.runner import ExperimentError
 
     real, days = tiny_real_set(tmp_path / "real", 105)
     lists = release_lists()
     k = tmp_path / "k_fold_indices_saved.p"
     k.write_bytes(pickle.dumps(lists))
     run = tmp_path / "run"
-    exp = Experiment(days, real, run, task="clean", epochs=1, width=4, rows_=["mix5"],
+    exp = experiment(days, real, run, task="clean", epochs=1, width=4, rows=["mix5"],
                      protocol="release", folds_file=k)
     exp.prepare()
     saved = json.loads((run / "folds.json").read_text())
@@ -282,25 +291,23 @@ def test_folds_file_writes_the_release_lists_and_the_options_are_recorded(tmp_pa
     assert synth and all(s["iso"] == isos[s["id"]] for s in synth)
     # a rerun with another option is refused before anything is written
     with pytest.raises(ExperimentError, match="targets = 'release', not 'day2night'"):
-        Experiment(days, real, run, task="clean", epochs=1, width=4, rows_=["mix5"],
+        experiment(days, real, run, task="clean", epochs=1, width=4, rows=["mix5"],
                    protocol="release", folds_file=k, targets="day2night").prepare()
     with pytest.raises(ExperimentError, match="folds_sha256"):
         k.write_bytes(pickle.dumps(release_lists(val=11)))
-        Experiment(days, real, run, task="clean", epochs=1, width=4, rows_=["mix5"],
+        experiment(days, real, run, task="clean", epochs=1, width=4, rows=["mix5"],
                    protocol="release", folds_file=k).prepare()
     with pytest.raises(protocol.ProtocolError, match="--folds 4: the fold file"):
-        Experiment(days, real, tmp_path / "run2", folds=4, folds_file=k)
+        experiment(days, real, tmp_path / "run2", folds=4, folds_file=k)
 
 
 def test_the_targets_default_to_the_release_for_copied_pngs(tmp_path):
-    from day2night.experiment.runner import Experiment
-
     real, days = tiny_real_set(tmp_path / "real", 6)
-    exp = Experiment(days, real, tmp_path / "run", task="clean")
-    assert (exp.cfg["targets"], exp.cfg["noise"], exp.cfg["synth_iso"], exp.cfg["folds"]) == \
+    c = experiment(days, real, tmp_path / "run", task="clean").config
+    assert (c.targets, c.noise, c.synth_iso, c.folds) == \
         ("release", "day2night", "alternate", 3)
-    exp = Experiment(days, real, tmp_path / "run", task="clean", targets="day2night")
-    assert exp.cfg["targets"] == "day2night"
+    c = experiment(days, real, tmp_path / "run", task="clean", targets="day2night").config
+    assert c.targets == "day2night"
 
 
 def processed_tree(cli, root):
@@ -401,7 +408,6 @@ def test_resume_reads_a_config_from_before_the_protocol_options(tmp_path):
     """A run folder whose config.json predates --protocol/--targets/--noise/--synth-iso/
     --folds-file resumes under the options that reproduce what it ran with, and only those."""
     import json
-    import types
 
     from day2night.experiment import prepare, protocol
 
@@ -409,11 +415,11 @@ def test_resume_reads_a_config_from_before_the_protocol_options(tmp_path):
            "width": 8, "device": "cpu", "rows": ["ours"]}
     (tmp_path / "config.json").write_text(json.dumps(old))
     new = dict(old, **protocol.resolve().config())
-    prepare.check_config(types.SimpleNamespace(out=tmp_path, cfg=new))  # accepted
+    prepare.check_config(tmp_path, new)  # accepted
     for key, value in [("noise", "release"), ("synth_iso", "release"),
                        ("targets", "release"), ("protocol", "release")]:
         with pytest.raises(prepare.ExperimentError, match=f"{key} = "):
-            prepare.check_config(types.SimpleNamespace(out=tmp_path, cfg=dict(new, **{key: value})))
+            prepare.check_config(tmp_path, dict(new, **{key: value}))
 
 
 def test_the_fresh_row_stays_out_of_a_release_table():
@@ -423,14 +429,13 @@ def test_the_fresh_row_stays_out_of_a_release_table():
     from day2night.experiment import rows
 
     every = rows.select([])
-    ours = {"targets": "day2night", "noise": "day2night"}
-    assert [r.id for r in protocol.fresh_rows(every, ours, False)] == [r.id for r in every]
+    ours = ("day2night", "day2night")
+    assert [r.id for r in protocol.fresh_rows(every, *ours, False)] == [r.id for r in every]
     assert "fresh" in [r.id for r in every]
-    for cfg in ({"targets": "release", "noise": "day2night"},
-                {"targets": "day2night", "noise": "release"}):
-        kept = [r.id for r in protocol.fresh_rows(every, cfg, False)]
+    for targets_noise in (("release", "day2night"), ("day2night", "release")):
+        kept = [r.id for r in protocol.fresh_rows(every, *targets_noise, False)]
         assert kept == [r.id for r in every if r.id != "fresh"]
         with pytest.raises(protocol.ProtocolError, match="--rows fresh"):
-            protocol.fresh_rows(rows.select(["ours", "fresh"]), cfg, True)
-        named = protocol.fresh_rows(rows.select(["ours"]), cfg, True)
+            protocol.fresh_rows(rows.select(["ours", "fresh"]), *targets_noise, True)
+        named = protocol.fresh_rows(rows.select(["ours"]), *targets_noise, True)
         assert [r.id for r in named] == ["ours"]

@@ -1,6 +1,6 @@
 """Fresh synthesis at the fixed row's budget (issue 35 item 4): an epoch of "Ours, fresh
 synthesis" trains on as many patches as "Ours" (within 5 %), by drawing several crops per
-day image (data.fresh_budget, experiment/unit.py _fresh_set); and the loader gives the same
+day image (data.fresh_budget, experiment/unit.py fresh_set); and the loader gives the same
 batches with 0 or 2 worker processes (items are functions of (seed, epoch, index))."""
 
 import types
@@ -39,22 +39,25 @@ def stand_in(tmp_path_factory):
     return root, sorted(days.glob("*.dng"))
 
 
-def fake_exp(root, files, patch):
-    return types.SimpleNamespace(
-        out=root / "run", day_train=[f.name for f in files], days={f.name: f for f in files},
-        cfg={"seed": 0, "patch": patch}, workers=0)
+def fresh_set(root, files, patch, task):
+    """unit.fresh_set over ``files`` (the options it reads: seed, patch, targets)."""
+    from day2night.experiment import unit
+
+    config = types.SimpleNamespace(seed=0, patch=patch, targets="day2night")
+    return unit.fresh_set(root / "run" / "data" / "day-train", {f.name: f for f in files},
+                          config, task)
 
 
 @pytest.mark.parametrize("patch", [32, 64])
 def test_fresh_epoch_has_the_fixed_rows_patches(stand_in, patch):
     need_torch()
-    from day2night.experiment import pairs, unit
+    from day2night.experiment import pairs
     from day2night.train.data import FixedPatches
 
     root, files = stand_in
     fixed_x = [pairs.synth_pairs(f, "local", 0)["clean"] for f in files]
     fixed = FixedPatches([x for x, _ in fixed_x], [y for _, y in fixed_x], patch, patch)
-    fresh = unit._fresh_set(fake_exp(root, files, patch), "clean")
+    fresh = fresh_set(root, files, patch, "clean")
     n_fresh = len(fresh) * fresh.patches_per_item
     assert abs(n_fresh - len(fixed)) <= 0.05 * len(fixed), (n_fresh, len(fixed))
     # and the items really hold that many patches
@@ -64,11 +67,10 @@ def test_fresh_epoch_has_the_fixed_rows_patches(stand_in, patch):
 
 def test_same_batches_whatever_the_worker_count(stand_in):
     torch = need_torch()
-    from day2night.experiment import unit
     from day2night.train import trainer
 
     root, files = stand_in
-    fresh = unit._fresh_set(fake_exp(root, files, 32), "noisy")
+    fresh = fresh_set(root, files, 32, "noisy")
     got = {}
     for workers in (0, 2):
         cfg = trainer.TrainConfig(out_dir=str(root / "w"), batch_size=32, workers=workers)

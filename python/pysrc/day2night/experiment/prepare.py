@@ -1,9 +1,11 @@
 """Everything the experiment checks before it writes anything (docs/experiment.md): the
 options against an earlier run's config.json, the inputs (the real set's manifest and files,
 the day DNGs), the folds (an earlier run's folds.json or new ones), and what an earlier run
-left in RUN (runfolder.py); then the run folder's setup files. Functions of the
-``runner.Experiment`` they prepare."""
+left in RUN (runfolder.py); then the run folder's setup files. Each function takes what it
+reads (the run folder, the config, the inputs) and returns what it makes (:class:`Inputs`,
+:class:`Plan`); ``runner.Experiment`` strings them together."""
 
+import dataclasses
 import pathlib
 import shutil
 import sys
@@ -11,18 +13,35 @@ import sys
 from ..isos import NOISY_ISOS
 from . import folds as folds_mod
 from . import mix as mix_mod
-from . import realset, rows, runfolder
+from . import protocol, realset, rows, runfolder
 from ..atomic import write_json
+from .config import CONFIG_KEYS, PAPER_VALUES, ExperimentError  # noqa: F401
 from .protocol import LEGACY_CONFIG
-from .presets import DEFAULTS  # the paper's training options, absent from config.json
-
-CONFIG_KEYS = ("day", "real", "task", "epochs", "seed", "folds", "width", "device", "rows",
-               "protocol", "targets", "noise", "synth_iso", "folds_file", "folds_sha256",
-               "patch", "batch", "lr", "amp", "channels_last")
 
 
-class ExperimentError(ValueError):
-    """Bad input of the experiment (the message names the file, scene or option)."""
+@dataclasses.dataclass
+class Inputs:
+    """The checked inputs: the day DNGs ({name: path}, split into training and validation
+    names) and the real scenes ({id: realset scene})."""
+
+    days: dict
+    scenes: dict
+    day_train: list
+    day_val: list
+
+
+@dataclasses.dataclass
+class Plan:
+    """The folds (the fold manifest; ``new``: not read from RUN/folds.json) and the training
+    slots of every fold of each mixed row (``mixes``, with the run's synthetic ISOs)."""
+
+    folds: dict
+    mixes: dict
+    new: bool
+
+    @property
+    def splits(self):
+        return self.folds["splits"]
 
 
 def log(msg):
@@ -56,94 +75,103 @@ def check_day_images(days):
                                   "one)")
 
 
-def check_config(exp):
-    path = exp.out / "config.json"
+def check_config(out, record):
+    """An earlier run's config.json in ``out`` against this run's ``record``
+    (ExperimentConfig.record): the first option that differs is an error."""
+    path = pathlib.Path(out) / "config.json"
     if path.is_file():
         # a key missing from a run made before the protocol options: the value that ran then
         old = {**LEGACY_CONFIG, **runfolder.read_config(path)}
-        # (training options absent from both: the paper's; presets.config)
-        diff = [k for k in CONFIG_KEYS if old.get(k) != exp.cfg.get(k)]
+        # (training options absent from both: the paper's; ExperimentConfig.record)
+        diff = [k for k in CONFIG_KEYS if old.get(k) != record.get(k)]
         if diff:
             k = diff[0]
             raise ExperimentError(
-                f"{exp.out} holds a run made with {k} = {old.get(k, DEFAULTS.get(k))!r}, "
-                f"not {exp.cfg.get(k, DEFAULTS.get(k))!r}: "
+                f"{out} holds a run made with {k} = {old.get(k, PAPER_VALUES.get(k))!r}, "
+                f"not {record.get(k, PAPER_VALUES.get(k))!r}: "
                 "rerun with the same options to resume, or choose another -o folder"
             )
 
 
-def read_inputs(exp):
-    """The real set (its manifest, then every file the tasks read: sizes, SHA-256, DNGs,
-    target PNGs) and the day DNGs, all read and checked."""
-    isos = NOISY_ISOS if "noisy" in exp.tasks else ()
-    exp.days = day_images(exp.cfg["day"])
+def read_inputs(day, real, tasks):
+    """The real set (its manifest, then every file the ``tasks`` read: sizes, SHA-256, DNGs,
+    target PNGs) and the day DNGs, all read and checked: the :class:`Inputs`."""
+    isos = NOISY_ISOS if "noisy" in tasks else ()
+    days = day_images(day)
     try:
-        scenes = realset.read_real(exp.cfg["real"], isos=isos)
-        manifest = pathlib.Path(exp.cfg["real"]) / "manifest.jsonl"
-        log(f"checking {len(scenes)} real scenes and {len(exp.days)} day images")
+        scenes = realset.read_real(real, isos=isos)
+        manifest = pathlib.Path(real) / "manifest.jsonl"
+        log(f"checking {len(scenes)} real scenes and {len(days)} day images")
         for s in scenes:
-            realset.check_scene(s, manifest, clean="clean" in exp.tasks, isos=isos)
+            realset.check_scene(s, manifest, clean="clean" in tasks, isos=isos)
     except realset.RealSetError as e:
         raise ExperimentError(str(e)) from None
-    exp.scenes = {s.id: s for s in scenes}
-    check_day_images(exp.days)
-    exp.day_train, exp.day_val = mix_mod.split_day_images(exp.days)
+    check_day_images(days)
+    day_train, day_val = mix_mod.split_day_images(days)
+    return Inputs(days=days, scenes={s.id: s for s in scenes}, day_train=day_train,
+                  day_val=day_val)
 
 
-def plan_folds(exp):
-    """The folds (an earlier run's folds.json, checked, or new ones) and the mixes."""
-    fpath = exp.out / "folds.json"
-    exp.new_folds = not fpath.is_file()
-    if not exp.new_folds:
-        exp.folds = runfolder.read_folds(fpath, exp.cfg["folds"], exp.cfg["seed"])
-        if exp.folds["scenes"] != sorted(exp.scenes):
+def plan_folds(out, config, inputs, run_rows):
+    """The folds (an earlier run's RUN/folds.json, checked, or new ones from ``config``'s
+    folds, seed and fold file) and the mixes of ``run_rows``: the :class:`Plan`."""
+    fpath = pathlib.Path(out) / "folds.json"
+    new = not fpath.is_file()
+    if not new:
+        folds = runfolder.read_folds(fpath, config.folds, config.seed)
+        if folds["scenes"] != sorted(inputs.scenes):
             raise ExperimentError(
                 f"{fpath}: its scenes differ from the real set's: {runfolder.FOLDS_ADVICE} "
                 "(and the units trained on the old folds), or choose another -o folder")
     else:
-        exp.folds = folds_mod.make_run_folds(
-            sorted(exp.scenes), exp.cfg["folds"], seed=exp.cfg["seed"],
-            folds_file=exp.cfg.get("folds_file"))
-    exp.mixes = {}
-    for r in exp.rows:
+        folds = folds_mod.make_run_folds(sorted(inputs.scenes), config.folds, seed=config.seed,
+                                         folds_file=config.folds_file)
+    mixes = {}
+    for r in run_rows:
         if r.per_fold:
-            exp.mixes[r.id] = [
-                mix_mod.mix(s["train"], exp.day_train, r.percent, seed=mix_mod.RELEASE_SEED)
-                for s in exp.folds["splits"]
+            mixes[r.id] = [
+                mix_mod.mix(s["train"], inputs.day_train, r.percent, seed=mix_mod.RELEASE_SEED)
+                for s in folds["splits"]
             ]
+    isos = protocol.run_isos(config.synth_iso, inputs.days, config.seed)
+    return Plan(folds=folds, mixes=protocol.mixes_with_isos(mixes, isos), new=new)
 
 
-def check_run_folder(exp):
+def check_run_folder(out, work, restart, scenes, epochs):
     """Every planned unit's scores.json (done units) or checkpoints (the others), and the
-    cached data; units named by --restart-unit are not checked (they are deleted)."""
-    work = exp.work()
+    cached data; units named by --restart-unit (``restart``) are not checked (they are
+    deleted). ``work``: rows.work's units; ``scenes``: the real scenes' ids."""
+    out = pathlib.Path(out)
     ids = [runfolder.unit_id(t, r.id, f) for t, r, f, _ in work]
-    for uid in exp.restart:
+    for uid in restart:
         if uid not in ids:
             raise ExperimentError(
                 f"--restart-unit {uid}: not a unit of this run (TASK/ROW/FOLD, one of: "
                 f"{', '.join(ids)})")
     for (task, row, fold, split), uid in zip(work, ids):
-        udir = exp.out / "units" / task / row.id / fold
-        if uid in exp.restart:
+        udir = out / "units" / task / row.id / fold
+        if uid in restart:
             continue
         if (udir / "scores.json").is_file():
-            tests = split["test"] if split else sorted(exp.scenes)
-            runfolder.read_scores(exp.out, udir / "scores.json", task, row.id, fold,
+            tests = split["test"] if split else sorted(scenes)
+            runfolder.read_scores(out, udir / "scores.json", task, row.id, fold,
                                   rows.test_keys(task), tests)
         else:
-            runfolder.check_checkpoints(exp.out, uid, udir / "model", exp.cfg["epochs"])
-    runfolder.check_data(exp.out)
+            runfolder.check_checkpoints(out, uid, udir / "model", epochs)
+    runfolder.check_data(out)
 
 
-def write_setup(exp):
-    exp.out.mkdir(parents=True, exist_ok=True)
-    write_json(exp.out / "config.json", exp.cfg)
-    if exp.new_folds:
-        folds_mod.write_folds(exp.out / "folds.json", exp.folds)
-    write_json(exp.out / "mixes.json", exp.mixes)
-    for uid in exp.restart:
-        udir = exp.out / "units" / uid
+def write_setup(out, record, plan, restart):
+    """RUN/config.json (``record``), folds.json (new folds only), mixes.json; then the
+    folders of the units named by --restart-unit (``restart``) deleted."""
+    out = pathlib.Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    write_json(out / "config.json", record)
+    if plan.new:
+        folds_mod.write_folds(out / "folds.json", plan.folds)
+    write_json(out / "mixes.json", plan.mixes)
+    for uid in restart:
+        udir = out / "units" / uid
         if udir.exists():
             shutil.rmtree(udir)
             log(f"--restart-unit {uid}: deleted {udir}")

@@ -58,20 +58,27 @@ def _choice(value, choices, flag):
     return value
 
 
-def resolve(protocol=None, targets=None, noise=None, synth_iso=None, folds_file=None,
-            real_targets="day2night"):
-    """The Protocol of the flags given (None: not given). ``real_targets``: the ISP of the
-    real set's targets (:func:`real_target_isp`), the default of ``targets``."""
-    name = _choice(protocol, PROTOCOLS, "--protocol") or "day2night"
+def check_flags(protocol=None, targets=None, noise=None, synth_iso=None, folds_file=None):
+    """The flags as given (None: not given) checked: each a choice of its own, and
+    ``--protocol release`` with a fold file."""
+    _choice(protocol, PROTOCOLS, "--protocol")
     _choice(targets, TARGETS, "--targets")
     _choice(noise, NOISE, "--noise")
     _choice(synth_iso, SYNTH_ISO, "--synth-iso")
-    release = name == "release"
-    if release and folds_file is None:
+    if protocol == "release" and folds_file is None:
         raise ProtocolError(
             "--protocol release needs --folds-file PATH: the release's "
             "utils/k_fold_indices_saved.p (or its JSON export; docs/experiment.md)"
         )
+
+
+def resolve(protocol=None, targets=None, noise=None, synth_iso=None, folds_file=None,
+            real_targets="day2night"):
+    """The Protocol of the flags given (None: not given). ``real_targets``: the ISP of the
+    real set's targets (:func:`real_target_isp`), the default of ``targets``."""
+    check_flags(protocol, targets, noise, synth_iso, folds_file)
+    name = protocol or "day2night"
+    release = name == "release"
     sha = None
     if folds_file is not None:
         path = pathlib.Path(folds_file)
@@ -167,22 +174,22 @@ def with_isos(slots, isos):
     return out
 
 
-CONFIG_KEYS = ("protocol", "targets", "noise", "synth_iso", "folds_file", "folds_sha256")
 # What a config.json written before these options ran with (resume reads a missing key as
 # this): day2night's protocol, targets, noise and alternating ISOs, no fold file.
 LEGACY_CONFIG = {"protocol": "day2night", "targets": "day2night", "noise": "day2night",
                  "synth_iso": "alternate", "folds_file": None, "folds_sha256": None}
 
 
-def for_run(cfg, real_dir, folds=None, **flags):
-    """Resolve the run's protocol (``flags``: protocol, targets, noise, synth_iso, folds_file
-    as given, None when not) into ``cfg`` (its CONFIG_KEYS, and ``folds``: the number of
-    folds, from the fold file when there is one). Returns ({scene: ISP of its target}, the
-    Protocol)."""
-    isps = real_target_isps(real_dir)
+def for_run(config):
+    """``config`` (config.ExperimentConfig) with its protocol resolved: the Protocol's
+    options (Protocol.config) and ``folds``, the number of folds (from the fold file when
+    there is one; else as given, 3 when not). Returns (that config, {scene: ISP of its
+    target})."""
+    isps = real_target_isps(config.real)
     real = "release" if isps and set(isps.values()) == {"release"} else "day2night"
-    p = resolve(real_targets=real, **flags)
-    count = folds
+    p = resolve(config.protocol, config.targets, config.noise, config.synth_iso,
+                config.folds_file, real_targets=real)
+    folds = count = config.folds
     if p.folds_file is not None:
         from .release_folds import read_release_folds
 
@@ -190,65 +197,68 @@ def for_run(cfg, real_dir, folds=None, **flags):
         if folds is not None and int(folds) != count:
             raise ProtocolError(f"--folds {folds}: the fold file {p.folds_file} holds {count} "
                                 "folds (leave --folds out)")
-    cfg.update(p.config(), folds=int(3 if count is None else count))
-    return isps, p
+    return dataclasses.replace(config, **p.config(), folds=int(3 if count is None else count)), \
+        isps
 
 
-def run_isos(exp):
-    """{day image: ISO} of the run's synthetic noisy inputs under ``synth_iso = release``,
-    else None (mix.py's alternation by slot)."""
-    if exp.cfg.get("synth_iso") != "release":
+def run_isos(synth_iso, days, seed):
+    """{day image: ISO} of the run's synthetic noisy inputs under ``synth_iso = release``
+    (``days``: the day images' names), else None (mix.py's alternation by slot)."""
+    if synth_iso != "release":
         return None
-    return release_isos(exp.days, exp.cfg["seed"])
+    return release_isos(days, seed)
 
 
-def synthetic_slots(exp, names):
-    """mix.synthetic_slots of ``names`` with the run's synthetic ISOs."""
+def synthetic_slots(names, isos):
+    """mix.synthetic_slots of ``names`` with the run's synthetic ISOs (:func:`run_isos`)."""
     from .mix import synthetic_slots as slots
 
-    return with_isos(slots(names), run_isos(exp))
+    return with_isos(slots(names), isos)
 
 
-def apply_isos(exp):
-    """Replace the synthetic slots' ISOs of ``exp.mixes`` by the release's draw."""
-    isos = run_isos(exp)
-    if isos:
-        exp.mixes = {r: [with_isos(m, isos) for m in ms] for r, ms in exp.mixes.items()}
+def mixes_with_isos(mixes, isos):
+    """``mixes`` (row: [slots per fold]) with the synthetic slots' ISOs replaced by the
+    release's draw ``isos`` (None or empty: unchanged)."""
+    if not isos:
+        return mixes
+    return {r: [with_isos(m, isos) for m in ms] for r, ms in mixes.items()}
 
 
-def fresh_rows(selected, cfg, named):
-    """The rows to run once ``cfg``'s targets and noise are resolved. The fresh row
+def fresh_rows(selected, targets, noise, named):
+    """The rows to run under the resolved ``targets`` and ``noise``. The fresh row
     synthesizes with day2night's ISP and noise (``FreshPatches`` has no release option), so
     under ``--targets release`` or ``--noise release`` it would put a second ISP into the
     table: it is left out of the default rows then, and refused when named."""
-    if cfg["targets"] == "day2night" and cfg["noise"] == "day2night":
+    if targets == "day2night" and noise == "day2night":
         return selected
     if named and any(r.source == "fresh" for r in selected):
         raise ProtocolError(
             "--rows fresh: the fresh row synthesizes with day2night's ISP and noise, and this "
-            f"run has --targets {cfg['targets']} --noise {cfg['noise']}: drop it from --rows, "
+            f"run has --targets {targets} --noise {noise}: drop it from --rows, "
             "or pass --targets day2night --noise day2night")
     return [r for r in selected if r.source != "fresh"]
 
 
-def notes(exp):
-    """Lines for the run's log about what the protocol does not reach."""
+def notes(config, days, scenes, target_isps):
+    """Lines for the run's log about what the protocol does not reach (``days``: {name:
+    day DNG}; ``scenes``: the real scenes' ids)."""
     out = []
-    if exp.cfg["targets"] != "day2night" or exp.cfg["noise"] != "day2night":
+    if config.targets != "day2night" or config.noise != "day2night":
         out.append("the fresh row is left out: it synthesizes with day2night's ISP and noise "
                    "(FreshPatches), and this run's targets or noise are the release's")
-    if exp.cfg["noise"] == "release" and exp.days:
+    if config.noise == "release" and days:
         import day2night
 
-        first = sorted(exp.days)[0]
-        white = day2night.read_dng(str(exp.days[first])).meta.get("white_level")
+        first = sorted(days)[0]
+        white = day2night.read_dng(str(days[first])).meta.get("white_level")
         if white is not None and float(white) != 1023:
             out.append(f"--noise release clips the noisy raws at 1023, as the release does for "
                        f"its 10-bit phone; {first} has white level {white:g}: its highlights "
                        "saturate")
-    mixed = set(exp.target_isps.get(s, "day2night") for s in exp.scenes) - {exp.cfg["targets"]}
+    isps = [target_isps.get(s, "day2night") for s in scenes]
+    mixed = set(isps) - {config.targets}
     if mixed:
-        n = sum(exp.target_isps.get(s, "day2night") != exp.cfg["targets"] for s in exp.scenes)
+        n = sum(i != config.targets for i in isps)
         out.append(f"{n} real target(s) came from the {'/'.join(sorted(mixed))} ISP: rendered "
-                   f"again from their clean raws by the {exp.cfg['targets']} ISP")
+                   f"again from their clean raws by the {config.targets} ISP")
     return out

@@ -60,3 +60,17 @@ def tasks_of(task):
 def test_keys(task):
     """The inputs each test scene is scored on: the merged raw, or each noisy ISO."""
     return ["clean"] if task == "clean" else list(NOISY_ISOS)
+
+
+def units(row, splits):
+    """(fold name, split) of each unit of ``row`` per task: one per fold of the fold
+    manifest's ``splits`` for a row with real data, else one, ``"all"`` (split None)."""
+    if row.per_fold:
+        return [(str(s["fold"]), s) for s in splits]
+    return [("all", None)]
+
+
+def work(tasks, rows, splits):
+    """Every unit of a run, in order: (task, row, fold, split)."""
+    return [(task, row, fold, split) for task in tasks for row in rows
+            for fold, split in units(row, splits)]

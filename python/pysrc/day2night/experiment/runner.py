@@ -12,200 +12,125 @@ Run folder (every file written through a temporary file + rename):
 A unit is done when its scores.json exists; a rerun skips done units and the trainer resumes
 an interrupted one from its last epoch, so a killed run finishes with the same table.
 Every input (day DNGs, real set) and every file an earlier run left in RUN is checked before
-anything is written (runfolder.py: a damaged file is an error naming it and what to do)."""
+anything is written (runfolder.py: a damaged file is an error naming it and what to do).
+
+:class:`Experiment` only strings the parts together: config.py (the options, resolved),
+prepare.py (checks, inputs, folds; the setup files), source.py (the pairs), unit.py (train
+and score one unit), table.py and report.py."""
 
 import pathlib
 
-from ..isos import NOISY_ISOS
-from . import mix as mix_mod
-from . import pairs, prepare, presets, protocol, report, rows, runfolder, table
+from . import prepare, protocol, report, rows, runfolder, table, unit
 from ..atomic import write_json
-from .prepare import CONFIG_KEYS, ExperimentError, day_images, log  # noqa: F401
+from .config import ExperimentConfig, ExperimentError, resolve  # noqa: F401
+from .prepare import day_images, log  # noqa: F401
+from .source import PairSource
 
 
 class Experiment:
-    def __init__(self, day, real, out, task="both", epochs=500, device="cpu", seed=0,
-                 folds=None, rows_=None, width=32, show=3, restart=(), train_opts=None,
-                 **protocol_flags):
-        """``protocol_flags``: protocol.for_run's; ``train_opts``: presets.apply's."""
-        self.out = pathlib.Path(out)
-        self.cfg = {
-            "day": str(pathlib.Path(day).resolve()),
-            "real": str(pathlib.Path(real).resolve()),
-            "task": task,
-            "epochs": int(epochs),
-            "seed": int(seed),
-            "width": int(width),
-            "device": device,
-        }
-        self.workers = presets.apply(self.cfg, train_opts)
-        if self.cfg["epochs"] < 1:
-            raise ExperimentError(f"--epochs {epochs}: at least 1")
-        if self.cfg["width"] < 1:
-            raise ExperimentError(f"--width {width}: at least 1 (the paper's network: 32)")
-        if device not in ("cpu", "cuda"):
-            raise ExperimentError(f"--device {device!r}: use cpu or cuda")
-        if not 0 <= self.cfg["seed"] <= 2**32 - 1:
-            raise ExperimentError(f"--seed {seed}: use 0 to {2**32 - 1} (numpy's RandomState)")
-        if int(show) < 0:
-            raise ExperimentError(f"--show {show}: at least 0 (test scenes on index.html)")
-        self.target_isps, _ = protocol.for_run(self.cfg, real, folds, **protocol_flags)
-        self.restart = list(dict.fromkeys(restart or ()))
-        self.tasks = rows.tasks_of(task)
-        self.rows = protocol.fresh_rows(rows.select(rows_ or []), self.cfg, bool(rows_))
-        self.cfg["rows"] = [r.id for r in self.rows]
-        self.show = show
-        self.smoke = self.cfg["width"] < 32
+    """One run of the experiment from an ExperimentConfig (resolved at once: a bad option,
+    real set or fold file is an error here, before anything is read or written)."""
 
-    # ---- setup -------------------------------------------------------------------------
+    def __init__(self, config):
+        self.config, self.target_isps = resolve(config)
+        self.out = pathlib.Path(self.config.output)
+        self.tasks = rows.tasks_of(self.config.task)
+        self.rows = rows.select(list(self.config.rows))
+        self.inputs = self.plan = self.source = None
+        self.report_scenes = []
+
     def prepare(self):
         """Read and check every input and what an earlier run left in RUN, then write config,
         folds and mixes (nothing is written when anything is bad)."""
+        c = self.config
         try:
             import torch
         except ImportError as e:
             raise ExperimentError(f"training needs torch ({e}): pip install day2night[train]") \
                 from None
-        if self.cfg["device"] == "cuda" and not torch.cuda.is_available():
+        if c.device == "cuda" and not torch.cuda.is_available():
             raise ExperimentError("--device cuda: torch sees no CUDA device (use --device cpu)")
-        prepare.check_config(self)
-        prepare.read_inputs(self)
-        prepare.plan_folds(self)
-        protocol.apply_isos(self)
-        prepare.check_run_folder(self)
-        prepare.write_setup(self)
-        self.report_scenes = self.folds["splits"][0]["test"][: self.show]
-        n = len(self.scenes)
+        prepare.check_config(self.out, c.record())
+        self.inputs = prepare.read_inputs(c.day, c.real, self.tasks)
+        self.plan = prepare.plan_folds(self.out, c, self.inputs, self.rows)
+        prepare.check_run_folder(self.out, self.work(), c.restart_unit, self.inputs.scenes,
+                                 c.epochs)
+        prepare.write_setup(self.out, c.record(), self.plan, c.restart_unit)
+        self.source = PairSource(self.out, c, self.inputs, self.target_isps, self.tasks)
+        self.report_scenes = self.plan.splits[0]["test"][: c.show]
+        self._log_setup()
+
+    def _log_setup(self):
+        c, i = self.config, self.inputs
         log(
-            f"{n} real scenes, {len(self.days)} day images ({len(self.day_train)} train, "
-            f"{len(self.day_val)} val), {self.cfg['folds']} folds, tasks {', '.join(self.tasks)}"
+            f"{len(i.scenes)} real scenes, {len(i.days)} day images ({len(i.day_train)} train, "
+            f"{len(i.day_val)} val), {c.folds} folds, tasks {', '.join(self.tasks)}"
         )
-        for note in protocol.notes(self):
+        for note in protocol.notes(c, i.days, i.scenes, self.target_isps):
             log(note)
-        if self.smoke:
+        if c.smoke:
             log(
-                f"SMOKE RUN: network width {self.cfg['width']} < 32 (the paper's UNet has 32); "
+                f"SMOKE RUN: network width {c.width} < 32 (the paper's UNet has 32); "
                 "its numbers are not the paper's"
             )
 
-    # ---- cached pairs ------------------------------------------------------------------
-    def real(self, sid, key):
-        """(x_path, y_path) of real scene ``sid`` for input key "clean" or an ISO."""
-        scene = self.scenes[sid]
-        name = f"{sid}_{key}" if key != "clean" else sid
-        folder = self.out / "data" / "real"
-        iso = None if key == "clean" else int(key)
-        return pairs.cached(folder, {key: name}, lambda: {key: self._real_pair(scene, iso)})[key]
-
-    def _real_pair(self, scene, iso):
-        try:
-            return pairs.real_pair(scene, iso, targets=self.cfg["targets"],
-                                   source=self.target_isps.get(scene.id, "day2night"))
-        except (pairs.PairError, ValueError) as e:
-            raise ExperimentError(str(e)) from None
-
-    def synth(self, mode, name, key):
-        """(x_path, y_path) of day image ``name`` synthesized in ``mode`` for input ``key``."""
-        folder = self.out / "data" / f"synth-{mode}"
-        stem = name.replace("/", "__").rsplit(".", 1)[0]
-        names = {}
-        if "clean" in self.tasks:
-            names["clean"] = stem
-        if "noisy" in self.tasks:
-            names.update({iso: f"{stem}_{iso}" for iso in NOISY_ISOS})
-        seed = self.cfg["seed"]
-
-        def make():
-            try:
-                return pairs.synth_pairs(self.days[name], mode, seed,
-                                         targets=self.cfg["targets"], noise=self.cfg["noise"])
-            except (pairs.PairError, ValueError) as e:
-                raise ExperimentError(str(e)) from None
-
-        return pairs.cached(folder, names, make)[key]
-
-    def slot_pair(self, slot, task, mode):
-        key = "clean" if task == "clean" else slot["iso"]
-        if slot["kind"] == "real":
-            return self.real(slot["id"], key)
-        return self.synth(mode, slot["id"], key)
-
-    # ---- units -------------------------------------------------------------------------
-    def units(self, task, row):
-        if row.per_fold:
-            for s in self.folds["splits"]:
-                yield str(s["fold"]), s
-        else:
-            yield "all", None
-
     def work(self):
         """Every unit of the run, in order: (task, row, fold, split)."""
-        return [
-            (task, row, fold, split)
-            for task in self.tasks
-            for row in self.rows
-            for fold, split in self.units(task, row)
-        ]
-
-    def train_val(self, task, row, split):
-        if row.per_fold:
-            fold = split["fold"]
-            train = self.mixes[row.id][fold]
-            val = mix_mod.real_slots(split["val"])
-        else:
-            train, val = (protocol.synthetic_slots(self, d) for d in (self.day_train,
-                                                                      self.day_val))
-        val_p = [self.slot_pair(s, task, row.mode) for s in val]
-        if row.source == "fresh":
-            return None, val_p
-        return [self.slot_pair(s, task, row.mode) for s in train], val_p
+        return rows.work(self.tasks, self.rows, self.plan.splits)
 
     def run_unit(self, task, row, fold, split, index, total):
-        run_unit(self, task, row, fold, split, index, total)
+        """Train (or resume) and score one unit; skipped when its scores.json exists."""
+        c, src = self.config, self.source
+        udir = self.out / "units" / task / row.id / fold
+        where = f"unit {index}/{total}: task {task}, row {row.id} ({row.label}), fold {fold}"
+        if (udir / "scores.json").is_file():
+            log(f"{where}: done (scores.json), skipped")
+            return
+        log(f"{where}: preparing data")
+        train_p, val_p = src.train_val(task, row, split, self.plan.mixes)
+        test = split["test"] if split else sorted(self.inputs.scenes)
+        tests = src.tests(task, test)
+        uid = runfolder.unit_id(task, row.id, fold)
+        done_epochs = runfolder.check_checkpoints(self.out, uid, udir / "model", c.epochs)
+        if done_epochs:
+            log(f"{where}: resuming after epoch {done_epochs} of {c.epochs}")
+        else:
+            log(f"{where}: training {c.epochs} epoch(s)")
+        scored = self._train_score(where, task, row, fold, udir, train_p, val_p, tests)
+        scored["train_pairs"] = "fresh" if train_p is None else len(train_p)
+        scored["val_pairs"] = len(val_p)
+        scored["test_scenes"] = list(test)
+        write_json(udir / "scores.json", scored)
+
+    def _train_score(self, where, task, row, fold, udir, train_p, val_p, tests):
+        from ..train.trainer import CheckpointError
+
+        c = self.config
+        if train_p is None:
+            days = {n: self.inputs.days[n] for n in self.inputs.day_train}
+            folder = self.out / "data" / "day-train"
+            train_set = lambda: unit.fresh_set(folder, days, c, task)  # noqa: E731
+        else:
+            train_set = lambda: unit.fixed_set(train_p, c.patch)  # noqa: E731
+        try:
+            result = unit.train_unit(c, udir / "model", val_p, train_set)
+            log(f"{where}: scoring {len(tests)} test input(s)")
+            return unit.score_unit(c, self.out, task, row, fold, tests, result,
+                                   self.report_scenes)
+        except CheckpointError as e:
+            uid = runfolder.unit_id(task, row.id, fold)
+            raise runfolder.RunFolderError(f"{e}; {runfolder.unit_advice(self.out, uid)}") \
+                from None
 
     def run(self):
+        """The whole run: prepare, every unit, then table.md, table.json and index.html."""
         self.prepare()
         work = self.work()
         for i, (task, row, fold, split) in enumerate(work, 1):
             self.run_unit(task, row, fold, split, i, len(work))
-        t = table.build(self)
-        table.write(self, t)
-        report.write(self, t)
+        t = table.build(self.config, self.out, self.plan.splits, len(self.inputs.scenes),
+                        len(self.inputs.days))
+        table.write(self.out, t)
+        report.write(self.out, t, self.tasks, self.report_scenes)
         log(f"wrote {self.out / 'table.md'}, table.json and index.html")
         return t
-
-
-def run_unit(exp, task, row, fold, split, index, total):
-    """Train (or resume) and score one unit; skipped when its scores.json exists."""
-    from . import unit
-
-    udir = exp.out / "units" / task / row.id / fold
-    done = udir / "scores.json"
-    where = f"unit {index}/{total}: task {task}, row {row.id} ({row.label}), fold {fold}"
-    if done.is_file():
-        log(f"{where}: done (scores.json), skipped")
-        return
-    log(f"{where}: preparing data")
-    train_p, val_p = exp.train_val(task, row, split)
-    test = split["test"] if split else sorted(exp.scenes)
-    tests = [(sid, k, exp.real(sid, k)) for sid in test for k in rows.test_keys(task)]
-    uid = runfolder.unit_id(task, row.id, fold)
-    done_epochs = runfolder.check_checkpoints(exp.out, uid, udir / "model",
-                                              exp.cfg["epochs"])
-    if done_epochs:
-        log(f"{where}: resuming after epoch {done_epochs} of {exp.cfg['epochs']}")
-    else:
-        log(f"{where}: training {exp.cfg['epochs']} epoch(s)")
-    from ..train.trainer import CheckpointError
-
-    try:
-        result = unit.train_unit(exp, udir, task, row, train_p, val_p)
-        log(f"{where}: scoring {len(tests)} test input(s)")
-        scored = unit.score_unit(exp, udir, task, row, fold, tests, result)
-    except CheckpointError as e:
-        raise runfolder.RunFolderError(f"{e}; {runfolder.unit_advice(exp.out, uid)}") \
-            from None
-    scored["train_pairs"] = "fresh" if train_p is None else len(train_p)
-    scored["val_pairs"] = len(val_p)
-    scored["test_scenes"] = list(test)
-    write_json(done, scored)

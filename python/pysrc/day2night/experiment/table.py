@@ -7,10 +7,12 @@ images, as the release's test.py; a per-fold row's score is the mean of its fold
 such a mean is reported as "inf"."""
 
 import math
+import pathlib
 
 from ..isos import NOISY_ISOS
 from ..atomic import write_json, write_text
-from .rows import test_keys
+from .rows import select, tasks_of, test_keys
+from .rows import units as row_units
 from .runfolder import read_scores
 
 METRICS = ("psnr", "ssim", "delta_e")
@@ -48,22 +50,27 @@ def _mean(values):
     return m
 
 
-def build(exp):
+def _unit_means(u, task):
+    """A unit's mean score per input over its test images (its ``mean``)."""
+    return {
+        str(k): {m: _mean(i[m] for i in u["images"] if i["input"] == str(k)) for m in METRICS}
+        for k in test_keys(task)
+    }
+
+
+def build(config, out, splits, n_scenes, n_days):
+    """table.json of a run: ``config`` its resolved ExperimentConfig (tasks, rows, the
+    record), ``out`` its folder (the units' scores.json), ``splits`` the fold manifest's,
+    ``n_scenes`` and ``n_days`` the real scenes and day images it ran on."""
     rows_out = []
-    for task in exp.tasks:
-        for row in exp.rows:
+    for task in tasks_of(config.task):
+        for row in select(list(config.rows)):
             units = []
-            for fold, _ in exp.units(task, row):
-                path = exp.out / "units" / task / row.id / fold / "scores.json"
-                units.append(read_scores(exp.out, path, task, row.id, fold, test_keys(task)))
+            for fold, _ in row_units(row, splits):
+                path = pathlib.Path(out) / "units" / task / row.id / fold / "scores.json"
+                units.append(read_scores(out, path, task, row.id, fold, test_keys(task)))
             for u in units:
-                u["mean"] = {
-                    str(k): {
-                        m: _mean(i[m] for i in u["images"] if i["input"] == str(k))
-                        for m in METRICS
-                    }
-                    for k in test_keys(task)
-                }
+                u["mean"] = _unit_means(u, task)
             mean = {
                 str(k): {m: _mean(u["mean"][str(k)][m] for u in units) for m in METRICS}
                 for k in test_keys(task)
@@ -73,27 +80,27 @@ def build(exp):
             )
     return {
         "format": "day2night-experiment-table/1",
-        "config": exp.cfg,
-        "smoke": exp.smoke,
-        "not_the_paper": deviations(exp),
-        "folds": exp.folds["splits"],
+        "config": config.record(),
+        "smoke": config.smoke,
+        "not_the_paper": deviations(config, n_scenes, n_days),
+        "folds": splits,
         "rows": rows_out,
     }
 
 
-def deviations(exp):
+def deviations(config, n_scenes, n_days):
     """How this run differs from the paper's protocol (said above its table)."""
     d = []
-    if exp.cfg["width"] != 32:
-        d.append(f"UNet width {exp.cfg['width']} (paper: 32)")
-    if exp.cfg["epochs"] != 500:
-        d.append(f"{exp.cfg['epochs']} epochs (paper: 500)")
-    if len(exp.scenes) != 105:
-        d.append(f"{len(exp.scenes)} real scenes (paper: 105)")
-    if len(exp.days) != 70:
-        d.append(f"{len(exp.days)} day images (paper: 70)")
-    if exp.cfg["folds"] != 3:
-        d.append(f"{exp.cfg['folds']} folds (paper: 3)")
+    if config.width != 32:
+        d.append(f"UNet width {config.width} (paper: 32)")
+    if config.epochs != 500:
+        d.append(f"{config.epochs} epochs (paper: 500)")
+    if n_scenes != 105:
+        d.append(f"{n_scenes} real scenes (paper: 105)")
+    if n_days != 70:
+        d.append(f"{n_days} day images (paper: 70)")
+    if config.folds != 3:
+        d.append(f"{config.folds} folds (paper: 3)")
     return d
 
 
@@ -153,6 +160,7 @@ def markdown(t):
     return "\n".join(lines) + "\n"
 
 
-def write(exp, t):
-    write_json(exp.out / "table.json", t)
-    write_text(exp.out / "table.md", markdown(t))
+def write(out, t):
+    """RUN/table.json and RUN/table.md of the table ``t`` (:func:`build`'s)."""
+    write_json(pathlib.Path(out) / "table.json", t)
+    write_text(pathlib.Path(out) / "table.md", markdown(t))

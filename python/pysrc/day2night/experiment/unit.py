@@ -10,102 +10,96 @@ from . import deltae, pairs
 from ..png import write_png
 
 
-def _fresh_set(exp, task):
-    """Fresh synthesis over the training day images (a folder of links to them), at the
-    fixed "Ours" row's budget: as many patches per epoch as the stride-``patch`` grids of
-    the fixed inputs hold (``data.fresh_budget``: crops per image from each image's area)."""
+def fresh_set(folder, days, config, task):
+    """Fresh synthesis over the training day images ``days`` ({name: day DNG}, in order)
+    through ``folder``, a folder of links to them, at the fixed "Ours" row's budget: as many
+    patches per epoch as the stride-``patch`` grids of the fixed inputs hold
+    (``data.fresh_budget``: crops per image from each image's area)."""
     from ..train.data import FreshPatches, fresh_budget
 
     import day2night
 
-    folder = exp.out / "data" / "day-train"
+    folder = pathlib.Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
     shapes, sides = {}, {}
-    for name in exp.day_train:
+    for name, path in days.items():
         link = folder / name.replace("/", "__")
         if not link.exists():
-            link.symlink_to(pathlib.Path(exp.days[name]).resolve())
-        raw = day2night.read_dng(str(exp.days[name]))
-        shapes[link.name], sides[link.name] = _fixed_shape(exp, raw)
+            link.symlink_to(pathlib.Path(path).resolve())
+        raw = day2night.read_dng(str(path))
+        shapes[link.name], sides[link.name] = _fixed_shape(config.targets, raw)
     files = sorted(shapes)  # NightPairs' order
-    patch = exp.cfg.get("patch", 64)
-    crop, items = fresh_budget([shapes[f] for f in files], patch, [sides[f] for f in files])
-    return FreshPatches(str(folder), crop=crop, patch=patch, isos=NOISY_ISOS,
-                        seed=exp.cfg["seed"], task=task, items_per_image=items)
+    crop, items = fresh_budget([shapes[f] for f in files], config.patch,
+                               [sides[f] for f in files])
+    return FreshPatches(str(folder), crop=crop, patch=config.patch, isos=NOISY_ISOS,
+                        seed=config.seed, task=task, items_per_image=items)
 
 
-def _fixed_shape(exp, raw):
+def _fixed_shape(targets, raw):
     """((H, W) of the fixed row's network input of ``raw``, the side of the largest square
     crop inside its DefaultCrop): the active area, or the release's window of it when the
-    targets are the release's (pairs.align cuts the input to it)."""
+    ``targets`` are the release's (pairs.align cuts the input to it)."""
     h, w = raw.data.shape[:2]
     area, crop = raw.meta.get("active_area"), raw.meta.get("default_crop")
     if area:
         h, w = int(area[2]) - int(area[0]), int(area[3]) - int(area[1])
     shape = (h, w)
-    if exp.cfg.get("targets") == "release":
+    if targets == "release":
         shape = tuple(pairs.release_window(raw.meta, h, w)[2:])
     side = min(int(crop[2]), int(crop[3])) if crop else min(h, w)
     return shape, side
 
 
-def train_unit(exp, udir, task, row, train_p, val_p):
+def fixed_set(pairs_, patch):
+    """The patches of stored (x_path, y_path) pairs (``data.FixedPatches``)."""
     from ..train.data import FixedPatches
-    from ..train.trainer import TrainConfig, train
 
-    c = exp.cfg
-    patch = c.get("patch", 64)
-    val_set = FixedPatches([x for x, _ in val_p], [y for _, y in val_p], patch, patch)
-    if train_p is None:
-        train_set = _fresh_set(exp, task)
-    else:
-        train_set = FixedPatches([x for x, _ in train_p], [y for _, y in train_p], patch, patch)
-    cfg = TrainConfig(
-        out_dir=str(udir / "model"),
-        epochs=c["epochs"],
-        batch_size=c.get("batch", 128),
-        lr=c.get("lr", 1e-3),
-        init_features=c["width"],
-        seed=c["seed"],
-        device=c["device"],
-        workers=getattr(exp, "workers", 0),
-        amp=c.get("amp"),
-        channels_last=c.get("channels_last", False),
-        progress=True,
-    )
-    return train(cfg, train_set, val_set)
+    return FixedPatches([x for x, _ in pairs_], [y for _, y in pairs_], patch, patch)
+
+
+def train_config(config, model_dir):
+    """The trainer's TrainConfig of an ExperimentConfig (its checkpoints in ``model_dir``)."""
+    from ..train.trainer import TrainConfig
+
+    c = config
+    return TrainConfig(out_dir=str(model_dir), epochs=c.epochs, batch_size=c.batch, lr=c.lr,
+                       init_features=c.width, seed=c.seed, device=c.device, workers=c.workers,
+                       amp=c.amp, channels_last=c.channels_last, progress=True)
+
+
+def train_unit(config, model_dir, val_p, train_set):
+    """Train (or resume, from ``model_dir``) on ``train_set`` (a callable giving the data
+    set: :func:`fixed_set`, :func:`fresh_set`), validated on the pairs ``val_p``."""
+    from ..train.trainer import train
+
+    val_set = fixed_set(val_p, config.patch)
+    return train(train_config(config, model_dir), train_set(), val_set)
 
 
 def _u8(x):
     return (np.clip(np.asarray(x, np.float32), 0, 1) * 255).astype(np.uint8)
 
 
-def score_unit(exp, udir, task, row, fold, tests, result):
+def score_unit(config, out, task, row, fold, tests, result, report_scenes):
+    """The unit's scores.json record: ``result`` (train's) scored on ``tests``
+    (PairSource.tests); the images of ``report_scenes`` written under ``out``/img."""
     from ..train.infer import predict
     from ..train.scores import score
     from ..train.trainer import load_model
 
-    device = exp.cfg["device"]
-    model = load_model(result["best"], device=device)
+    model = load_model(result["best"], device=config.device)
     images = []
     for sid, key, (xp, yp) in tests:
         x, y = pairs.load(xp), np.asarray(pairs.load(yp))
-        pred = predict(model, np.asarray(x), device=device, amp=exp.cfg.get("amp"),
-                       channels_last=exp.cfg.get("channels_last", False))
+        pred = predict(model, np.asarray(x), device=config.device, amp=config.amp,
+                       channels_last=config.channels_last)
         s = score(pred, y)
         images.append(
             {"scene": sid, "input": str(key), "psnr": _num(s["psnr"]), "ssim": _num(s["ssim"]),
              "delta_e": _num(s["delta_e"])}
         )
-        if sid in exp.report_scenes:
-            img = exp.out / "img" / task / row.id
-            stem = f"{sid}_{key}"
-            write_png(img / f"{stem}_pred.png", pred)
-            write_png(img / f"{stem}_de.png", deltae.heat(deltae.delta_e_map(pred, y)))
-            shared = exp.out / "img" / task / "scenes"
-            if not (shared / f"{stem}_target.png").is_file():
-                write_png(shared / f"{stem}_input.png", _u8(x))
-                write_png(shared / f"{stem}_target.png", y)
+        if sid in report_scenes:
+            _report_images(pathlib.Path(out) / "img" / task, row.id, f"{sid}_{key}", x, y, pred)
     # the epochs' numbers without their timings (table.json is the same on every rerun)
     history = [
         {k: _num(v) for k, v in h.items() if k != "seconds"} for h in result.get("history", [])
@@ -119,6 +113,17 @@ def score_unit(exp, udir, task, row, fold, tests, result):
         "initial": {k: _num(v) for k, v in (result.get("initial") or {}).items()},
         "images": images,
     }
+
+
+def _report_images(img, row_id, stem, x, y, pred):
+    """The report's PNGs of one test input: the prediction and its Delta E map per row, the
+    input and target once per task (``img``: RUN/img/<task>)."""
+    write_png(img / row_id / f"{stem}_pred.png", pred)
+    write_png(img / row_id / f"{stem}_de.png", deltae.heat(deltae.delta_e_map(pred, y)))
+    shared = img / "scenes"
+    if not (shared / f"{stem}_target.png").is_file():
+        write_png(shared / f"{stem}_input.png", _u8(x))
+        write_png(shared / f"{stem}_target.png", y)
 
 
 def _num(v):

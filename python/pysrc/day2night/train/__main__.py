@@ -10,12 +10,17 @@ resumes from it), best.pt (lowest validation loss) and history.json.
 """
 
 import argparse
+import dataclasses
 import sys
 
 from ..isos import NOISY_ISOS
 
 
 def parser():
+    """The command line: a flag per TrainConfig field (its default, help and choices from
+    the field), then the data sets' flags. Imports torch (through the trainer)."""
+    from .trainer import TrainConfig
+
     p = argparse.ArgumentParser(prog="python -m day2night.train", description=__doc__,
                                 formatter_class=argparse.RawDescriptionHelpFormatter)
     src = p.add_mutually_exclusive_group(required=True)
@@ -23,23 +28,15 @@ def parser():
     src.add_argument("--fresh", metavar="DAY_DIR",
                      help="folder of day DNGs: fresh night synthesis every epoch")
     p.add_argument("--val", required=True, help="folder of fixed validation pairs")
-    p.add_argument("-o", "--out", required=True, help="run folder (checkpoints, history)")
-    p.add_argument("--epochs", type=int, default=500)
-    p.add_argument("--batch-size", type=int, default=128, help="patches per step (global)")
-    p.add_argument("--lr", type=float, default=1e-3)
-    p.add_argument("--decay-at", type=float, default=0.8,
-                   help="fraction of the epochs after which the rate is x0.1")
-    p.add_argument("--init-features", type=int, default=32, help="UNet width (32 in the paper)")
-    p.add_argument("--patch", type=int, default=64)
-    p.add_argument("--seed", type=int, default=0)
-    p.add_argument("--device", default="cpu", help="cpu or cuda")
-    p.add_argument("--workers", type=int, default=0, help="DataLoader worker processes")
-    p.add_argument("--amp", choices=["bf16"], help="bfloat16 mixed precision (for GPUs)")
-    p.add_argument("--channels-last", action="store_true",
-                   help="channels-last memory format (for GPUs)")
-    p.add_argument("--no-progress", action="store_true", help="no progress line on stderr")
-    p.add_argument("--record-shards", action="store_true",
-                   help="write each rank's sample indices to OUT/shards/ (checks)")
+    for f in dataclasses.fields(TrainConfig):
+        kw = {k: v for k, v in f.metadata.items() if k != "flags"}
+        flags = f.metadata.get("flags") or ("--" + f.name.replace("_", "-"),)
+        if f.type in (int, float):
+            kw["type"] = f.type
+        if f.default is not dataclasses.MISSING:
+            kw["default"] = f.default
+        p.add_argument(*flags, dest=f.name, **kw)
+    p.add_argument("--patch", type=int, default=64, help="training patch side")
     p.add_argument("--crop", type=int, default=512, help="--fresh: synthesis crop side")
     p.add_argument("--crops-per-image", type=int, default=1, help="--fresh: items per image")
     p.add_argument("--task", choices=("noisy", "clean"), default="noisy", help="--fresh: input")
@@ -47,15 +44,22 @@ def parser():
     return p
 
 
+def config(args):
+    """The TrainConfig of parsed arguments (:func:`parser`'s)."""
+    from .trainer import TrainConfig
+
+    return TrainConfig(**{f.name: getattr(args, f.name) for f in dataclasses.fields(TrainConfig)})
+
+
 def main(argv=None):
-    args = parser().parse_args(argv)
+    try:
+        args = parser().parse_args(argv)
+    except ImportError as e:
+        print(f"day2night.train: error: {e}", file=sys.stderr)
+        return 2
     try:
         from . import data, trainer
-        cfg = trainer.TrainConfig(
-            out_dir=args.out, epochs=args.epochs, batch_size=args.batch_size, lr=args.lr,
-            decay_at=args.decay_at, init_features=args.init_features, seed=args.seed,
-            device=args.device, workers=args.workers, progress=not args.no_progress,
-            record_shards=args.record_shards, amp=args.amp, channels_last=args.channels_last)
+        cfg = config(args)
         if args.train:
             train_set = data.FixedPatches.from_dir(args.train, args.patch, args.patch)
         else:
