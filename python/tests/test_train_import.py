@@ -24,3 +24,13 @@ def test_missing_torch_names_the_extra():
         assert "ImportError" in r.stderr and "pip install day2night[train]" in r.stderr, r.stderr
     r = run("import sys; sys.modules['torch'] = None\nimport day2night.train as t\nt.train")
     assert "pip install day2night[train]" in r.stderr, r.stderr
+
+
+def test_train_help_and_config_without_torch():
+    # the trainer's settings and its command line need no torch: --help works without it
+    r = run("import sys; sys.modules['torch'] = None\n"
+            "from day2night.train.config import TrainConfig\n"
+            "TrainConfig(out_dir='x').check()\n"
+            "from day2night.train.__main__ import main\nmain(['--help'])")
+    assert r.returncode == 0, r.stderr
+    assert "--init-features" in r.stdout and "training epochs" in r.stdout, r.stdout

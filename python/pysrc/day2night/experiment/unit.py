@@ -59,7 +59,7 @@ def fixed_set(pairs_, patch):
 
 def train_config(config, model_dir):
     """The trainer's TrainConfig of an ExperimentConfig (its checkpoints in ``model_dir``)."""
-    from ..train.trainer import TrainConfig
+    from ..train.config import TrainConfig
 
     c = config
     return TrainConfig(out_dir=str(model_dir), epochs=c.epochs, batch_size=c.batch, lr=c.lr,

@@ -31,7 +31,7 @@ _NAMES = {
     "FixedPatches": "data",
     "FreshPatches": "data",
     "save_pair": "data",
-    "TrainConfig": "trainer",
+    "TrainConfig": "config",
     "train": "trainer",
     "load_model": "trainer",
     "predict": "infer",

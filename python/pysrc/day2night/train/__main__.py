@@ -19,7 +19,7 @@ from ..isos import NOISY_ISOS
 def parser():
     """The command line: a flag per TrainConfig field (its default, help and choices from
     the field), then the data sets' flags. Imports torch (through the trainer)."""
-    from .trainer import TrainConfig
+    from .config import TrainConfig
 
     p = argparse.ArgumentParser(prog="python -m day2night.train", description=__doc__,
                                 formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -46,7 +46,7 @@ def parser():
 
 def config(args):
     """The TrainConfig of parsed arguments (:func:`parser`'s)."""
-    from .trainer import TrainConfig
+    from .config import TrainConfig
 
     return TrainConfig(**{f.name: getattr(args, f.name) for f in dataclasses.fields(TrainConfig)})
 
