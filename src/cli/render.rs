@@ -90,6 +90,23 @@ enum Format {
 
 /// The output's format (from its extension) and whether it is 16-bit (`--bits`, else TIFF
 /// 16 and the others 8).
+/// The output policy of a render (the input is never overwritten), an existing output
+/// refused before the (slow) read and render, and the input read, its metadata warnings
+/// printed.
+fn policy_and_input(
+    args: &RenderArgs,
+) -> Result<(OutputPolicy, day2night::raw::RawImage), super::Failure> {
+    let policy = OutputPolicy {
+        overwrite: args.overwrite,
+        inputs: vec![args.input.clone()],
+        ..OutputPolicy::default()
+    };
+    policy.check(&args.output).map_err(lib)?;
+    let img = day2night::dng::read::read_dng(&args.input).map_err(lib)?;
+    super::print_meta_warnings(&args.input, &img.meta);
+    Ok((policy, img))
+}
+
 fn output_format(args: &RenderArgs) -> Result<(Format, bool), super::Failure> {
     let ext = args
         .output
@@ -139,15 +156,7 @@ pub fn run(args: RenderArgs) -> CmdResult {
         .parse()
         .map_err(|e: day2night::Error| usage(format!("--opcodes: {e}")))?;
     let (format, sixteen) = output_format(&args)?;
-    let policy = OutputPolicy {
-        overwrite: args.overwrite,
-        inputs: vec![args.input.clone()],
-        ..OutputPolicy::default()
-    };
-    // Refuse an existing output before the (slow) render.
-    policy.check(&args.output).map_err(lib)?;
-    let img = day2night::dng::read::read_dng(&args.input).map_err(lib)?;
-    super::print_meta_warnings(&args.input, &img.meta);
+    let (policy, img) = policy_and_input(&args)?;
     let in_file = |e: day2night::Error| lib(e.in_file(&args.input));
     let n = resolve_neutral(&img.meta, neutral).map_err(in_file)?;
     // Optional opcodes that cannot be applied are skipped with a warning; others are errors,
@@ -302,14 +311,7 @@ fn run_release(args: &RenderArgs) -> CmdResult {
         .map_err(usage)?;
     let compression: ExrCompression = args.exr_compression.parse().map_err(usage)?;
     let zip_level = parse_zip_level(args.exr_zip_level)?;
-    let policy = OutputPolicy {
-        overwrite: args.overwrite,
-        inputs: vec![args.input.clone()],
-        ..OutputPolicy::default()
-    };
-    policy.check(&args.output).map_err(lib)?;
-    let img = day2night::dng::read::read_dng(&args.input).map_err(lib)?;
-    super::print_meta_warnings(&args.input, &img.meta);
+    let (policy, img) = policy_and_input(args)?;
     let in_file = |e: day2night::Error| lib(e.in_file(&args.input));
     let linear =
         day2night::isp::release::render_linear(&img, neutral, !args.no_orient).map_err(in_file)?;

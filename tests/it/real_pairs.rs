@@ -101,6 +101,20 @@ pub(crate) fn processed_scene(root: &Path, nnn: &str, synth_dir: &Path) {
     }
 }
 
+/// Scenes `a` and `b` of the simple layout under `d/scenes`, each from `n` still frames
+/// synthesized into `d/synth`, made by one `real-pairs` run into `d/out` with `extra` flags;
+/// returns (SCENES, OUT).
+pub(crate) fn two_simple_scenes(d: &Path, n: u32, extra: &[&str]) -> (PathBuf, PathBuf) {
+    let s = d.join("synth");
+    synth(&s, n, &["--motion", "none"]);
+    let root = d.join("scenes");
+    simple_scene(&root.join("a"), &s);
+    simple_scene(&root.join("b"), &s);
+    let out = d.join("out");
+    ok(&real_pairs(&root, &out, extra));
+    (root, out)
+}
+
 pub(crate) fn real_pairs(scenes: &Path, out: &Path, extra: &[&str]) -> Output {
     common::cli("real-pairs", scenes, out, extra)
 }
@@ -224,7 +238,7 @@ fn three_layouts_make_the_pairs() {
     assert_eq!(pairs(rs).len(), 5);
     assert_eq!(rs["night_neutral"], rr["night_neutral"]);
     assert_eq!(rs["night_neutral"], rp["night_neutral"]);
-    let first = read_dng(&frames(&s, 50)[0]).unwrap();
+    let first = read_dng(&frames(&d.path().join("synth"), 50)[0]).unwrap();
     let n = first.meta.as_shot_neutral.unwrap();
     let nn: Vec<f64> = serde_json::from_value(rs["night_neutral"].clone()).unwrap();
     assert!(
@@ -237,7 +251,7 @@ fn three_layouts_make_the_pairs() {
     let o = &outs[0];
     let merged_path = o.join("real/clean_raw/night__a.dng");
     let merged = read_dng(&merged_path).unwrap();
-    let low: Vec<RawImage> = frames(&s, 50)
+    let low: Vec<RawImage> = frames(&d.path().join("synth"), 50)
         .iter()
         .map(|p| read_dng(p).unwrap())
         .collect();
@@ -255,7 +269,7 @@ fn three_layouts_make_the_pairs() {
             assert_eq!(merged.data[i] as u32, sum, "site {i}");
         }
     }
-    validate_merge(&merged_path, &frames(&s, 50));
+    validate_merge(&merged_path, &frames(&d.path().join("synth"), 50));
     // The target is `render` of the clean raw, byte for byte.
     let r = d.path().join("render.png");
     ok(&common::cli("render", &merged_path, &r, &[]));
@@ -334,11 +348,11 @@ fn bad_scenes_fail_by_name_and_good_ones_are_made() {
     simple_scene(&root.join("good"), &s);
     // One frame in the low-ISO burst.
     simple_scene(&root.join("one"), &s);
-    for f in &frames(&s, 50)[1..] {
+    for f in &frames(&d.path().join("synth"), 50)[1..] {
         std::fs::remove_file(root.join("one").join(f.file_name().unwrap())).unwrap();
     }
     // A frame of another size / CFA / camera / black / white level.
-    let second = frames(&s, 50)[1].clone();
+    let second = frames(&d.path().join("synth"), 50)[1].clone();
     let cases: [(&str, Alter, &str); 5] = [
         (
             "size",
@@ -483,13 +497,7 @@ fn motion_is_caught() {
 #[test]
 fn rerun_resumes_with_nothing_redone() {
     let d = tempfile::tempdir().unwrap();
-    let s = d.path().join("synth");
-    synth(&s, 3, &["--motion", "none"]);
-    let root = d.path().join("scenes");
-    simple_scene(&root.join("a"), &s);
-    simple_scene(&root.join("b"), &s);
-    let out = d.path().join("out");
-    ok(&real_pairs(&root, &out, &["--jobs", "2"]));
+    let (root, out) = two_simple_scenes(d.path(), 3, &["--jobs", "2"]);
     let before = std::fs::read(out.join("manifest.jsonl")).unwrap();
     let t = std::fs::metadata(out.join("real/clean_raw/a.dng"))
         .unwrap()
@@ -516,8 +524,12 @@ fn rerun_resumes_with_nothing_redone() {
         t
     );
     // A changed frame remakes its scene only; --overwrite remakes all.
-    let f = root.join("b").join(frames(&s, 50)[2].file_name().unwrap());
-    altered(&frames(&s, 50)[2].clone(), &f, |i| i.data[1000] ^= 1);
+    let f = root
+        .join("b")
+        .join(frames(&d.path().join("synth"), 50)[2].file_name().unwrap());
+    altered(&frames(&d.path().join("synth"), 50)[2].clone(), &f, |i| {
+        i.data[1000] ^= 1
+    });
     let o = real_pairs(&root, &out, &["--json"]);
     ok(&o);
     let sum: Value = serde_json::from_slice(&o.stdout).unwrap();

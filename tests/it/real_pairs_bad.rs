@@ -4,6 +4,7 @@
 //! Scenes are made as in tests/it/real_pairs.rs (`synth --burst` of the fixture).
 use crate::real_pairs::{
     altered, frames, manifest, ok, processed_scene, real_pairs, release_scene, simple_scene, synth,
+    two_simple_scenes,
 };
 use day2night::raw::RawImage;
 use day2night::realpairs::{self, Checkpoint, PairOptions, RunOptions};
@@ -204,7 +205,7 @@ fn featureless_frames_are_reported_not_given_a_shift() {
     let root = d.path().join("scenes");
     let flat = root.join("flat");
     std::fs::create_dir_all(&flat).unwrap();
-    let first = frames(&s, 50)[0].clone();
+    let first = frames(&d.path().join("synth"), 50)[0].clone();
     altered(&first, &flat.join("f0.dng"), black);
     for k in 1..3 {
         std::fs::copy(flat.join("f0.dng"), flat.join(format!("f{k}.dng"))).unwrap();
@@ -277,8 +278,8 @@ fn errors_blame_the_real_cause_and_advise_what_exists() {
     let s = d.path().join("synth");
     synth(&s, 2, &["--motion", "none"]);
     let root = d.path().join("scenes");
-    let second = frames(&s, 50)[1].clone();
-    let first = frames(&s, 50)[0].clone();
+    let second = frames(&d.path().join("synth"), 50)[1].clone();
+    let first = frames(&d.path().join("synth"), 50)[0].clone();
     // WhiteLevel below BlackLevel (a LONG 4000 made 100).
     simple_scene(&root.join("white"), &s);
     let p = root.join("white").join(second.file_name().unwrap());
@@ -327,15 +328,9 @@ fn errors_blame_the_real_cause_and_advise_what_exists() {
 #[test]
 fn a_scene_that_turns_failed_loses_its_old_files() {
     let d = tempfile::tempdir().unwrap();
-    let s = d.path().join("synth");
-    synth(&s, 3, &["--motion", "none"]);
-    let root = d.path().join("scenes");
-    simple_scene(&root.join("a"), &s);
-    simple_scene(&root.join("b"), &s);
-    let out = d.path().join("out");
-    ok(&real_pairs(&root, &out, &[]));
+    let (root, out) = two_simple_scenes(d.path(), 3, &[]);
     assert_eq!(files_under(&out.join("real")).len(), 10);
-    for f in &frames(&s, 50)[1..] {
+    for f in &frames(&d.path().join("synth"), 50)[1..] {
         std::fs::remove_file(root.join("a").join(f.file_name().unwrap())).unwrap();
     }
     let o = real_pairs(&root, &out, &[]);
@@ -461,7 +456,7 @@ fn saturated_sites_are_white_counted_and_documented() {
     let root = d.path().join("scenes");
     simple_scene(&root.join("a"), &s);
     // Three sites clipped in one frame of the burst only.
-    let f = frames(&s, 50)[1].clone();
+    let f = frames(&d.path().join("synth"), 50)[1].clone();
     let img = day2night::dng::read_dng(&f).unwrap();
     let a = img.active_area();
     let sites: Vec<usize> = (0..3)
@@ -496,13 +491,7 @@ fn saturated_sites_are_white_counted_and_documented() {
 #[test]
 fn a_scene_gone_from_scenes_is_listed_with_its_files_left() {
     let d = tempfile::tempdir().unwrap();
-    let s = d.path().join("synth");
-    synth(&s, 2, &["--motion", "none"]);
-    let root = d.path().join("scenes");
-    simple_scene(&root.join("a"), &s);
-    simple_scene(&root.join("b"), &s);
-    let out = d.path().join("out");
-    ok(&real_pairs(&root, &out, &[]));
+    let (root, out) = two_simple_scenes(d.path(), 2, &[]);
     std::fs::remove_dir_all(root.join("b")).unwrap();
     let o = real_pairs(&root, &out, &["--json"]);
     let err = ok(&o);
