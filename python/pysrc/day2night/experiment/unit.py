@@ -6,7 +6,8 @@ import pathlib
 import numpy as np
 
 from ..isos import NOISY_ISOS
-from . import deltae, pairs
+from .. import delta_e2000_map
+from . import pairs
 from ..png import write_png
 
 
@@ -80,6 +81,11 @@ def _u8(x):
     return (np.clip(np.asarray(x, np.float32), 0, 1) * 255).astype(np.uint8)
 
 
+def heat(de, scale=10.0):
+    """A Delta E map as an 8-bit greyscale image: 0 black, ``scale`` and more white."""
+    return (np.clip(de / scale, 0, 1) * 255).astype(np.uint8)
+
+
 def score_unit(exp, udir, task, row, fold, tests, result):
     from ..train.infer import predict
     from ..train.scores import score
@@ -101,7 +107,8 @@ def score_unit(exp, udir, task, row, fold, tests, result):
             img = exp.out / "img" / task / row.id
             stem = f"{sid}_{key}"
             write_png(img / f"{stem}_pred.png", pred)
-            write_png(img / f"{stem}_de.png", deltae.heat(deltae.delta_e_map(pred, y)))
+            de = delta_e2000_map(pred / 255.0, y / 255.0, pred_linear=False, target_linear=False)
+            write_png(img / f"{stem}_de.png", heat(de))
             shared = exp.out / "img" / task / "scenes"
             if not (shared / f"{stem}_target.png").is_file():
                 write_png(shared / f"{stem}_input.png", _u8(x))
