@@ -50,6 +50,7 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(metrics::psnr, m)?)?;
     m.add_function(wrap_pyfunction!(metrics::ssim, m)?)?;
     m.add_function(wrap_pyfunction!(metrics::delta_e2000, m)?)?;
+    m.add_function(wrap_pyfunction!(metrics::delta_e2000_map, m)?)?;
     m.add_function(wrap_pyfunction!(version, m)?)?;
     m.add_function(wrap_pyfunction!(pool::set_threads, m)?)?;
     m.add_function(wrap_pyfunction!(pool::threads, m)?)?;

@@ -2,7 +2,7 @@
 section against the signatures.
 
 docs/python.md's block between ``<!-- synth-options`` and ``<!-- /synth-options -->`` is
-generated here from ``inspect.signature`` of each function and the table
+generated here from ``inspect.signature`` of each function (the metrics' too) and the table
 (``_native.SYNTH_OPTIONS``): ``D2N_BLESS=1 python -m pytest python/tests/test_python_signatures.py``
 rewrites it; without that the test fails when the two differ. Each row of the table is then
 exercised: its option accepted with a valid value other than its default, and refused when
@@ -33,6 +33,8 @@ FUNCTIONS = {
     "write_unit": day2night.write_unit,
     "write_units": day2night.write_units,
 }
+# The metrics, whose signatures the block lists too (docs/python.md, "Metrics").
+METRICS = ("psnr", "ssim", "delta_e2000", "delta_e2000_map")
 # A parameter of its own that is a table option under another name (a sequence of them).
 SPELLED = {"isos": "iso"}
 START = "<!-- synth-options:"
@@ -126,6 +128,10 @@ def block():
     for name, func in FUNCTIONS.items():
         lines.append(signature_line(name, func))
     lines.append(signature_line("dataset_units", day2night.dataset_units))
+    lines += ["", "The metrics (`day2night eval`'s numbers, and the per-pixel map behind its "
+              "Delta E; no table options):", ""]
+    for name in METRICS:
+        lines.append(f"- `{name}{inspect.signature(getattr(day2night, name))}`")
     lines += [
         "",
         *homonyms(),

@@ -102,6 +102,32 @@ pub fn ciede2000(lab1: Lab, lab2: Lab) -> f64 {
     (x * x + y * y + z * z + rt * y * z).max(0.0).sqrt()
 }
 
+/// CIELAB of one pixel's RGB, linear sRGB (`linear`) or display-encoded sRGB (decoded with
+/// the inverse OETF first). Values are used unclipped.
+fn pixel_lab(px: &[f32], linear: bool) -> Lab {
+    let v = [px[0], px[1], px[2]].map(|c| {
+        if linear {
+            c as f64
+        } else {
+            srgb_eotf(c) as f64
+        }
+    });
+    linear_srgb_to_lab(v)
+}
+
+/// CIEDE2000 of each pixel of one row (interleaved RGB) of `pred` against `target`.
+fn row_delta_e<'a>(
+    pred_row: &'a [f32],
+    target_row: &'a [f32],
+    pred_linear: bool,
+    target_linear: bool,
+) -> impl Iterator<Item = f64> + 'a {
+    pred_row
+        .chunks_exact(3)
+        .zip(target_row.chunks_exact(3))
+        .map(move |(a, b)| ciede2000(pixel_lab(a, pred_linear), pixel_lab(b, target_linear)))
+}
+
 /// Mean CIEDE2000 between two images; `*_linear` says whether an image holds linear sRGB
 /// (true, e.g. EXR) or display-encoded sRGB (false, e.g. PNG). Values are used unclipped.
 pub fn mean_delta_e_2000(
@@ -111,30 +137,36 @@ pub fn mean_delta_e_2000(
     target_linear: bool,
 ) -> Result<f64> {
     check_same_size(pred, target)?;
-    let lab = |px: &[f32], linear: bool| {
-        let v = [px[0], px[1], px[2]].map(|c| {
-            if linear {
-                c as f64
-            } else {
-                srgb_eotf(c) as f64
-            }
-        });
-        linear_srgb_to_lab(v)
-    };
     let sum: f64 = pred
         .data
         .par_chunks(3 * pred.width)
         .zip(target.data.par_chunks(3 * pred.width))
-        .map(|(ra, rb)| {
-            ra.chunks_exact(3)
-                .zip(rb.chunks_exact(3))
-                .map(|(a, b)| ciede2000(lab(a, pred_linear), lab(b, target_linear)))
-                .sum::<f64>()
-        })
+        .map(|(ra, rb)| row_delta_e(ra, rb, pred_linear, target_linear).sum::<f64>())
         .collect::<Vec<f64>>()
         .iter()
         .sum();
     Ok(sum / (pred.width * pred.height) as f64)
+}
+
+/// CIEDE2000 of each pixel, row-major (`width * height` values), with the conversions of
+/// [`mean_delta_e_2000`] (whose value is these values' mean): the per-pixel map of a report.
+pub fn delta_e_2000_map(
+    pred: &RgbImage,
+    target: &RgbImage,
+    pred_linear: bool,
+    target_linear: bool,
+) -> Result<Vec<f64>> {
+    check_same_size(pred, target)?;
+    let mut out = vec![0.0; pred.width * pred.height];
+    out.par_chunks_mut(pred.width)
+        .zip(pred.data.par_chunks(3 * pred.width))
+        .zip(target.data.par_chunks(3 * pred.width))
+        .for_each(|((o, ra), rb)| {
+            o.iter_mut()
+                .zip(row_delta_e(ra, rb, pred_linear, target_linear))
+                .for_each(|(o, d)| *o = d);
+        });
+    Ok(out)
 }
 
 #[cfg(test)]
@@ -227,5 +259,32 @@ mod tests {
         let d = mean_delta_e_2000(&a, &b, false, false).unwrap();
         let want = ciede2000([0.0; 3], linear_srgb_to_lab([srgb_eotf(0.5) as f64; 3]));
         assert!((d - want).abs() < 1e-9);
+    }
+
+    #[test]
+    fn map_is_the_mean_per_pixel() {
+        let (w, h) = (7, 5);
+        let mut a = RgbImage::new(w, h);
+        let mut b = RgbImage::new(w, h);
+        // a deterministic spread of colours, some out of [0, 1]
+        for (i, v) in a.data.iter_mut().enumerate() {
+            *v = ((i * 37 % 101) as f32) / 90.0 - 0.05;
+        }
+        for (i, v) in b.data.iter_mut().enumerate() {
+            *v = ((i * 53 % 97) as f32) / 96.0;
+        }
+        for (pl, tl) in [(false, false), (true, false), (false, true), (true, true)] {
+            let m = delta_e_2000_map(&a, &b, pl, tl).unwrap();
+            assert_eq!(m.len(), w * h);
+            for (k, d) in m.iter().enumerate() {
+                let (pa, pb) = (&a.data[3 * k..3 * k + 3], &b.data[3 * k..3 * k + 3]);
+                assert_eq!(*d, ciede2000(pixel_lab(pa, pl), pixel_lab(pb, tl)));
+            }
+            // the mean sums row by row: the same order gives the same bits
+            let rows: f64 = m.chunks(w).map(|r| r.iter().sum::<f64>()).sum();
+            let mean = mean_delta_e_2000(&a, &b, pl, tl).unwrap();
+            assert_eq!(rows / (w * h) as f64, mean);
+        }
+        assert!(delta_e_2000_map(&a, &RgbImage::new(w, h + 1), false, false).is_err());
     }
 }

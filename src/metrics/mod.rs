@@ -1,5 +1,6 @@
 //! Image quality metrics of `day2night eval`: PSNR, SSIM (scikit-image's default and the
-//! Gaussian-window variant of Wang et al. 2004) and mean CIEDE2000 colour difference.
+//! Gaussian-window variant of Wang et al. 2004) and mean CIEDE2000 colour difference (and its
+//! per-pixel map).
 //!
 //! All take two [`RgbImage`]s of the same size; a size mismatch is an
 //! [`crate::Error::InvalidParam`] naming both sizes.
@@ -9,7 +10,7 @@ pub mod deltae;
 pub mod psnr;
 pub mod ssim;
 
-pub use deltae::{ciede2000, mean_delta_e_2000, Lab};
+pub use deltae::{ciede2000, delta_e_2000_map, mean_delta_e_2000, Lab};
 pub use psnr::psnr;
 pub use ssim::{ssim, SsimOptions, SsimWindow};
 

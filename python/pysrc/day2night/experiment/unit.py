@@ -6,7 +6,8 @@ import pathlib
 import numpy as np
 
 from ..isos import NOISY_ISOS
-from . import deltae, pairs
+from .. import delta_e2000_map
+from . import pairs
 from ..png import write_png
 
 
@@ -80,6 +81,11 @@ def _u8(x):
     return (np.clip(np.asarray(x, np.float32), 0, 1) * 255).astype(np.uint8)
 
 
+def heat(de, scale=10.0):
+    """A Delta E map as an 8-bit greyscale image: 0 black, ``scale`` and more white."""
+    return (np.clip(de / scale, 0, 1) * 255).astype(np.uint8)
+
+
 def score_unit(config, out, task, row, fold, tests, result, report_scenes):
     """The unit's scores.json record: ``result`` (train's) scored on ``tests``
     (PairSource.tests); the images of ``report_scenes`` written under ``out``/img."""
@@ -119,7 +125,8 @@ def _report_images(img, row_id, stem, x, y, pred):
     """The report's PNGs of one test input: the prediction and its Delta E map per row, the
     input and target once per task (``img``: RUN/img/<task>)."""
     write_png(img / row_id / f"{stem}_pred.png", pred)
-    write_png(img / row_id / f"{stem}_de.png", deltae.heat(deltae.delta_e_map(pred, y)))
+    de = delta_e2000_map(pred / 255.0, y / 255.0, pred_linear=False, target_linear=False)
+    write_png(img / row_id / f"{stem}_de.png", heat(de))
     shared = img / "scenes"
     if not (shared / f"{stem}_target.png").is_file():
         write_png(shared / f"{stem}_input.png", _u8(x))
