@@ -28,7 +28,7 @@ pub(crate) fn python_default<'py>(
             .map_err(|_| bad(t))?
             .into_pyobject(py)?
             .into_any(),
-        Kind::Float => t
+        Kind::Float { .. } => t
             .parse::<f64>()
             .map_err(|_| bad(t))?
             .into_pyobject(py)?

@@ -22,7 +22,7 @@ pub struct SynthOpts {
 /// The clap argument of one option.
 fn arg(d: &'static OptionDef) -> Arg {
     let a = Arg::new(d.name).long(d.name).help(d.help_text());
-    if d.kind == Kind::Switch {
+    if matches!(d.kind, Kind::Switch) {
         return a.action(ArgAction::SetTrue);
     }
     let a = a.action(ArgAction::Set).value_name(d.value_name);
@@ -32,7 +32,7 @@ fn arg(d: &'static OptionDef) -> Arg {
             Width::U32 => a.value_parser(value_parser!(u32)),
             Width::U64 => a.value_parser(value_parser!(u64)),
         },
-        Kind::Float => a.value_parser(value_parser!(f64)),
+        Kind::Float { .. } => a.value_parser(value_parser!(f64)),
         Kind::Path => a.value_parser(value_parser!(PathBuf)),
         Kind::Choice(choices) => a.value_parser(PossibleValuesParser::new(
             choices
@@ -72,7 +72,7 @@ fn value_of(m: &ArgMatches, d: &OptionDef) -> Result<Option<Value>, clap::Error>
                 .map(|n| i128::from(*n)),
         }
         .map(Value::Int),
-        Kind::Float => m
+        Kind::Float { .. } => m
             .try_get_one::<f64>(d.name)
             .map_err(bad)?
             .map(|x| Value::Float(*x)),
