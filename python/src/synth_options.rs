@@ -80,7 +80,7 @@ fn kind_name(k: &Kind) -> &'static str {
         Kind::Float { .. } => "float",
         Kind::Text => "text",
         Kind::Isos => "isos",
-        Kind::Numbers(_) => "numbers",
+        Kind::Numbers(_) | Kind::Pair { .. } => "numbers",
         Kind::Path => "path",
         Kind::Choice(_) => "choice",
     }
@@ -176,7 +176,11 @@ fn value(d: &OptionDef, key: &str, v: &Bound<'_, PyAny>) -> PyResult<Value> {
                 Value::Isos(args::isos(v, key)?)
             }
         }
-        Kind::Numbers(n) => {
+        Kind::Numbers(_) | Kind::Pair { .. } => {
+            let n = match d.kind {
+                Kind::Numbers(n) => n,
+                _ => 2,
+            };
             if let Ok(s) = v.extract::<String>() {
                 Value::Text(s)
             } else {

@@ -87,7 +87,7 @@ def test_unknown_keyword_lists_the_table(raw, unit, tmp_path):
     ({"mask_eval": "fast"}, r"mask_eval: .*fast.*separable"),
     ({"relight_formula": "new"}, r"relight_formula: .*new.*release or paper"),
     ({"compat": "paper"}, r"compat: .*paper.*release"),
-    ({"dim_range": (0.9, 0.5)}, r"dimming range"),
+    ({"dim_range": (0.9, 0.5)}, r"dim_range: LO 0\.9 is above HI 0\.5"),
     ({"bulb_gain": (1, 2, 3)}, r"bulb_gain: 3 values given"),
     ({"ambient_gain": "x"}, r"ambient_gain must be a number"),
     ({"burst": True}, r"burst must be an integer \(got bool\)"),

@@ -39,7 +39,7 @@ fn arg(d: &'static OptionDef) -> Arg {
                 .iter()
                 .map(|c| PossibleValue::new(c.name).help(c.help)),
         )),
-        Kind::Switch | Kind::Text | Kind::Isos | Kind::Numbers(_) => {
+        Kind::Switch | Kind::Text | Kind::Isos | Kind::Numbers(_) | Kind::Pair { .. } => {
             a.value_parser(value_parser!(String))
         }
     };
@@ -80,7 +80,7 @@ fn value_of(m: &ArgMatches, d: &OptionDef) -> Result<Option<Value>, clap::Error>
             .try_get_one::<PathBuf>(d.name)
             .map_err(bad)?
             .map(|p| Value::Path(p.clone())),
-        Kind::Choice(_) | Kind::Text | Kind::Isos | Kind::Numbers(_) => m
+        Kind::Choice(_) | Kind::Text | Kind::Isos | Kind::Numbers(_) | Kind::Pair { .. } => m
             .try_get_one::<String>(d.name)
             .map_err(bad)?
             .map(|s| Value::Text(s.clone())),

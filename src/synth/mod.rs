@@ -279,17 +279,6 @@ impl SynthOptions {
                 plan_bounds::MAX_NOISE_ENTRIES
             )));
         }
-        let fin = |v: &[f64]| v.iter().all(|x| x.is_finite());
-        if !(fin(&self.dim_range)
-            && self.dim_range[0] > 0.0
-            && self.dim_range[0] <= self.dim_range[1])
-        {
-            return Err(Error::invalid("dimming range must satisfy 0 < lo <= hi"));
-        }
-        if !fin(&self.bulb_gain) || self.bulb_gain[0] < 0.0 || self.bulb_gain[0] > self.bulb_gain[1]
-        {
-            return Err(Error::invalid("bulb gain range must satisfy 0 <= lo <= hi"));
-        }
         // the numbers' ranges of the option table
         options::check_fields(self)?;
         if let MaskEval::Truncated { k } = self.mask_eval {

@@ -61,6 +61,14 @@ pub enum Kind {
     Isos,
     /// `n` comma-separated numbers (Python: also a sequence of `n` numbers).
     Numbers(usize),
+    /// `LO,HI`: two numbers (Python: also a sequence of two), each within `range`, with
+    /// `LO <= HI`; checked and shown as a [`Kind::Float`]'s range is.
+    Pair {
+        /// The values each of LO and HI takes.
+        range: Range,
+        /// The [`SynthOptions`] field it sets, which [`SynthOptions::validate`] checks.
+        field: Option<fn(&SynthOptions) -> [f64; 2]>,
+    },
     /// A file path (some options also take a name, e.g. `paper`).
     Path,
     /// One of a few names.
@@ -124,6 +132,17 @@ impl Range {
             Some(m) => Err(Error::invalid(m)),
             None => Ok(()),
         }
+    }
+
+    /// What is wrong with the pair `[lo, hi]` of a [`Kind::Pair`] option (`LO 0 is not > 0`,
+    /// `LO 0.9 is above HI 0.5`), or None when each is in the range and `lo <= hi`.
+    fn pair_fault(&self, [lo, hi]: [f64; 2]) -> Option<String> {
+        for (name, x) in [("LO", lo), ("HI", hi)] {
+            if let Some(m) = self.fault(x) {
+                return Some(format!("{name} {m}"));
+            }
+        }
+        (lo > hi).then(|| format!("LO {} is above HI {}", short(lo), short(hi)))
     }
 
     /// What [`Range::check`] says of `x`, or None when it is in the range.
@@ -273,6 +292,10 @@ impl OptionDef {
             Kind::Float { range, .. } if range != Range::ANY => {
                 format!("{} [range: {range}]", self.help)
             }
+            Kind::Pair { range, .. } if range != Range::ANY => {
+                format!("{} [range: LO <= HI, each {range}]", self.help)
+            }
+            Kind::Pair { .. } => format!("{} [range: LO <= HI]", self.help),
             _ => self.help.to_string(),
         }
     }
@@ -290,7 +313,7 @@ impl OptionDef {
                 .map_or_else(|_| Value::Text(text.into()), Value::Float),
             Kind::Switch => Value::Switch(text == "true"),
             Kind::Path => Value::Path(text.into()),
-            Kind::Text | Kind::Isos | Kind::Numbers(_) | Kind::Choice(_) => {
+            Kind::Text | Kind::Isos | Kind::Numbers(_) | Kind::Pair { .. } | Kind::Choice(_) => {
                 Value::Text(text.into())
             }
         })
@@ -346,18 +369,23 @@ pub fn with_defaults(blank: SynthOptions) -> SynthOptions {
 /// the Python keyword.
 pub fn check_fields(o: &SynthOptions) -> Result<()> {
     for def in OPTIONS {
-        if let Kind::Float {
-            range,
-            field: Some(get),
-        } = def.kind
-        {
-            if let Some(m) = range.fault(get(o)) {
-                return Err(Error::invalid(format!(
-                    "{} (Python {}): {m}",
-                    def.spelled(Spelling::Cli),
-                    def.python_name()
-                )));
-            }
+        let fault = match def.kind {
+            Kind::Float {
+                range,
+                field: Some(get),
+            } => range.fault(get(o)),
+            Kind::Pair {
+                range,
+                field: Some(get),
+            } => range.pair_fault(get(o)),
+            _ => None,
+        };
+        if let Some(m) = fault {
+            return Err(Error::invalid(format!(
+                "{} (Python {}): {m}",
+                def.spelled(Spelling::Cli),
+                def.python_name()
+            )));
         }
     }
     Ok(())
@@ -477,6 +505,11 @@ impl Draft {
                     range.check(x).map_err(named)?;
                 }
             }
+            (Kind::Pair { range, .. }, v) => {
+                if let Some(m) = numbers(v).and_then(|n| range.pair_fault(n.try_into().ok()?)) {
+                    return Err(named(Error::invalid(m)));
+                }
+            }
             (Kind::Choice(choices), Value::Text(t)) if !choices.iter().any(|c| c.name == t) => {
                 let names: Vec<&str> = choices.iter().map(|c| c.name).collect();
                 let list = match names.split_last() {
@@ -539,6 +572,16 @@ fn number(v: &Value) -> Option<f64> {
         Value::Float(x) => Some(*x),
         Value::Int(n) => Some(*n as f64),
         Value::Text(s) => s.trim().parse().ok(),
+        _ => None,
+    }
+}
+
+/// The numbers of a [`Kind::Pair`] option's value, if it is numbers (text that is not is the
+/// setter's error).
+fn numbers(v: &Value) -> Option<Vec<f64>> {
+    match v {
+        Value::Numbers(n) => Some(n.clone()),
+        Value::Text(s) => s.split(',').map(|p| p.trim().parse().ok()).collect(),
         _ => None,
     }
 }

@@ -175,10 +175,13 @@ released code)",
     OptionDef {
         name: "bulb-gain",
         value_name: "LO,HI",
-        kind: Kind::Numbers(2),
+        kind: Kind::Pair {
+            range: Range::at_least(0.0),
+            field: Some(|o| o.bulb_gain),
+        },
         default: Some("50,100"),
-        help: "Range of the saturated bulbs' gain, each drawn uniformly (0 <= LO <= HI; the \
-authors' released code)",
+        help: "Range of the saturated bulbs' gain, each drawn uniformly (the authors' released \
+code)",
         python: Python::Keyword,
         python_alias: None,
         synth_only: false,
@@ -249,10 +252,13 @@ camera",
     OptionDef {
         name: "dim-range",
         value_name: "LO,HI",
-        kind: Kind::Numbers(2),
+        kind: Kind::Pair {
+            range: Range::above(0.0),
+            field: Some(|o| o.dim_range),
+        },
         default: Some("0.55,0.9"),
-        help: "Range of the uniform dimming factor without a brightness dictionary (0 < LO <= HI; \
-the paper's U(0.55, 0.9))",
+        help: "Range of the uniform dimming factor without a brightness dictionary (the paper's \
+U(0.55, 0.9))",
         python: Python::Keyword,
         python_alias: None,
         synth_only: false,

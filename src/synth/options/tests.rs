@@ -112,18 +112,14 @@ fn errors_name_the_option() {
         )
         .unwrap_err();
     assert!(e.to_string().starts_with("dim_range: "), "{e}");
-    let mut d = Draft::new(1);
-    d.set(
-        find("dim-range").unwrap(),
-        Value::Numbers(vec![0.9, 0.5]),
-        Spelling::Cli,
-    )
-    .unwrap();
-    assert!(d
-        .finish(Spelling::Cli)
-        .unwrap_err()
-        .to_string()
-        .contains("dimming range"));
+    let e = Draft::new(1)
+        .set(
+            find("dim-range").unwrap(),
+            Value::Numbers(vec![0.9, 0.5]),
+            Spelling::Cli,
+        )
+        .unwrap_err();
+    assert_eq!(e.to_string(), "--dim-range: LO 0.9 is above HI 0.5");
     let mut d = Draft::new(1);
     d.set(
         find("compat").unwrap(),
@@ -347,4 +343,63 @@ fn choices_are_checked_from_their_list() {
     }
     assert_eq!(d.config.target, crate::synth::job::Target::Both);
     assert_eq!(d.config.compression, crate::dng::write::Compression::Ljpeg);
+}
+
+#[test]
+fn pair_ranges_are_written_once() {
+    let mut checked = 0;
+    for d in OPTIONS {
+        let Kind::Pair { range, field } = d.kind else {
+            continue;
+        };
+        assert!(
+            !d.help.contains("LO <=") && !d.help.contains(&range.to_string()),
+            "{}: its range in its help",
+            d.name
+        );
+        assert!(d.help_text().contains("[range: LO <= HI"), "{}", d.name);
+        let default: Vec<f64> = d
+            .default
+            .unwrap()
+            .split(',')
+            .map(|x| x.parse().unwrap())
+            .collect();
+        let get = field.expect("a pair sets a field");
+        assert_eq!(
+            get(&SynthOptions::default()).to_vec(),
+            default,
+            "{}",
+            d.name
+        );
+        for bad in [vec![-1.0, 1.0], vec![2.0, 1.0], vec![1.0, f64::NAN]] {
+            let e = Draft::new(1)
+                .set(d, Value::Numbers(bad.clone()), Spelling::Python)
+                .unwrap_err()
+                .to_string();
+            assert!(e.starts_with(&format!("{}: ", d.python_name())), "{e}");
+            // validate refuses the same field (a sidecar's), naming flag and keyword
+            let mut draft = Draft::new(1);
+            (d.set)(&mut draft, Value::Numbers(bad)).unwrap();
+            let e = draft.config.options.validate().unwrap_err().to_string();
+            assert!(
+                e.contains(&format!("--{} (Python {}): ", d.name, d.python_name())),
+                "{e}"
+            );
+        }
+        checked += 1;
+    }
+    assert_eq!(checked, 2);
+    assert!(find("dim-range")
+        .unwrap()
+        .help_text()
+        .ends_with(" [range: LO <= HI, each > 0]"));
+    let e = Draft::new(1)
+        .set(
+            find("bulb-gain").unwrap(),
+            Value::Text("-1,2".into()),
+            Spelling::Cli,
+        )
+        .unwrap_err()
+        .to_string();
+    assert_eq!(e, "--bulb-gain: LO -1 is not >= 0");
 }
