@@ -28,7 +28,7 @@ pub(crate) fn python_default<'py>(
             .map_err(|_| bad(t))?
             .into_pyobject(py)?
             .into_any(),
-        Kind::Float => t
+        Kind::Float { .. } => t
             .parse::<f64>()
             .map_err(|_| bad(t))?
             .into_pyobject(py)?
@@ -42,7 +42,7 @@ pub(crate) fn python_default<'py>(
                 .map_err(|_| bad(t))?;
             PyTuple::new(py, v)?.into_any()
         }
-        Kind::Numbers(_) => {
+        Kind::Numbers(_) | Kind::Pair { .. } => {
             let v = t
                 .split(',')
                 .map(|i| i.trim().parse::<f64>())

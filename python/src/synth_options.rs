@@ -77,10 +77,10 @@ fn kind_name(k: &Kind) -> &'static str {
     match k {
         Kind::Switch => "switch",
         Kind::Int { .. } => "int",
-        Kind::Float => "float",
+        Kind::Float { .. } => "float",
         Kind::Text => "text",
         Kind::Isos => "isos",
-        Kind::Numbers(_) => "numbers",
+        Kind::Numbers(_) | Kind::Pair { .. } => "numbers",
         Kind::Path => "path",
         Kind::Choice(_) => "choice",
     }
@@ -147,10 +147,10 @@ fn option_err(e: OptionError) -> PyErr {
 fn value(d: &OptionDef, key: &str, v: &Bound<'_, PyAny>) -> PyResult<Value> {
     // None is the unset state of an option unset by default (the default its signature
     // shows), and of the texts and paths whose setters take it.
-    let none_ok = (d.default.is_none() && d.kind != Kind::Switch)
+    let none_ok = (d.default.is_none() && !matches!(d.kind, Kind::Switch))
         || !matches!(
             d.kind,
-            Kind::Switch | Kind::Float | Kind::Int { late: true, .. }
+            Kind::Switch | Kind::Float { .. } | Kind::Int { late: true, .. }
         );
     if none_ok && v.is_none() {
         return Ok(Value::Unset);
@@ -161,7 +161,7 @@ fn value(d: &OptionDef, key: &str, v: &Bound<'_, PyAny>) -> PyResult<Value> {
         })?),
         // the type here; the range is the table's check (Draft::set, or Draft::finish)
         Kind::Int { lo, hi, .. } => Value::Int(args::integer(v, key, lo, hi)?),
-        Kind::Float => Value::Float(args::float(v, key)?),
+        Kind::Float { .. } => Value::Float(args::float(v, key)?),
         Kind::Text | Kind::Choice(_) => Value::Text(args::string(v, key)?),
         Kind::Path => Value::Path(v.extract::<PathBuf>().map_err(|_| {
             PyTypeError::new_err(format!("{key} must be a path (got {})", type_name(v)))
@@ -176,7 +176,11 @@ fn value(d: &OptionDef, key: &str, v: &Bound<'_, PyAny>) -> PyResult<Value> {
                 Value::Isos(args::isos(v, key)?)
             }
         }
-        Kind::Numbers(n) => {
+        Kind::Numbers(_) | Kind::Pair { .. } => {
+            let n = match d.kind {
+                Kind::Numbers(n) => n,
+                _ => 2,
+            };
             if let Ok(s) = v.extract::<String>() {
                 Value::Text(s)
             } else {

@@ -263,10 +263,9 @@ INVALID = {"ambient_gain": -1.0, "bulb_gain": (100, 50), "dim_range": (0.9, 0.5)
            "illuminants": "nowhere.json", "brightness": "nowhere.json",
            "noise_model": "nowhere.json", "noise_gain": 0.0}
 # What an error of each says when it is not the keyword (the options checked together).
-NAMED = {"dim_range": "dimming range", "bulb_gain": "bulb gain", "ambient_gain": "ambient gain",
-         "illuminants": "nowhere.json", "brightness": "nowhere.json",
+NAMED = {"illuminants": "nowhere.json", "brightness": "nowhere.json",
          "noise_model": "nowhere.json", "shake_step": "shake", "shake_roll": "shake",
-         "iso": "ISO", "noise_gain": "noise gain"}
+         "iso": "ISO"}
 
 
 def samples(key, files):

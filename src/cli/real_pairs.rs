@@ -39,7 +39,7 @@ pub struct RealPairsArgs {
     pub layout: String,
     /// Release layouts: the noisy ISOs expected (frames RAW_0_00<ISO, 4 digits>*, or
     /// dng/iso_<ISO>/NNN.dng in the processed tree); a missing one is an error.
-    #[arg(long, default_value = "1600,3200", value_name = "ISO,ISO")]
+    #[arg(long, default_value_t = isos_text(&realpairs::RELEASE_NOISY_ISOS), value_name = "ISO,ISO")]
     pub iso: String,
     /// Largest motion accepted between the burst's frames, or between the merged raw and a
     /// noisy input, in raw pixels.
@@ -56,6 +56,12 @@ pub struct RealPairsArgs {
     /// --jobs, --overwrite, --json, --quiet (shared with `dataset`).
     #[command(flatten)]
     pub run: RunFlags,
+}
+
+/// `--iso`'s default: the release's noisy ISOs as `--iso` spells them (`1600,3200`).
+fn isos_text(isos: &[u32]) -> String {
+    let text: Vec<String> = isos.iter().map(u32::to_string).collect();
+    text.join(",")
 }
 
 /// `--iso`: `synth`'s ISO list ([`day2night::synth::config::parse_isos`]: duplicates

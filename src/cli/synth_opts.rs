@@ -22,7 +22,7 @@ pub struct SynthOpts {
 /// The clap argument of one option.
 fn arg(d: &'static OptionDef) -> Arg {
     let a = Arg::new(d.name).long(d.name).help(d.help_text());
-    if d.kind == Kind::Switch {
+    if matches!(d.kind, Kind::Switch) {
         return a.action(ArgAction::SetTrue);
     }
     let a = a.action(ArgAction::Set).value_name(d.value_name);
@@ -32,14 +32,14 @@ fn arg(d: &'static OptionDef) -> Arg {
             Width::U32 => a.value_parser(value_parser!(u32)),
             Width::U64 => a.value_parser(value_parser!(u64)),
         },
-        Kind::Float => a.value_parser(value_parser!(f64)),
+        Kind::Float { .. } => a.value_parser(value_parser!(f64)),
         Kind::Path => a.value_parser(value_parser!(PathBuf)),
         Kind::Choice(choices) => a.value_parser(PossibleValuesParser::new(
             choices
                 .iter()
                 .map(|c| PossibleValue::new(c.name).help(c.help)),
         )),
-        Kind::Switch | Kind::Text | Kind::Isos | Kind::Numbers(_) => {
+        Kind::Switch | Kind::Text | Kind::Isos | Kind::Numbers(_) | Kind::Pair { .. } => {
             a.value_parser(value_parser!(String))
         }
     };
@@ -72,7 +72,7 @@ fn value_of(m: &ArgMatches, d: &OptionDef) -> Result<Option<Value>, clap::Error>
                 .map(|n| i128::from(*n)),
         }
         .map(Value::Int),
-        Kind::Float => m
+        Kind::Float { .. } => m
             .try_get_one::<f64>(d.name)
             .map_err(bad)?
             .map(|x| Value::Float(*x)),
@@ -80,7 +80,7 @@ fn value_of(m: &ArgMatches, d: &OptionDef) -> Result<Option<Value>, clap::Error>
             .try_get_one::<PathBuf>(d.name)
             .map_err(bad)?
             .map(|p| Value::Path(p.clone())),
-        Kind::Choice(_) | Kind::Text | Kind::Isos | Kind::Numbers(_) => m
+        Kind::Choice(_) | Kind::Text | Kind::Isos | Kind::Numbers(_) | Kind::Pair { .. } => m
             .try_get_one::<String>(d.name)
             .map_err(bad)?
             .map(|s| Value::Text(s.clone())),

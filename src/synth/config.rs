@@ -43,8 +43,15 @@ pub struct JobConfig {
 
 impl Default for JobConfig {
     fn default() -> Self {
+        JobConfig::of(SynthOptions::default())
+    }
+}
+
+impl JobConfig {
+    /// A configuration of `options` with everything else at its default.
+    pub fn of(options: SynthOptions) -> JobConfig {
         JobConfig {
-            options: SynthOptions::default(),
+            options,
             illuminants: None,
             brightness: None,
             noise_model: None,
@@ -55,9 +62,7 @@ impl Default for JobConfig {
             exr: ExrOptions::default(),
         }
     }
-}
 
-impl JobConfig {
     /// Check the options, load the calibration files and make the job.
     pub fn build(&self) -> Result<SynthJob> {
         self.options.validate()?;

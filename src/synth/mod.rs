@@ -127,7 +127,36 @@ impl Compat {
     }
 }
 
-/// Synthesis options (all serializable: the sidecar records them).
+/// Declares the struct it is given and its `blank()`: every field at its type's default,
+/// on which [`options::with_defaults`] sets the option table's defaults. So a field's
+/// default is written once, in its option's entry (src/synth/options/table.rs), and a field
+/// that is not an option has its type's default (`CONSTANTS` there says why it is fixed).
+macro_rules! with_blank {
+    (
+        $(#[$meta:meta])*
+        pub struct $name:ident {
+            $($(#[$field_meta:meta])* pub $field:ident: $ty:ty,)*
+        }
+    ) => {
+        $(#[$meta])*
+        pub struct $name {
+            $($(#[$field_meta])* pub $field: $ty,)*
+        }
+
+        impl $name {
+            /// Every field at its type's default.
+            fn blank() -> $name {
+                $name {
+                    $($field: Default::default(),)*
+                }
+            }
+        }
+    };
+}
+
+with_blank! {
+/// Synthesis options (all serializable: the sidecar records them). The defaults are the
+/// option table's ([`options::OPTIONS`]).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(default)]
 pub struct SynthOptions {
@@ -175,12 +204,9 @@ pub struct SynthOptions {
     pub burst: burst::BurstOptions,
     /// Factor on the noise model's standard deviation at every ISO (`--noise-gain`; 1: the
     /// model as calibrated, absent from serialized options).
-    #[serde(default = "one", skip_serializing_if = "is_one")]
+    #[serde(skip_serializing_if = "is_one")]
     pub noise_gain: f64,
 }
-
-fn one() -> f64 {
-    1.0
 }
 
 fn is_one(x: &f64) -> bool {
@@ -188,28 +214,9 @@ fn is_one(x: &f64) -> bool {
 }
 
 impl Default for SynthOptions {
+    /// The option table's defaults ([`options::with_defaults`]).
     fn default() -> Self {
-        SynthOptions {
-            mode: Mode::Local,
-            formula: RelightFormula::Release,
-            bulbs: None,
-            local_lights: None,
-            isos: vec![1600, 3200],
-            truncate: false,
-            keep_negative: false,
-            keep_highlights: false,
-            dim_range: [0.55, 0.90],
-            ambient_gain: 0.05,
-            bulb_gain: [50.0, 100.0],
-            sampler: SamplerRules::default(),
-            covariance: Covariance::Unbiased,
-            day_neutral: None,
-            mask_eval: MaskEval::Separable,
-            compat: Compat::default(),
-            opcodes: OpcodeMode::Apply,
-            burst: burst::BurstOptions::default(),
-            noise_gain: 1.0,
-        }
+        options::with_defaults(SynthOptions::blank())
     }
 }
 
@@ -272,23 +279,8 @@ impl SynthOptions {
                 plan_bounds::MAX_NOISE_ENTRIES
             )));
         }
-        let fin = |v: &[f64]| v.iter().all(|x| x.is_finite());
-        if !(fin(&self.dim_range)
-            && self.dim_range[0] > 0.0
-            && self.dim_range[0] <= self.dim_range[1])
-        {
-            return Err(Error::invalid("dimming range must satisfy 0 < lo <= hi"));
-        }
-        if !fin(&self.bulb_gain) || self.bulb_gain[0] < 0.0 || self.bulb_gain[0] > self.bulb_gain[1]
-        {
-            return Err(Error::invalid("bulb gain range must satisfy 0 <= lo <= hi"));
-        }
-        if !(self.noise_gain > 0.0 && self.noise_gain.is_finite()) {
-            return Err(Error::invalid("noise gain must be > 0"));
-        }
-        if !(self.ambient_gain >= 0.0 && self.ambient_gain.is_finite()) {
-            return Err(Error::invalid("ambient gain must be >= 0"));
-        }
+        // the numbers' ranges of the option table
+        options::check_fields(self)?;
         if let MaskEval::Truncated { k } = self.mask_eval {
             if !(k > 0.0 && k.is_finite()) {
                 return Err(Error::invalid("mask truncation radius must be > 0"));

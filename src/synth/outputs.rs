@@ -63,6 +63,20 @@ pub fn compression_name(c: Compression) -> &'static str {
     }
 }
 
+impl FromStr for Compression {
+    type Err = Error;
+    /// The compression [`compression_name`] names.
+    fn from_str(s: &str) -> Result<Compression> {
+        let all = [Compression::None, Compression::Ljpeg];
+        all.into_iter()
+            .find(|c| compression_name(*c) == s)
+            .ok_or_else(|| {
+                let names = all.map(compression_name);
+                Error::invalid(format!("{s:?} (use {})", names.join(" or ")))
+            })
+    }
+}
+
 /// One output of a variant.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum OutputKind {

@@ -8,10 +8,12 @@
 //! by the parser and the docs.
 //! docs/architecture.md ("Adding a synthesis option") shows what adding one touches.
 //!
-//! Values arrive as [`Value`]s (the parser of each front end checks the type and, for
-//! integers, the range) and are applied to a [`Draft`] in any order; [`Draft::finish`]
-//! applies what depends on several options (the release preset, the burst's checks) and
-//! checks the whole.
+//! Values arrive as [`Value`]s (the parser of each front end checks the type) and are
+//! applied to a [`Draft`] in any order: [`Draft::set`] checks what the kind says (an
+//! integer's or a number's range, a choice's name), [`Draft::finish`] applies what depends
+//! on several options (the release preset, the burst's checks) and checks the whole. The
+//! table's defaults are [`crate::synth::SynthOptions`]'s ([`with_defaults`]), and its number
+//! ranges are what [`crate::synth::SynthOptions::validate`] checks ([`check_fields`]).
 
 mod table;
 
@@ -19,12 +21,15 @@ pub use table::{CONSTANTS, OPTIONS};
 
 use super::burst::checks::{BurstRequest, Names};
 use super::config::JobConfig;
+use super::SynthOptions;
+use crate::bounds::short;
 use crate::error::{Error, Result};
 use crate::isp::opcodes::OpcodeMode;
+use std::ops::Bound;
 use std::path::PathBuf;
 
 /// What an option's value is.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy)]
 pub enum Kind {
     /// A switch: present or not (Python: a bool).
     Switch,
@@ -41,18 +46,155 @@ pub enum Kind {
         /// The range is checked in [`Draft::finish`], not by the front end.
         late: bool,
     },
-    /// A number (checked by the setter or [`Draft::finish`]).
-    Float,
+    /// A finite number within `range`, which [`Draft::set`] checks and the help shows.
+    Float {
+        /// The values it takes.
+        range: Range,
+        /// The [`SynthOptions`] field it sets, which [`SynthOptions::validate`] checks
+        /// against `range` (a sidecar can hold any value); None: not a field of its own
+        /// (a burst's, checked with the burst).
+        field: Option<fn(&SynthOptions) -> f64>,
+    },
     /// Text the setter parses (a list, a neutral, a mode with a parameter...).
     Text,
     /// A comma-separated list of ISOs, or `none` (Python: also an int or a sequence of ints).
     Isos,
     /// `n` comma-separated numbers (Python: also a sequence of `n` numbers).
     Numbers(usize),
+    /// `LO,HI`: two numbers (Python: also a sequence of two), each within `range`, with
+    /// `LO <= HI`; checked and shown as a [`Kind::Float`]'s range is.
+    Pair {
+        /// The values each of LO and HI takes.
+        range: Range,
+        /// The [`SynthOptions`] field it sets, which [`SynthOptions::validate`] checks.
+        field: Option<fn(&SynthOptions) -> [f64; 2]>,
+    },
     /// A file path (some options also take a name, e.g. `paper`).
     Path,
     /// One of a few names.
     Choice(&'static [Choice]),
+}
+
+/// The values of a [`Kind::Float`] option: finite numbers within two bounds, each included,
+/// excluded or absent. Written once, in the kind: [`Draft::set`] checks a value given,
+/// [`SynthOptions::validate`] the field, and [`OptionDef::help_text`] shows it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Range {
+    /// The lower bound.
+    pub lo: Bound<f64>,
+    /// The upper bound.
+    pub hi: Bound<f64>,
+}
+
+impl Range {
+    /// Every finite number.
+    pub const ANY: Range = Range {
+        lo: Bound::Unbounded,
+        hi: Bound::Unbounded,
+    };
+
+    /// The numbers above `lo`.
+    pub const fn above(lo: f64) -> Range {
+        Range {
+            lo: Bound::Excluded(lo),
+            hi: Bound::Unbounded,
+        }
+    }
+
+    /// The numbers from `lo` up.
+    pub const fn at_least(lo: f64) -> Range {
+        Range {
+            lo: Bound::Included(lo),
+            hi: Bound::Unbounded,
+        }
+    }
+
+    /// Whether `x` is finite and within the bounds.
+    pub fn contains(&self, x: f64) -> bool {
+        let above = match self.lo {
+            Bound::Included(lo) => x >= lo,
+            Bound::Excluded(lo) => x > lo,
+            Bound::Unbounded => true,
+        };
+        let below = match self.hi {
+            Bound::Included(hi) => x <= hi,
+            Bound::Excluded(hi) => x < hi,
+            Bound::Unbounded => true,
+        };
+        x.is_finite() && above && below
+    }
+
+    /// Error unless `x` is in the range: what is wrong with it and the range
+    /// (`0 is not > 0`, `2000 is outside 0..=1000`, `NaN is not a finite number`); the
+    /// caller names the option.
+    pub fn check(&self, x: f64) -> Result<()> {
+        match self.fault(x) {
+            Some(m) => Err(Error::invalid(m)),
+            None => Ok(()),
+        }
+    }
+
+    /// What is wrong with the pair `[lo, hi]` of a [`Kind::Pair`] option (`LO 0 is not > 0`,
+    /// `LO 0.9 is above HI 0.5`), or None when each is in the range and `lo <= hi`.
+    fn pair_fault(&self, [lo, hi]: [f64; 2]) -> Option<String> {
+        for (name, x) in [("LO", lo), ("HI", hi)] {
+            if let Some(m) = self.fault(x) {
+                return Some(format!("{name} {m}"));
+            }
+        }
+        (lo > hi).then(|| format!("LO {} is above HI {}", short(lo), short(hi)))
+    }
+
+    /// What [`Range::check`] says of `x`, or None when it is in the range.
+    fn fault(&self, x: f64) -> Option<String> {
+        if self.contains(x) {
+            return None;
+        }
+        if !x.is_finite() {
+            return Some(format!("{x} is not a finite number"));
+        }
+        // A value just past a bound is shown with every digit it needs.
+        let mut shown = short(x);
+        if [self.lo, self.hi].iter().any(|b| match b {
+            Bound::Included(v) | Bound::Excluded(v) => short(*v) == shown,
+            Bound::Unbounded => false,
+        }) {
+            shown = format!("{x}");
+        }
+        let bounded = |b: Bound<f64>| !matches!(b, Bound::Unbounded);
+        let verb = if bounded(self.lo) && bounded(self.hi) {
+            "is outside"
+        } else {
+            "is not"
+        };
+        Some(format!("{shown} {verb} {self}"))
+    }
+}
+
+impl std::fmt::Display for Range {
+    /// `> 0`, `>= 0.5`, `< 1`, `0..=1000`, `0..1`, `> 0 and <= 1`; `any finite number`.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        use Bound::{Excluded, Included, Unbounded};
+        match (self.lo, self.hi) {
+            (Unbounded, Unbounded) => write!(f, "any finite number"),
+            (Included(a), Included(b)) => write!(f, "{}..={}", short(a), short(b)),
+            (Included(a), Excluded(b)) => write!(f, "{}..{}", short(a), short(b)),
+            (lo, hi) => {
+                let lo = match lo {
+                    Included(a) => Some(format!(">= {}", short(a))),
+                    Excluded(a) => Some(format!("> {}", short(a))),
+                    Unbounded => None,
+                };
+                let hi = match hi {
+                    Included(b) => Some(format!("<= {}", short(b))),
+                    Excluded(b) => Some(format!("< {}", short(b))),
+                    Unbounded => None,
+                };
+                let parts: Vec<String> = lo.into_iter().chain(hi).collect();
+                write!(f, "{}", parts.join(" and "))
+            }
+        }
+    }
 }
 
 /// The command line's integer type of an [`Kind::Int`] option.
@@ -139,15 +281,42 @@ impl OptionDef {
     }
 
     /// The help text with what the kind says of the value: an integer's range when it is
-    /// narrower than its type (`[range: 1..=64]`). The range is written once, in the kind:
-    /// [`Draft::set`] checks it and the help shows it.
+    /// narrower than its type (`[range: 1..=64]`), a number's when it has a bound
+    /// (`[range: > 0]`). The range is written once, in the kind: [`Draft::set`] checks it
+    /// and the help shows it.
     pub fn help_text(&self) -> String {
         match self.kind {
             Kind::Int { lo, hi, width, .. } if (lo, hi) != (0, width.max()) => {
                 format!("{} [range: {lo}..={hi}]", self.help)
             }
+            Kind::Float { range, .. } if range != Range::ANY => {
+                format!("{} [range: {range}]", self.help)
+            }
+            Kind::Pair { range, .. } if range != Range::ANY => {
+                format!("{} [range: LO <= HI, each {range}]", self.help)
+            }
+            Kind::Pair { .. } => format!("{} [range: LO <= HI]", self.help),
             _ => self.help.to_string(),
         }
+    }
+
+    /// The default as the command line's parser hands it to [`Draft::set`] (an integer, a
+    /// number, a path or text), or None when the option is unset by default.
+    pub fn default_value(&self) -> Option<Value> {
+        let text = self.default?;
+        Some(match self.kind {
+            Kind::Int { .. } => text
+                .parse()
+                .map_or_else(|_| Value::Text(text.into()), Value::Int),
+            Kind::Float { .. } => text
+                .parse()
+                .map_or_else(|_| Value::Text(text.into()), Value::Float),
+            Kind::Switch => Value::Switch(text == "true"),
+            Kind::Path => Value::Path(text.into()),
+            Kind::Text | Kind::Isos | Kind::Numbers(_) | Kind::Pair { .. } | Kind::Choice(_) => {
+                Value::Text(text.into())
+            }
+        })
     }
 
     /// This option's name as `spelling` writes it.
@@ -169,6 +338,57 @@ pub struct Constant {
     pub value: &'static str,
     /// Why it is not an option.
     pub why: &'static str,
+}
+
+/// `blank` with every option of the table that sets one of its fields at its default, set
+/// as the command line sets it: the defaults of [`SynthOptions`] are the table's, written
+/// once (`SynthOptions::default()` is this of its fields at their types' defaults; the
+/// fields that are not options keep those).
+pub fn with_defaults(blank: SynthOptions) -> SynthOptions {
+    let mut draft = Draft {
+        config: JobConfig::of(blank),
+        seed: 0,
+        replay: None,
+        release: false,
+        opcodes: None,
+        burst: BurstRequest::default(),
+    };
+    for def in OPTIONS.iter().filter(|d| d.sidecar.is_some()) {
+        if let Some(v) = def.default_value() {
+            let done = draft.set(def, v, Spelling::Cli);
+            // Each default sets (src/synth/options/tests.rs): an error is a table's bug.
+            debug_assert!(done.is_ok(), "{}: {:?}", def.name, done.err());
+        }
+    }
+    draft.config.options
+}
+
+/// Error unless each field of `o` that a [`Kind::Float`] option sets is in the option's
+/// range: the one check of the range, as [`Draft::set`] makes it, for options that did not
+/// come through the table (a sidecar's, a library caller's). The message names the flag and
+/// the Python keyword.
+pub fn check_fields(o: &SynthOptions) -> Result<()> {
+    for def in OPTIONS {
+        let fault = match def.kind {
+            Kind::Float {
+                range,
+                field: Some(get),
+            } => range.fault(get(o)),
+            Kind::Pair {
+                range,
+                field: Some(get),
+            } => range.pair_fault(get(o)),
+            _ => None,
+        };
+        if let Some(m) = fault {
+            return Err(Error::invalid(format!(
+                "{} (Python {}): {m}",
+                def.spelled(Spelling::Cli),
+                def.python_name()
+            )));
+        }
+    }
+    Ok(())
 }
 
 /// The option named `name` (a flag name or a Python keyword or alias).
@@ -254,9 +474,10 @@ impl Draft {
         d
     }
 
-    /// Apply `value` to the option `def`; an error names the option in `spelling`. An
-    /// integer is checked against its kind's range here (the one check of it; a `late`
-    /// range is part of a check of several options in [`Draft::finish`]).
+    /// Apply `value` to the option `def`; an error names the option in `spelling`. What
+    /// the kind says of the value is checked here, the one check of it: an integer's range
+    /// (a `late` range is part of a check of several options in [`Draft::finish`]), a
+    /// number's range, a choice's name (so a setter reads only names of its list).
     pub fn set(
         &mut self,
         def: &OptionDef,
@@ -267,19 +488,38 @@ impl Draft {
             option: Some(def.spelled(spelling)),
             error,
         };
-        if let (
-            Kind::Int {
-                lo,
-                hi,
-                late: false,
-                ..
-            },
-            Value::Int(n),
-        ) = (def.kind, &value)
-        {
-            if *n < i128::from(lo) || *n > i128::from(hi) {
+        match (def.kind, &value) {
+            (
+                Kind::Int {
+                    lo,
+                    hi,
+                    late: false,
+                    ..
+                },
+                Value::Int(n),
+            ) if *n < i128::from(lo) || *n > i128::from(hi) => {
                 return Err(named(Error::invalid(format!("{n} is outside {lo}..={hi}"))));
             }
+            (Kind::Float { range, .. }, v) => {
+                if let Some(x) = number(v) {
+                    range.check(x).map_err(named)?;
+                }
+            }
+            (Kind::Pair { range, .. }, v) => {
+                if let Some(m) = numbers(v).and_then(|n| range.pair_fault(n.try_into().ok()?)) {
+                    return Err(named(Error::invalid(m)));
+                }
+            }
+            (Kind::Choice(choices), Value::Text(t)) if !choices.iter().any(|c| c.name == t) => {
+                let names: Vec<&str> = choices.iter().map(|c| c.name).collect();
+                let list = match names.split_last() {
+                    Some((last, [])) => last.to_string(),
+                    Some((last, rest)) => format!("{} or {last}", rest.join(", ")),
+                    None => String::new(),
+                };
+                return Err(named(Error::invalid(format!("{t:?} (use {list})"))));
+            }
+            _ => {}
         }
         (def.set)(self, value).map_err(named)
     }
@@ -322,6 +562,27 @@ impl Draft {
             .validate()
             .map_err(|e| named("exr-zip-level", e))?;
         Ok(self.config)
+    }
+}
+
+/// The number a [`Kind::Float`] option's value is, if it is one (text that is not a number
+/// is the setter's error).
+fn number(v: &Value) -> Option<f64> {
+    match v {
+        Value::Float(x) => Some(*x),
+        Value::Int(n) => Some(*n as f64),
+        Value::Text(s) => s.trim().parse().ok(),
+        _ => None,
+    }
+}
+
+/// The numbers of a [`Kind::Pair`] option's value, if it is numbers (text that is not is the
+/// setter's error).
+fn numbers(v: &Value) -> Option<Vec<f64>> {
+    match v {
+        Value::Numbers(n) => Some(n.clone()),
+        Value::Text(s) => s.split(',').map(|p| p.trim().parse().ok()).collect(),
+        _ => None,
     }
 }
 

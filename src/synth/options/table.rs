@@ -2,14 +2,12 @@
 //! module). A new option is one entry here (docs/architecture.md, "Adding a synthesis
 //! option").
 
-use super::{Choice, Constant, Kind, OptionDef, Python, Value, Width};
+use super::{Choice, Constant, Kind, OptionDef, Python, Range, Value, Width};
 use crate::bounds::{EXR_ZIP_LEVEL_RANGE, MAX_LIGHTS, SEED_RANGE};
-use crate::dng::write::Compression;
 use crate::encode::exr::ExrCompression;
 use crate::error::{Error, Result};
 use crate::synth::burst::motion::MAX_FRAMES;
 use crate::synth::config::{parse_isos, parse_neutral};
-use crate::synth::job::Target;
 use crate::synth::{Covariance, MaskEval, Mode, RelightFormula};
 use std::path::PathBuf;
 
@@ -158,10 +156,13 @@ carries its seed)",
     OptionDef {
         name: "ambient-gain",
         value_name: "G",
-        kind: Kind::Float,
+        kind: Kind::Float {
+            range: Range::at_least(0.0),
+            field: Some(|o| o.ambient_gain),
+        },
         default: Some("0.05"),
-        help: "Gain of the ambient light in the release formula's local relighting (>= 0; the \
-authors' released code)",
+        help: "Gain of the ambient light in the release formula's local relighting (the authors' \
+released code)",
         python: Python::Keyword,
         python_alias: None,
         synth_only: false,
@@ -174,10 +175,13 @@ authors' released code)",
     OptionDef {
         name: "bulb-gain",
         value_name: "LO,HI",
-        kind: Kind::Numbers(2),
+        kind: Kind::Pair {
+            range: Range::at_least(0.0),
+            field: Some(|o| o.bulb_gain),
+        },
         default: Some("50,100"),
-        help: "Range of the saturated bulbs' gain, each drawn uniformly (0 <= LO <= HI; the \
-authors' released code)",
+        help: "Range of the saturated bulbs' gain, each drawn uniformly (the authors' released \
+code)",
         python: Python::Keyword,
         python_alias: None,
         synth_only: false,
@@ -248,10 +252,13 @@ camera",
     OptionDef {
         name: "dim-range",
         value_name: "LO,HI",
-        kind: Kind::Numbers(2),
+        kind: Kind::Pair {
+            range: Range::above(0.0),
+            field: Some(|o| o.dim_range),
+        },
         default: Some("0.55,0.9"),
-        help: "Range of the uniform dimming factor without a brightness dictionary (0 < LO <= HI; \
-the paper's U(0.55, 0.9))",
+        help: "Range of the uniform dimming factor without a brightness dictionary (the paper's \
+U(0.55, 0.9))",
         python: Python::Keyword,
         python_alias: None,
         synth_only: false,
@@ -281,11 +288,14 @@ embedded paper phone table with a warning. See docs/noise.md",
     OptionDef {
         name: "noise-gain",
         value_name: "K",
-        kind: Kind::Float,
+        kind: Kind::Float {
+            range: Range::above(0.0),
+            field: Some(|o| o.noise_gain),
+        },
         default: Some("1"),
-        help: "Factor on the noise model's standard deviation at every ISO (> 0; S and O times \
-K^2; a Gaussian model only): noisier or cleaner inputs than the calibrated camera at the same \
-Exif ISO, for a network robust to a noise calibration that is off",
+        help: "Factor on the noise model's standard deviation at every ISO (S and O times K^2; a \
+Gaussian model only): noisier or cleaner inputs than the calibrated camera at the same Exif ISO, \
+for a network robust to a noise calibration that is off",
         python: Python::Keyword,
         python_alias: None,
         synth_only: false,
@@ -449,7 +459,10 @@ camera, the default)",
     OptionDef {
         name: "shake-step",
         value_name: "PX",
-        kind: Kind::Float,
+        kind: Kind::Float {
+            range: Range::ANY,
+            field: None,
+        },
         default: None,
         help: "Hand-held walk: standard deviation of each frame's translation step per axis, in \
 pixels [default: 0.6]",
@@ -465,7 +478,10 @@ pixels [default: 0.6]",
     OptionDef {
         name: "shake-roll",
         value_name: "DEG",
-        kind: Kind::Float,
+        kind: Kind::Float {
+            range: Range::ANY,
+            field: None,
+        },
         default: None,
         help: "Hand-held walk: standard deviation of each frame's rotation step, in degrees \
 [default: 0.015]",
@@ -521,17 +537,8 @@ pixels [default: 0.6]",
         synth_only: false,
         sidecar: None,
         set: |d, v| {
-            d.config.target = match text(&v)?.as_str() {
-                "exr" => Target::Exr,
-                "png" => Target::Png,
-                "both" => Target::Both,
-                "none" => Target::None,
-                t => {
-                    return Err(Error::invalid(format!(
-                        "{t:?} (use exr, png, both or none)"
-                    )))
-                }
-            };
+            // one of the choices (Draft::set checks the name)
+            d.config.target = text(&v)?.parse()?;
             Ok(())
         },
     },
@@ -570,11 +577,7 @@ pixels [default: 0.6]",
         synth_only: false,
         sidecar: None,
         set: |d, v| {
-            d.config.compression = match text(&v)?.as_str() {
-                "none" => Compression::None,
-                "ljpeg" => Compression::Ljpeg,
-                c => return Err(Error::invalid(format!("{c:?} (use none or ljpeg)"))),
-            };
+            d.config.compression = text(&v)?.parse()?;
             Ok(())
         },
     },
@@ -611,12 +614,13 @@ See docs/synthesis.md, \"Release compatibility\"",
         synth_only: false,
         sidecar: Some("compat"),
         set: |d, v| {
+            // the one preset (Draft::set checks the name), or None
             d.release = match v {
                 Value::Unset => false,
-                v => match text(&v)?.as_str() {
-                    "release" => true,
-                    c => return Err(Error::invalid(format!("{c:?} (use release or None)"))),
-                },
+                v => {
+                    text(&v)?;
+                    true
+                }
             };
             Ok(())
         },

@@ -4,25 +4,15 @@ use super::*;
 use crate::synth::burst::BurstOptions;
 use crate::synth::SynthOptions;
 
-/// The command line's view of a default: the text clap passes to the setter.
-fn default_value(d: &OptionDef) -> Option<Value> {
-    let text = d.default?;
-    Some(match d.kind {
-        Kind::Int { .. } => Value::Int(text.parse().unwrap()),
-        Kind::Float => Value::Float(text.parse().unwrap()),
-        Kind::Switch => Value::Switch(false),
-        Kind::Path => Value::Path(text.into()),
-        _ => Value::Text(text.into()),
-    })
-}
-
 #[test]
 fn defaults_are_the_libraries() {
+    // SynthOptions' are made from the table (with_defaults); the job's other settings
+    // (targets, compression, EXR) are JobConfig's own
     let mut d = Draft::new(1);
     for def in OPTIONS {
         let v = match def.kind {
             Kind::Switch => Some(Value::Switch(false)),
-            _ => default_value(def),
+            _ => def.default_value(),
         };
         if let Some(v) = v {
             d.set(def, v, Spelling::Cli).unwrap();
@@ -122,18 +112,14 @@ fn errors_name_the_option() {
         )
         .unwrap_err();
     assert!(e.to_string().starts_with("dim_range: "), "{e}");
-    let mut d = Draft::new(1);
-    d.set(
-        find("dim-range").unwrap(),
-        Value::Numbers(vec![0.9, 0.5]),
-        Spelling::Cli,
-    )
-    .unwrap();
-    assert!(d
-        .finish(Spelling::Cli)
-        .unwrap_err()
-        .to_string()
-        .contains("dimming range"));
+    let e = Draft::new(1)
+        .set(
+            find("dim-range").unwrap(),
+            Value::Numbers(vec![0.9, 0.5]),
+            Spelling::Cli,
+        )
+        .unwrap_err();
+    assert_eq!(e.to_string(), "--dim-range: LO 0.9 is above HI 0.5");
     let mut d = Draft::new(1);
     d.set(
         find("compat").unwrap(),
@@ -218,4 +204,202 @@ fn ranges_are_written_once() {
         find("seed").unwrap().help_text(),
         find("seed").unwrap().help
     );
+}
+
+#[test]
+fn every_default_sets_its_field() {
+    // with_defaults ignores a default that does not set (in a release build): none does
+    let mut d = Draft::new(1);
+    for def in OPTIONS {
+        if let Some(v) = def.default_value() {
+            assert!(!matches!(v, Value::Text(_)) || !matches!(def.kind, Kind::Int { .. }));
+            d.set(def, v, Spelling::Cli)
+                .unwrap_or_else(|e| panic!("{}: {e}", def.name));
+        }
+        if let (Kind::Float { range, field }, Some(text)) = (def.kind, def.default) {
+            let x: f64 = text.parse().unwrap();
+            assert!(
+                range.contains(x),
+                "{}: default {x} outside {range}",
+                def.name
+            );
+            if let Some(get) = field {
+                assert_eq!(get(&SynthOptions::default()), x, "{}", def.name);
+            }
+        }
+    }
+}
+
+#[test]
+fn default_options_serialize_as_before() {
+    // SynthOptions::default() is made from the table's defaults: its JSON (what sidecars
+    // and dataset fingerprints hold) is pinned here.
+    let json = serde_json::to_string(&SynthOptions::default()).unwrap();
+    // noise_gain, compat, opcodes and burst are left out at their defaults.
+    assert_eq!(
+        json,
+        r#"{"mode":"local","formula":"release","bulbs":null,"local_lights":null,"isos":[1600,3200],"truncate":false,"keep_negative":false,"keep_highlights":false,"dim_range":[0.55,0.9],"ambient_gain":0.05,"bulb_gain":[50.0,100.0],"sampler":{"floor":0.001,"max_mahalanobis":3.0,"max_tries":1000},"covariance":"unbiased","day_neutral":null,"mask_eval":{"eval":"separable"}}"#
+    );
+}
+
+#[test]
+fn number_ranges_are_written_once() {
+    let mut checked = 0;
+    for d in OPTIONS {
+        let Kind::Float { range, field } = d.kind else {
+            continue;
+        };
+        if range == Range::ANY {
+            assert_eq!(d.help_text(), d.help, "{}", d.name);
+            continue;
+        }
+        // the help shows the kind's range, the text does not spell it again
+        let shown = range.to_string();
+        assert!(!d.help.contains(&shown), "{}: {shown} in its help", d.name);
+        assert!(
+            d.help_text().ends_with(&format!(" [range: {shown}]")),
+            "{}",
+            d.name
+        );
+        // Draft::set refuses a value outside, naming the option and the range
+        for bad in [-1.0, f64::NAN, f64::INFINITY] {
+            let e = Draft::new(1)
+                .set(d, Value::Float(bad), Spelling::Cli)
+                .unwrap_err()
+                .to_string();
+            assert!(e.starts_with(&format!("--{}: ", d.name)), "{e}");
+        }
+        // and validate refuses the field outside (a sidecar's), naming flag and keyword
+        let get = field.expect("a number option with a range sets a field");
+        let mut draft = Draft::new(1);
+        (d.set)(&mut draft, Value::Float(-1.0)).unwrap(); // the setter alone: no check
+        let o = draft.config.options;
+        assert_eq!(get(&o), -1.0);
+        let e = o.validate().unwrap_err().to_string();
+        assert!(
+            e.contains(&format!(
+                "--{} (Python {}): -1 is not",
+                d.name,
+                d.python_name()
+            )),
+            "{e}"
+        );
+        checked += 1;
+    }
+    assert!(checked >= 2);
+    assert_eq!(
+        find("noise-gain").unwrap().help_text().rsplit('[').next(),
+        Some("range: > 0]")
+    );
+    assert_eq!(
+        find("ambient-gain").unwrap().help_text().rsplit('[').next(),
+        Some("range: >= 0]")
+    );
+    let e = Draft::new(1)
+        .set(
+            find("noise-gain").unwrap(),
+            Value::Float(0.0),
+            Spelling::Python,
+        )
+        .unwrap_err()
+        .to_string();
+    assert_eq!(e, "noise_gain: 0 is not > 0");
+}
+
+#[test]
+fn choices_are_checked_from_their_list() {
+    // Draft::set checks a choice's name against the entry's list, the one spelling of them
+    for (name, bad, list) in [
+        ("target", "jpeg", "exr, png, both or none"),
+        ("compression", "zip", "none or ljpeg"),
+        ("compat", "paper", "release"),
+        ("relight-formula", "new", "release or paper"),
+    ] {
+        let e = Draft::new(1)
+            .set(find(name).unwrap(), Value::Text(bad.into()), Spelling::Cli)
+            .unwrap_err()
+            .to_string();
+        assert_eq!(e, format!("--{name}: {bad:?} (use {list})"));
+    }
+    // and each name of each list sets
+    for d in OPTIONS {
+        if let Kind::Choice(choices) = d.kind {
+            for c in choices {
+                let mut draft = Draft::new(1);
+                draft
+                    .set(d, Value::Text(c.name.into()), Spelling::Cli)
+                    .unwrap_or_else(|e| panic!("{e}"));
+            }
+        }
+    }
+    let mut d = Draft::new(1);
+    for (name, value) in [("target", "both"), ("compression", "ljpeg")] {
+        d.set(
+            find(name).unwrap(),
+            Value::Text(value.into()),
+            Spelling::Cli,
+        )
+        .unwrap();
+    }
+    assert_eq!(d.config.target, crate::synth::job::Target::Both);
+    assert_eq!(d.config.compression, crate::dng::write::Compression::Ljpeg);
+}
+
+#[test]
+fn pair_ranges_are_written_once() {
+    let mut checked = 0;
+    for d in OPTIONS {
+        let Kind::Pair { range, field } = d.kind else {
+            continue;
+        };
+        assert!(
+            !d.help.contains("LO <=") && !d.help.contains(&range.to_string()),
+            "{}: its range in its help",
+            d.name
+        );
+        assert!(d.help_text().contains("[range: LO <= HI"), "{}", d.name);
+        let default: Vec<f64> = d
+            .default
+            .unwrap()
+            .split(',')
+            .map(|x| x.parse().unwrap())
+            .collect();
+        let get = field.expect("a pair sets a field");
+        assert_eq!(
+            get(&SynthOptions::default()).to_vec(),
+            default,
+            "{}",
+            d.name
+        );
+        for bad in [vec![-1.0, 1.0], vec![2.0, 1.0], vec![1.0, f64::NAN]] {
+            let e = Draft::new(1)
+                .set(d, Value::Numbers(bad.clone()), Spelling::Python)
+                .unwrap_err()
+                .to_string();
+            assert!(e.starts_with(&format!("{}: ", d.python_name())), "{e}");
+            // validate refuses the same field (a sidecar's), naming flag and keyword
+            let mut draft = Draft::new(1);
+            (d.set)(&mut draft, Value::Numbers(bad)).unwrap();
+            let e = draft.config.options.validate().unwrap_err().to_string();
+            assert!(
+                e.contains(&format!("--{} (Python {}): ", d.name, d.python_name())),
+                "{e}"
+            );
+        }
+        checked += 1;
+    }
+    assert_eq!(checked, 2);
+    assert!(find("dim-range")
+        .unwrap()
+        .help_text()
+        .ends_with(" [range: LO <= HI, each > 0]"));
+    let e = Draft::new(1)
+        .set(
+            find("bulb-gain").unwrap(),
+            Value::Text("-1,2".into()),
+            Spelling::Cli,
+        )
+        .unwrap_err()
+        .to_string();
+    assert_eq!(e, "--bulb-gain: LO -1 is not >= 0");
 }
