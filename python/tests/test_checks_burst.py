@@ -45,7 +45,7 @@ def synth(raw, **opts):
     (dict(burst=2.0), TypeError, "burst must be an integer"),
     (dict(burst=3, shake_step=1e308), ValueError, "shake_step (px): 1e308 is outside [0, 1000]"),
     (dict(burst=3, shake_step="2"), TypeError, "shake_step must be a number"),
-    (dict(burst=3, shake_roll=float("nan")), ValueError, "shake_roll (degrees): NaN is outside"),
+    (dict(burst=3, shake_roll=float("nan")), ValueError, "shake_roll: NaN is not a finite number"),
     (dict(burst=3, motion="tripod"), ValueError, 'motion: "tripod" (use none or shake)'),
 ])
 def test_burst_options_follow_the_command_line_rules(raw, opts, exc, words):
