@@ -107,6 +107,22 @@ fn policy_and_input(
     Ok((policy, img))
 }
 
+/// `--neutral` (None: the file's AsShotNeutral), `--exr-compression` and
+/// `--exr-zip-level`, each a usage error when bad: the options both ISPs read.
+fn neutral_and_exr(
+    args: &RenderArgs,
+) -> Result<(Option<[f64; 3]>, ExrCompression, u8), super::Failure> {
+    let neutral = args
+        .neutral
+        .as_deref()
+        .map(parse_neutral)
+        .transpose()
+        .map_err(usage)?;
+    let compression: ExrCompression = args.exr_compression.parse().map_err(usage)?;
+    let zip_level = parse_zip_level(args.exr_zip_level)?;
+    Ok((neutral, compression, zip_level))
+}
+
 fn output_format(args: &RenderArgs) -> Result<(Format, bool), super::Failure> {
     let ext = args
         .output
@@ -142,14 +158,7 @@ pub fn run(args: RenderArgs) -> CmdResult {
         other => return Err(usage(format!("--isp {other}: use day2night or release"))),
     }
     let demosaic: Demosaic = args.demosaic.parse().map_err(usage)?;
-    let neutral = args
-        .neutral
-        .as_deref()
-        .map(parse_neutral)
-        .transpose()
-        .map_err(usage)?;
-    let compression: ExrCompression = args.exr_compression.parse().map_err(usage)?;
-    let zip_level = parse_zip_level(args.exr_zip_level)?;
+    let (neutral, compression, zip_level) = neutral_and_exr(&args)?;
     let tone: DisplayTone = args.tone.parse().map_err(usage)?;
     let opcodes: OpcodeMode = args
         .opcodes
@@ -303,14 +312,7 @@ fn run_release(args: &RenderArgs) -> CmdResult {
             args.output.display()
         )));
     }
-    let neutral = args
-        .neutral
-        .as_deref()
-        .map(parse_neutral)
-        .transpose()
-        .map_err(usage)?;
-    let compression: ExrCompression = args.exr_compression.parse().map_err(usage)?;
-    let zip_level = parse_zip_level(args.exr_zip_level)?;
+    let (neutral, compression, zip_level) = neutral_and_exr(args)?;
     let (policy, img) = policy_and_input(args)?;
     let in_file = |e: day2night::Error| lib(e.in_file(&args.input));
     let linear =
