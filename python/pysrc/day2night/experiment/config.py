@@ -244,6 +244,6 @@ def resolve(config):
         raise ExperimentError(f"--compare-to {ref}: not a row of this run (rows: "
                               f"{', '.join([rows.UNTRAINED.id] + ids)})")
     c = dataclasses.replace(
-        c, compare_to=ref, day=str(pathlib.Path(c.day).resolve()), real=str(pathlib.Path(c.real).resolve()),
-        rows=tuple(r.id for r in chosen), restart_unit=tuple(dict.fromkeys(c.restart_unit)))
+        c, compare_to=ref, day=str(pathlib.Path(c.day).resolve()),
+        real=str(pathlib.Path(c.real).resolve()), rows=tuple(r.id for r in chosen), restart_unit=tuple(dict.fromkeys(c.restart_unit)))
     return c, isps
