@@ -70,8 +70,9 @@ class ExperimentConfig:
                      "runs and --preset mini: 8)", record="always")
     show: int = opt(3, help="test scenes per row in index.html")
     restart_unit: tuple = opt((), help="delete this unit's folder and train it again "
-                              "(repeatable), e.g. clean/ours/all or noisy/supervised/1; for a "
-                              "damaged unit", action="append", metavar="TASK/ROW/FOLD")
+                              "(repeatable), e.g. clean/ours/all or noisy/supervised/1, "
+                              "seed-S/TASK/ROW/FOLD for an extra seed of --seeds; for a damaged "
+                              "unit", action="append", metavar="TASK/ROW/FOLD")
     protocol: str = opt(help="preset: release sets the four options below to the release's",
                         group=PROTOCOL, record="always", choices=list(PROTOCOLS))
     targets: str = opt(help="ISP of every target (default: the one that made the real set's)",

@@ -30,6 +30,9 @@ import functools
 import numpy as np
 
 REPLICATES = 10_000
+#: A mean or bound within this much (relative to the values) of 0 is 0: the rounding of the
+#: per-fold weights never decides a verdict.
+ROUNDING = 1e-12
 LEVEL = 0.95
 HIGHER_IS_BETTER = {"psnr": True, "ssim": True, "delta_e": False}
 METHOD = ("percentile bootstrap of the mean over the test scenes, resampled within their "
@@ -109,7 +112,10 @@ def summary(v, strata=None, seed=0, replicates=REPLICATES, level=LEVEL):
     lo, hi = np.quantile(reps, [(1 - level) / 2, (1 + level) / 2])
     c = v.flat[0]
     seed_means = c + (v - c).mean(axis=1)
-    return {**out, "mean": float(c + (v - c).mean()), "ci_low": float(lo), "ci_high": float(hi),
+    # rounding: a per-fold row's weighted values can make an exact 0 a -1e-17 (tested)
+    tol = ROUNDING * (1.0 + float(np.max(np.abs(v))))
+    lo, hi, mean = (0.0 if abs(x) <= tol else float(x) for x in (lo, hi, c + (v - c).mean()))
+    return {**out, "mean": mean, "ci_low": lo, "ci_high": hi,
             "seed_means": [float(x) for x in seed_means],
             "seed_sd": float(np.std(seed_means, ddof=1)) if n_seeds > 1 else None}
 

@@ -334,10 +334,12 @@ def _header(t):
         f"synthetic data of seed {seeds[0]}).",
         "Rows trained on synthesis only are tested on every real scene; rows with real data "
         "are the mean over the folds of each fold's test scenes.",
-        f"Each cell: the mean [95 % interval] over the test scenes (n below) and the seeds, by "
-        f"a {b['replicates']}-replicate bootstrap (scenes resampled within their folds, seeds "
-        f"resampled; bootstrap seed {b['seed']}). The gain over untrained and the comparisons "
-        "are paired per-scene differences, bootstrapped the same way.",
+        f"Each cell: the mean [95 % interval] over the test scenes (n below)"
+        f"{' and the seeds' if len(seeds) > 1 else ''}, by a {b['replicates']}-replicate "
+        f"bootstrap (scenes resampled within their folds"
+        f"{', seeds resampled' if len(seeds) > 1 else ''}; bootstrap seed {b['seed']}). The "
+        "gain over untrained and the comparisons are paired per-scene differences, "
+        "bootstrapped the same way.",
         "",
     ]
     return lines
@@ -350,7 +352,7 @@ def _table(rows, keys, metrics, title):
     multi = len(keys) > 1
     heads = [f"{'ISO ' + k + ' ' if multi else ''}{NAMES[m]}" for k in keys for m in metrics]
     gain_head = "gain over untrained (PSNR" + (" " + " / ".join(keys) if multi else "") + ")"
-    lines = [f"## {title} ({n} test scenes)", "",
+    lines = [f"## {title}, {n} test scenes", "",
              "| model | " + " | ".join(heads) + f" | {gain_head} | paper |",
              "|---" * (len(heads) + 3) + "|"]
     for r in rows:
@@ -374,7 +376,8 @@ def _comparison_lines(t, task, metrics, labels):
              "| model | input | metric | difference [95 % interval] | verdict |",
              "|---|---|---|---|---|"]
     for c in comps:
-        lines.append(f"| {labels.get((task, c['row']), c['row'])} | {c['input']} | "
+        key = c["input"] if c["input"] == "clean" else "ISO " + c["input"]
+        lines.append(f"| {labels.get((task, c['row']), c['row'])} | {key} | "
                      f"{NAMES[c['metric']]} | {_cell(c, DIGITS[c['metric']], sign=True)} | "
                      f"{c['verdict']} |")
     return lines + [""]
