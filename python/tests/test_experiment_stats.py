@@ -275,6 +275,9 @@ def test_the_burst_row_is_scored_or_left_out_with_the_reason(tmp_path, monkeypat
     c = [c for c in t["comparisons"] if c["row"] == "burst" and c["metric"] == "psnr"]
     assert [x["input"] for x in c] == ["1600", "3200"] and c[0]["verdict"] == "worse"
     assert t["left_out"] == []
+    why = {"task": "noisy", "row": "burst", "why": "one frame per ISO"}
+    t = table.build(cfg, tmp_path, SPLITS, 5, 4, left_out=[why])
+    assert [r["row"] for r in t["rows"]] == ["untrained", "day"] and t["left_out"] == [why]
 
 
 def test_the_fresh_row_left_out_by_the_protocol_is_named(tmp_path):

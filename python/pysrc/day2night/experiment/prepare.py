@@ -143,7 +143,8 @@ def check_run_folder(out, work, restart, scenes, epochs, extra_seeds=()):
     deleted). ``work``: rows.work's units, also run with each of ``extra_seeds`` (--seeds);
     ``scenes``: the real scenes' ids."""
     out = pathlib.Path(out)
-    seeded = [(w, s) for s in (None, *extra_seeds) for w in work]
+    seeded = [(w, s) for s in (None, *extra_seeds) for w in work
+              if s is None or w[1].source != "burst"]  # the burst row has no seed
     ids = [runfolder.unit_id(t, r.id, f, s) for (t, r, f, _), s in seeded]
     for uid in restart:
         if uid not in ids:

@@ -86,13 +86,13 @@ class Experiment:
     def work(self):
         """Every unit of one seed, in order: (task, row, fold, split); the untrained row
         first in each task."""
-        trained = [r for r in self.rows if r.source != "burst"]  # the burst row trains nothing
-        return rows.work(self.tasks, [rows.UNTRAINED] + trained, self.plan.splits)
+        return rows.work(self.tasks, [rows.UNTRAINED] + self.rows, self.plan.splits)
 
     def seeded_work(self):
         """Every unit of the run: (seed, task, row, fold, split), the units of --seed first
         (seed None: RUN/units/...), then those of each extra seed of --seeds."""
-        return [(s, *w) for s in (None, *self.config.seed_list[1:]) for w in self.work()]
+        return [(s, *w) for s in (None, *self.config.seed_list[1:]) for w in self.work()
+                if s is None or w[1].source != "burst"]  # the burst row has no seed
 
     def run_unit(self, seed, task, row, fold, split, index, total):
         """Train (or resume) and score one unit; skipped when its scores.json exists."""

@@ -171,10 +171,11 @@ def build(config, out, splits, n_scenes, n_days, left_out=()):
     ({"task", "row", "why"}) rows the run dropped besides those this function finds."""
     st = _Stats(config, splits)
     rows_out, dropped = [], _left_out(config) + list(left_out)
+    gone = {(g["task"], g["row"]) for g in dropped}
     ref = config.compare_to or UNTRAINED.id
     for task in tasks_of(config.task):
         for row in [UNTRAINED] + select(list(config.rows)):
-            if row.source == "burst" and task != "noisy":
+            if (row.source == "burst" and task != "noisy") or (task, row.id) in gone:
                 continue
             if row.source == "burst" and not _burst_done(out, task, row):
                 dropped.append({"task": task, "row": row.id, "why": BURST_MISSING})
