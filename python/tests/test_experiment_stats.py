@@ -285,3 +285,25 @@ def test_the_fresh_row_left_out_by_the_protocol_is_named(tmp_path):
     cfg = _config([0], ["day"], targets="release", noise="release")
     t = table.build(cfg, tmp_path, SPLITS, 5, 4)
     assert t["left_out"] == [{"task": "clean", "row": "fresh", "why": table.FRESH_WHY}]
+
+
+def test_an_extra_seeds_unit_is_checked_named_and_restarted_apart(tmp_path):
+    from day2night.experiment import prepare, rows
+    from day2night.experiment.runfolder import RunFolderError
+
+    _run_folder(tmp_path, [0, 1], ["day"])
+    work = rows.work(["clean"], [rows.UNTRAINED, rows.BY_ID["day"]], SPLITS)
+    prepare.check_run_folder(tmp_path, work, (), SCENES, 3, [1])
+    bad = tmp_path / "seeds" / "1" / "units" / "clean" / "day" / "all" / "scores.json"
+    bad.write_text("[]")
+    with pytest.raises(RunFolderError, match="--restart-unit seed-1/clean/day/all") as e:
+        prepare.check_run_folder(tmp_path, work, (), SCENES, 3, [1])
+    assert str(bad) in str(e.value)
+    with pytest.raises(ExperimentError, match="seed-1/clean/untrained/all"):
+        prepare.check_run_folder(tmp_path, work, ("seed-2/clean/day/all",), SCENES, 3, [1])
+    prepare.check_run_folder(tmp_path, work, ("seed-1/clean/day/all",), SCENES, 3, [1])
+    plan = prepare.Plan(folds={"splits": SPLITS}, mixes={}, new=False)
+    prepare.write_setup(tmp_path, {"seed": 0, "seeds": 2}, plan, ("seed-1/clean/day/all",))
+    assert not bad.parent.exists()
+    assert (tmp_path / "units" / "clean" / "day" / "all" / "scores.json").is_file()
+    assert (tmp_path / "seeds" / "1" / "units" / "clean" / "untrained" / "all").is_dir()
