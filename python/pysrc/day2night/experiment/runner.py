@@ -80,8 +80,9 @@ class Experiment:
                 "its numbers are not the paper's"
             )
         elif c.label != "paper":
-            log(f"{c.label.upper()} SETTINGS: network width {c.width}, {c.epochs} epochs "
-                "(the paper's: 32, 500); its numbers are not the paper's")
+            what = "MINI PRESET" if c.label == "mini" else "CUSTOM SETTINGS"
+            log(f"{what}: network width {c.width}, {c.epochs} epochs (the paper's: 32, 500); "
+                "its numbers are not the paper's")
 
     def work(self):
         """Every unit of one seed, in order: (task, row, fold, split); the untrained row
