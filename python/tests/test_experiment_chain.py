@@ -86,7 +86,8 @@ def test_chain_writes_every_row_of_both_tables(full_run, mini_set):
     t = json.loads((out / "table.json").read_text())
     assert t["smoke"] is True
     labels = [(x["task"], x["label"]) for x in t["rows"]]
-    want = ["Day", "Day dimmed", "Global relight", "Ours", "Ours 95 % + Real 5 %",
+    want = ["Untrained (the initial weights)", "Day", "Day dimmed", "Global relight", "Ours",
+            "Ours 95 % + Real 5 %",
             "Ours 90 % + Real 10 %", "Supervised (k-fold)", "Ours, fresh synthesis"]
     assert labels == [("clean", w) for w in want] + [("noisy", w) for w in want]
     md = (out / "table.md").read_text()
@@ -101,7 +102,7 @@ def test_chain_writes_every_row_of_both_tables(full_run, mini_set):
             tested += u["test_scenes"]
             assert sorted({i["input"] for i in u["images"]}) == sorted(keys)
             assert len(u["images"]) == len(u["test_scenes"]) * len(keys)
-            assert len(u["history"]) == EPOCHS
+            assert len(u["history"]) == (0 if row["kind"] == "untrained" else EPOCHS)
         # synthetic rows test every scene once; fold rows cover every scene across folds
         assert sorted(tested) == scenes
         for k in keys:
@@ -131,6 +132,8 @@ def test_training_loss_falls(full_run):
     out, _ = full_run
     t = json.loads((out / "table.json").read_text())
     for row in t["rows"]:
+        if row["kind"] == "untrained":
+            continue
         for u in row["units"]:
             h = u["history"]
             assert h[-1]["loss"] < h[0]["loss"], (row["task"], row["row"], u["fold"], h)
@@ -163,6 +166,65 @@ def test_scores_equal_scikit_image_and_day2night_eval(full_run):
                 assert i["delta_e"] == pytest.approx(e["delta_e_2000"], rel=1e-9)
                 checked += 1
     assert checked >= 8
+
+
+def test_one_seed_keeps_the_run_folder_layout(full_run):
+    out, _ = full_run
+    assert "seeds" not in json.loads((out / "config.json").read_text())
+    assert not (out / "seeds").exists()
+    for task in ("clean", "noisy"):
+        units = sorted(p.name for p in (out / "units" / task).iterdir())
+        assert units == sorted(["untrained", "day", "dimmed", "global", "ours", "mix5", "mix10",
+                                "supervised", "fresh"])
+        assert sorted(p.name for p in (out / "units" / task / "untrained" / "all").iterdir()) \
+            == ["scores.json"]
+        s = json.loads((out / "units" / task / "ours" / "all" / "scores.json").read_text())
+        assert sorted(s) == ["fold", "history", "images", "initial", "row", "task",
+                             "test_scenes", "train_pairs", "val_pairs"]
+    t = json.loads((out / "table.json").read_text())
+    assert t["label"] == "smoke" and t["seeds"] == [3] and t["compare_to"] == "day"
+    assert [r["kind"] for r in t["rows"]] == (["untrained"] + ["trained"] * 8) * 2
+
+
+def test_seeds_2_gives_intervals_gains_and_comparisons(mini_set):
+    out = mini_set["root"] / "run_seeds"
+    mini.run_experiment(out, mini_set["day"], mini_set["real"], "--epochs", 2, "--width", WIDTH,
+                        "--rows", "day", "ours", "mix5", "--task", "clean", "--seeds", 2,
+                        "--seed", 7, env=env())
+    t = json.loads((out / "table.json").read_text(), parse_constant=pytest.fail)
+    assert t["seeds"] == [7, 8] and t["compare_to"] == "day"
+    assert json.loads((out / "config.json").read_text())["seeds"] == 2
+    assert [r["row"] for r in t["rows"]] == ["untrained", "day", "ours", "mix5"]
+    for r in t["rows"]:
+        assert [u["seed"] for u in r["units"]] == [7] * (len(r["units"]) // 2) + \
+            [8] * (len(r["units"]) // 2)
+        for m in ("psnr", "ssim", "delta_e"):
+            s = r["scores"]["clean"][m]
+            assert s["seeds"] == [7, 8] and s["n_scenes"] == 6 and len(s["seed_means"]) == 2
+            assert s["ci_low"] <= s["mean"] <= s["ci_high"] and s["seed_sd"] >= 0
+        assert (r["gain"] is None) == (r["row"] == "untrained")
+    comps = t["comparisons"]
+    assert {(c["row"], c["metric"]) for c in comps} == {
+        (r, m) for r in ("untrained", "ours", "mix5") for m in ("psnr", "ssim", "delta_e")}
+    assert all(c["verdict"] in ("better", "worse", "not distinguishable") for c in comps)
+    # the extra seed's units live apart; the first seed's where a one-seed run puts them
+    assert (out / "units" / "clean" / "ours" / "all" / "scores.json").is_file()
+    extra = json.loads((out / "seeds" / "8" / "units" / "clean" / "mix5" / "1" /
+                        "scores.json").read_text())
+    assert extra["seed"] == 8
+    assert (out / "seeds" / "8" / "units" / "clean" / "untrained" / "all" / "scores.json").is_file()
+    md = (out / "table.md").read_text()
+    assert "Training seeds: 7, 8" in md and "### Comparisons against Day (clean task)" in md
+    # rerun: every unit of both seeds is done, and the table is the same
+    r = mini.run_experiment(out, mini_set["day"], mini_set["real"], "--epochs", 2, "--width",
+                            WIDTH, "--rows", "day", "ours", "mix5", "--task", "clean",
+                            "--seeds", 2, "--seed", 7, env=env())
+    assert r.stderr.count("done (scores.json), skipped") == 12
+    assert json.loads((out / "table.json").read_text()) == t
+    err = mini.run_experiment(out, mini_set["day"], mini_set["real"], "--epochs", 2,
+                              "--width", WIDTH, "--rows", "day", "ours", "mix5", "--task",
+                              "clean", "--seed", 7, env=env(), check=False).stderr
+    assert "seeds = 2, not 1" in err
 
 
 def test_report_page_shows_test_scenes(full_run):
@@ -209,9 +271,12 @@ def test_killed_run_resumes_to_the_same_table(small_run, mini_set):
     assert not (out / "table.json").exists()
     r = subprocess.run(cmd, capture_output=True, text=True, env=env())
     assert r.returncode == 0, r.stderr
-    assert "unit 1/8: task clean, row ours (Ours), fold all: done (scores.json), skipped" in r.stderr
-    assert "unit 2/8: task clean, row supervised (Supervised (k-fold)), fold 0: done" in r.stderr
-    unit3 = "unit 3/8: task clean, row supervised (Supervised (k-fold)), fold 1: "
+    assert ("unit 1/10: task clean, row untrained (Untrained (the initial weights)), fold "
+            "all: done (scores.json), skipped") in r.stderr
+    assert "unit 2/10: task clean, row ours (Ours), fold all: done (scores.json), skipped" \
+        in r.stderr
+    assert "unit 3/10: task clean, row supervised (Supervised (k-fold)), fold 0: done" in r.stderr
+    unit3 = "unit 4/10: task clean, row supervised (Supervised (k-fold)), fold 1: "
     assert unit3 + f"resuming after epoch 1 of {EPOCHS}" in r.stderr, r.stderr
     assert (out / "table.json").read_bytes() == (small_run / "table.json").read_bytes()
 

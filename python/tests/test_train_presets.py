@@ -36,7 +36,7 @@ def test_the_recorded_keys_are_the_compared_ones():
                 if f.metadata["record"] in ("always", "paper")}
     assert set(config.CONFIG_KEYS) == recorded and len(config.CONFIG_KEYS) == len(recorded)
     assert config.PAPER_VALUES == {"patch": 64, "batch": 128, "lr": 1e-3, "amp": None,
-                                   "channels_last": False}
+                                   "channels_last": False, "seeds": 1}
 
 
 def test_mini_preset_and_overrides():
@@ -52,7 +52,7 @@ def test_paper_defaults_write_nothing_new():
     assert (a.epochs, a.width, a.patch, a.batch, a.lr) == (500, 32, 64, 128, 1e-3)
     assert training(a) == {}
     assert set(a.record()) == set(config.CONFIG_KEYS) - {"patch", "batch", "lr", "amp",
-                                                         "channels_last"}
+                                                         "channels_last", "seeds"}
     a = cli.parse(BASE + ["--amp", "bf16", "--channels-last", "--workers", "3"])
     assert training(a) == {"amp": "bf16", "channels_last": True}
     assert a.workers == 3 and "workers" not in a.record()

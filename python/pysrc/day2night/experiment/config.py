@@ -53,7 +53,15 @@ class ExperimentConfig:
     epochs: int = opt(help="training epochs (paper and default: 500; --preset mini: 40)",
                       record="always")
     device: str = opt("cpu", record="always", choices=["cpu", "cuda"])
-    seed: int = opt(0, record="always")
+    seed: int = opt(0, help="seed of the folds, the synthetic data and the first training "
+                    "seed", record="always")
+    seeds: int = opt(1, help="train every unit with N seeds: --seed, --seed+1, ..., "
+                     "--seed+N-1 (the folds and synthetic data stay those of --seed; the "
+                     "spread measures training variance, shown in the intervals)",
+                     group=TRAINING, record="paper", paper=1, metavar="N")
+    compare_to: str = opt(help="reference row of the table's paired comparisons (default: "
+                          "day, the row the paper's claims are made against; untrained when "
+                          "day is not run)", metavar="ROW")
     folds: int = opt(help="cross-validation folds (default and paper: 3; with --folds-file: "
                      "the file's)", record="always")
     rows: tuple = opt(help="rows to run (default: all)", record="always", nargs="+",
@@ -62,8 +70,9 @@ class ExperimentConfig:
                      "runs and --preset mini: 8)", record="always")
     show: int = opt(3, help="test scenes per row in index.html")
     restart_unit: tuple = opt((), help="delete this unit's folder and train it again "
-                              "(repeatable), e.g. clean/ours/all or noisy/supervised/1; for a "
-                              "damaged unit", action="append", metavar="TASK/ROW/FOLD")
+                              "(repeatable), e.g. clean/ours/all or noisy/supervised/1, "
+                              "seed-S/TASK/ROW/FOLD for an extra seed of --seeds; for a damaged "
+                              "unit", action="append", metavar="TASK/ROW/FOLD")
     protocol: str = opt(help="preset: release sets the four options below to the release's",
                         group=PROTOCOL, record="always", choices=list(PROTOCOLS))
     targets: str = opt(help="ISP of every target (default: the one that made the real set's)",
@@ -104,6 +113,24 @@ class ExperimentConfig:
         check_options(self)
 
     @property
+    def seed_list(self):
+        """The training seeds of every unit: ``seed``, ``seed + 1``, ... (``seeds`` of them)."""
+        return [self.seed + i for i in range(self.seeds)]
+
+    @property
+    def label(self):
+        """The settings named (table.json's "label"): "paper" or "mini" (the preset's
+        training values), "smoke" (narrower than mini and fewer epochs), else "custom"."""
+        values = {k: getattr(self, k) for k in presets.PAPER}
+        for name in ("paper", "mini"):
+            if values == presets.PRESETS[name]:
+                return name
+        mini = presets.PRESETS["mini"]
+        if self.width < mini["width"] and self.epochs < mini["epochs"]:
+            return "smoke"
+        return "custom"
+
+    @property
     def smoke(self):
         """A network narrower than the paper's: for tests and smoke runs."""
         return self.width < 32
@@ -122,8 +149,8 @@ class ExperimentConfig:
 
 #: The options a resume compares with the earlier run's config.json, in the order it names
 #: the first that differs (every field recorded "always" or "paper"; a test checks).
-CONFIG_KEYS = ("day", "real", "task", "epochs", "seed", "folds", "width", "device", "rows",
-               "protocol", "targets", "noise", "synth_iso", "folds_file", "folds_sha256",
+CONFIG_KEYS = ("day", "real", "task", "epochs", "seed", "seeds", "folds", "width", "device",
+               "rows", "protocol", "targets", "noise", "synth_iso", "folds_file", "folds_sha256",
                "patch", "batch", "lr", "amp", "channels_last")
 #: The value of a training option absent from config.json: the paper's.
 PAPER_VALUES = {f.name: f.metadata["paper"] for f in dataclasses.fields(ExperimentConfig)
@@ -181,6 +208,14 @@ def check_options(c):
         raise ExperimentError(f"--device {c.device!r}: use cpu or cuda")
     if not 0 <= c.seed <= 2**32 - 1:
         raise ExperimentError(f"--seed {c.seed}: use 0 to {2**32 - 1} (numpy's RandomState)")
+    if not 1 <= c.seeds <= 2**32 - c.seed:
+        raise ExperimentError(f"--seeds {c.seeds}: at least 1, and --seed + --seeds - 1 at "
+                              f"most {2**32 - 1}")
+    if c.compare_to is not None and c.compare_to != rows.UNTRAINED.id:
+        try:
+            rows.select([c.compare_to])
+        except ValueError as e:
+            raise ExperimentError(f"--compare-to: {e}") from None
     if c.show < 0:
         raise ExperimentError(f"--show {c.show}: at least 0 (test scenes on index.html)")
     protocol.check_flags(c.protocol, c.targets, c.noise, c.synth_iso, c.folds_file)
@@ -204,7 +239,12 @@ def resolve(config):
     c, isps = protocol.for_run(c)
     named = list(c.rows or ())
     chosen = protocol.fresh_rows(rows.select(named), c.targets, c.noise, bool(named))
+    ids = [r.id for r in chosen]
+    ref = c.compare_to or ("day" if "day" in ids else rows.UNTRAINED.id)
+    if ref not in ids + [rows.UNTRAINED.id]:
+        raise ExperimentError(f"--compare-to {ref}: not a row of this run (rows: "
+                              f"{', '.join([rows.UNTRAINED.id] + ids)})")
     c = dataclasses.replace(
-        c, day=str(pathlib.Path(c.day).resolve()), real=str(pathlib.Path(c.real).resolve()),
-        rows=tuple(r.id for r in chosen), restart_unit=tuple(dict.fromkeys(c.restart_unit)))
+        c, compare_to=ref, day=str(pathlib.Path(c.day).resolve()),
+        real=str(pathlib.Path(c.real).resolve()), rows=tuple(r.id for r in chosen), restart_unit=tuple(dict.fromkeys(c.restart_unit)))
     return c, isps

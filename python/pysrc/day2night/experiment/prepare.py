@@ -137,25 +137,28 @@ def plan_folds(out, config, inputs, run_rows):
     return Plan(folds=folds, mixes=protocol.mixes_with_isos(mixes, isos), new=new)
 
 
-def check_run_folder(out, work, restart, scenes, epochs):
+def check_run_folder(out, work, restart, scenes, epochs, extra_seeds=()):
     """Every planned unit's scores.json (done units) or checkpoints (the others), and the
     cached data; units named by --restart-unit (``restart``) are not checked (they are
-    deleted). ``work``: rows.work's units; ``scenes``: the real scenes' ids."""
+    deleted). ``work``: rows.work's units, also run with each of ``extra_seeds`` (--seeds);
+    ``scenes``: the real scenes' ids."""
     out = pathlib.Path(out)
-    ids = [runfolder.unit_id(t, r.id, f) for t, r, f, _ in work]
+    seeded = [(w, s) for s in (None, *extra_seeds) for w in work
+              if s is None or w[1].source != "burst"]  # the burst row has no seed
+    ids = [runfolder.unit_id(t, r.id, f, s) for (t, r, f, _), s in seeded]
     for uid in restart:
         if uid not in ids:
             raise ExperimentError(
                 f"--restart-unit {uid}: not a unit of this run (TASK/ROW/FOLD, one of: "
                 f"{', '.join(ids)})")
-    for (task, row, fold, split), uid in zip(work, ids):
-        udir = out / "units" / task / row.id / fold
+    for ((task, row, fold, split), seed), uid in zip(seeded, ids):
+        udir = runfolder.unit_dir(out, uid)
         if uid in restart:
             continue
         if (udir / "scores.json").is_file():
             tests = split["test"] if split else sorted(scenes)
             runfolder.read_scores(out, udir / "scores.json", task, row.id, fold,
-                                  rows.test_keys(task), tests)
+                                  rows.test_keys(task), tests, seed)
         else:
             runfolder.check_checkpoints(out, uid, udir / "model", epochs)
     runfolder.check_data(out)
@@ -171,7 +174,7 @@ def write_setup(out, record, plan, restart):
         folds_mod.write_folds(out / "folds.json", plan.folds)
     write_json(out / "mixes.json", plan.mixes)
     for uid in restart:
-        udir = out / "units" / uid
+        udir = runfolder.unit_dir(out, uid)
         if udir.exists():
             shutil.rmtree(udir)
             log(f"--restart-unit {uid}: deleted {udir}")

@@ -15,7 +15,7 @@ from ..isos import NOISY_ISOS
 class Row:
     id: str
     label: str
-    source: str  # "synthetic" | "mix" | "fresh"
+    source: str  # "synthetic" | "mix" | "fresh" | "untrained"
     mode: str = "local"  # synthesis mode of its synthetic data
     percent: float = 0.0  # real share of the training slots ("mix")
 
@@ -35,6 +35,9 @@ ROWS = (
     Row("fresh", "Ours, fresh synthesis", "fresh"),
 )
 BY_ID = {r.id: r for r in ROWS}
+#: The initial weights, scored like a trained unit (no training): first in every table, not
+#: one of ``--rows`` (every run has it; its units: RUN/units/<task>/untrained/all).
+UNTRAINED = Row("untrained", "Untrained (the initial weights)", "untrained")
 
 
 def select(ids):

@@ -28,13 +28,24 @@ class RunFolderError(ValueError):
     """A damaged file of the run folder (the message names it and says what to do)."""
 
 
-def unit_id(task, row_id, fold):
-    """The name ``--restart-unit`` takes: ``TASK/ROW/FOLD`` (``clean/ours/all``)."""
-    return f"{task}/{row_id}/{fold}"
+def unit_id(task, row_id, fold, seed=None):
+    """The name ``--restart-unit`` takes: ``TASK/ROW/FOLD`` (``clean/ours/all``), or
+    ``seed-S/TASK/ROW/FOLD`` for a unit of an extra seed S of ``--seeds`` (``seed``)."""
+    uid = f"{task}/{row_id}/{fold}"
+    return uid if seed is None else f"seed-{seed}/{uid}"
+
+
+def unit_dir(out, uid):
+    """The folder of the unit ``uid`` (:func:`unit_id`): RUN/units/TASK/ROW/FOLD, or
+    RUN/seeds/S/units/TASK/ROW/FOLD for an extra seed S."""
+    head, _, rest = uid.partition("/")
+    if head.startswith("seed-"):
+        return pathlib.Path(out) / "seeds" / head[len("seed-"):] / "units" / rest
+    return pathlib.Path(out) / "units" / uid
 
 
 def unit_advice(out, uid):
-    folder = pathlib.Path(out) / "units" / uid
+    folder = unit_dir(out, uid)
     return (f"delete the unit folder {folder} to train the unit again, or rerun with "
             f"--restart-unit {uid}")
 
@@ -125,10 +136,10 @@ def _scores_problem(s, task, row_id, fold, keys):
     return None
 
 
-def read_scores(out, path, task, row_id, fold, keys, tests=None):
+def read_scores(out, path, task, row_id, fold, keys, tests=None, seed=None):
     """A done unit's scores.json, checked against its task, row, fold, inputs ``keys`` and
-    (when given) its test scenes ``tests``."""
-    advice = unit_advice(out, unit_id(task, row_id, fold))
+    (when given) its test scenes ``tests``; ``seed``: an extra seed's unit (unit_id)."""
+    advice = unit_advice(out, unit_id(task, row_id, fold, seed))
     s = read_object(path, "unit scores", advice)
     why = _scores_problem(s, task, row_id, fold, [str(k) for k in keys])
     if not why and tests is not None and sorted(s["test_scenes"]) != sorted(tests):

@@ -7,6 +7,8 @@ Run folder (every file written through a temporary file + rename):
     RUN/mixes.json                  every fold's training slots per mixed row (mix.py)
     RUN/data/...                    cached network inputs and targets (.npy)
     RUN/units/<task>/<row>/<fold>/  model/ (checkpoints, resumed after a kill), scores.json
+                                    (row "untrained": the initial weights, scores.json only)
+    RUN/seeds/<S>/units/...         the same per extra training seed S of --seeds N > 1
     RUN/table.md, table.json, index.html, img/   (table.py, report.py)
 
 A unit is done when its scores.json exists; a rerun skips done units and the trainer resumes
@@ -18,6 +20,7 @@ anything is written (runfolder.py: a damaged file is an error naming it and what
 prepare.py (checks, inputs, folds; the setup files), source.py (the pairs), unit.py (train
 and score one unit), table.py and report.py."""
 
+import dataclasses
 import pathlib
 
 from . import prepare, protocol, report, rows, runfolder, table, unit
@@ -54,7 +57,7 @@ class Experiment:
         self.inputs = prepare.read_inputs(c.day, c.real, self.tasks)
         self.plan = prepare.plan_folds(self.out, c, self.inputs, self.rows)
         prepare.check_run_folder(self.out, self.work(), c.restart_unit, self.inputs.scenes,
-                                 c.epochs)
+                                 c.epochs, c.seed_list[1:])
         prepare.write_setup(self.out, c.record(), self.plan, c.restart_unit)
         self.source = PairSource(self.out, c, self.inputs, self.target_isps, self.tasks)
         self.report_scenes = self.plan.splits[0]["test"][: c.show]
@@ -68,44 +71,74 @@ class Experiment:
         )
         for note in protocol.notes(c, i.days, i.scenes, self.target_isps):
             log(note)
-        if c.smoke:
+        if c.seeds > 1:
+            log(f"training seeds {', '.join(map(str, c.seed_list))} (folds and synthetic data "
+                f"of seed {c.seed})")
+        if c.label == "smoke":
             log(
                 f"SMOKE RUN: network width {c.width} < 32 (the paper's UNet has 32); "
                 "its numbers are not the paper's"
             )
+        elif c.label != "paper":
+            what = "MINI PRESET" if c.label == "mini" else "CUSTOM SETTINGS"
+            log(f"{what}: network width {c.width}, {c.epochs} epochs (the paper's: 32, 500); "
+                "its numbers are not the paper's")
 
     def work(self):
-        """Every unit of the run, in order: (task, row, fold, split)."""
-        return rows.work(self.tasks, self.rows, self.plan.splits)
+        """Every unit of one seed, in order: (task, row, fold, split); the untrained row
+        first in each task."""
+        return rows.work(self.tasks, [rows.UNTRAINED] + self.rows, self.plan.splits)
 
-    def run_unit(self, task, row, fold, split, index, total):
+    def seeded_work(self):
+        """Every unit of the run: (seed, task, row, fold, split), the units of --seed first
+        (seed None: RUN/units/...), then those of each extra seed of --seeds."""
+        return [(s, *w) for s in (None, *self.config.seed_list[1:]) for w in self.work()
+                if s is None or w[1].source != "burst"]  # the burst row has no seed
+
+    def run_unit(self, seed, task, row, fold, split, index, total):
         """Train (or resume) and score one unit; skipped when its scores.json exists."""
         c, src = self.config, self.source
-        udir = self.out / "units" / task / row.id / fold
+        uid = runfolder.unit_id(task, row.id, fold, seed)
+        udir = runfolder.unit_dir(self.out, uid)
         where = f"unit {index}/{total}: task {task}, row {row.id} ({row.label}), fold {fold}"
+        if c.seeds > 1:
+            where += f", seed {c.seed if seed is None else seed}"
         if (udir / "scores.json").is_file():
             log(f"{where}: done (scores.json), skipped")
             return
-        log(f"{where}: preparing data")
-        train_p, val_p = src.train_val(task, row, split, self.plan.mixes)
+        cs = c if seed is None else dataclasses.replace(c, seed=seed)
+        shown = self.report_scenes if seed is None else []
         test = split["test"] if split else sorted(self.inputs.scenes)
-        tests = src.tests(task, test)
-        uid = runfolder.unit_id(task, row.id, fold)
-        done_epochs = runfolder.check_checkpoints(self.out, uid, udir / "model", c.epochs)
-        if done_epochs:
-            log(f"{where}: resuming after epoch {done_epochs} of {c.epochs}")
+        if row.source == "untrained":
+            log(f"{where}: scoring the initial weights on {len(test)} test scene(s)")
+            scored = unit.score_untrained(cs, self.out, task, row, fold, src.tests(task, test),
+                                          shown)
+            scored.update(train_pairs=0, val_pairs=0)
         else:
-            log(f"{where}: training {c.epochs} epoch(s)")
-        scored = self._train_score(where, task, row, fold, udir, train_p, val_p, tests)
-        scored["train_pairs"] = "fresh" if train_p is None else len(train_p)
-        scored["val_pairs"] = len(val_p)
+            log(f"{where}: preparing data")
+            train_p, val_p = src.train_val(task, row, split, self.plan.mixes)
+            tests = src.tests(task, test)
+            done_epochs = runfolder.check_checkpoints(self.out, uid, udir / "model", c.epochs)
+            if done_epochs:
+                log(f"{where}: resuming after epoch {done_epochs} of {c.epochs}")
+            else:
+                log(f"{where}: training {c.epochs} epoch(s)")
+            scored = self._train_score(where, cs, uid, (task, row, fold), udir, (train_p, val_p),
+                                       (tests, shown))
+            scored["train_pairs"] = "fresh" if train_p is None else len(train_p)
+            scored["val_pairs"] = len(val_p)
         scored["test_scenes"] = list(test)
+        if seed is not None:
+            scored["seed"] = seed
         write_json(udir / "scores.json", scored)
 
-    def _train_score(self, where, task, row, fold, udir, train_p, val_p, tests):
+    def _train_score(self, where, c, uid, unit_key, udir, data, testing):
+        """Train the unit ``unit_key`` (task, row, fold) under the config ``c`` (its seed) on
+        ``data`` (training pairs, or None for fresh synthesis; validation pairs), then score
+        it: ``testing`` = (the test inputs, the scenes whose images the report shows)."""
         from ..train.trainer import CheckpointError
 
-        c = self.config
+        (task, row, fold), (train_p, val_p), (tests, report_scenes) = unit_key, data, testing
         if train_p is None:
             days = {n: self.inputs.days[n] for n in self.inputs.day_train}
             folder = self.out / "data" / "day-train"
@@ -115,19 +148,17 @@ class Experiment:
         try:
             result = unit.train_unit(c, udir / "model", val_p, train_set)
             log(f"{where}: scoring {len(tests)} test input(s)")
-            return unit.score_unit(c, self.out, task, row, fold, tests, result,
-                                   self.report_scenes)
+            return unit.score_unit(c, self.out, task, row, fold, tests, result, report_scenes)
         except CheckpointError as e:
-            uid = runfolder.unit_id(task, row.id, fold)
             raise runfolder.RunFolderError(f"{e}; {runfolder.unit_advice(self.out, uid)}") \
                 from None
 
     def run(self):
         """The whole run: prepare, every unit, then table.md, table.json and index.html."""
         self.prepare()
-        work = self.work()
-        for i, (task, row, fold, split) in enumerate(work, 1):
-            self.run_unit(task, row, fold, split, i, len(work))
+        work = self.seeded_work()
+        for i, (seed, task, row, fold, split) in enumerate(work, 1):
+            self.run_unit(seed, task, row, fold, split, i, len(work))
         t = table.build(self.config, self.out, self.plan.splits, len(self.inputs.scenes),
                         len(self.inputs.days))
         table.write(self.out, t)

@@ -3,17 +3,28 @@ image) and RUN/table.md.
 
 A unit's score per input (the merged raw, or ISO 1600 / 3200) is the mean over its test
 images, as the release's test.py; a per-fold row's score is the mean of its folds' scores
-(the paper's "three-fold cross validation"). PSNR of an identical prediction is infinite;
-such a mean is reported as "inf"."""
+(the paper's "three-fold cross validation"); with ``--seeds N``, the mean over the seeds.
+PSNR of an identical prediction is infinite; such a mean is reported as "inf".
+
+Format "day2night-experiment-table/2" (docs/experiment.md, "table.json"): every row also
+has its "kind" (untrained, trained, burst), its "scores" (mean, 95 % interval, scenes and
+seeds per input and metric: stats.py), its "gain" over the untrained row and the paper's
+numbers; the table its "label" (the preset), "protocol", "seeds", "compare_to",
+"bootstrap", "comparisons" (paired differences against the reference row, with verdicts)
+and "left_out" (rows the run dropped, and why)."""
 
 import math
 import pathlib
 
+import numpy as np
+
 from ..isos import NOISY_ISOS
 from ..atomic import write_json, write_text
-from .rows import select, tasks_of, test_keys
+from . import stats
+from .rows import UNTRAINED, select, tasks_of, test_keys
 from .rows import units as row_units
-from .runfolder import read_scores
+from .runfolder import read_scores, unit_dir, unit_id
+from .stats import bootstrap_seed
 
 METRICS = ("psnr", "ssim", "delta_e")
 PAPER = {
@@ -34,6 +45,7 @@ PAPER = {
         "mix5": (38.32, 0.9419, 36.60, 0.9206),
         "mix10": (39.04, 0.9477, 37.54, 0.9352),
         "supervised": (39.74, 0.9541, 38.16, 0.9419),
+        "burst": (34.91, 0.8021, 31.39, 0.6526),  # the supplementary's burst denoising
     },
 }
 
@@ -58,34 +70,200 @@ def _unit_means(u, task):
     }
 
 
-def build(config, out, splits, n_scenes, n_days):
-    """table.json of a run: ``config`` its resolved ExperimentConfig (tasks, rows, the
-    record), ``out`` its folder (the units' scores.json), ``splits`` the fold manifest's,
-    ``n_scenes`` and ``n_days`` the real scenes and day images it ran on."""
-    rows_out = []
+def _value(v):
+    return float(v)  # "inf"/"-inf"/"nan" strings too
+
+
+def _load_units(config, out, task, row, splits):
+    """The units of ``row`` per training seed: [(seed, [scores.json records])]; a burst
+    row (no training) has one entry, seed None."""
+    if row.source == "burst":
+        path = pathlib.Path(out) / "units" / task / row.id / "all" / "scores.json"
+        u = read_scores(out, path, task, row.id, "all", test_keys(task))
+        u["seed"] = None
+        return [(None, [u])]
+    seeds = []
+    for i, seed in enumerate(config.seed_list):
+        units = []
+        for fold, _ in row_units(row, splits):
+            uid = unit_id(task, row.id, fold, None if i == 0 else seed)
+            u = read_scores(out, unit_dir(out, uid) / "scores.json", task, row.id, fold,
+                            test_keys(task), seed=None if i == 0 else seed)
+            u["seed"] = seed
+            units.append(u)
+        seeds.append((seed, units))
+    return seeds
+
+
+def _per_scene(per_seed, key, metric, fold_of):
+    """{scene: [value per seed]} of one input and metric, each scene's value weighted so
+    that the mean over scenes is the row's (stats.py: a per-fold row's mean of fold means)."""
+    counts = {}
+    for _, units in per_seed[:1]:
+        for u in units:
+            counts[u["fold"]] = len(u["test_scenes"])
+    n, k = sum(counts.values()), len(counts)
+    out = {}
+    for _, units in per_seed:
+        for u in units:
+            w = 1.0 if u["fold"] == "all" else n / (k * counts[u["fold"]])
+            for i in u["images"]:
+                if i["input"] == str(key) and i["scene"] in fold_of:
+                    out.setdefault(i["scene"], []).append(_value(i[metric]) * w)
+    return out
+
+
+def _matrix(scenes_a, scenes_b=None):
+    """(the common scenes, in order; a (seeds x scenes) array per side)."""
+    common = sorted(set(scenes_a) & set(scenes_b if scenes_b is not None else scenes_a))
+    mats = [np.array([d[sc] for sc in common], dtype=np.float64).T
+            for d in ((scenes_a,) if scenes_b is None else (scenes_a, scenes_b))]
+    return common, mats
+
+
+def _interval(s):
+    """The JSON of a stats summary: non-finite means as strings, the note kept."""
+    out = {k: s[k] for k in ("mean", "ci_low", "ci_high", "n_scenes")}
+    if "note" in s:
+        out["note"] = s["note"]
+    return out
+
+
+class _Stats:
+    """The bootstrap of one table (its seed, fold of each scene, and the rows' per-scene
+    values per input and metric)."""
+
+    def __init__(self, config, splits):
+        self.seed = bootstrap_seed(config.seed)
+        self.fold_of = {sc: s["fold"] for s in splits for sc in s["test"]}
+        self.values = {}  # (task, row) -> {(key, metric): {scene: [per seed]}}
+
+    def add(self, task, row_id, per_seed):
+        self.values[(task, row_id)] = {
+            (str(k), m): _per_scene(per_seed, k, m, self.fold_of)
+            for k in test_keys(task) for m in METRICS}
+
+    def scores(self, task, row_id, seeds):
+        out = {}
+        for (k, m), d in self.values[(task, row_id)].items():
+            common, (v,) = _matrix(d)
+            s = stats.summary(v, [self.fold_of[sc] for sc in common], self.seed)
+            out.setdefault(k, {})[m] = {**_interval(s), "seeds": seeds,
+                                        "seed_means": s["seed_means"],
+                                        "seed_sd": s["seed_sd"]}
+        return out
+
+    def compare(self, task, row_id, ref_id):
+        """{(input, metric): stats.compare's summary} of the row against ``ref_id``."""
+        out = {}
+        a, b = self.values[(task, row_id)], self.values[(task, ref_id)]
+        for km in a:
+            common, (va, vb) = _matrix(a[km], b[km])
+            out[km] = stats.compare(va, vb, km[1], [self.fold_of[sc] for sc in common],
+                                    self.seed)
+        return out
+
+
+def build(config, out, splits, n_scenes, n_days, left_out=()):
+    """table.json of a run: ``config`` its resolved ExperimentConfig (tasks, rows, seeds,
+    the record), ``out`` its folder (the units' scores.json), ``splits`` the fold manifest's,
+    ``n_scenes`` and ``n_days`` the real scenes and day images it ran on, ``left_out``
+    ({"task", "row", "why"}) rows the run dropped besides those this function finds."""
+    st = _Stats(config, splits)
+    rows_out, dropped = [], _left_out(config) + list(left_out)
+    gone = {(g["task"], g["row"]) for g in dropped}
+    ref = config.compare_to or UNTRAINED.id
     for task in tasks_of(config.task):
-        for row in select(list(config.rows)):
-            units = []
-            for fold, _ in row_units(row, splits):
-                path = pathlib.Path(out) / "units" / task / row.id / fold / "scores.json"
-                units.append(read_scores(out, path, task, row.id, fold, test_keys(task)))
-            for u in units:
-                u["mean"] = _unit_means(u, task)
-            mean = {
-                str(k): {m: _mean(u["mean"][str(k)][m] for u in units) for m in METRICS}
-                for k in test_keys(task)
-            }
-            rows_out.append(
-                {"task": task, "row": row.id, "label": row.label, "units": units, "mean": mean}
-            )
+        for row in [UNTRAINED] + select(list(config.rows)):
+            if (row.source == "burst" and task != "noisy") or (task, row.id) in gone:
+                continue
+            if row.source == "burst" and not _burst_done(out, task, row):
+                dropped.append({"task": task, "row": row.id, "why": BURST_MISSING})
+                continue
+            per_seed = _load_units(config, out, task, row, splits)
+            st.add(task, row.id, per_seed)
+            rows_out.append(_row(config, task, row, per_seed, st))
+    comparisons = []
+    for r in rows_out:
+        r["gain"] = None if r["row"] == UNTRAINED.id else _gain(st, r)
+        if r["row"] != ref and (r["task"], ref) in st.values:
+            comparisons += _comparisons(st, r, ref)
     return {
-        "format": "day2night-experiment-table/1",
+        "format": "day2night-experiment-table/2",
         "config": config.record(),
+        "label": config.label,
         "smoke": config.smoke,
         "not_the_paper": deviations(config, n_scenes, n_days),
+        "protocol": {k: getattr(config, k) for k in PROTOCOL_KEYS},
+        "seeds": config.seed_list,
+        "compare_to": ref,
+        "bootstrap": {"replicates": stats.REPLICATES, "level": stats.LEVEL, "seed": st.seed,
+                      "method": stats.METHOD},
         "folds": splits,
         "rows": rows_out,
+        "comparisons": comparisons,
+        "left_out": dropped,
     }
+
+
+PROTOCOL_KEYS = ("protocol", "targets", "noise", "synth_iso", "amp", "channels_last",
+                 "folds_file")
+BURST_MISSING = ("no burst scores (units/noisy/burst/all/scores.json): the real set holds one "
+                 "frame per ISO, no burst to average")
+FRESH_WHY = ("it synthesizes with day2night's ISP and noise (FreshPatches), and this run's "
+             "targets or noise are the release's")
+
+
+def _burst_done(out, task, row):
+    return (pathlib.Path(out) / "units" / task / row.id / "all" / "scores.json").is_file()
+
+
+def _left_out(config):
+    """The rows the protocol dropped (protocol.fresh_rows), with the reason."""
+    if "fresh" in config.rows or (config.targets == "day2night" and config.noise == "day2night"):
+        return []
+    return [{"task": t, "row": "fresh", "why": FRESH_WHY} for t in tasks_of(config.task)]
+
+
+def _row(config, task, row, per_seed, st):
+    """One row of table.json (without its gain)."""
+    units = [u for _, us in per_seed for u in us]
+    for u in units:
+        u["mean"] = _unit_means(u, task)
+    seed_means = [{str(k): {m: _mean(u["mean"][str(k)][m] for u in us) for m in METRICS}
+                   for k in test_keys(task)} for _, us in per_seed]
+    mean = {str(k): {m: _mean(sm[str(k)][m] for sm in seed_means) for m in METRICS}
+            for k in test_keys(task)}
+    seeds = [] if row.source == "burst" else list(config.seed_list)
+    kind = row.source if row.source in ("untrained", "burst") else "trained"
+    return {"task": task, "row": row.id, "label": row.label, "kind": kind, "units": units,
+            "mean": mean, "scores": st.scores(task, row.id, seeds),
+            "paper": paper_of(task, row.id)}
+
+
+def _gain(st, r):
+    """The row's paired difference over the untrained row, per input and metric."""
+    out = {}
+    for (k, m), s in st.compare(r["task"], r["row"], UNTRAINED.id).items():
+        out.setdefault(k, {})[m] = _interval(s)
+    return out
+
+
+def _comparisons(st, r, ref):
+    return [{"task": r["task"], "row": r["row"], "reference": ref, "input": k, "metric": m,
+             **_interval(s), "seeds": r["scores"][k][m]["seeds"], "verdict": s["verdict"]}
+            for (k, m), s in st.compare(r["task"], r["row"], ref).items()]
+
+
+def paper_of(task, row_id):
+    """The paper's numbers of a row (table.json's "paper"), or None."""
+    p = PAPER[task].get(row_id)
+    if p is None:
+        return None
+    if task == "clean":
+        return {"clean": dict(zip(METRICS, p))}
+    lo, hi = NOISY_ISOS
+    return {str(lo): {"psnr": p[0], "ssim": p[1]}, str(hi): {"psnr": p[2], "ssim": p[3]}}
 
 
 def deviations(config, n_scenes, n_days):
@@ -112,51 +290,121 @@ def _fmt(v, digits):
     return f"{v:.{digits}f}"
 
 
-def markdown(t):
-    cfg = t["config"]
+def _cell(s, digits, sign=False):
+    """``mean [ci_low, ci_high]`` of a summary (``sign``: a difference, signed)."""
+    if s is None:
+        return "-"
+    f = (lambda v: "-" if v is None else f"{v:+.{digits}f}") if sign and \
+        not isinstance(s["mean"], str) else (lambda v: _fmt(v, digits))
+    if s.get("ci_low") is None:
+        return f"{f(s['mean'])} (no interval)"
+    return f"{f(s['mean'])} [{_fmt(s['ci_low'], digits)}, {_fmt(s['ci_high'], digits)}]"
+
+
+DIGITS = {"psnr": 2, "ssim": 4, "delta_e": 4}
+NAMES = {"psnr": "PSNR", "ssim": "SSIM", "delta_e": "Delta E"}
+BANNERS = {
+    "smoke": "**Smoke run** (below the mini preset: network width {width}, {epochs} epochs; "
+             "the paper's UNet: width 32, 500 epochs). These are not the paper's numbers.",
+    "mini": "**Mini preset** (network width 8, 32 x 32 patches, batches of 8, lr 1e-2, 40 "
+            "epochs: the night ISP learning on a CPU). These are not the paper's numbers.",
+    "custom": "**Custom settings** (network width {width}, {epochs} epochs, {patch} x {patch} "
+              "patches, batches of {batch}, lr {lr:g}). These are not the paper's numbers.",
+}
+
+
+def _header(t):
+    """The lines above the tables: label, deviations, options, protocol, seeds, method."""
+    cfg, p = t["config"], t["protocol"]
+    values = {"width": cfg["width"], "epochs": cfg["epochs"], "patch": cfg.get("patch", 64),
+              "batch": cfg.get("batch", 128), "lr": cfg.get("lr", 1e-3)}
     lines = ["# day2night experiment: Tables 1 and 2", ""]
-    if t["smoke"]:
-        lines += [
-            f"**Smoke run**: network width {cfg['width']} (the paper's UNet: 32). "
-            "These are not the paper's numbers.",
-            "",
-        ]
+    if t["label"] in BANNERS:
+        lines += [BANNERS[t["label"]].format(**values), ""]
     if t["not_the_paper"]:
         lines += ["Differs from the paper's protocol: " + "; ".join(t["not_the_paper"]) + ".", ""]
+    seeds = t["seeds"]
+    b = t["bootstrap"]
     lines += [
         f"Options: task {cfg['task']}, epochs {cfg['epochs']}, seed {cfg['seed']}, "
         f"folds {cfg['folds']}, width {cfg['width']}, device {cfg['device']}.",
+        f"Protocol: {p['protocol']} (targets {p['targets']}, noise {p['noise']}, synthetic ISO "
+        f"{p['synth_iso']}, folds {'from ' + p['folds_file'] if p['folds_file'] else 'seeded'}"
+        f"); AMP {p['amp'] or 'off'}, channels-last {'on' if p['channels_last'] else 'off'}.",
+        f"Training seeds: {', '.join(map(str, seeds))} ({len(seeds)} per unit; folds and "
+        f"synthetic data of seed {seeds[0]}).",
         "Rows trained on synthesis only are tested on every real scene; rows with real data "
         "are the mean over the folds of each fold's test scenes.",
+        f"Each cell: the mean [95 % interval] over the test scenes (n below)"
+        f"{' and the seeds' if len(seeds) > 1 else ''}, by a {b['replicates']}-replicate "
+        f"bootstrap (scenes resampled within their folds"
+        f"{', seeds resampled' if len(seeds) > 1 else ''}; bootstrap seed {b['seed']}). The "
+        "gain over untrained and the comparisons are paired per-scene differences, "
+        "bootstrapped the same way.",
         "",
     ]
+    return lines
+
+
+def _table(rows, keys, metrics, title):
+    """One task's table: each (input, metric) cell with its interval, the PSNR gain over the
+    untrained row, and the paper's numbers."""
+    n = rows[0]["scores"][keys[0]][metrics[0]]["n_scenes"] if rows else 0
+    multi = len(keys) > 1
+    heads = [f"{'ISO ' + k + ' ' if multi else ''}{NAMES[m]}" for k in keys for m in metrics]
+    gain_head = "gain over untrained (PSNR" + (" " + " / ".join(keys) if multi else "") + ")"
+    lines = [f"## {title}, {n} test scenes", "",
+             "| model | " + " | ".join(heads) + f" | {gain_head} | paper |",
+             "|---" * (len(heads) + 3) + "|"]
+    for r in rows:
+        cells = [_cell(r["scores"][k][m], DIGITS[m]) for k in keys for m in metrics]
+        gain = " / ".join(_cell(r["gain"][k]["psnr"], 2, sign=True) for k in keys) \
+            if r["gain"] else "-"
+        p = r["paper"]
+        ps = " / ".join(_fmt(p[k][m], DIGITS[m]) for k in keys for m in metrics) if p else "-"
+        lines.append(f"| {r['label']} | " + " | ".join(cells) + f" | {gain} | {ps} |")
+    return lines + [""]
+
+
+def _comparison_lines(t, task, metrics, labels):
+    comps = [c for c in t["comparisons"] if c["task"] == task and c["metric"] in metrics]
+    if not comps:
+        return []
+    ref = labels.get((task, t["compare_to"]), t["compare_to"])
+    lines = [f"### Comparisons against {ref} ({task} task)", "",
+             "Paired per-scene difference row - reference (PSNR, SSIM: positive is better; "
+             "Delta E: negative is better), its 95 % interval and the verdict at 95 %.", "",
+             "| model | input | metric | difference [95 % interval] | verdict |",
+             "|---|---|---|---|---|"]
+    for c in comps:
+        key = c["input"] if c["input"] == "clean" else "ISO " + c["input"]
+        lines.append(f"| {labels.get((task, c['row']), c['row'])} | {key} | "
+                     f"{NAMES[c['metric']]} | {_cell(c, DIGITS[c['metric']], sign=True)} | "
+                     f"{c['verdict']} |")
+    return lines + [""]
+
+
+def markdown(t):
+    lines = _header(t)
     by_task = {}
     for r in t["rows"]:
         by_task.setdefault(r["task"], []).append(r)
+    labels = {(r["task"], r["row"]): r["label"] for r in t["rows"]}
+    lo, hi = (str(i) for i in NOISY_ISOS)
     if "clean" in by_task:
-        lines += ["## Table 1: clean (ISO 50 merged raw input)", "",
-                  "| model | PSNR | SSIM | Delta E | paper PSNR / SSIM / Delta E |",
-                  "|---|---|---|---|---|"]
-        for r in by_task["clean"]:
-            m = r["mean"]["clean"]
-            p = PAPER["clean"].get(r["row"])
-            ps = f"{p[0]:.2f} / {p[1]:.4f} / {p[2]:.4f}" if p else "-"
-            lines.append(f"| {r['label']} | {_fmt(m['psnr'], 2)} | {_fmt(m['ssim'], 4)} | "
-                         f"{_fmt(m['delta_e'], 4)} | {ps} |")
-        lines.append("")
+        lines += _table(by_task["clean"], ["clean"], METRICS,
+                        "Table 1: clean (ISO 50 merged raw input)")
     if "noisy" in by_task:
-        lo, hi = NOISY_ISOS
-        lines += [f"## Table 2: noisy (first frame at ISO {lo} and {hi})", "",
-                  f"| model | ISO {lo} PSNR | ISO {lo} SSIM | ISO {hi} PSNR | ISO {hi} SSIM | "
-                  "paper (same columns) |", "|---|---|---|---|---|---|"]
-        for r in by_task["noisy"]:
-            a, b = (r["mean"][str(iso)] for iso in NOISY_ISOS)
-            p = PAPER["noisy"].get(r["row"])
-            ps = f"{p[0]:.2f} / {p[1]:.4f} / {p[2]:.2f} / {p[3]:.4f}" if p else "-"
-            lines.append(f"| {r['label']} | {_fmt(a['psnr'], 2)} | {_fmt(a['ssim'], 4)} | "
-                         f"{_fmt(b['psnr'], 2)} | {_fmt(b['ssim'], 4)} | {ps} |")
-        lines.append("")
-    lines.append("Per row, fold and image: table.json. Test scenes: index.html.")
+        lines += _table(by_task["noisy"], [lo, hi], ("psnr", "ssim"),
+                        f"Table 2: noisy (first frame at ISO {lo} and {hi})")
+    if t["comparisons"]:
+        lines += ["## Comparisons", ""]
+        lines += _comparison_lines(t, "clean", METRICS, labels)
+        lines += _comparison_lines(t, "noisy", ("psnr", "ssim"), labels)
+    if t["left_out"]:
+        lines += ["Left out: " + "; ".join(f"{x['row']} ({x['task']} task): {x['why']}"
+                                             for x in t["left_out"]) + ".", ""]
+    lines.append("Per row, fold, seed and image: table.json. Test scenes: index.html.")
     return "\n".join(lines) + "\n"
 
 

@@ -89,11 +89,41 @@ def heat(de, scale=10.0):
 def score_unit(config, out, task, row, fold, tests, result, report_scenes):
     """The unit's scores.json record: ``result`` (train's) scored on ``tests``
     (PairSource.tests); the images of ``report_scenes`` written under ``out``/img."""
-    from ..train.infer import predict
-    from ..train.scores import score
     from ..train.trainer import load_model
 
     model = load_model(result["best"], device=config.device)
+    # the epochs' numbers without their timings (table.json is the same on every rerun)
+    history = [
+        {k: _num(v) for k, v in h.items() if k != "seconds"} for h in result.get("history", [])
+    ]
+    return {
+        "task": task,
+        "row": row.id,
+        "fold": fold,
+        "history": history,
+        # the untrained weights' validation (the start of the report's curves)
+        "initial": {k: _num(v) for k, v in (result.get("initial") or {}).items()},
+        "images": score_model(config, model, out, task, row, tests, report_scenes),
+    }
+
+
+def score_untrained(config, out, task, row, fold, tests, report_scenes):
+    """The scores.json record of the untrained row: the initial weights of a unit trained
+    with ``config`` (``trainer.make_model``: ``torch.manual_seed(config.seed)``, width
+    ``config.width``), not trained, scored like :func:`score_unit` (no history)."""
+    from ..train.trainer import make_model
+
+    model = make_model(train_config(config, None)).to(config.device).eval()
+    return {"task": task, "row": row.id, "fold": fold, "history": [], "initial": {},
+            "images": score_model(config, model, out, task, row, tests, report_scenes)}
+
+
+def score_model(config, model, out, task, row, tests, report_scenes):
+    """The per-image scores of ``model`` on ``tests`` (PairSource.tests), as scores.json's
+    "images"; the images of ``report_scenes`` written under ``out``/img."""
+    from ..train.infer import predict
+    from ..train.scores import score
+
     images = []
     for sid, key, (xp, yp) in tests:
         x, y = pairs.load(xp), np.asarray(pairs.load(yp))
@@ -106,19 +136,7 @@ def score_unit(config, out, task, row, fold, tests, result, report_scenes):
         )
         if sid in report_scenes:
             _report_images(pathlib.Path(out) / "img" / task, row.id, f"{sid}_{key}", x, y, pred)
-    # the epochs' numbers without their timings (table.json is the same on every rerun)
-    history = [
-        {k: _num(v) for k, v in h.items() if k != "seconds"} for h in result.get("history", [])
-    ]
-    return {
-        "task": task,
-        "row": row.id,
-        "fold": fold,
-        "history": history,
-        # the untrained weights' validation (the start of the report's curves)
-        "initial": {k: _num(v) for k, v in (result.get("initial") or {}).items()},
-        "images": images,
-    }
+    return images
 
 
 def _report_images(img, row_id, stem, x, y, pred):
