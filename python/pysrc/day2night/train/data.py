@@ -33,7 +33,7 @@ import numpy as np
 from ..atomic import open_atomic
 from ..isos import NOISY_ISOS
 from . import cache, preprocess, targets
-from ._torch import torch
+from ._torch import Dataset, torch
 
 
 def _load(a, mmap):
@@ -70,7 +70,7 @@ def save_pair(folder, name, x, y):
             np.save(f, a)
 
 
-class FixedPatches(torch.utils.data.Dataset):
+class FixedPatches(Dataset):
     """Every non-overlapping ``patch`` x ``patch`` crop (top-left on a ``stride`` grid) of
     fixed pairs. ``inputs``: H x W x 3 float32 network inputs (arrays or ``.npy`` paths);
     ``targets``: H x W x 3 uint8 sRGB targets (arrays or paths), same sizes. Paths are
@@ -151,7 +151,7 @@ def cut(a, patch):
         a.reshape(h, patch, w, patch, 3).transpose(0, 2, 4, 1, 3).reshape(h * w, 3, patch, patch))
 
 
-class FreshPatches(torch.utils.data.Dataset):
+class FreshPatches(Dataset):
     """Fresh synthesis: item i of epoch e is the ``crop`` x ``crop`` night synthesis
     ``NightPairs(day_dir, crop, isos, seed, crops_per_image)`` draws for (e, i), cut into
     (crop/patch)^2 patches. ``task``: "noisy" (input = the noisy raw of the drawn ISO) or
