@@ -24,7 +24,11 @@ import pathlib
 
 import numpy as np
 
+import day2night
+
 from ..isos import NOISY_ISOS  # noqa: F401  (re-exported)
+from .mix import synthetic_slots as slots
+from .release_folds import read_release_folds
 
 TARGETS = ("release", "day2night")
 NOISE = ("day2night", "release")
@@ -191,8 +195,6 @@ def for_run(config):
                 config.folds_file, real_targets=real)
     folds = count = config.folds
     if p.folds_file is not None:
-        from .release_folds import read_release_folds
-
         count = len(read_release_folds(p.folds_file)["test_index_all"])
         if folds is not None and int(folds) != count:
             raise ProtocolError(f"--folds {folds}: the fold file {p.folds_file} holds {count} "
@@ -211,8 +213,6 @@ def run_isos(synth_iso, days, seed):
 
 def synthetic_slots(names, isos):
     """mix.synthetic_slots of ``names`` with the run's synthetic ISOs (:func:`run_isos`)."""
-    from .mix import synthetic_slots as slots
-
     return with_isos(slots(names), isos)
 
 
@@ -247,8 +247,6 @@ def notes(config, days, scenes, target_isps):
         out.append("the fresh row is left out: it synthesizes with day2night's ISP and noise "
                    "(FreshPatches), and this run's targets or noise are the release's")
     if config.noise == "release" and days:
-        import day2night
-
         first = sorted(days)[0]
         white = day2night.read_dng(str(days[first])).meta.get("white_level")
         if white is not None and float(white) != 1023:

@@ -25,6 +25,10 @@ from ..atomic import write_json
 from .config import ExperimentConfig, ExperimentError, resolve  # noqa: F401
 from .prepare import day_images, log  # noqa: F401
 from .source import PairSource
+from ..train._torch import available as torch_available
+from ..train._torch import missing as torch_missing
+from ..train._torch import torch
+from ..train.trainer import CheckpointError
 
 
 class Experiment:
@@ -43,11 +47,8 @@ class Experiment:
         """Read and check every input and what an earlier run left in RUN, then write config,
         folds and mixes (nothing is written when anything is bad)."""
         c = self.config
-        try:
-            import torch
-        except ImportError as e:
-            raise ExperimentError(f"training needs torch ({e}): pip install day2night[train]") \
-                from None
+        if not torch_available():
+            raise ExperimentError(f"training needs torch ({torch_missing()})")
         if c.device == "cuda" and not torch.cuda.is_available():
             raise ExperimentError("--device cuda: torch sees no CUDA device (use --device cpu)")
         prepare.check_config(self.out, c.record())
@@ -103,8 +104,6 @@ class Experiment:
         write_json(udir / "scores.json", scored)
 
     def _train_score(self, where, task, row, fold, udir, train_p, val_p, tests):
-        from ..train.trainer import CheckpointError
-
         c = self.config
         if train_p is None:
             days = {n: self.inputs.days[n] for n in self.inputs.day_train}

@@ -6,9 +6,9 @@ every attribute raises the ImportError that says how to install it, and ``Module
 ``Dataset`` (torch's base classes of a network and of a data set) are a stand-in that raises it
 when instantiated. So every module imports what it needs at its top, with or without torch
 (``python -m day2night.train --help`` and ``python -m day2night.experiment --help`` need none),
-and a missing torch is reported where it is first needed. ``import day2night`` and the
-numpy modules of day2night.train (``preprocess``, ``targets``, ``scores``, ``cache``,
-``config``) never import this module."""
+and a missing torch is reported where it is first needed. ``import day2night``,
+``import day2night.train`` and its numpy modules (``preprocess``, ``targets``, ``scores``,
+``cache``) never import this module."""
 
 import functools
 

@@ -30,8 +30,10 @@ import os
 
 import numpy as np
 
+from .._native import fresh_pair, synthesize
 from ..atomic import open_atomic
 from ..isos import NOISY_ISOS
+from ..pairs import NightPairs
 from . import cache, preprocess, targets
 from ._torch import Dataset, torch
 
@@ -161,7 +163,6 @@ class FreshPatches(Dataset):
     def __init__(self, day_dir, crop=512, patch=64, isos=NOISY_ISOS, seed=0,
                  crops_per_image=1, task="noisy", gamma=preprocess.GAMMA, mode="local",
                  items_per_image=None, **options):
-        from ..pairs import NightPairs
         if task not in ("noisy", "clean"):
             raise ValueError(f"task {task!r}: use 'noisy' or 'clean'")
         if crop % patch or crop < patch:
@@ -204,7 +205,6 @@ class FreshPatches(Dataset):
         return self.pairs.epoch
 
     def _pair(self, index, patch):
-        from .._native import fresh_pair
         q = self.pairs.place(self.pair_index(index))
         return fresh_pair(q["raw"], q["crop"], q["iso"], seed=self.seed, variant=q["variant"],
                           mode=self.mode, task=self.task, table=preprocess._table(self.gamma),
@@ -218,7 +218,6 @@ class FreshPatches(Dataset):
         """``arrays(index)`` computed the long way: ``synthesize`` of the crop, then
         ``preprocess.network_input_array`` and ``targets.srgb8`` in numpy (the same numbers;
         for tests and benches)."""
-        from .._native import synthesize
         q = self.pairs.place(self.pair_index(index))
         raw, (top, left, h, w) = q["raw"], q["crop"]
         out = synthesize(raw, seed=self.seed, variant=q["variant"], mode=self.mode,
