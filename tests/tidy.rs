@@ -34,6 +34,7 @@ use std::path::{Path, PathBuf};
 use syn::spanned::Spanned;
 use syn::visit::Visit;
 
+#[path = "tidy/imports.rs"]
 mod imports;
 
 /// Longest function, in lines (Rust and Python).
@@ -1260,14 +1261,18 @@ https://github.com/o/r/blob/main/src/none.rs.
 
 #[test]
 fn planted_function_imports_and_torch_imports_are_caught() {
-    let text = "\"\"\"Doc.\n\n    import not_code\n\"\"\"\nimport os\n\ntry:\n    import numpy\nexcept ImportError:\n    numpy = None\n\n\ndef f():\n    x = \"import no\"  # import no\n    from .b import (\n        c,\n        d,\n    )\n    return x\n\n\nclass K:\n    def m(self):\n        import json\n        return json\n\n\nimport torch.nn as nn\n";
+    let text = "\"\"\"Doc.\n\n    import not_code\n\"\"\"\nimport os\n\ntry:\n    import numpy\nexcept ImportError:\n    numpy = None\n\n\ndef f():\n    x = \"import no\"  # import no\n    raise ValueError(x) \\\n        from None\n    from .b import (\n        c,\n        d,\n    )\n    return x\n\n\nclass K:\n    def m(self):\n        import json\n        return json\n\n\nimport torch.nn as nn\n";
     let found = imports::function_imports("python/pysrc/day2night/x.py", text);
     assert_eq!(
         rules(&found),
-        vec![(15, "py-import"), (24, "py-import"), (28, "py-import")],
+        vec![(17, "py-import"), (26, "py-import"), (30, "py-import")],
         "{found:#?}"
     );
-    assert!(found[0].msg.contains("inside the function of line 13"), "{}", found[0].msg);
+    assert!(
+        found[0].msg.contains("inside the function of line 13"),
+        "{}",
+        found[0].msg
+    );
     assert!(found[2].msg.contains("_torch.py"), "{}", found[2].msg);
     // torch at the top of its one module is fine
     let home = "try:\n    import torch\nexcept ImportError:\n    torch = None\n";
@@ -1284,13 +1289,20 @@ fn a_planted_python_import_cycle_is_caught_and_named() {
         f("p/sub/b.py", ""),
         f("p/sub/c.py", "from . import b\n"),
     ];
-    assert!(imports::python_cycles(&ok).is_empty(), "{:#?}", imports::python_cycles(&ok));
+    assert!(
+        imports::python_cycles(&ok).is_empty(),
+        "{:#?}",
+        imports::python_cycles(&ok)
+    );
     let g = imports::python_graph(&ok);
     assert_eq!(g["p.a"].keys().collect::<Vec<_>>(), ["p.sub.b", "p.sub.c"]);
     assert_eq!(g["p.sub.c"].keys().collect::<Vec<_>>(), ["p.sub.b"]);
     // b imports a back, inside a function: still an edge, so a cycle
     let mut bad = ok.clone();
-    bad[3] = f("p/sub/b.py", "import os\n\n\ndef late():\n    from ..a import thing\n");
+    bad[3] = f(
+        "p/sub/b.py",
+        "import os\n\n\ndef late():\n    from ..a import thing\n",
+    );
     let found = imports::python_cycles(&bad);
     assert_eq!(rules(&found), vec![(1, "py-cycle")], "{found:#?}");
     assert_eq!(found[0].file, "python/pysrc/p/a.py");

@@ -109,13 +109,7 @@ pub fn dataset_units<'py>(
 ) -> PyResult<Bound<'py, PyList>> {
     // The keyword-only parameters, bound by name (Python's errors for an unknown one);
     // `out_dir` comes from the signature above, so only its default is bound here.
-    let (p, _) = args::bind_params(
-        "dataset_units",
-        PARAMS,
-        &PyTuple::empty(py),
-        kwargs,
-        false,
-    )?;
+    let (p, _) = args::bind_params("dataset_units", PARAMS, &PyTuple::empty(py), kwargs, false)?;
     let variants = p.extract::<Variants>("variants")?.0;
     let val = p.extract::<Option<Val>>("val")?.map(|v| v.0);
     let val_fraction = p.extract::<Option<f64>>("val_fraction")?;

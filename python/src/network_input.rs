@@ -64,9 +64,9 @@ pub(crate) fn release_codes<'py>(
             .ok()
             .and_then(|v| <[f64; 3]>::try_from(v.as_slice()).ok())
             .ok_or_else(|| value_err(format!("neutral {n}: need 3 numbers")))?,
-        None => m.as_shot_neutral.ok_or_else(|| {
-            value_err("no neutral given and the raw has no AsShotNeutral")
-        })?,
+        None => m
+            .as_shot_neutral
+            .ok_or_else(|| value_err("no neutral given and the raw has no AsShotNeutral"))?,
     };
     let (data, h, w) = plane_samples(plane, "plane")?;
     let out = py

@@ -221,10 +221,15 @@ pub(crate) fn cfa_from(v: &Bound<'_, PyAny>, label: &str) -> PyResult<Bayer> {
     } else {
         flat_floats(v)
             .ok()
-            .filter(|c| c.iter().all(|x| x.fract() == 0.0 && (0.0..=255.0).contains(x)))
+            .filter(|c| {
+                c.iter()
+                    .all(|x| x.fract() == 0.0 && (0.0..=255.0).contains(x))
+            })
             .ok_or_else(|| {
-                bad("must be a string such as \"RGGB\" or four colour indices (0 R, 1 G, 2 B)"
-                    .into())
+                bad(
+                    "must be a string such as \"RGGB\" or four colour indices (0 R, 1 G, 2 B)"
+                        .into(),
+                )
             })?
             .into_iter()
             .map(|x| x as u8)
@@ -348,7 +353,11 @@ fn parse_levels(m: &Meta<'_>) -> PyResult<Levels> {
 
 /// The dict's LinearizationTable (None when missing or None), as 16-bit values.
 fn parse_linearization(m: &Meta<'_>) -> PyResult<Option<Vec<u16>>> {
-    Ok(m.floats("linearization_table", None)?.map(|t| t.into_iter().map(|x| x.clamp(0.0, 65535.0) as u16).collect()))
+    Ok(m.floats("linearization_table", None)?.map(|t| {
+        t.into_iter()
+            .map(|x| x.clamp(0.0, 65535.0) as u16)
+            .collect()
+    }))
 }
 
 /// What the release's network input reads of a `Raw.meta`-like dict: the CFA pattern, the

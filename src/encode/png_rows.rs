@@ -366,7 +366,8 @@ pub fn png_rgb8_bytes(
     tone: DisplayTone,
 ) -> Result<Vec<u8>> {
     let groups = rgb8_groups(bytes, width, height)?;
-    let mut out = Vec::with_capacity(groups.iter().map(|g| g.deflate.len() + 12).sum::<usize>() + 64);
+    let mut out =
+        Vec::with_capacity(groups.iter().map(|g| g.deflate.len() + 12).sum::<usize>() + 64);
     encode_png_rows(&groups, width, height, tone, &mut out)?;
     Ok(out)
 }

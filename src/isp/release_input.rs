@@ -408,7 +408,11 @@ mod tests {
             let q: Vec<u16> = (0..w * h).map(|i| ((i * 7919) % 16384) as u16).collect();
             for bayer in Bayer::ALL {
                 let got = demosaic_bilinear(&q, w, h, bayer).unwrap();
-                assert_eq!(got, reference_demosaic(&q, w, h, 0, 0, bayer), "{bayer:?} {w}x{h}");
+                assert_eq!(
+                    got,
+                    reference_demosaic(&q, w, h, 0, 0, bayer),
+                    "{bayer:?} {w}x{h}"
+                );
             }
         }
         let e = demosaic_bilinear(&[0; 6], 3, 2, Bayer::RGGB).unwrap_err();

@@ -48,7 +48,11 @@ fn import_statements(text: &str) -> Vec<(usize, String)> {
                 break;
             }
         }
-        out.push((start + 1, stmt.trim().to_string()));
+        let stmt = stmt.trim().to_string();
+        // `raise E(...) \` continued by `from None` is no import
+        if stmt.starts_with("import ") || stmt.contains(" import ") {
+            out.push((start + 1, stmt));
+        }
     }
     out
 }
@@ -100,7 +104,11 @@ fn imported_names(stmt: &str) -> Vec<String> {
             .to_string()
     };
     if let Some(rest) = stmt.strip_prefix("import ") {
-        return rest.split(',').map(clean).filter(|s| !s.is_empty()).collect();
+        return rest
+            .split(',')
+            .map(clean)
+            .filter(|s| !s.is_empty())
+            .collect();
     }
     let Some(rest) = stmt.strip_prefix("from ") else {
         return vec![];
@@ -287,7 +295,9 @@ pub(super) fn positional_params(rel: &str, text: &str) -> Vec<Violation> {
     let mut i = 0;
     while i < toks.len() {
         if toks[i].0 == "let" {
-            let end = (i..toks.len()).find(|&j| toks[j].0 == ";").unwrap_or(toks.len());
+            let end = (i..toks.len())
+                .find(|&j| toks[j].0 == ";")
+                .unwrap_or(toks.len());
             let eq = (i..end).find(|&j| toks[j].0 == "=").unwrap_or(end);
             let binds = toks[eq..end]
                 .windows(2)
@@ -309,7 +319,10 @@ pub(super) fn positional_params(rel: &str, text: &str) -> Vec<Violation> {
         let (name, open, first) = (&w[0], &w[1], &w[2]);
         let literal = first.2 && first.0.chars().all(|c| c.is_ascii_digit());
         let slice = first.0 == "." && name.0.ends_with("PARAMS");
-        if open.0 == "[" && (literal || slice) && (bound.contains(&name.0) || name.0.ends_with("PARAMS")) {
+        if open.0 == "["
+            && (literal || slice)
+            && (bound.contains(&name.0) || name.0.ends_with("PARAMS"))
+        {
             out.push(v(
                 rel,
                 name.1,
