@@ -20,6 +20,10 @@
 //!   python/README.md, tests/README.md) or a Rust doc comment exists, and so does every
 //!   relative Markdown link target.
 //!
+//! - `py-import`, `py-cycle`, `pyo3-by-name`: the import graph (tests/tidy/imports.rs): no
+//!   import inside a Python function and torch imported in one module, no cycle among the
+//!   Python modules, parameters read by name in python/src.
+//!
 //! [`ALLOW`] lists the exceptions still standing, each with its reason; it is meant to be
 //! empty. `cargo test --test tidy -- --nocapture` also prints what [`PY_STRICT`] would find.
 
@@ -29,6 +33,9 @@ use std::fmt;
 use std::path::{Path, PathBuf};
 use syn::spanned::Spanned;
 use syn::visit::Visit;
+
+#[path = "tidy/imports.rs"]
+mod imports;
 
 /// Longest function, in lines (Rust and Python).
 const FN_MAX: usize = 150;
@@ -42,7 +49,19 @@ const PY_STRICT_FN_MAX: usize = 60;
 const PY_CLASS_MAX: usize = 150;
 
 /// Exceptions: (rule, file, reason). Every entry is a debt to pay back, not a rule.
-const ALLOW: &[(&str, &str, &str)] = &[];
+const ALLOW: &[(&str, &str, &str)] = &[
+    (
+        "py-import",
+        "python/pysrc/day2night/experiment/folds.py",
+        "its function-level import of release_folds hides the cycle below; helper \"folds\" \
+         (issue 43) rewrites folds.py and release_folds.py and breaks it",
+    ),
+    (
+        "py-cycle",
+        "python/pysrc/day2night/experiment/folds.py",
+        "folds.py <-> release_folds.py: helper \"folds\" (issue 43) breaks this cycle",
+    ),
+];
 
 /// One broken rule.
 #[derive(Debug, Clone, PartialEq, Eq, PartialOrd, Ord)]
@@ -1019,12 +1038,42 @@ fn paths_named_in_docs_exist() {
     assert_clean("doc-path", doc_path_found());
 }
 
+/// The Python sources of the package: (path, text).
+fn pysrc() -> Vec<(String, String)> {
+    files("python/pysrc", ".py")
+        .into_iter()
+        .map(|rel| {
+            let text = read(&rel);
+            (rel, text)
+        })
+        .collect()
+}
+
+fn import_found() -> Vec<Violation> {
+    let py = pysrc();
+    let mut found: Vec<Violation> = py
+        .iter()
+        .flat_map(|(rel, text)| imports::function_imports(rel, text))
+        .collect();
+    found.extend(imports::python_cycles(&py));
+    for rel in files("python/src", ".rs") {
+        found.extend(imports::positional_params(&rel, &read(&rel)));
+    }
+    found
+}
+
+#[test]
+fn imports_at_the_top_no_cycle_and_parameters_by_name() {
+    assert_clean("import graph", import_found());
+}
+
 #[test]
 fn every_allowance_is_still_needed_and_has_a_reason() {
     let mut all = env_print_found();
     all.extend(length_found());
     all.extend(colour_found());
     all.extend(doc_path_found());
+    all.extend(import_found());
     for (rule, file, reason) in ALLOW {
         assert!(!reason.trim().is_empty(), "{rule} {file}: no reason");
         assert!(
@@ -1208,4 +1257,70 @@ https://github.com/o/r/blob/main/src/none.rs.
     let found = doc_paths("src/y.rs", &rust_doc_text(rs), false, &exists);
     assert_eq!(rules(&found), [(1, "doc-path")], "{found:#?}");
     assert!(found[0].msg.contains("tests/it/option_table.rs"));
+}
+
+#[test]
+fn planted_function_imports_and_torch_imports_are_caught() {
+    let text = "\"\"\"Doc.\n\n    import not_code\n\"\"\"\nimport os\n\ntry:\n    import numpy\nexcept ImportError:\n    numpy = None\n\n\ndef f():\n    x = \"import no\"  # import no\n    raise ValueError(x) \\\n        from None\n    from .b import (\n        c,\n        d,\n    )\n    return x\n\n\nclass K:\n    def m(self):\n        import json\n        return json\n\n\nimport torch.nn as nn\n";
+    let found = imports::function_imports("python/pysrc/day2night/x.py", text);
+    assert_eq!(
+        rules(&found),
+        vec![(17, "py-import"), (26, "py-import"), (30, "py-import")],
+        "{found:#?}"
+    );
+    assert!(
+        found[0].msg.contains("inside the function of line 13"),
+        "{}",
+        found[0].msg
+    );
+    assert!(found[2].msg.contains("_torch.py"), "{}", found[2].msg);
+    // torch at the top of its one module is fine
+    let home = "try:\n    import torch\nexcept ImportError:\n    torch = None\n";
+    assert!(imports::function_imports(imports::TORCH_HOME, home).is_empty());
+}
+
+#[test]
+fn a_planted_python_import_cycle_is_caught_and_named() {
+    let f = |rel: &str, text: &str| (format!("python/pysrc/{rel}"), text.to_string());
+    let ok = vec![
+        f("p/__init__.py", "from . import a\nfrom ._native import x\n"),
+        f("p/a.py", "from .sub import b\nimport p.sub.c\n"),
+        f("p/sub/__init__.py", ""),
+        f("p/sub/b.py", ""),
+        f("p/sub/c.py", "from . import b\n"),
+    ];
+    assert!(
+        imports::python_cycles(&ok).is_empty(),
+        "{:#?}",
+        imports::python_cycles(&ok)
+    );
+    let g = imports::python_graph(&ok);
+    assert_eq!(g["p.a"].keys().collect::<Vec<_>>(), ["p.sub.b", "p.sub.c"]);
+    assert_eq!(g["p.sub.c"].keys().collect::<Vec<_>>(), ["p.sub.b"]);
+    // b imports a back, inside a function: still an edge, so a cycle
+    let mut bad = ok.clone();
+    bad[3] = f(
+        "p/sub/b.py",
+        "import os\n\n\ndef late():\n    from ..a import thing\n",
+    );
+    let found = imports::python_cycles(&bad);
+    assert_eq!(rules(&found), vec![(1, "py-cycle")], "{found:#?}");
+    assert_eq!(found[0].file, "python/pysrc/p/a.py");
+    assert!(
+        found[0].msg.contains("p.a -> p.sub.b (line 1)")
+            && found[0].msg.contains("p.sub.b -> p.a (line 5)"),
+        "{}",
+        found[0].msg
+    );
+}
+
+#[test]
+fn planted_positional_parameter_reads_are_caught() {
+    let text = "fn f(args: &A) -> PyResult<()> {\n    let (p, options) = args::bind_params(\"f\", PARAMS, args, None, true)?;\n    let seed = p[0].extract::<u64>()?;\n    let ok = p.get(\"seed\")?;\n    let (q, _) = args::bind_params(\"g\", &G_PARAMS[1..], args, None, false)?;\n    let v = other[0];\n    Ok(())\n}\n";
+    let found = imports::positional_params("python/src/x.rs", text);
+    assert_eq!(
+        rules(&found),
+        vec![(3, "pyo3-by-name"), (5, "pyo3-by-name")],
+        "{found:#?}"
+    );
 }

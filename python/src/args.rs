@@ -410,15 +410,45 @@ pub(crate) fn signature_list<'py>(
     Ok(list)
 }
 
+/// The values of a function's [`Param`]s, each given or its default, read by name: a
+/// parameter list can be reordered without rebinding anything (tests/tidy.rs refuses a
+/// positional read such as `p[0]`).
+pub(crate) struct BoundParams<'py> {
+    func: String,
+    values: Vec<(&'static str, Bound<'py, PyAny>)>,
+}
+
+impl<'py> BoundParams<'py> {
+    /// The value of the parameter `name` (an internal error names it if the function's
+    /// `PARAMS` has no such parameter).
+    pub fn get(&self, name: &str) -> PyResult<&Bound<'py, PyAny>> {
+        self.values
+            .iter()
+            .find(|(n, _)| *n == name)
+            .map(|(_, v)| v)
+            .ok_or_else(|| {
+                pyo3::exceptions::PyRuntimeError::new_err(format!(
+                    "internal error: {}() has no parameter {name:?}",
+                    self.func
+                ))
+            })
+    }
+
+    /// The value of `name`, extracted (a TypeError as PyO3 words it otherwise).
+    pub fn extract<T: for<'a> pyo3::FromPyObject<'a, 'py>>(&self, name: &str) -> PyResult<T> {
+        self.get(name)?.extract::<T>().map_err(Into::into)
+    }
+}
+
 /// [`bind`] with `params`' names (their positions allowed while positional), each value
-/// given or its default; the other keyword arguments when `rest`.
+/// given or its default, by name; the other keyword arguments when `rest`.
 pub(crate) fn bind_params<'py>(
     func: &str,
     params: &[Param],
     args: &Bound<'py, pyo3::types::PyTuple>,
     kwargs: Option<&Bound<'py, PyDict>>,
     rest: bool,
-) -> PyResult<(Vec<Bound<'py, PyAny>>, Bound<'py, PyDict>)> {
+) -> PyResult<(BoundParams<'py>, Bound<'py, PyDict>)> {
     let names: Vec<&str> = params.iter().map(|p| p.name).collect();
     let positional = params.iter().take_while(|p| !p.keyword_only).count();
     if args.len() > positional {
@@ -430,12 +460,17 @@ pub(crate) fn bind_params<'py>(
     let (given, others) = bind(func, &names, args, kwargs, rest)?;
     let mut values = Vec::with_capacity(params.len());
     for (g, p) in given.into_iter().zip(params) {
-        values.push(match g {
+        let v = match g {
             Some(v) => v,
             None => p.default_value(args.py())?,
-        });
+        };
+        values.push((p.name, v));
     }
-    Ok((values, others))
+    let bound = BoundParams {
+        func: func.to_string(),
+        values,
+    };
+    Ok((bound, others))
 }
 
 /// The parameters `names` of the Python function `func`, bound from its positional `args`

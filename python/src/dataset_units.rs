@@ -107,20 +107,15 @@ pub fn dataset_units<'py>(
     out_dir: Option<PathBuf>,
     kwargs: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyList>> {
-    // Keyword-only parameters, bound by name (Python's errors for an unknown one).
-    let (p, _) = args::bind_params(
-        "dataset_units",
-        &PARAMS[1..],
-        &PyTuple::empty(py),
-        kwargs,
-        false,
-    )?;
-    let variants = p[0].extract::<Variants>()?.0;
-    let val = p[1].extract::<Option<Val>>()?.map(|v| v.0);
-    let val_fraction = p[2].extract::<Option<f64>>()?;
-    let seed = p[3].extract::<Seed>()?.0;
-    let shard = p[4].extract::<Option<String>>()?;
-    let overwrite = p[5].extract::<bool>()?;
+    // The keyword-only parameters, bound by name (Python's errors for an unknown one);
+    // `out_dir` comes from the signature above, so only its default is bound here.
+    let (p, _) = args::bind_params("dataset_units", PARAMS, &PyTuple::empty(py), kwargs, false)?;
+    let variants = p.extract::<Variants>("variants")?.0;
+    let val = p.extract::<Option<Val>>("val")?.map(|v| v.0);
+    let val_fraction = p.extract::<Option<f64>>("val_fraction")?;
+    let seed = p.extract::<Seed>("seed")?.0;
+    let shard = p.extract::<Option<String>>("shard")?;
+    let overwrite = p.extract::<bool>("overwrite")?;
     let opts = UnitsOptions {
         day_dir,
         out_dir,

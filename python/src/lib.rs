@@ -8,7 +8,8 @@
 //! metadata dict to a raw). Entry points: `raw` (`Raw`, `read_dng`),
 //! `synthesize` (`synthesize`, `write_outputs`), `render`, `metrics`, `pairs`
 //! (`NightPairs` items), `patches` (`fresh_pair`: `FreshPatches` items), `dataset_units`,
-//! `pool` (`set_threads`, `threads`).
+//! `network_input` (`release_codes`, `demosaic_bilinear`: the release's network input),
+//! `png` (`png_bytes`), `pool` (`set_threads`, `threads`).
 #![forbid(unsafe_code)]
 
 mod args;
@@ -18,9 +19,11 @@ mod dataset_units;
 mod diagnostics;
 mod errors;
 mod metrics;
+mod network_input;
 mod option_default;
 mod pairs;
 mod patches;
+mod png;
 mod pool;
 mod raw;
 mod raw_from;
@@ -47,6 +50,9 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(render::encode_u8, m)?)?;
     m.add_function(wrap_pyfunction!(render::render_release_u8, m)?)?;
     m.add_function(wrap_pyfunction!(render::release_window, m)?)?;
+    m.add_function(wrap_pyfunction!(network_input::release_codes, m)?)?;
+    m.add_function(wrap_pyfunction!(network_input::demosaic_bilinear, m)?)?;
+    m.add_function(wrap_pyfunction!(png::png_bytes, m)?)?;
     m.add_function(wrap_pyfunction!(metrics::psnr, m)?)?;
     m.add_function(wrap_pyfunction!(metrics::ssim, m)?)?;
     m.add_function(wrap_pyfunction!(metrics::delta_e2000, m)?)?;

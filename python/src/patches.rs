@@ -46,13 +46,13 @@ impl<'py> PairCall<'py> {
         let (p, options) = args::bind_params("fresh_pair", PARAMS, args, kwargs, true)?;
         let opt = |v: &Bound<'py, PyAny>| Some(v.clone()).filter(|v| !v.is_none());
         Ok(PairCall {
-            seed: p[0].extract()?,
-            variant: p[1].extract()?,
-            mode: args::string(&p[2], "mode")?,
-            task: args::string(&p[3], "task")?,
-            table: opt(&p[4]).map(|t| t.extract()).transpose()?,
-            patch: opt(&p[5]).map(|t| t.extract()).transpose()?,
-            tone: args::string(&p[6], "tone")?,
+            seed: p.extract("seed")?,
+            variant: p.extract("variant")?,
+            mode: args::string(p.get("mode")?, "mode")?,
+            task: args::string(p.get("task")?, "task")?,
+            table: opt(p.get("table")?).map(|t| t.extract()).transpose()?,
+            patch: opt(p.get("patch")?).map(|t| t.extract()).transpose()?,
+            tone: args::string(p.get("tone")?, "tone")?,
             options,
         })
     }

@@ -155,12 +155,7 @@ impl<'py> Meta<'py> {
         let Some(v) = self.get(k)? else {
             return Ok(None);
         };
-        let np = self.d.py().import("numpy")?;
-        let flat: Vec<f64> = np
-            .call_method1("asarray", (&v, "float64"))
-            .and_then(|a| a.call_method0("ravel"))
-            .and_then(|a| a.call_method0("tolist"))
-            .and_then(|a| a.extract())
+        let flat = flat_floats(&v)
             .map_err(|_| Self::bad(k, format!("must be numbers (got {})", short_repr(&v))))?;
         if let Some(n) = n {
             if flat.len() != n {
@@ -209,10 +204,10 @@ fn short_repr(v: &Bound<'_, PyAny>) -> String {
     }
 }
 
-/// "RGGB" (case-insensitive) or four colour indices (0 red, 1 green, 2 blue), flat or 2x2.
-fn parse_cfa(m: &Meta<'_>) -> PyResult<Bayer> {
-    let k = "cfa_pattern";
-    let v = m.required(k)?;
+/// "RGGB" (case-insensitive) or four colour indices (0 red, 1 green, 2 blue), flat or 2x2,
+/// as the value `v` of `label` (`meta["cfa_pattern"]`, `cfa`).
+pub(crate) fn cfa_from(v: &Bound<'_, PyAny>, label: &str) -> PyResult<Bayer> {
+    let bad = |why: String| value_err(format!("{label}: {why}"));
     let codes: Vec<u8> = if let Ok(s) = v.extract::<String>() {
         s.to_ascii_uppercase()
             .chars()
@@ -220,32 +215,43 @@ fn parse_cfa(m: &Meta<'_>) -> PyResult<Bayer> {
                 'R' => Ok(0),
                 'G' => Ok(1),
                 'B' => Ok(2),
-                _ => Err(Meta::bad(
-                    k,
-                    format!("{s:?}: use R, G and B (e.g. \"RGGB\")"),
-                )),
+                _ => Err(bad(format!("{s:?}: use R, G and B (e.g. \"RGGB\")"))),
             })
             .collect::<PyResult<_>>()?
     } else {
-        m.ints(k, 4)
-            .map_err(|_| {
-                Meta::bad(
-                    k,
-                    "must be a string such as \"RGGB\" or four colour indices (0 R, 1 G, 2 B)",
+        flat_floats(v)
+            .ok()
+            .filter(|c| {
+                c.iter()
+                    .all(|x| x.fract() == 0.0 && (0.0..=255.0).contains(x))
+            })
+            .ok_or_else(|| {
+                bad(
+                    "must be a string such as \"RGGB\" or four colour indices (0 R, 1 G, 2 B)"
+                        .into(),
                 )
             })?
-            .unwrap_or_default()
             .into_iter()
-            .map(|x| x.min(255) as u8)
+            .map(|x| x as u8)
             .collect()
     };
     let arr: [u8; 4] = codes.as_slice().try_into().map_err(|_| {
-        Meta::bad(
-            k,
-            format!("has {} colours, a Bayer pattern has 4", codes.len()),
-        )
+        bad(format!(
+            "has {} colours, a Bayer pattern has 4",
+            codes.len()
+        ))
     })?;
-    Bayer::from_pattern(arr).map_err(|e| Meta::bad(k, e))
+    Bayer::from_pattern(arr).map_err(|e| bad(e.to_string()))
+}
+
+/// Numbers, flat or nested (lists, tuples, arrays), flattened in row-major order.
+pub(crate) fn flat_floats(v: &Bound<'_, PyAny>) -> PyResult<Vec<f64>> {
+    v.py()
+        .import("numpy")?
+        .call_method1("asarray", (v, "float64"))
+        .and_then(|a| a.call_method0("ravel"))
+        .and_then(|a| a.call_method0("tolist"))
+        .and_then(|a| a.extract())
 }
 
 /// The tags of the dict beyond the mosaic's layout: camera, colour, noise, Exif, opcodes.
@@ -316,6 +322,72 @@ fn apply_defaults(m: &Meta<'_>, meta: &mut RawMeta) -> PyResult<Vec<String>> {
     Ok(notes)
 }
 
+/// BlackLevel (with its repeat pattern, (1, 1) or (2, 2) by the count when not given),
+/// the deltas and WhiteLevel of the dict.
+fn parse_levels(m: &Meta<'_>) -> PyResult<Levels> {
+    m.required("black_level")?;
+    let black = m.floats("black_level", None)?.unwrap_or_default();
+    let black_repeat = match m.ints("black_level_repeat_dim", 2)? {
+        Some(v) => (v[0] as usize, v[1] as usize),
+        None => match black.len() {
+            1 => (1, 1),
+            4 => (2, 2),
+            n => {
+                return Err(Meta::bad(
+                    "black_level",
+                    format!("{n} values: give black_level_repeat_dim (rows, cols)"),
+                ))
+            }
+        },
+    };
+    m.required("white_level")?;
+    let white = m.floats("white_level", Some(1))?.unwrap_or_default()[0];
+    Ok(Levels {
+        black_repeat,
+        black,
+        black_delta_h: m.floats("black_level_delta_h", None)?.unwrap_or_default(),
+        black_delta_v: m.floats("black_level_delta_v", None)?.unwrap_or_default(),
+        white,
+    })
+}
+
+/// The dict's LinearizationTable (None when missing or None), as 16-bit values.
+fn parse_linearization(m: &Meta<'_>) -> PyResult<Option<Vec<u16>>> {
+    Ok(m.floats("linearization_table", None)?.map(|t| {
+        t.into_iter()
+            .map(|x| x.clamp(0.0, 65535.0) as u16)
+            .collect()
+    }))
+}
+
+/// What the release's network input reads of a `Raw.meta`-like dict: the CFA pattern, the
+/// levels, the LinearizationTable and AsShotNeutral (other keys are not read).
+pub(crate) struct InputMeta {
+    pub bayer: Bayer,
+    pub levels: Levels,
+    pub linearization: Option<Vec<u16>>,
+    pub as_shot_neutral: Option<[f64; 3]>,
+}
+
+/// [`InputMeta`] of `meta`; a dict without a CFA pattern (a LinearRaw raw's) is refused.
+pub(crate) fn input_meta(meta: &Bound<'_, PyAny>) -> PyResult<InputMeta> {
+    let d = meta
+        .cast::<PyDict>()
+        .map_err(|_| value_err("meta must be a dict (as Raw.meta returns)"))?;
+    let m = Meta { d: d.clone() };
+    let Some(cfa) = m.get("cfa_pattern")? else {
+        return Err(value_err(
+            "the raw is not a Bayer CFA mosaic (no cfa_pattern)",
+        ));
+    };
+    Ok(InputMeta {
+        bayer: cfa_from(&cfa, "meta[\"cfa_pattern\"]")?,
+        levels: parse_levels(&m)?,
+        linearization: parse_linearization(&m)?.filter(|t| !t.is_empty()),
+        as_shot_neutral: m.floats_n::<3>("as_shot_neutral")?,
+    })
+}
+
 /// Build the library's metadata from the dict; returns it with the defaults' notes.
 fn parse_meta(
     m: &Meta<'_>,
@@ -352,31 +424,9 @@ fn parse_meta(
             ));
         }
     }
-    let bayer = parse_cfa(m)?;
-    m.required("black_level")?;
-    let black = m.floats("black_level", None)?.unwrap_or_default();
-    let black_repeat = match m.ints("black_level_repeat_dim", 2)? {
-        Some(v) => (v[0] as usize, v[1] as usize),
-        None => match black.len() {
-            1 => (1, 1),
-            4 => (2, 2),
-            n => {
-                return Err(Meta::bad(
-                    "black_level",
-                    format!("{n} values: give black_level_repeat_dim (rows, cols)"),
-                ))
-            }
-        },
-    };
-    m.required("white_level")?;
-    let white = m.floats("white_level", Some(1))?.unwrap_or_default()[0];
-    let levels = Levels {
-        black_repeat,
-        black,
-        black_delta_h: m.floats("black_level_delta_h", None)?.unwrap_or_default(),
-        black_delta_v: m.floats("black_level_delta_v", None)?.unwrap_or_default(),
-        white,
-    };
+    let bayer = cfa_from(&m.required("cfa_pattern")?, "meta[\"cfa_pattern\"]")?;
+    let levels = parse_levels(m)?;
+    let white = levels.white;
     let bits = match m.extract::<u16>("bits_per_sample", "an integer")? {
         Some(b) => b,
         None => {
@@ -386,11 +436,7 @@ fn parse_meta(
         }
     };
     let mut meta = RawMeta::bare(bayer, levels, bits);
-    meta.linearization_table = m.floats("linearization_table", None)?.map(|t| {
-        t.into_iter()
-            .map(|x| x.clamp(0.0, 65535.0) as u16)
-            .collect()
-    });
+    meta.linearization_table = parse_linearization(m)?;
     if let Some(a) = m.ints("active_area", 4)? {
         let c = |x: i64| u32::try_from(x).unwrap_or(u32::MAX);
         meta.active_area = Some(Rect {

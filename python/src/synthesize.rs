@@ -63,15 +63,15 @@ impl<'py> SynthCall<'py> {
     fn bind(args: &Bound<'py, PyTuple>, kwargs: Option<&Bound<'py, PyDict>>) -> PyResult<Self> {
         let (p, options) = args::bind_params("synthesize", PARAMS, args, kwargs, true)?;
         Ok(SynthCall {
-            seed: p[0].extract::<Seed>()?.0,
-            variant: p[1].extract::<Variant>()?.0,
-            mode: args::string(&p[2], "mode")?,
-            isos: p[3].extract::<Isos>()?.0,
-            target: match &p[4] {
+            seed: p.extract::<Seed>("seed")?.0,
+            variant: p.extract::<Variant>("variant")?.0,
+            mode: args::string(p.get("mode")?, "mode")?,
+            isos: p.extract::<Isos>("isos")?.0,
+            target: match p.get("target")? {
                 v if v.is_none() => None,
                 v => Some(args::string(v, "target")?),
             },
-            crop: Some(p[5].clone()),
+            crop: Some(p.get("crop")?.clone()),
             options,
         })
     }

@@ -2,6 +2,7 @@
 running pickle code, its noise on synthetic noisy inputs, its ISO draw, and the choice of the
 ISP that renders the targets."""
 
+import dataclasses
 import json
 import os
 import pickle
@@ -116,26 +117,36 @@ def test_lists_that_do_not_fit_the_real_set_are_named(tmp_path):
 
 
 def test_protocol_presets_and_flags(tmp_path):
-    p = protocol.resolve()
-    assert (p.targets, p.noise, p.synth_iso, p.folds_file) == \
-        ("day2night", "day2night", "alternate", None)
-    assert protocol.resolve(real_targets="release").targets == "release"
+    from day2night.experiment import config
+
+    def resolved(**kw):
+        base = config.ExperimentConfig(day=str(tmp_path), real=str(tmp_path), output="o")
+        return config.resolve(dataclasses.replace(base, **kw))[0]
+
+    p = resolved()
+    assert (p.protocol, p.targets, p.noise, p.synth_iso, p.folds_file, p.folds) == \
+        ("day2night", "day2night", "day2night", "alternate", None, 3)
     with pytest.raises(protocol.ProtocolError, match="--protocol release needs --folds-file"):
-        protocol.resolve("release")
+        resolved(protocol="release")
     k = tmp_path / "k.p"
     k.write_bytes(pickle.dumps(release_lists()))
-    r = protocol.resolve("release", folds_file=k)
-    assert (r.targets, r.noise, r.synth_iso, r.folds_file) == \
-        ("release", "release", "release", str(k.resolve()))
+    r = resolved(protocol="release", folds_file=str(k))
+    assert (r.targets, r.noise, r.synth_iso, r.folds_file, r.folds) == \
+        ("release", "release", "release", str(k.resolve()), 3)
     assert len(r.folds_sha256) == 64
-    r = protocol.resolve("release", folds_file=k, targets="day2night", synth_iso="alternate")
+    r = resolved(protocol="release", folds_file=str(k), targets="day2night",
+                 synth_iso="alternate")
     assert (r.targets, r.noise, r.synth_iso) == ("day2night", "release", "alternate")
     with pytest.raises(protocol.ProtocolError, match="--targets 'srgb'"):
-        protocol.resolve(targets="srgb")
+        resolved(targets="srgb")
     with pytest.raises(protocol.ProtocolError, match="cannot read"):
-        protocol.resolve(folds_file=tmp_path / "absent.p")
-    assert set(r.config()) == {"protocol", "targets", "noise", "synth_iso", "folds_file",
-                               "folds_sha256"}
+        resolved(folds_file=str(tmp_path / "absent.p"))
+    # each protocol default is one field's metadata: its sources, in order
+    sources = {f.name: f.metadata["default_from"]
+               for f in dataclasses.fields(config.ExperimentConfig)}
+    assert sources["targets"] == ("protocol", "real set")
+    assert sources["noise"] == sources["synth_iso"] == ("protocol",)
+    assert sources["folds"] == ("fold file", 3)
 
 
 def test_the_targets_default_follows_the_real_sets_targets(tmp_path):
@@ -409,12 +420,13 @@ def test_resume_reads_a_config_from_before_the_protocol_options(tmp_path):
     --folds-file resumes under the options that reproduce what it ran with, and only those."""
     import json
 
-    from day2night.experiment import prepare, protocol
+    from day2night.experiment import config, prepare, protocol
 
     old = {"day": "d", "real": "r", "task": "clean", "epochs": 2, "seed": 0, "folds": 3,
            "width": 8, "device": "cpu", "rows": ["ours"]}
     (tmp_path / "config.json").write_text(json.dumps(old))
-    new = dict(old, **protocol.resolve().config())
+    c, _ = config.resolve(config.ExperimentConfig(day="d", real=str(tmp_path), output="o"))
+    new = dict(old, **{k: v for k, v in c.record().items() if k in protocol.LEGACY_CONFIG})
     prepare.check_config(tmp_path, new)  # accepted
     for key, value in [("noise", "release"), ("synth_iso", "release"),
                        ("targets", "release"), ("protocol", "release")]:

@@ -16,13 +16,20 @@ def test_import_day2night_does_not_import_torch():
 
 
 def test_missing_torch_names_the_extra():
-    # torch made unimportable (a None entry in sys.modules makes `import torch` fail)
-    for mod in ("unet", "data", "trainer", "infer"):
+    # torch made unimportable (a None entry in sys.modules makes `import torch` fail): the
+    # torch modules import (their imports are at their tops), and the first use of torch
+    # raises the ImportError that names the extra
+    uses = {"unet": "m.UNet()", "data": "m.FixedPatches([], [])", "trainer": "m.collate([])",
+            "infer": "import numpy as np\nclass Net:\n    def eval(self): pass\n"
+                     "m.predict(Net(), np.zeros((16, 16, 3), np.float32), device='cpu')"}
+    for mod, use in uses.items():
         r = run("import sys; sys.modules['torch'] = None\n"
-                f"import day2night.train.{mod}")
-        assert r.returncode != 0
-        assert "ImportError" in r.stderr and "pip install day2night[train]" in r.stderr, r.stderr
-    r = run("import sys; sys.modules['torch'] = None\nimport day2night.train as t\nt.train")
+                f"import day2night.train.{mod} as m\nprint('imported')\n{use}")
+        assert "imported" in r.stdout, (mod, r.stderr)
+        assert r.returncode != 0, mod
+        assert "ImportError" in r.stderr and "pip install day2night[train]" in r.stderr, \
+            (mod, r.stderr)
+    r = run("import sys; sys.modules['torch'] = None\nimport day2night.train as t\nt.UNet()")
     assert "pip install day2night[train]" in r.stderr, r.stderr
 
 
@@ -34,3 +41,16 @@ def test_train_help_and_config_without_torch():
             "from day2night.train.__main__ import main\nmain(['--help'])")
     assert r.returncode == 0, r.stderr
     assert "--init-features" in r.stdout and "training epochs" in r.stdout, r.stdout
+
+
+def test_experiment_help_without_torch():
+    r = run("import sys; sys.modules['torch'] = None\n"
+            "from day2night.experiment.__main__ import main\nmain(['--help'])")
+    assert r.returncode == 0, r.stderr
+    assert "--protocol" in r.stdout and "--folds-file" in r.stdout, r.stdout
+    r = run("import sys; sys.modules['torch'] = None\n"
+            "from day2night.experiment.runner import Experiment\n"
+            "from day2night.experiment.config import ExperimentConfig\n"
+            "Experiment(ExperimentConfig(day='d', real='r', output='o')).prepare()")
+    assert "training needs torch" in r.stderr and "pip install day2night[train]" in r.stderr, \
+        r.stderr

@@ -35,6 +35,12 @@ def test_the_recorded_keys_are_the_compared_ones():
     recorded = {f.name for f in dataclasses.fields(config.ExperimentConfig)
                 if f.metadata["record"] in ("always", "paper")}
     assert set(config.CONFIG_KEYS) == recorded and len(config.CONFIG_KEYS) == len(recorded)
+    # the order a resume names the first difference in, as before the keys came from the
+    # fields
+    assert config.CONFIG_KEYS == (
+        "day", "real", "task", "epochs", "seed", "seeds", "folds", "width", "device", "rows",
+        "protocol", "targets", "noise", "synth_iso", "folds_file", "folds_sha256",
+        "patch", "batch", "lr", "amp", "channels_last")
     assert config.PAPER_VALUES == {"patch": 64, "batch": 128, "lr": 1e-3, "amp": None,
                                    "channels_last": False, "seeds": 1}
 
@@ -70,3 +76,24 @@ def test_bad_values_are_refused(opts, msg):
     c = dataclasses.replace(cli.parse(BASE), **opts)
     with pytest.raises(ValueError, match=msg):
         c.check()
+
+
+def test_defaults_come_from_the_fields_sources_in_order():
+    base = config.ExperimentConfig(day="d", real="r", output="o")
+    # the preset alone: the training options; the others wait for their sources
+    a = base.with_preset()
+    assert (a.epochs, a.width, a.patch, a.batch, a.lr) == (500, 32, 64, 128, 1e-3)
+    assert (a.targets, a.noise, a.synth_iso, a.folds) == (None, None, None, None)
+    srcs = {"protocol": {"noise": "n"}, "real set": {"targets": "t"}, "fold file": {}}
+    b = a.with_defaults(srcs)
+    assert (b.targets, b.noise, b.synth_iso, b.folds) == ("t", "n", None, 3)
+    # the first source with a value wins; a value given wins over every source
+    c = a.with_defaults(dict(srcs, protocol={"targets": "p", "synth_iso": "s"},
+                             **{"fold file": {"folds": 5}}))
+    assert (c.targets, c.synth_iso, c.folds) == ("p", "s", 5)
+    d = dataclasses.replace(a, targets="given").with_defaults(srcs)
+    assert d.targets == "given"
+    # every field with a default from a source names known sources or values
+    for f in dataclasses.fields(config.ExperimentConfig):
+        for src in f.metadata["default_from"]:
+            assert src in config.SOURCES or not isinstance(src, str), (f.name, src)

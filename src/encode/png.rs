@@ -488,6 +488,8 @@ mod tests {
         crate::encode::png_rows::write_png_rgb8(&bytes, 7, 5, DisplayTone::Srgb, &b, &policy)
             .unwrap();
         assert_eq!(std::fs::read(&a).unwrap(), std::fs::read(&b).unwrap());
+        let mem = crate::encode::png_rows::png_rgb8_bytes(&bytes, 7, 5, DisplayTone::Srgb);
+        assert_eq!(mem.unwrap(), std::fs::read(&a).unwrap());
         let c = dir.path().join("c.png");
         assert!(crate::encode::png_rows::write_png_rgb8(
             &bytes[1..],

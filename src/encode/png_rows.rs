@@ -353,6 +353,28 @@ pub fn write_png_rgb8(
     path: &Path,
     policy: &OutputPolicy,
 ) -> Result<()> {
+    let groups = rgb8_groups(bytes, width, height)?;
+    write_png_groups(&groups, width, height, tone, path, policy)
+}
+
+/// The bytes of the PNG file [`write_png_rgb8`] writes for these samples, in memory (the
+/// Python package's `day2night.png.png_bytes`).
+pub fn png_rgb8_bytes(
+    bytes: &[u8],
+    width: usize,
+    height: usize,
+    tone: DisplayTone,
+) -> Result<Vec<u8>> {
+    let groups = rgb8_groups(bytes, width, height)?;
+    let mut out =
+        Vec::with_capacity(groups.iter().map(|g| g.deflate.len() + 12).sum::<usize>() + 64);
+    encode_png_rows(&groups, width, height, tone, &mut out)?;
+    Ok(out)
+}
+
+/// Interleaved 8-bit RGB samples (`width` x `height`) in groups of
+/// [`crate::isp::render::BAND`] rows, filtered and compressed in parallel.
+fn rgb8_groups(bytes: &[u8], width: usize, height: usize) -> Result<Vec<PngRows>> {
     let need = width.checked_mul(BPP).and_then(|s| s.checked_mul(height));
     if width == 0 || height == 0 || Some(bytes.len()) != need {
         return Err(Error::invalid(format!(
@@ -363,11 +385,10 @@ pub fn write_png_rgb8(
     }
     // bytes.len() = 3 * width * height did not overflow, so neither does this (BAND > 0)
     let group = BPP * width * crate::isp::render::BAND.min(height);
-    let groups = bytes
+    bytes
         .par_chunks(group)
         .map_init(Encoder::new, |enc, rows| PngRows::encode(rows, width, enc))
-        .collect::<Result<Vec<_>>>()?;
-    write_png_groups(&groups, width, height, tone, path, policy)
+        .collect()
 }
 
 #[cfg(test)]

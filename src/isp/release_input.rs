@@ -140,17 +140,7 @@ pub fn release_codes(plane: &CfaPlane<'_>, frame: &FrameFacts<'_>) -> Result<Vec
         neutral,
         linearization,
     } = *frame;
-    if width < 3 || height < 3 {
-        return Err(Error::invalid(format!(
-            "bilinear demosaic needs at least 3x3 samples, got {width}x{height}"
-        )));
-    }
-    if plane.len() != width * height {
-        return Err(Error::invalid(format!(
-            "the plane holds {} samples, not {width}x{height}",
-            plane.len()
-        )));
-    }
+    check_plane(plane.len(), width, height)?;
     let s = Sites::new(levels, bayer, neutral, top, left)?;
     let lin = linearization.filter(|t| !t.is_empty());
     // Steps 1-3 and the quantization, per sample: the same float32 operations as numpy's.
@@ -188,8 +178,39 @@ pub fn release_codes(plane: &CfaPlane<'_>, frame: &FrameFacts<'_>) -> Result<Vec
             }
         }
     }
+    Ok(demosaic_codes(&q, width, height, &s.colour))
+}
+
+/// OpenCV's bilinear Bayer demosaic (`cv2.cvtColor(q, COLOR_BAYER_*2RGB)`) of 14-bit (or
+/// any 16-bit) codes `q` (`width` x `height`, row-major, at least 3 x 3) whose pattern at
+/// the origin is `bayer`: `height * width * 3` codes (R, G, B interleaved), step 4 of the
+/// module documentation without the quantization. The input store of the Python package
+/// (`day2night.train.cache`) demosaics its stored codes again with it.
+pub fn demosaic_bilinear(q: &[u16], width: usize, height: usize, bayer: Bayer) -> Result<Vec<u16>> {
+    check_plane(q.len(), width, height)?;
+    let colour: [usize; 4] = std::array::from_fn(|k| bayer.color_at(k >> 1, k & 1) as usize);
+    Ok(demosaic_codes(q, width, height, &colour))
+}
+
+/// A plane of `len` samples is `width` x `height` and at least 3 x 3.
+fn check_plane(len: usize, width: usize, height: usize) -> Result<()> {
+    if width < 3 || height < 3 {
+        return Err(Error::invalid(format!(
+            "bilinear demosaic needs at least 3x3 samples, got {width}x{height}"
+        )));
+    }
+    if Some(len) != width.checked_mul(height) {
+        return Err(Error::invalid(format!(
+            "the plane holds {len} samples, not {width}x{height}"
+        )));
+    }
+    Ok(())
+}
+
+/// The demosaic of checked codes: the inner samples, then the borders.
+fn demosaic_codes(q: &[u16], width: usize, height: usize, colour: &[usize; 4]) -> Vec<u16> {
     let mut out = vec![0u16; width * height * 3];
-    demosaic_inner(&q, width, height, &s.colour, &mut out);
+    demosaic_inner(q, width, height, colour, &mut out);
     // Borders: the first and last rows copy their inner neighbours, then the first and last
     // columns (OpenCV's rule, as the release sees it).
     let row = 3 * width;
@@ -200,7 +221,7 @@ pub fn release_codes(plane: &CfaPlane<'_>, frame: &FrameFacts<'_>) -> Result<Vec
         out.copy_within(o + 3..o + 6, o);
         out.copy_within(o + row - 6..o + row - 3, o + row - 3);
     }
-    Ok(out)
+    out
 }
 
 /// The bilinear demosaic of the inner samples (rows and columns 1..n-1).
@@ -308,6 +329,18 @@ mod tests {
                 (v * 16383.0) as u16
             })
             .collect();
+        reference_demosaic(&q, w, h, top, left, bayer)
+    }
+
+    /// The bilinear demosaic written out per pixel.
+    fn reference_demosaic(
+        q: &[u16],
+        w: usize,
+        h: usize,
+        top: usize,
+        left: usize,
+        bayer: Bayer,
+    ) -> Vec<u16> {
         let at = |r: usize, c: usize| q[r * w + c] as u32;
         let mut out = vec![0u16; w * h * 3];
         for y in 0..h {
@@ -367,6 +400,25 @@ mod tests {
                 );
             }
         }
+    }
+
+    #[test]
+    fn demosaic_alone_follows_the_documented_rule_for_every_phase_and_size() {
+        for (w, h) in [(3usize, 3usize), (4, 5), (11, 8), (7, 9)] {
+            let q: Vec<u16> = (0..w * h).map(|i| ((i * 7919) % 16384) as u16).collect();
+            for bayer in Bayer::ALL {
+                let got = demosaic_bilinear(&q, w, h, bayer).unwrap();
+                assert_eq!(
+                    got,
+                    reference_demosaic(&q, w, h, 0, 0, bayer),
+                    "{bayer:?} {w}x{h}"
+                );
+            }
+        }
+        let e = demosaic_bilinear(&[0; 6], 3, 2, Bayer::RGGB).unwrap_err();
+        assert!(e.to_string().contains("3x3"), "{e}");
+        let e = demosaic_bilinear(&[0; 8], 3, 3, Bayer::RGGB).unwrap_err();
+        assert!(e.to_string().contains("holds 8"), "{e}");
     }
 
     #[test]

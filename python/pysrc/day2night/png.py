@@ -1,14 +1,19 @@
-"""8-bit PNG reading and writing without an image library (the package depends on numpy only).
+"""8-bit PNG reading and writing: the extension encodes (``day2night.png_bytes``, the
+library's PNG writer, src/encode/png_rows.rs), numpy decodes.
 
 Reads what day2night and common writers produce: 8-bit greyscale, RGB or RGBA,
-non-interlaced, any filter. Writes 8-bit greyscale or RGB through a temporary file + rename."""
+non-interlaced, any filter. Writes 8-bit RGB (a greyscale array as R = G = B) through a
+temporary file + rename."""
 
 import struct
 import zlib
 
 import numpy as np
 
+from ._native import png_bytes
 from .atomic import write_bytes
+
+__all__ = ["PngError", "png_bytes", "write_png", "read_png", "check_png"]
 
 SIGNATURE = b"\x89PNG\r\n\x1a\n"
 CHANNELS = {0: 1, 2: 3, 6: 4}
@@ -16,32 +21,6 @@ CHANNELS = {0: 1, 2: 3, 6: 4}
 
 class PngError(ValueError):
     """A PNG this reader cannot read (the message names the file)."""
-
-
-def png_bytes(array) -> bytes:
-    a = np.ascontiguousarray(array)
-    if a.dtype != np.uint8:
-        raise ValueError(f"PNG: 8-bit samples expected, got {a.dtype}")
-    if a.ndim == 2:
-        colour, a = 0, a[:, :, None]
-    elif a.ndim == 3 and a.shape[2] == 3:
-        colour = 2
-    else:
-        raise ValueError(f"PNG: (H, W) or (H, W, 3) expected, got {a.shape}")
-    h, w, c = a.shape
-    rows = np.concatenate([np.zeros((h, 1), np.uint8), a.reshape(h, w * c)], axis=1)
-
-    def chunk(tag, body):
-        crc = zlib.crc32(tag + body) & 0xFFFFFFFF
-        return struct.pack(">I", len(body)) + tag + body + struct.pack(">I", crc)
-
-    head = struct.pack(">IIBBBBB", w, h, 8, colour, 0, 0, 0)
-    return (
-        SIGNATURE
-        + chunk(b"IHDR", head)
-        + chunk(b"IDAT", zlib.compress(rows.tobytes(), 6))
-        + chunk(b"IEND", b"")
-    )
 
 
 def write_png(path, array):

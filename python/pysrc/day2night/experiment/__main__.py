@@ -8,6 +8,9 @@ import sys
 
 from . import config
 from .rows import ROWS
+from .folds import FoldError
+from .mix import MixError
+from .runner import Experiment, ExperimentError
 
 EPILOG = """rows: """ + ", ".join(f"{r.id} ({r.label})" for r in ROWS) + """
 
@@ -34,10 +37,6 @@ def parse(argv):
 
 def main(argv=None):
     cfg = parse(argv)
-    from .folds import FoldError
-    from .mix import MixError
-    from .runner import Experiment, ExperimentError
-
     try:
         Experiment(cfg).run()
     except (ExperimentError, FoldError, MixError, ValueError) as e:

@@ -9,15 +9,22 @@ protocol, from the real set and the fold file, and the rows). :meth:`ExperimentC
 is ``RUN/config.json``: what a resume compares (:data:`CONFIG_KEYS`).
 
 Metadata of a field: ``help``, ``flags`` (its spellings; none: not a flag), ``group`` (the
-help's section), ``argparse`` (choices, metavar, nargs, action, required) and ``record``:
+help's section), ``argparse`` (choices, metavar, nargs, action, required), ``record``:
 ``"always"`` (in config.json), ``"paper"`` (in config.json only when not the paper's value,
 ``paper``, so a run folder of an earlier version resumes as before), ``"set"`` (in
-config.json when given, not compared) or None (not recorded: it changes no number)."""
+config.json when given, not compared) or None (not recorded: it changes no number), and
+``default_from``: where the option gets its value when the command line leaves it out, the
+sources tried in order (:meth:`ExperimentConfig.with_defaults`): ``"preset"`` (the
+``--preset``'s values, presets.py), ``"protocol"`` (the ``--protocol``'s, protocol.PRESETS),
+``"real set"`` (the ISP of the real set's targets), ``"fold file"`` (its number of folds)
+or the value itself. The only place a default is written."""
 
 import dataclasses
 import pathlib
 
 from . import presets, protocol, rows
+from .presets import FROM_PRESET
+from .protocol import FROM_FOLD_FILE, FROM_PROTOCOL, FROM_REAL_SET
 from .protocol import NOISE, PROTOCOLS, SYNTH_ISO, TARGETS
 
 PROTOCOL = "protocol (each also set by --protocol release)"
@@ -28,16 +35,22 @@ class ExperimentError(ValueError):
     """Bad input of the experiment (the message names the file, scene or option)."""
 
 
-def opt(default=None, help=None, flags=None, group=None, record=None, paper=None, **argparse):
+#: The sources a field's ``default_from`` may name (anything else is a value).
+SOURCES = (FROM_PRESET, FROM_PROTOCOL, FROM_REAL_SET, FROM_FOLD_FILE)
+
+
+def opt(default=None, help=None, flags=None, group=None, record=None, paper=None,
+        default_from=(), **argparse):
     """A field of :class:`ExperimentConfig` with its command line in its metadata."""
     meta = {"help": help, "flags": flags, "group": group, "record": record, "paper": paper,
-            "argparse": argparse}
+            "default_from": tuple(default_from), "argparse": argparse}
     return dataclasses.field(default=default, metadata=meta)
 
 
 def _paper(name, help, **kw):
-    """A training option recorded only when it is not the paper's."""
-    return opt(help=help, group=TRAINING, record="paper", paper=presets.PAPER[name], **kw)
+    """A training option recorded only when it is not the paper's, from the preset."""
+    return opt(help=help, group=TRAINING, record="paper", paper=presets.PAPER[name],
+               default_from=(FROM_PRESET,), **kw)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -49,10 +62,10 @@ class ExperimentConfig:
     real: str = opt(help="real night pairs written by `day2night real-pairs`",
                     record="always", metavar="REAL_DIR", required=True)
     output: str = opt(help="run folder", flags=("-o", "--output"), metavar="RUN", required=True)
+    # (the recorded fields in the order a resume names the first that differs: CONFIG_KEYS)
     task: str = opt("both", record="always", choices=["clean", "noisy", "both"])
     epochs: int = opt(help="training epochs (paper and default: 500; --preset mini: 40)",
-                      record="always")
-    device: str = opt("cpu", record="always", choices=["cpu", "cuda"])
+                      record="always", default_from=(FROM_PRESET,))
     seed: int = opt(0, help="seed of the folds, the synthetic data and the first training "
                     "seed", record="always")
     seeds: int = opt(1, help="train every unit with N seeds: --seed, --seed+1, ..., "
@@ -63,26 +76,32 @@ class ExperimentConfig:
                           "day, the row the paper's claims are made against; untrained when "
                           "day is not run)", metavar="ROW")
     folds: int = opt(help="cross-validation folds (default and paper: 3; with --folds-file: "
-                     "the file's)", record="always")
+                     "the file's)", record="always", default_from=(FROM_FOLD_FILE, 3))
+    width: int = opt(help="UNet init_features (paper and default: 32; smaller for tests, smoke "
+                     "runs and --preset mini: 8)", record="always",
+                     default_from=(FROM_PRESET,))
+    device: str = opt("cpu", record="always", choices=["cpu", "cuda"])
     rows: tuple = opt(help="rows to run (default: all)", record="always", nargs="+",
                       metavar="ROW")
-    width: int = opt(help="UNet init_features (paper and default: 32; smaller for tests, smoke "
-                     "runs and --preset mini: 8)", record="always")
     show: int = opt(3, help="test scenes per row in index.html")
     restart_unit: tuple = opt((), help="delete this unit's folder and train it again "
                               "(repeatable), e.g. clean/ours/all or noisy/supervised/1, "
                               "seed-S/TASK/ROW/FOLD for an extra seed of --seeds; for a damaged "
                               "unit", action="append", metavar="TASK/ROW/FOLD")
-    protocol: str = opt(help="preset: release sets the four options below to the release's",
-                        group=PROTOCOL, record="always", choices=list(PROTOCOLS))
+    protocol: str = opt("day2night", help="preset: release sets the four options below to "
+                        "the release's", group=PROTOCOL, record="always",
+                        choices=list(PROTOCOLS))
     targets: str = opt(help="ISP of every target (default: the one that made the real set's)",
-                       group=PROTOCOL, record="always", choices=list(TARGETS))
+                       group=PROTOCOL, record="always", choices=list(TARGETS),
+                       default_from=(FROM_PROTOCOL, FROM_REAL_SET))
     noise: str = opt(help="noise of synthetic noisy inputs: the synthesis' model, or the "
                      "release's S20 FE table clipped to [0, 1023] and truncated",
-                     group=PROTOCOL, record="always", choices=list(NOISE))
+                     group=PROTOCOL, record="always", choices=list(NOISE),
+                     default_from=(FROM_PROTOCOL,))
     synth_iso: str = opt(help="ISO of a synthetic noisy slot: alternate by position, or drawn "
                          "at random per day image as the release does", group=PROTOCOL,
-                         record="always", choices=list(SYNTH_ISO))
+                         record="always", choices=list(SYNTH_ISO),
+                         default_from=(FROM_PROTOCOL,))
     folds_file: str = opt(help="the release's utils/k_fold_indices_saved.p or its JSON export: "
                           "its fold lists instead of seeded folds", group=PROTOCOL,
                           record="always", metavar="PATH")
@@ -104,9 +123,29 @@ class ExperimentConfig:
 
     def with_preset(self):
         """This config with the preset's values (``paper`` without one) where it has none."""
-        values = presets.PRESETS[self.preset or "paper"]
-        return dataclasses.replace(self, **{k: v for k, v in values.items()
-                                            if getattr(self, k) is None})
+        return self.with_defaults({FROM_PRESET: presets.PRESETS[self.preset or "paper"]})
+
+    def with_defaults(self, sources):
+        """This config with each option left out (None) given by its field's
+        ``default_from``: the first source there that has a value for it. ``sources`` maps
+        a source to {option: value}; a source it does not map is not known yet and leaves
+        the option out (to be filled once it is known); an entry that is no source is the
+        value itself."""
+        values = {}
+        for f in dataclasses.fields(self):
+            if getattr(self, f.name) is not None:
+                continue
+            for src in f.metadata["default_from"]:
+                if src not in SOURCES:
+                    values[f.name] = src
+                elif src not in sources:
+                    break
+                elif f.name in sources[src]:
+                    values[f.name] = sources[src][f.name]
+                else:
+                    continue
+                break
+        return dataclasses.replace(self, **values)
 
     def check(self):
         """Validate the options (preset applied): an ExperimentError naming the flag."""
@@ -148,10 +187,9 @@ class ExperimentConfig:
 
 
 #: The options a resume compares with the earlier run's config.json, in the order it names
-#: the first that differs (every field recorded "always" or "paper"; a test checks).
-CONFIG_KEYS = ("day", "real", "task", "epochs", "seed", "seeds", "folds", "width", "device",
-               "rows", "protocol", "targets", "noise", "synth_iso", "folds_file", "folds_sha256",
-               "patch", "batch", "lr", "amp", "channels_last")
+#: the first that differs: every field recorded "always" or "paper", in field order.
+CONFIG_KEYS = tuple(f.name for f in dataclasses.fields(ExperimentConfig)
+                    if f.metadata["record"] in ("always", "paper"))
 #: The value of a training option absent from config.json: the paper's.
 PAPER_VALUES = {f.name: f.metadata["paper"] for f in dataclasses.fields(ExperimentConfig)
                 if f.metadata["record"] == "paper"}
@@ -232,11 +270,13 @@ def typed(config):
 
 def resolve(config):
     """The run's config: preset applied, checked, the day and real folders absolute, the
-    protocol resolved (protocol.for_run: the real set's target ISP, the fold file) and the
-    rows chosen (protocol.fresh_rows). Returns (config, {scene: ISP of its real target})."""
+    options left out given by their protocol, real set and fold file (protocol.for_run,
+    :meth:`ExperimentConfig.with_defaults`) and the rows chosen (protocol.fresh_rows).
+    Returns (config, {scene: ISP of its real target})."""
     c = typed(config.with_preset())
     c.check()
-    c, isps = protocol.for_run(c)
+    c, isps, sources = protocol.for_run(c)
+    c = c.with_defaults(sources)
     named = list(c.rows or ())
     chosen = protocol.fresh_rows(rows.select(named), c.targets, c.noise, bool(named))
     ids = [r.id for r in chosen]

@@ -19,10 +19,15 @@ import pathlib
 
 import numpy as np
 
+import day2night
+
 from ..isos import NOISY_ISOS
 from ..train import cache as input_cache
 from ..atomic import write_bytes
 from ..png import read_png
+from ..train.preprocess import network_input
+from ..train.targets import render_target, srgb8
+from .release_noise import noise_key, release_noisy_plane
 
 
 
@@ -108,8 +113,6 @@ def _first_line(e):
 
 
 def _read_dng(path, what):
-    import day2night
-
     try:
         return day2night.read_dng(str(path))
     except (OSError, ValueError) as e:
@@ -133,8 +136,6 @@ def real_pair(scene, task_iso, targets=None, source=None):
     ISP (and, for day2night's, from a clean raw without opcode lists, which its render
     applies); otherwise the target is rendered again from the scene's clean raw by
     :func:`real_target`. The input is then cut and turned onto the target's pixel grid."""
-    from ..train.preprocess import network_input
-
     raw = _input_raw(scene, task_iso)
     x = network_input(raw)
     y, geometry = real_target(scene, targets, source)
@@ -183,10 +184,6 @@ def render_target_as(isp, raw, neutral, display):
     release ignores them too). ``display``: day2night's target in the geometry real-pairs
     writes (DefaultCrop, Orientation: geometry "render"), else the active area as stored
     (geometry "raw"). The release's ISP has one geometry, its own ("release")."""
-    import day2night
-
-    from ..train.targets import srgb8
-
     if isp == "release":
         return release_render(raw, neutral), "release"
     if isp != "day2night":
@@ -199,8 +196,6 @@ def render_target_as(isp, raw, neutral, display):
 def release_render(raw, neutral):
     """The release ISP's 8-bit target of ``raw`` (``render --isp release``: its crop and its
     orientation, opcode lists ignored)."""
-    from ..train.targets import render_target
-
     return np.asarray(render_target(raw, neutral=neutral, isp="release"), np.uint8)
 
 
@@ -298,10 +293,6 @@ def synth_pairs(day_path, mode, seed, isos=NOISY_ISOS, targets="day2night", nois
     ``targets``: the ISP of the target (day2night's, with opcodes ignored like the input,
     or the release's); ``noise``: the noisy inputs' noise (``"day2night"``: the synthesis'
     own model; ``"release"``: release_noise.py on the clean night raw)."""
-    import day2night
-
-    from ..train.preprocess import network_input
-
     day = _read_dng(day_path, "day image")
     own_isos = tuple(isos) if noise == "day2night" else ()
     try:
@@ -316,8 +307,6 @@ def synth_pairs(day_path, mode, seed, isos=NOISY_ISOS, targets="day2night", nois
     planes = {"clean": out["clean"]}
     for iso in isos:
         if noise == "release":
-            from .release_noise import noise_key, release_noisy_plane
-
             planes[iso] = release_noisy_plane(out["clean"], day.meta["active_area"], iso,
                                               noise_key(seed, day.name, iso))
         else:

@@ -10,6 +10,8 @@ import pathlib
 import shutil
 import sys
 
+import day2night
+
 from ..isos import NOISY_ISOS
 from . import folds as folds_mod
 from . import mix as mix_mod
@@ -63,8 +65,6 @@ def day_images(day_dir):
 
 def check_day_images(days):
     """Read every day DNG (a file that is no DNG, or no CFA mosaic, is an error naming it)."""
-    import day2night
-
     for path in days.values():
         try:
             raw = day2night.read_dng(str(path))

@@ -14,6 +14,8 @@ An option given on the command line wins over the preset's. Options that change 
 the paper's (``ExperimentConfig.record``), so a run folder of an earlier version resumes as
 before."""
 
+#: The source name of these values in a config field's ``default_from`` (config.py).
+FROM_PRESET = "preset"
 PAPER = {"epochs": 500, "width": 32, "patch": 64, "batch": 128, "lr": 1e-3}
 PRESETS = {
     "paper": dict(PAPER),

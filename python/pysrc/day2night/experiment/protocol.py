@@ -24,7 +24,11 @@ import pathlib
 
 import numpy as np
 
+import day2night
+
 from ..isos import NOISY_ISOS  # noqa: F401  (re-exported)
+from . import mix as mix_mod
+from .release_folds import read_release_folds
 
 TARGETS = ("release", "day2night")
 NOISE = ("day2night", "release")
@@ -36,20 +40,14 @@ class ProtocolError(ValueError):
     """Protocol options that cannot be combined (the message names the flags)."""
 
 
-@dataclasses.dataclass(frozen=True)
-class Protocol:
-    name: str = "day2night"
-    targets: str = "day2night"
-    noise: str = "day2night"
-    synth_iso: str = "alternate"
-    folds_file: str = None
-    folds_sha256: str = None
-
-    def config(self):
-        """The run's recorded options (config.json): a resume must give the same."""
-        return {"protocol": self.name, "targets": self.targets, "noise": self.noise,
-                "synth_iso": self.synth_iso, "folds_file": self.folds_file,
-                "folds_sha256": self.folds_sha256}
+#: Where an option the command line left out gets its value: the sources a field of
+#: config.ExperimentConfig names in its ``default_from`` metadata (the preset's source,
+#: presets.FROM_PRESET, is the fourth). :func:`for_run` gives the values of these three.
+FROM_PROTOCOL, FROM_REAL_SET, FROM_FOLD_FILE = "protocol", "real set", "fold file"
+#: The values each ``--protocol`` gives (the table above); under day2night's, ``--targets``
+#: comes from the real set (:func:`real_target_isp`).
+PRESETS = {"day2night": {"noise": "day2night", "synth_iso": "alternate"},
+           "release": {"targets": "release", "noise": "release", "synth_iso": "release"}}
 
 
 def _choice(value, choices, flag):
@@ -72,13 +70,8 @@ def check_flags(protocol=None, targets=None, noise=None, synth_iso=None, folds_f
         )
 
 
-def resolve(protocol=None, targets=None, noise=None, synth_iso=None, folds_file=None,
-            real_targets="day2night"):
-    """The Protocol of the flags given (None: not given). ``real_targets``: the ISP of the
-    real set's targets (:func:`real_target_isp`), the default of ``targets``."""
-    check_flags(protocol, targets, noise, synth_iso, folds_file)
-    name = protocol or "day2night"
-    release = name == "release"
+def fold_file(folds_file):
+    """(absolute path, SHA-256) of the fold file ``folds_file`` ((None, None) without one)."""
     sha = None
     if folds_file is not None:
         path = pathlib.Path(folds_file)
@@ -88,14 +81,7 @@ def resolve(protocol=None, targets=None, noise=None, synth_iso=None, folds_file=
             raise ProtocolError(f"--folds-file {path}: cannot read it ({e.strerror or e})") \
                 from None
         folds_file = str(path.resolve())
-    return Protocol(
-        name=name,
-        targets=targets or ("release" if release else real_targets),
-        noise=noise or ("release" if release else "day2night"),
-        synth_iso=synth_iso or ("release" if release else "alternate"),
-        folds_file=folds_file,
-        folds_sha256=sha,
-    )
+    return folds_file, sha
 
 
 def _json_lines(path):
@@ -181,24 +167,24 @@ LEGACY_CONFIG = {"protocol": "day2night", "targets": "day2night", "noise": "day2
 
 
 def for_run(config):
-    """``config`` (config.ExperimentConfig) with its protocol resolved: the Protocol's
-    options (Protocol.config) and ``folds``, the number of folds (from the fold file when
-    there is one; else as given, 3 when not). Returns (that config, {scene: ISP of its
-    target})."""
+    """What the protocol settles for ``config`` (config.ExperimentConfig, checked): returns
+    (``config`` with its fold file absolute and hashed, {scene: ISP of its real target}, the
+    values of the sources of its options left out: the protocol's preset, the real set's
+    target ISP, the fold file's number of folds). A ``--folds`` that differs from the fold
+    file's is an error."""
     isps = real_target_isps(config.real)
     real = "release" if isps and set(isps.values()) == {"release"} else "day2night"
-    p = resolve(config.protocol, config.targets, config.noise, config.synth_iso,
-                config.folds_file, real_targets=real)
-    folds = count = config.folds
-    if p.folds_file is not None:
-        from .release_folds import read_release_folds
-
-        count = len(read_release_folds(p.folds_file)["test_index_all"])
-        if folds is not None and int(folds) != count:
-            raise ProtocolError(f"--folds {folds}: the fold file {p.folds_file} holds {count} "
+    path, sha = fold_file(config.folds_file)
+    counted = {}
+    if path is not None:
+        count = len(read_release_folds(path)["test_index_all"])
+        if config.folds is not None and int(config.folds) != count:
+            raise ProtocolError(f"--folds {config.folds}: the fold file {path} holds {count} "
                                 "folds (leave --folds out)")
-    return dataclasses.replace(config, **p.config(), folds=int(3 if count is None else count)), \
-        isps
+        counted = {"folds": count}
+    sources = {FROM_PROTOCOL: PRESETS[config.protocol], FROM_REAL_SET: {"targets": real},
+               FROM_FOLD_FILE: counted}
+    return dataclasses.replace(config, folds_file=path, folds_sha256=sha), isps, sources
 
 
 def run_isos(synth_iso, days, seed):
@@ -211,9 +197,7 @@ def run_isos(synth_iso, days, seed):
 
 def synthetic_slots(names, isos):
     """mix.synthetic_slots of ``names`` with the run's synthetic ISOs (:func:`run_isos`)."""
-    from .mix import synthetic_slots as slots
-
-    return with_isos(slots(names), isos)
+    return with_isos(mix_mod.synthetic_slots(names), isos)
 
 
 def mixes_with_isos(mixes, isos):
@@ -247,8 +231,6 @@ def notes(config, days, scenes, target_isps):
         out.append("the fresh row is left out: it synthesizes with day2night's ISP and noise "
                    "(FreshPatches), and this run's targets or noise are the release's")
     if config.noise == "release" and days:
-        import day2night
-
         first = sorted(days)[0]
         white = day2night.read_dng(str(days[first])).meta.get("white_level")
         if white is not None and float(white) != 1023:

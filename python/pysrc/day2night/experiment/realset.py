@@ -21,6 +21,11 @@ import re
 
 import numpy as np
 
+import day2night
+
+from . import pairs
+from ..png import PngError, check_png
+
 NOISY_RE = re.compile(r"_iso(\d+)\.dng$", re.IGNORECASE)
 
 
@@ -176,8 +181,6 @@ def raw_problem(raw):
 
 
 def _read_dng(path, sid):
-    import day2night
-
     try:
         raw = day2night.read_dng(str(path))
     except (OSError, ValueError) as e:
@@ -192,9 +195,6 @@ def check_scene(scene, manifest, clean=True, isos=()):
     """Check the files of ``scene`` the experiment reads, before it writes anything: sizes and
     SHA-256 (:func:`verify_outputs`), the clean raw (``clean``) and the noisy raws of
     ``isos`` as DNGs, the target as a PNG of the network input's size once cut and turned."""
-    from . import pairs
-    from ..png import PngError, check_png
-
     verify_outputs(scene, manifest)
     raws = ([scene.clean_raw] if clean else []) + [scene.noisy[i] for i in isos]
     try:

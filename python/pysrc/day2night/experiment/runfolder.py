@@ -20,6 +20,10 @@ import pathlib
 
 import numpy as np
 
+from . import folds as folds_mod
+from .pairs import check_cached
+from ..train.trainer import RESUME_STATE, CheckpointError, load_checkpoint
+
 SCORE_KEYS = ("psnr", "ssim", "delta_e")
 NON_FINITE = ("inf", "-inf", "nan")
 
@@ -84,8 +88,6 @@ def read_config(path):
 def read_folds(path, folds, seed):
     """The fold manifest of an earlier run, checked (folds.check_folds and the fold numbers
     the runner indexes with)."""
-    from . import folds as folds_mod
-
     m = read_object(path, "fold manifest", FOLDS_ADVICE)
     try:
         folds_mod.check_folds(m)
@@ -199,8 +201,6 @@ def check_data(out):
     """Every complete cached pair under RUN/data (a target without its input is the trace of
     an interrupted write: it is made again): ``.in.npy`` input stores (pairs.check_cached)
     and inputs of the first format (``.x.npy``, migrated when used)."""
-    from .pairs import check_cached
-
     for suffix in (".x.npy", ".in.npy"):
         for xp in sorted(pathlib.Path(out, "data").rglob("*" + suffix)):
             yp = xp.with_name(xp.name[: -len(suffix)] + ".y.npy")
@@ -218,8 +218,6 @@ def check_data(out):
 def check_checkpoints(out, uid, model_dir, epochs):
     """The checkpoints of a unit that is not done: ``last.pt`` resumable, ``best.pt``
     loadable; returns the epochs ``last.pt`` holds (0 without it)."""
-    from ..train.trainer import RESUME_STATE, CheckpointError, load_checkpoint
-
     advice = (f"no earlier checkpoint is kept to fall back to; "
               f"{unit_advice(out, uid)}")
     model_dir = pathlib.Path(model_dir)

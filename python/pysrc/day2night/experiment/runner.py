@@ -28,6 +28,10 @@ from ..atomic import write_json
 from .config import ExperimentConfig, ExperimentError, resolve  # noqa: F401
 from .prepare import day_images, log  # noqa: F401
 from .source import PairSource
+from ..train._torch import available as torch_available
+from ..train._torch import missing as torch_missing
+from ..train._torch import torch
+from ..train.trainer import CheckpointError
 
 
 class Experiment:
@@ -46,11 +50,8 @@ class Experiment:
         """Read and check every input and what an earlier run left in RUN, then write config,
         folds and mixes (nothing is written when anything is bad)."""
         c = self.config
-        try:
-            import torch
-        except ImportError as e:
-            raise ExperimentError(f"training needs torch ({e}): pip install day2night[train]") \
-                from None
+        if not torch_available():
+            raise ExperimentError(f"training needs torch ({torch_missing()})")
         if c.device == "cuda" and not torch.cuda.is_available():
             raise ExperimentError("--device cuda: torch sees no CUDA device (use --device cpu)")
         prepare.check_config(self.out, c.record())
@@ -136,8 +137,6 @@ class Experiment:
         """Train the unit ``unit_key`` (task, row, fold) under the config ``c`` (its seed) on
         ``data`` (training pairs, or None for fresh synthesis; validation pairs), then score
         it: ``testing`` = (the test inputs, the scenes whose images the report shows)."""
-        from ..train.trainer import CheckpointError
-
         (task, row, fold), (train_p, val_p), (tests, report_scenes) = unit_key, data, testing
         if train_p is None:
             days = {n: self.inputs.days[n] for n in self.inputs.day_train}

@@ -7,6 +7,7 @@ from ..isos import NOISY_ISOS
 from . import mix as mix_mod
 from . import pairs, protocol
 from .config import ExperimentError
+from .rows import test_keys
 
 
 class PairSource:
@@ -83,6 +84,4 @@ class PairSource:
 
     def tests(self, task, test_scenes):
         """(scene, input key, (x_path, y_path)) of every test input of a unit."""
-        from .rows import test_keys
-
         return [(sid, k, self.real(sid, k)) for sid in test_scenes for k in test_keys(task)]

@@ -5,10 +5,17 @@ import pathlib
 
 import numpy as np
 
+import day2night
+
 from ..isos import NOISY_ISOS
 from .. import delta_e2000_map
 from . import pairs
 from ..png import write_png
+from ..train.config import TrainConfig
+from ..train.data import FixedPatches, FreshPatches, fresh_budget
+from ..train.infer import predict
+from ..train.scores import score
+from ..train.trainer import load_model, make_model, train
 
 
 def fresh_set(folder, days, config, task):
@@ -16,10 +23,6 @@ def fresh_set(folder, days, config, task):
     through ``folder``, a folder of links to them, at the fixed "Ours" row's budget: as many
     patches per epoch as the stride-``patch`` grids of the fixed inputs hold
     (``data.fresh_budget``: crops per image from each image's area)."""
-    from ..train.data import FreshPatches, fresh_budget
-
-    import day2night
-
     folder = pathlib.Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
     shapes, sides = {}, {}
@@ -53,14 +56,12 @@ def _fixed_shape(targets, raw):
 
 def fixed_set(pairs_, patch):
     """The patches of stored (x_path, y_path) pairs (``data.FixedPatches``)."""
-    from ..train.data import FixedPatches
 
     return FixedPatches([x for x, _ in pairs_], [y for _, y in pairs_], patch, patch)
 
 
 def train_config(config, model_dir):
     """The trainer's TrainConfig of an ExperimentConfig (its checkpoints in ``model_dir``)."""
-    from ..train.config import TrainConfig
 
     c = config
     return TrainConfig(out_dir=str(model_dir), epochs=c.epochs, batch_size=c.batch, lr=c.lr,
@@ -71,7 +72,6 @@ def train_config(config, model_dir):
 def train_unit(config, model_dir, val_p, train_set):
     """Train (or resume, from ``model_dir``) on ``train_set`` (a callable giving the data
     set: :func:`fixed_set`, :func:`fresh_set`), validated on the pairs ``val_p``."""
-    from ..train.trainer import train
 
     val_set = fixed_set(val_p, config.patch)
     return train(train_config(config, model_dir), train_set(), val_set)
@@ -89,7 +89,6 @@ def heat(de, scale=10.0):
 def score_unit(config, out, task, row, fold, tests, result, report_scenes):
     """The unit's scores.json record: ``result`` (train's) scored on ``tests``
     (PairSource.tests); the images of ``report_scenes`` written under ``out``/img."""
-    from ..train.trainer import load_model
 
     model = load_model(result["best"], device=config.device)
     # the epochs' numbers without their timings (table.json is the same on every rerun)
@@ -111,8 +110,6 @@ def score_untrained(config, out, task, row, fold, tests, report_scenes):
     """The scores.json record of the untrained row: the initial weights of a unit trained
     with ``config`` (``trainer.make_model``: ``torch.manual_seed(config.seed)``, width
     ``config.width``), not trained, scored like :func:`score_unit` (no history)."""
-    from ..train.trainer import make_model
-
     model = make_model(train_config(config, None)).to(config.device).eval()
     return {"task": task, "row": row.id, "fold": fold, "history": [], "initial": {},
             "images": score_model(config, model, out, task, row, tests, report_scenes)}
@@ -121,9 +118,6 @@ def score_untrained(config, out, task, row, fold, tests, report_scenes):
 def score_model(config, model, out, task, row, tests, report_scenes):
     """The per-image scores of ``model`` on ``tests`` (PairSource.tests), as scores.json's
     "images"; the images of ``report_scenes`` written under ``out``/img."""
-    from ..train.infer import predict
-    from ..train.scores import score
-
     images = []
     for sid, key, (xp, yp) in tests:
         x, y = pairs.load(xp), np.asarray(pairs.load(yp))

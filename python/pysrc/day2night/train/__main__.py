@@ -14,13 +14,13 @@ import dataclasses
 import sys
 
 from ..isos import NOISY_ISOS
+from . import data, trainer
+from .config import TrainConfig
 
 
 def parser():
     """The command line: a flag per TrainConfig field (its default, help and choices from
-    the field), then the data sets' flags. Imports torch (through the trainer)."""
-    from .config import TrainConfig
-
+    the field), then the data sets' flags."""
     p = argparse.ArgumentParser(prog="python -m day2night.train", description=__doc__,
                                 formatter_class=argparse.RawDescriptionHelpFormatter)
     src = p.add_mutually_exclusive_group(required=True)
@@ -46,8 +46,6 @@ def parser():
 
 def config(args):
     """The TrainConfig of parsed arguments (:func:`parser`'s)."""
-    from .config import TrainConfig
-
     return TrainConfig(**{f.name: getattr(args, f.name) for f in dataclasses.fields(TrainConfig)})
 
 
@@ -58,7 +56,6 @@ def main(argv=None):
         print(f"day2night.train: error: {e}", file=sys.stderr)
         return 2
     try:
-        from . import data, trainer
         cfg = config(args)
         if args.train:
             train_set = data.FixedPatches.from_dir(args.train, args.patch, args.patch)

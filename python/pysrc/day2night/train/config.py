@@ -1,8 +1,10 @@
-"""The trainer's settings, :class:`TrainConfig`: a module without torch, so that
+"""The trainer's settings, :class:`TrainConfig`: a module that works without torch, so that
 ``python -m day2night.train --help`` and the experiment's checks run where torch is not
-installed (torch is imported only to ask whether a CUDA device is there)."""
+installed (torch, from _torch.py, is asked only whether a CUDA device is there)."""
 
 import dataclasses
+
+from ._torch import torch
 
 
 def _opt(default, help=None, **argparse):
@@ -52,8 +54,6 @@ class TrainConfig:
         if self.device not in ("cpu", "cuda") and not self.device.startswith("cuda:"):
             raise ValueError(f"device {self.device!r}: use cpu or cuda")
         if self.device.startswith("cuda"):
-            from ._torch import torch
-
             if not torch.cuda.is_available():
                 raise ValueError(f"device {self.device!r}: torch sees no CUDA device")
         if self.amp not in (None, "bf16"):

@@ -30,10 +30,12 @@ import os
 
 import numpy as np
 
+from .._native import fresh_pair, synthesize
 from ..atomic import open_atomic
 from ..isos import NOISY_ISOS
+from ..pairs import NightPairs
 from . import cache, preprocess, targets
-from ._torch import torch
+from ._torch import Dataset, torch
 
 
 def _load(a, mmap):
@@ -70,7 +72,7 @@ def save_pair(folder, name, x, y):
             np.save(f, a)
 
 
-class FixedPatches(torch.utils.data.Dataset):
+class FixedPatches(Dataset):
     """Every non-overlapping ``patch`` x ``patch`` crop (top-left on a ``stride`` grid) of
     fixed pairs. ``inputs``: H x W x 3 float32 network inputs (arrays or ``.npy`` paths);
     ``targets``: H x W x 3 uint8 sRGB targets (arrays or paths), same sizes. Paths are
@@ -151,7 +153,7 @@ def cut(a, patch):
         a.reshape(h, patch, w, patch, 3).transpose(0, 2, 4, 1, 3).reshape(h * w, 3, patch, patch))
 
 
-class FreshPatches(torch.utils.data.Dataset):
+class FreshPatches(Dataset):
     """Fresh synthesis: item i of epoch e is the ``crop`` x ``crop`` night synthesis
     ``NightPairs(day_dir, crop, isos, seed, crops_per_image)`` draws for (e, i), cut into
     (crop/patch)^2 patches. ``task``: "noisy" (input = the noisy raw of the drawn ISO) or
@@ -161,7 +163,6 @@ class FreshPatches(torch.utils.data.Dataset):
     def __init__(self, day_dir, crop=512, patch=64, isos=NOISY_ISOS, seed=0,
                  crops_per_image=1, task="noisy", gamma=preprocess.GAMMA, mode="local",
                  items_per_image=None, **options):
-        from ..pairs import NightPairs
         if task not in ("noisy", "clean"):
             raise ValueError(f"task {task!r}: use 'noisy' or 'clean'")
         if crop % patch or crop < patch:
@@ -204,7 +205,6 @@ class FreshPatches(torch.utils.data.Dataset):
         return self.pairs.epoch
 
     def _pair(self, index, patch):
-        from .._native import fresh_pair
         q = self.pairs.place(self.pair_index(index))
         return fresh_pair(q["raw"], q["crop"], q["iso"], seed=self.seed, variant=q["variant"],
                           mode=self.mode, task=self.task, table=preprocess._table(self.gamma),
@@ -218,7 +218,6 @@ class FreshPatches(torch.utils.data.Dataset):
         """``arrays(index)`` computed the long way: ``synthesize`` of the crop, then
         ``preprocess.network_input_array`` and ``targets.srgb8`` in numpy (the same numbers;
         for tests and benches)."""
-        from .._native import synthesize
         q = self.pairs.place(self.pair_index(index))
         raw, (top, left, h, w) = q["raw"], q["crop"]
         out = synthesize(raw, seed=self.seed, variant=q["variant"], mode=self.mode,

@@ -26,7 +26,7 @@ import sys
 import time
 
 from ..atomic import open_atomic, write_text
-from ._torch import torch
+from ._torch import no_grad, torch
 from .config import TrainConfig  # noqa: F401  (trainer.TrainConfig, as before)
 from .data import collate
 from .unet import UNet
@@ -94,7 +94,7 @@ def train_epoch(model, loader, optimizer, device, epoch, progress=None, cfg=None
     return total / max(count, 1), count
 
 
-@torch.no_grad()
+@no_grad
 def evaluate(model, loader, device, world, cfg=None):
     """(mean L1, PSNR in dB of the mean squared error) over the validation patches, summed
     over all ranks."""

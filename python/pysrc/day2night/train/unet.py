@@ -16,12 +16,11 @@ release's training loads into this class (``UNet.load_state_dict``).
 
 from collections import OrderedDict
 
-from ._torch import torch
-
-nn = torch.nn
+from ._torch import Module, torch
 
 
 def _level(cin, cout, name):
+    nn = torch.nn
     return nn.Sequential(OrderedDict([
         (f"{name}conv1", nn.Conv2d(cin, cout, kernel_size=3, padding=1, bias=False)),
         (f"{name}norm1", nn.BatchNorm2d(cout)),
@@ -32,7 +31,7 @@ def _level(cin, cout, name):
     ]))
 
 
-class UNet(nn.Module):
+class UNet(Module):
     """UNet(in_channels=3, out_channels=3, init_features=32): the paper's night ISP. Input
     N x in_channels x H x W with H and W multiples of 16 (four 2x poolings); output
     N x out_channels x H x W in (0, 1)."""
@@ -42,6 +41,7 @@ class UNet(nn.Module):
 
     def __init__(self, in_channels=3, out_channels=3, init_features=32):
         super().__init__()
+        nn = torch.nn
         f = int(init_features)
         if f < 1:
             raise ValueError(f"init_features {init_features!r} must be a positive integer")
