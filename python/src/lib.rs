@@ -8,7 +8,7 @@
 //! metadata dict to a raw). Entry points: `raw` (`Raw`, `read_dng`),
 //! `synthesize` (`synthesize`, `write_outputs`), `render`, `metrics`, `pairs`
 //! (`NightPairs` items), `patches` (`fresh_pair`: `FreshPatches` items), `dataset_units`,
-//! `pool` (`set_threads`, `threads`).
+//! `pool` (`set_threads`, `threads`), `merge` (a burst's mean).
 #![forbid(unsafe_code)]
 
 mod args;
@@ -17,6 +17,7 @@ mod convert;
 mod dataset_units;
 mod diagnostics;
 mod errors;
+mod merge;
 mod metrics;
 mod option_default;
 mod pairs;
@@ -55,6 +56,7 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(pool::set_threads, m)?)?;
     m.add_function(wrap_pyfunction!(pool::threads, m)?)?;
     m.add_function(wrap_pyfunction!(raw::write_dng, m)?)?;
+    m.add_function(wrap_pyfunction!(merge::merge, m)?)?;
     m.add("BOUNDS", args::bounds_dict(m.py())?)?;
     m.add("SYNTH_OPTIONS", synth_options::table_dict(m.py())?)?;
     m.add("KEYWORDS", synth_options::keywords_dict(m.py())?)?;
