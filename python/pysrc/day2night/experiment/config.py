@@ -49,6 +49,10 @@ class ExperimentConfig:
     real: str = opt(help="real night pairs written by `day2night real-pairs`",
                     record="always", metavar="REAL_DIR", required=True)
     output: str = opt(help="run folder", flags=("-o", "--output"), metavar="RUN", required=True)
+    captures: str = opt(help="the capture folders REAL_DIR was made from (the SCENES of "
+                        "`day2night real-pairs`): the burst row averages their ISO 1600 and "
+                        "3200 bursts (without it the row is left out)", record="set",
+                        metavar="SCENES")
     task: str = opt("both", record="always", choices=["clean", "noisy", "both"])
     epochs: int = opt(help="training epochs (paper and default: 500; --preset mini: 40)",
                       record="always")
@@ -204,7 +208,9 @@ def resolve(config):
     c, isps = protocol.for_run(c)
     named = list(c.rows or ())
     chosen = protocol.fresh_rows(rows.select(named), c.targets, c.noise, bool(named))
+    chosen = rows.for_tasks(chosen, c.task, bool(named))
     c = dataclasses.replace(
         c, day=str(pathlib.Path(c.day).resolve()), real=str(pathlib.Path(c.real).resolve()),
+        captures=str(pathlib.Path(c.captures).resolve()) if c.captures else None,
         rows=tuple(r.id for r in chosen), restart_unit=tuple(dict.fromkeys(c.restart_unit)))
     return c, isps

@@ -156,7 +156,7 @@ def check_run_folder(out, work, restart, scenes, epochs):
             tests = split["test"] if split else sorted(scenes)
             runfolder.read_scores(out, udir / "scores.json", task, row.id, fold,
                                   rows.test_keys(task), tests)
-        else:
+        elif row.source != "burst":  # the burst row has no checkpoints (burst.py)
             runfolder.check_checkpoints(out, uid, udir / "model", epochs)
     runfolder.check_data(out)
 
