@@ -244,3 +244,21 @@ def test_the_command_writes_the_row_into_the_table_without_torch_or_training(sta
     assert "Left out: the burst row of the noisy task: the real set holds 1 frame(s)" in \
         (out2 / "table.md").read_text()
     assert "row burst (noisy task) left out: the real set holds 1" in r.stderr
+
+
+def test_left_out_on_the_authors_processed_tree(cli, tmp_path):
+    """The release's night_real/ tree (one DNG per ISO): the row is left out, --captures or
+    not, and the reason names the frame count."""
+    from test_experiment_protocol import processed_tree
+
+    days, tree = processed_tree(cli, tmp_path)
+    real = tmp_path / "real"
+    cli("real-pairs", tree, "-o", real, "-q")
+    for captures in (None, str(tree)):
+        c, _ = resolve(ExperimentConfig(day=str(days), real=str(real), output=str(tmp_path / "o"),
+                                        task="noisy", captures=captures))
+        kept, gone = burst.burst_rows(c, inputs_of(c))
+        assert "burst" not in [r.id for r in kept]
+        assert gone == [{"task": "noisy", "row": "burst", "why": (
+            "the real set holds 1 frame(s) at ISO 1600 for scene 000 (the authors' processed "
+            "tree holds one per ISO): the burst row averages whole bursts")}]
