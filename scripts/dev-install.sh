@@ -5,8 +5,8 @@
 # 1. VENV is made if missing (python3 -m venv), with the wheel's build tools
 #    (scripts/wheel-requirements.txt: ziglang, cargo-zigbuild, ...) and maturin;
 # 2. scripts/wheel.sh builds the one wheel (the Python extension and the release `day2night`
-#    binary as its script; about 10 minutes the first time on 2 cores); D2N_WHEEL=PATH
-#    installs that wheel instead of building one (scripts/test.sh passes the one it built);
+#    binary as its script; minutes the first time: README.md, "The two commands");
+#    D2N_WHEEL=PATH installs that wheel instead (scripts/test.sh passes the one it built);
 # 3. the wheel goes into VENV with the `train` extra (torch; --no-train: without), replacing
 #    an earlier build of the same version;
 # 4. checked: VENV/bin/day2night --version is the wheel's version and
