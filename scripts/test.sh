@@ -9,7 +9,8 @@
 #      binary, manylinux2014), built once and installed into the same venv (with ray[data]
 #      from python/tests/requirements-ray.txt where it has wheels, and torch from
 #      python/tests/requirements-train.txt); scripts/wheel-check.sh runs that wheel in a
-#      fresh venv without cargo/rustc against the CLI built in 2; then the pytest suite
+#      fresh venv without cargo/rustc against the CLI built in 2 (installed into the venv by
+#      scripts/dev-install.sh, the documented way from a checkout); then the pytest suite
 #      (python/tests), which compares the package with the CLI built in 2.
 # Nothing passes without testing (tests/README.md): a missing validator, exiftool, chromium,
 # iinfo or GNU time fails the run; D2N_REQUIRE_TOOLS=0 (local runs) instead declares the
@@ -17,7 +18,8 @@
 # ignored. Tests that need the real-camera files of ../shared/data (or $D2N_SHARED_DATA) are
 # reported as ignored when those were absent at build time; D2N_REQUIRE_SHARED_DATA=1 (set
 # by .ci/run when ../shared/data exists) makes them fail instead.
-# --slow: also the slow tests (#[ignore = "slow: ..."], names slow_*), in a release build.
+# --slow: also the slow tests (#[ignore = "slow: ..."], names slow_*), in a release build, and
+# the docs' slow blocks (D2N_SLOW=1: python/tests/test_docs_run.py, "docs-run: slow").
 # Extra arguments go to cargo test, e.g. scripts/test.sh --test it dng_roundtrip:: (then the
 # Python suite is skipped; D2N_PYTHON_TESTS=1 runs it anyway, D2N_PYTHON_TESTS=0 never).
 set -euo pipefail
@@ -146,11 +148,18 @@ if [ "$py_tests" = 1 ]; then
   # checked in a fresh venv without cargo/rustc against the cargo-built CLI.
   echo "scripts/test.sh: building the wheel (scripts/wheel.sh) and installing it into $VENV" >&2
   wheel=$(D2N_WHEEL_PYTHON="$VENV/bin/python" scripts/wheel.sh | tail -1)
-  "$VENV/bin/python" -m pip install --quiet --disable-pip-version-check --force-reinstall --no-deps "$wheel"
+  # installed the documented way (scripts/dev-install.sh, README.md "Install"), with the
+  # train extra where torch is installed (its dependencies are then already there)
+  train_flag=--no-train
+  [ "${D2N_REQUIRE_TORCH:-}" = 1 ] && train_flag=
+  D2N_WHEEL="$wheel" scripts/dev-install.sh "$VENV" $train_flag >/dev/null
+  export D2N_DEV_VENV="$VENV" D2N_DEV_TRAIN="$([ -z "$train_flag" ] && echo 1 || echo 0)"
   D2N_WHEEL_PYTHON="$VENV/bin/python" scripts/wheel-check.sh "$wheel" "$D2N_BIN"
   if [ "${D2N_PACKAGE_CHECK:-0}" = 1 ]; then
     D2N_WHEEL_PYTHON="$VENV/bin/python" scripts/package-check.sh
   fi
   # ---- end of the wheel -----------------------------------------------------------------
+  # --slow: also the docs' slow blocks (docs-run: slow, e.g. the experiment's mini preset)
+  if [ "$slow" = 1 ]; then export D2N_SLOW=1; fi
   "$VENV/bin/python" -m pytest -q python/tests
 fi

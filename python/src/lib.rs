@@ -9,7 +9,7 @@
 //! `synthesize` (`synthesize`, `write_outputs`), `render`, `metrics`, `pairs`
 //! (`NightPairs` items), `patches` (`fresh_pair`: `FreshPatches` items), `dataset_units`,
 //! `network_input` (`release_codes`, `demosaic_bilinear`: the release's network input),
-//! `png` (`png_bytes`), `pool` (`set_threads`, `threads`).
+//! `png` (`png_bytes`), `pool` (`set_threads`, `threads`), `merge` (a burst's mean).
 #![forbid(unsafe_code)]
 
 mod args;
@@ -18,6 +18,7 @@ mod convert;
 mod dataset_units;
 mod diagnostics;
 mod errors;
+mod merge;
 mod metrics;
 mod network_input;
 mod option_default;
@@ -61,6 +62,7 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(pool::set_threads, m)?)?;
     m.add_function(wrap_pyfunction!(pool::threads, m)?)?;
     m.add_function(wrap_pyfunction!(raw::write_dng, m)?)?;
+    m.add_function(wrap_pyfunction!(merge::merge, m)?)?;
     m.add("BOUNDS", args::bounds_dict(m.py())?)?;
     m.add("SYNTH_OPTIONS", synth_options::table_dict(m.py())?)?;
     m.add("KEYWORDS", synth_options::keywords_dict(m.py())?)?;

@@ -6,7 +6,8 @@ temporary folder per document, in the document's order, with `day2night` on PATH
 of D2N_BIN; `cargo run --release --` in a command means it too), `python` the interpreter
 running the tests (with the package), and a copy of `fixtures/` in the folder. `python`
 blocks run in one namespace per document, in the same folder. A failure names the
-document, the line of the block and the error.
+document, the line of the block and the error. Shell blocks also get D2N_ROOT, the
+repository's root (a setup may link a folder of it, e.g. `python`, to stand for the clone).
 
 An HTML comment right before a block (blank lines between allowed) changes that:
 
@@ -15,8 +16,12 @@ An HTML comment right before a block (blank lines between allowed) changes that:
     <!-- docs-run: setup
     COMMANDS OR CODE -->                  run first, in the block's language (e.g. make
                                           card_*.dng from the fixture); not shown to readers
-    <!-- docs-run: needs MODULE -->       a python block that needs MODULE: skipped, with
-                                          the reason, when it cannot be imported
+    <!-- docs-run: needs MODULE -->       a block that needs the Python module MODULE
+                                          (e.g. torch): skipped, with the reason, when the
+                                          test interpreter cannot import it
+    <!-- docs-run: slow (REASON) -->      run only with D2N_SLOW=1 (`scripts/test.sh --slow`
+                                          sets it): a block of minutes, such as a training
+                                          run; skipped with REASON otherwise
 
 Every fenced block names its language (`text` for diagrams, synopses and output), so a
 command cannot hide in an untagged block. Also checked: repository paths named in the docs
@@ -44,17 +49,18 @@ RUN = {"sh", "bash", "console", "python"}
 SHOWN = {"text", "json", "yaml", "rust", "rust,no_run", "rust,ignore", "toml", "diff"}
 # docs/cli.md is generated from --help (tests/it/cli_docs.rs); its blocks are `text`
 FENCE = re.compile(r"^(\s*)```(\S*)\s*$")
-MARK = re.compile(r"<!--\s*docs-run:\s*(skip|setup|needs)\b(.*?)-->", re.S)
+MARK = re.compile(r"<!--\s*docs-run:\s*(skip|setup|needs|slow)\b(.*?)-->", re.S)
 
 
 class Block:
     def __init__(self, doc, line, lang, code):
         self.doc, self.line, self.lang, self.code = doc, line, lang, code
-        self.skip = self.setup = self.needs = None
+        self.skip = self.setup = self.needs = self.slow = None
 
     @property
     def where(self):
-        return f"{self.doc.relative_to(ROOT)}:{self.line}"
+        doc = self.doc.relative_to(ROOT) if self.doc.is_relative_to(ROOT) else self.doc
+        return f"{doc}:{self.line}"
 
 
 def blocks(doc):
@@ -81,10 +87,10 @@ def blocks(doc):
         tail = text_before[text_before.rfind("\n\n") + 1:] if "\n\n" in text_before else text_before
         for mk in MARK.finditer(tail):
             kind, arg = mk.group(1), mk.group(2).strip()
-            if kind == "skip":
+            if kind in ("skip", "slow"):
                 assert re.fullmatch(r"\(.+\)", arg, re.S), \
-                    f"{b.where}: docs-run: skip needs a reason in parentheses"
-                b.skip = arg[1:-1]
+                    f"{b.where}: docs-run: {kind} needs a reason in parentheses"
+                setattr(b, kind, arg[1:-1])
             elif kind == "setup":
                 b.setup = arg
             else:
@@ -105,13 +111,15 @@ def test_every_block_names_its_language():
 
 
 def test_markers_are_on_runnable_blocks():
-    bad = [b.where for b in ALL if b.lang not in RUN and (b.skip or b.setup or b.needs)]
+    bad = [b.where for b in ALL if b.lang not in RUN and (b.skip or b.setup or b.needs or b.slow)]
     assert not bad, f"docs-run markers on blocks that never run: {bad}"
 
 
 def test_skipped_blocks_are_counted():
     """Prints the count (pytest -s, or -rA) and every skipped block with its reason."""
     skipped = [f"{b.where} ({b.skip})" for b in RUNNABLE if b.skip]
+    slow = [f"{b.where} ({b.slow})" for b in RUNNABLE if b.slow and not b.skip]
+    print(f"docs-run: {len(slow)} slow block(s), run with D2N_SLOW=1:\n  " + "\n  ".join(slow))
     print(f"docs-run: {len(RUNNABLE) - len(skipped)} of {len(RUNNABLE)} blocks run, "
           f"{len(skipped)} skipped with a reason:\n  " + "\n  ".join(skipped))
     assert all(b.skip.strip() for b in RUNNABLE if b.skip is not None), "a skip without a reason"
@@ -157,6 +165,8 @@ def shell_script(b):
 def test_documented_block_runs(b, workdirs, monkeypatch):
     if b.skip:
         pytest.skip(f"docs-run: skip ({b.skip})")
+    if b.slow and os.environ.get("D2N_SLOW") != "1":
+        pytest.skip(f"docs-run: slow ({b.slow}); D2N_SLOW=1 (scripts/test.sh --slow) runs it")
     if b.needs:
         try:
             __import__(b.needs)
@@ -173,12 +183,25 @@ def test_documented_block_runs(b, workdirs, monkeypatch):
         except Exception:
             pytest.fail(f"{b.where}: the python block fails:\n{b.code}\n{traceback.format_exc()}")
         return
-    env = dict(os.environ, PATH=f"{workdirs.bindir}{os.pathsep}{os.environ['PATH']}")
+    env = dict(os.environ, PATH=f"{workdirs.bindir}{os.pathsep}{os.environ['PATH']}",
+               D2N_ROOT=str(ROOT))
     r = subprocess.run(["bash", "-e", "-o", "pipefail", "-c", shell_script(b)], cwd=d, env=env,
-                       capture_output=True, text=True, timeout=600)
+                       capture_output=True, text=True, timeout=3600 if b.slow else 600)
     if r.returncode != 0:
         pytest.fail(f"{b.where}: the {b.lang} block fails (exit {r.returncode}):\n{b.code}\n"
                     f"--- stderr ---\n{r.stderr[-3000:]}\n--- stdout ---\n{r.stdout[-1000:]}")
+
+
+def test_markers_are_parsed(tmp_path):
+    doc = tmp_path / "doc.md"
+    doc.write_text("Text.\n\n<!-- docs-run: slow (a 6-minute run) -->\n<!-- docs-run: needs torch -->"
+                   "\n\n```sh\necho hi\n```\n\n```sh\necho plain\n```\n", encoding="utf-8")
+    a, b = blocks(doc)
+    assert (a.slow, a.needs, a.skip) == ("a 6-minute run", "torch", None)
+    assert (b.slow, b.needs, b.skip) == (None, None, None)
+    doc.write_text("<!-- docs-run: slow -->\n```sh\necho hi\n```\n", encoding="utf-8")
+    with pytest.raises(AssertionError, match="slow needs a reason in parentheses"):
+        blocks(doc)
 
 
 # --- paths and references -------------------------------------------------------------------

@@ -4,7 +4,7 @@ on a mix with real pairs, or on real pairs alone (k-fold), scored on real night 
     python -m day2night.experiment --day DAY_DIR --real REAL_DIR -o RUN/
 
 ``folds`` (k-fold manifests) and ``mix`` (x % real training slots) need numpy only; training
-imports torch (``pip install day2night[train]``). See docs/experiment.md of the repository."""
+imports torch (the package's ``train`` extra; from a checkout ``scripts/dev-install.sh``). See docs/experiment.md of the repository."""
 
 from .folds import FoldError, make_folds, read_folds, write_folds  # noqa: F401
 from .mix import MixError, real_count  # noqa: F401

@@ -46,7 +46,8 @@ def main(argv=None):
         print(f"day2night.experiment: error: {e}", file=sys.stderr)
         return 2
     except ImportError as e:
-        print(f"day2night.experiment: error: {e} (pip install day2night[train])", file=sys.stderr)
+        print(f"day2night.experiment: error: {e} (pip install torch: the train extra; from a "
+              "checkout scripts/dev-install.sh installs it)", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
         print("day2night.experiment: interrupted: rerun the same command to resume",

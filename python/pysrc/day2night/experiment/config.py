@@ -62,6 +62,10 @@ class ExperimentConfig:
     real: str = opt(help="real night pairs written by `day2night real-pairs`",
                     record="always", metavar="REAL_DIR", required=True)
     output: str = opt(help="run folder", flags=("-o", "--output"), metavar="RUN", required=True)
+    captures: str = opt(help="the capture folders REAL_DIR was made from (the SCENES of "
+                        "`day2night real-pairs`): the burst row averages their ISO 1600 and "
+                        "3200 bursts (without it the row is left out)", record="set",
+                        metavar="SCENES")
     # (the recorded fields in the order a resume names the first that differs: CONFIG_KEYS)
     task: str = opt("both", record="always", choices=["clean", "noisy", "both"])
     epochs: int = opt(help="training epochs (paper and default: 500; --preset mini: 40)",
@@ -279,6 +283,11 @@ def resolve(config):
     c = c.with_defaults(sources)
     named = list(c.rows or ())
     chosen = protocol.fresh_rows(rows.select(named), c.targets, c.noise, bool(named))
+    chosen = rows.for_tasks(chosen, c.task, bool(named))
+    if not named and not c.captures:
+        # the burst row needs --captures: without it the rows (config.json) are those of a
+        # run folder made before the row existed, which resumes unchanged
+        chosen = [r for r in chosen if r.source != "burst"]
     ids = [r.id for r in chosen]
     ref = c.compare_to or ("day" if "day" in ids else rows.UNTRAINED.id)
     if ref not in ids + [rows.UNTRAINED.id]:
@@ -286,5 +295,7 @@ def resolve(config):
                               f"{', '.join([rows.UNTRAINED.id] + ids)})")
     c = dataclasses.replace(
         c, compare_to=ref, day=str(pathlib.Path(c.day).resolve()),
-        real=str(pathlib.Path(c.real).resolve()), rows=tuple(r.id for r in chosen), restart_unit=tuple(dict.fromkeys(c.restart_unit)))
+        real=str(pathlib.Path(c.real).resolve()),
+        captures=str(pathlib.Path(c.captures).resolve()) if c.captures else None,
+        rows=tuple(r.id for r in chosen), restart_unit=tuple(dict.fromkeys(c.restart_unit)))
     return c, isps

@@ -4,7 +4,9 @@ A row trained on synthesis only (Day, Day dimmed, Global relight, Ours, Ours on 
 synthesis) is one model per task, validated on the synthetic validation images and tested on
 every real scene (the paper: "the 105 test images"). A row with real data (Ours + 5 % or
 10 % real, Supervised) is one model per fold and task, validated on the fold's real
-validation scenes and tested on its test scenes; its score is the mean over the folds."""
+validation scenes and tested on its test scenes; its score is the mean over the folds. The
+burst row (the supplementary's burst denoising, noisy task only) trains nothing: each
+scene's high-ISO burst averaged and rendered (burst.py), scored on every real scene."""
 
 import dataclasses
 
@@ -15,9 +17,10 @@ from ..isos import NOISY_ISOS
 class Row:
     id: str
     label: str
-    source: str  # "synthetic" | "mix" | "fresh" | "untrained"
+    source: str  # "synthetic" | "mix" | "fresh" | "untrained" | "burst"
     mode: str = "local"  # synthesis mode of its synthetic data
     percent: float = 0.0  # real share of the training slots ("mix")
+    tasks: tuple = ("clean", "noisy")  # the tasks it has a unit in
 
     @property
     def per_fold(self):
@@ -33,6 +36,7 @@ ROWS = (
     Row("mix10", "Ours 90 % + Real 10 %", "mix", percent=10),
     Row("supervised", "Supervised (k-fold)", "mix", percent=100),
     Row("fresh", "Ours, fresh synthesis", "fresh"),
+    Row("burst", "Burst denoising (mean of the high-ISO frames)", "burst", tasks=("noisy",)),
 )
 BY_ID = {r.id: r for r in ROWS}
 #: The initial weights, scored like a trained unit (no training): first in every table, not
@@ -73,7 +77,23 @@ def units(row, splits):
     return [("all", None)]
 
 
+def of_task(rows, task):
+    """The rows of ``rows`` that have a unit in ``task`` (the burst row: noisy only)."""
+    return [r for r in rows if task in r.tasks]
+
+
+def for_tasks(rows, task, named):
+    """The rows a run of ``task`` (clean, noisy or both) runs: a row of no task of the run is
+    dropped from the default rows and refused when named (``named``)."""
+    tasks = tasks_of(task)
+    off = [r for r in rows if not set(r.tasks) & set(tasks)]
+    if named and off:
+        raise ValueError(f"--rows {off[0].id}: the {off[0].label} row has the "
+                         f"{' and '.join(off[0].tasks)} task only; this run has --task {task}")
+    return [r for r in rows if r not in off]
+
+
 def work(tasks, rows, splits):
     """Every unit of a run, in order: (task, row, fold, split)."""
-    return [(task, row, fold, split) for task in tasks for row in rows
+    return [(task, row, fold, split) for task in tasks for row in of_task(rows, task)
             for fold, split in units(row, splits)]

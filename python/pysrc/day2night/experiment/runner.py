@@ -10,6 +10,8 @@ Run folder (every file written through a temporary file + rename):
                                     (row "untrained": the initial weights, scores.json only)
     RUN/seeds/<S>/units/...         the same per extra training seed S of --seeds N > 1
     RUN/table.md, table.json, index.html, img/   (table.py, report.py)
+    RUN/left_out.json               rows the inputs cannot give, and why (burst.py)
+    RUN/log.txt                     every line of the log and every warning (runlog.py)
 
 A unit is done when its scores.json exists; a rerun skips done units and the trainer resumes
 an interrupted one from its last epoch, so a killed run finishes with the same table.
@@ -23,7 +25,7 @@ and score one unit), table.py and report.py."""
 import dataclasses
 import pathlib
 
-from . import prepare, protocol, report, rows, runfolder, table, unit
+from . import burst, prepare, protocol, report, rows, runfolder, runlog, table, unit
 from ..atomic import write_json
 from .config import ExperimentConfig, ExperimentError, resolve  # noqa: F401
 from .prepare import day_images, log  # noqa: F401
@@ -45,21 +47,31 @@ class Experiment:
         self.rows = rows.select(list(self.config.rows))
         self.inputs = self.plan = self.source = None
         self.report_scenes = []
+        self.left_out = []  # [{"task", "row", "why"}]: rows the inputs cannot give (burst.py)
+        self.runlog = None  # runlog.RunLog while run() runs: RUN/log.txt
 
     def prepare(self):
         """Read and check every input and what an earlier run left in RUN, then write config,
         folds and mixes (nothing is written when anything is bad)."""
         c = self.config
-        if not torch_available():
-            raise ExperimentError(f"training needs torch ({torch_missing()})")
-        if c.device == "cuda" and not torch.cuda.is_available():
-            raise ExperimentError("--device cuda: torch sees no CUDA device (use --device cpu)")
+        if any(r.source != "burst" for r in self.rows):  # the burst row trains nothing
+            if not torch_available():
+                raise ExperimentError(f"training needs torch ({torch_missing()})")
+            if c.device == "cuda" and not torch.cuda.is_available():
+                raise ExperimentError("--device cuda: torch sees no CUDA device (use --device "
+                                      "cpu)")
         prepare.check_config(self.out, c.record())
         self.inputs = prepare.read_inputs(c.day, c.real, self.tasks)
+        self.rows, self.left_out = burst.burst_rows(c, self.inputs, self.rows)
         self.plan = prepare.plan_folds(self.out, c, self.inputs, self.rows)
         prepare.check_run_folder(self.out, self.work(), c.restart_unit, self.inputs.scenes,
                                  c.epochs, c.seed_list[1:])
         prepare.write_setup(self.out, c.record(), self.plan, c.restart_unit)
+        write_json(self.out / "left_out.json", self.left_out)
+        if self.runlog is not None:
+            self.runlog.open(self.out / "log.txt")
+        for gone in self.left_out:
+            log(f"row {gone['row']} ({gone['task']} task) left out: {gone['why']}")
         self.source = PairSource(self.out, c, self.inputs, self.target_isps, self.tasks)
         self.report_scenes = self.plan.splits[0]["test"][: c.show]
         self._log_setup()
@@ -107,6 +119,9 @@ class Experiment:
         if (udir / "scores.json").is_file():
             log(f"{where}: done (scores.json), skipped")
             return
+        if row.source == "burst":  # no training (burst.py)
+            return burst.run_unit(self.out, c, self.inputs, self.target_isps, src,
+                                  self.report_scenes, lambda m: log(f"{where}: {m}"))
         cs = c if seed is None else dataclasses.replace(c, seed=seed)
         shown = self.report_scenes if seed is None else []
         test = split["test"] if split else sorted(self.inputs.scenes)
@@ -153,13 +168,22 @@ class Experiment:
                 from None
 
     def run(self):
-        """The whole run: prepare, every unit, then table.md, table.json and index.html."""
+        """The whole run: prepare, every unit, then table.md, table.json and index.html;
+        its stderr and warnings logged (runlog.py: RUN/log.txt, each warning kind printed
+        once, with its count at the end)."""
+        with runlog.capture() as self.runlog:
+            try:
+                return self._run()
+            finally:
+                self.runlog = None
+
+    def _run(self):
         self.prepare()
         work = self.seeded_work()
         for i, (seed, task, row, fold, split) in enumerate(work, 1):
             self.run_unit(seed, task, row, fold, split, i, len(work))
         t = table.build(self.config, self.out, self.plan.splits, len(self.inputs.scenes),
-                        len(self.inputs.days))
+                        len(self.inputs.days), left_out=self.left_out)
         table.write(self.out, t)
         report.write(self.out, t, self.tasks, self.report_scenes)
         log(f"wrote {self.out / 'table.md'}, table.json and index.html")
