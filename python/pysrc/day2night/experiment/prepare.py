@@ -13,7 +13,7 @@ import sys
 from ..isos import NOISY_ISOS
 from . import folds as folds_mod
 from . import mix as mix_mod
-from . import protocol, realset, rows, runfolder
+from . import protocol, realset, release_folds, rows, runfolder
 from ..atomic import write_json
 from .config import CONFIG_KEYS, PAPER_VALUES, ExperimentError  # noqa: F401
 from .protocol import LEGACY_CONFIG
@@ -124,8 +124,9 @@ def plan_folds(out, config, inputs, run_rows):
                 f"{fpath}: its scenes differ from the real set's: {runfolder.FOLDS_ADVICE} "
                 "(and the units trained on the old folds), or choose another -o folder")
     else:
-        folds = folds_mod.make_run_folds(sorted(inputs.scenes), config.folds, seed=config.seed,
-                                         folds_file=config.folds_file)
+        folds = release_folds.make_run_folds(sorted(inputs.scenes), config.folds,
+                                             seed=config.seed, folds_file=config.folds_file,
+                                             folds_sha256=config.folds_sha256)
     mixes = {}
     for r in run_rows:
         if r.per_fold:

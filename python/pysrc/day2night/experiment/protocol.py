@@ -18,13 +18,14 @@ option              day2night                    release
 rendered them with ``--isp release``, else ``day2night``."""
 
 import dataclasses
-import hashlib
 import json
 import pathlib
 
 import numpy as np
 
 from ..isos import NOISY_ISOS  # noqa: F401  (re-exported)
+from . import release_folds
+from .folds import FoldError
 
 TARGETS = ("release", "day2night")
 NOISE = ("day2night", "release")
@@ -44,6 +45,8 @@ class Protocol:
     synth_iso: str = "alternate"
     folds_file: str = None
     folds_sha256: str = None
+    #: The number of folds of the fold file (not recorded: config.json's ``folds`` is).
+    file_folds: int = None
 
     def config(self):
         """The run's recorded options (config.json): a resume must give the same."""
@@ -79,14 +82,15 @@ def resolve(protocol=None, targets=None, noise=None, synth_iso=None, folds_file=
     check_flags(protocol, targets, noise, synth_iso, folds_file)
     name = protocol or "day2night"
     release = name == "release"
-    sha = None
+    sha = count = None
     if folds_file is not None:
+        # read once (capped, a regular file only), parsed, and those bytes hashed
         path = pathlib.Path(folds_file)
         try:
-            sha = hashlib.sha256(path.read_bytes()).hexdigest()
-        except OSError as e:
-            raise ProtocolError(f"--folds-file {path}: cannot read it ({e.strerror or e})") \
-                from None
+            lists, sha = release_folds.read_release_file(path)
+        except FoldError as e:
+            raise ProtocolError(str(e)) from None
+        count = len(lists["test_index_all"])
         folds_file = str(path.resolve())
     return Protocol(
         name=name,
@@ -95,6 +99,7 @@ def resolve(protocol=None, targets=None, noise=None, synth_iso=None, folds_file=
         synth_iso=synth_iso or ("release" if release else "alternate"),
         folds_file=folds_file,
         folds_sha256=sha,
+        file_folds=count,
     )
 
 
@@ -191,9 +196,7 @@ def for_run(config):
                 config.folds_file, real_targets=real)
     folds = count = config.folds
     if p.folds_file is not None:
-        from .release_folds import read_release_folds
-
-        count = len(read_release_folds(p.folds_file)["test_index_all"])
+        count = p.file_folds
         if folds is not None and int(folds) != count:
             raise ProtocolError(f"--folds {folds}: the fold file {p.folds_file} holds {count} "
                                 "folds (leave --folds out)")
