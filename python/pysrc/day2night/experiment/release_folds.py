@@ -61,7 +61,7 @@ def read_bytes(path):
         fd = os.open(path, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0))
     except OSError as e:
         raise _error(path, f"cannot read it ({e.strerror or e})") from None
-    with os.fdopen(fd, "rb") as f:
+    try:
         st = os.fstat(fd)
         if not stat.S_ISREG(st.st_mode):
             raise _error(path, "not a regular file (a FIFO, a device or a folder); give the "
@@ -69,13 +69,20 @@ def read_bytes(path):
         if st.st_size > MAX_BYTES:
             raise _error(path, f"{st.st_size} bytes, larger than {MAX_BYTES}: not a "
                          "fold-index file")
-        try:
-            data = f.read(MAX_BYTES + 1)
-        except OSError as e:
-            raise _error(path, f"cannot read it ({e.strerror or e})") from None
-    if len(data) > MAX_BYTES:
+        chunks, size = [], 0
+        while size <= MAX_BYTES:
+            chunk = os.read(fd, MAX_BYTES + 1 - size)
+            if not chunk:
+                break
+            chunks.append(chunk)
+            size += len(chunk)
+    except OSError as e:
+        raise _error(path, f"cannot read it ({e.strerror or e})") from None
+    finally:
+        os.close(fd)
+    if size > MAX_BYTES:
         raise _error(path, f"larger than {MAX_BYTES} bytes: not a fold-index file")
-    return data
+    return b"".join(chunks)
 
 
 class _JsonRefused(ValueError):
