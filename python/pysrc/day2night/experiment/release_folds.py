@@ -282,6 +282,7 @@ def make_run_folds(scenes, folds=3, seed=0, folds_file=None, folds_sha256=None):
                      f"{folds_sha256}): rerun")
     manifest = to_manifest(lists, scenes, source=folds_file)
     manifest["seed"] = int(seed)
+    manifest["source"]["sha256"] = sha
     return manifest
 
 

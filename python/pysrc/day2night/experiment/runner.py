@@ -50,12 +50,13 @@ class Experiment:
                 from None
         if c.device == "cuda" and not torch.cuda.is_available():
             raise ExperimentError("--device cuda: torch sees no CUDA device (use --device cpu)")
-        prepare.check_config(self.out, c.record())
+        prepare.check_config(self.out, c.record(), c.restart_unit)
         self.inputs = prepare.read_inputs(c.day, c.real, self.tasks)
         self.plan = prepare.plan_folds(self.out, c, self.inputs, self.rows)
         prepare.check_run_folder(self.out, self.work(), c.restart_unit, self.inputs.scenes,
                                  c.epochs)
-        prepare.write_setup(self.out, c.record(), self.plan, c.restart_unit)
+        prepare.write_setup(self.out, c.record(), self.plan, c.restart_unit,
+                            [runfolder.unit_id(t, r.id, f) for t, r, f, _ in self.work()])
         self.source = PairSource(self.out, c, self.inputs, self.target_isps, self.tasks)
         self.report_scenes = self.plan.splits[0]["test"][: c.show]
         self._log_setup()
