@@ -31,7 +31,6 @@ import hashlib
 import json
 import numbers
 import os
-import pathlib
 import re
 import stat
 import sys
@@ -295,8 +294,8 @@ def export(src, dst):
 def main(argv=None):
     p = argparse.ArgumentParser(
         prog="python -m day2night.experiment.release_folds",
-        description="Export the release's k_fold_indices_saved.p as JSON (read without "
-        "running pickle code: only numpy scalars are allowed).",
+        description="Export the release's k_fold_indices_saved.p as JSON (its opcodes read as "
+        "data, never unpickled: docs/experiment.md).",
     )
     sub = p.add_subparsers(dest="cmd", required=True)
     e = sub.add_parser("export", help="write the JSON export")
