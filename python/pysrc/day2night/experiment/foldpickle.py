@@ -165,7 +165,7 @@ def _opname(code):
              0x49: "INT", 0x8D: "BINUNICODE8", 0x8E: "BINBYTES8", 0x96: "BYTEARRAY8",
              0x8F: "EMPTY_SET", 0x90: "ADDITEMS", 0x91: "FROZENSET", 0x97: "NEXT_BUFFER",
              0x98: "READONLY_BUFFER", 0x47: "BINFLOAT", 0x46: "FLOAT"}
-    return names.get(code, f"0x{code:02x} ({chr(code)!r})")
+    return names.get(code, f"0x{code:02x} ({ascii(chr(code))})")
 
 
 # -- opcodes ---------------------------------------------------------------------------------
@@ -222,7 +222,7 @@ def _global(r, module, name):
         return SCALAR
     if (module, name) in DTYPE_NAMES:
         return DTYPE
-    return r.refuse(f"the global {module}.{name}: only numpy's scalar constructor and "
+    return r.refuse(f"the global {ascii(module)[1:-1]}.{ascii(name)[1:-1]}: only numpy's scalar constructor and "
                     "numpy.dtype may appear in a fold-index file (and are never imported)")
 
 
@@ -316,9 +316,9 @@ def _set(r, target, items):
         if not isinstance(k, str):
             r.refuse(f"a dict key that is {_what(k)}, not a string")
         if not isinstance(v, (_List, str)):
-            r.refuse(f"the dict's {k!r} is {_what(v)}, not a list of folds")
+            r.refuse(f"the dict's {ascii(k)[:40]} is {_what(v)}, not a list of folds")
         if k in target:
-            r.refuse(f"the dict's key {k!r} appears twice")
+            r.refuse(f"the dict's key {ascii(k)[:40]} appears twice")
         target[k] = v
 
 
@@ -381,7 +381,7 @@ def _scalar(r, args):
 
 
 def _short(args):
-    text = ", ".join(_what(a) if isinstance(a, (_Token, _Dtype)) else repr(a)[:20]
+    text = ", ".join(_what(a) if isinstance(a, (_Token, _Dtype)) else ascii(a)[:20]
                      for a in args[:4])
     return f"({text}{', ...' if len(args) > 4 else ''})"
 

@@ -104,7 +104,7 @@ def _json_object(pairs):
     seen = set()
     for k, _ in pairs:
         if k in seen:
-            raise _JsonRefused(f"the key {k!r} appears twice")
+            raise _JsonRefused(f"the key {ascii(k)[:40]} appears twice")
         seen.add(k)
     return dict(pairs)
 
@@ -173,7 +173,12 @@ def _show(v):
     """A value for a message: short whatever it holds (never a repr of a large structure)."""
     if isinstance(v, (list, dict, tuple)):
         return f"a {type(v).__name__} of {len(v)} items"
-    return repr(v)[:40]
+    return ascii(v)[:40]
+
+
+def _key(k):
+    """A dict key for a message: as it is when short and printable, else escaped and cut."""
+    return k if isinstance(k, str) and k.isprintable() and len(k) <= 40 else ascii(k)[:40]
 
 
 def _fold(path, key, i, fold):
@@ -193,10 +198,10 @@ def _check_lists(obj, path):
     """{key: [[int]]} from the loaded dict, with every shape checked."""
     if not isinstance(obj, dict):
         raise _error(path, f"{_show(obj)}, not a dict of {', '.join(KEYS)}")
-    extra = sorted(str(k)[:40] for k in obj if k not in KEYS and k != "format")
+    extra = sorted(_key(k) for k in obj if k not in KEYS and k != "format")
     missing = [k for k in KEYS if k not in obj]
     if missing or extra:
-        raise _error(path, f"keys {sorted(str(k)[:40] for k in obj)[:8]}; expected "
+        raise _error(path, f"keys {', '.join(sorted(_key(k) for k in obj)[:8])}; expected "
                      f"{', '.join(KEYS)}"
                      + (f" (missing {', '.join(missing)})" if missing else "")
                      + (f" (unknown {', '.join(extra[:8])})" if extra else ""))
