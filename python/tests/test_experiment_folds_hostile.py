@@ -252,6 +252,9 @@ def test_the_command_lines_refuse_with_one_line_and_write_nothing(tmp_path, caps
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and f"--folds-file {bad}: refused" in err
     assert not out.exists()
+    good = write(tmp_path, "k.p", pickle.dumps(release_lists()))
+    assert release_folds.main(["export", str(good), "-o", str(good / "x.json")]) == 2
+    assert capsys.readouterr().err.count("\n") == 1
     pytest.importorskip("torch")
     from day2night.experiment.__main__ import main
 

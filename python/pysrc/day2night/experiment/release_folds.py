@@ -312,6 +312,10 @@ def main(argv=None):
     except folds_mod.FoldError as err:
         print(f"release_folds: error: {err}", file=sys.stderr)
         return 2
+    except OSError as err:
+        print(f"release_folds: error: {a.output}: cannot write it ({err.strerror or err})",
+              file=sys.stderr)
+        return 2
     return 0
 
 
