@@ -227,8 +227,11 @@ def parse(path, data):
         data = data[3:]
     if data.lstrip()[:1] in (b"{", b"["):
         obj = _load_json(path, data)
-    else:
+    elif data[:1] == b"\x80":
         obj = _load_pickle(path, data)
+    else:
+        raise _error(path, "neither a pickle of protocol 2 to 5 (the release's "
+                     "k_fold_indices_saved.p) nor the JSON export (a UTF-8 object)")
     return _check_lists(obj, path)
 
 
