@@ -153,7 +153,7 @@ def test_unusable_model_folder_is_a_clear_error(base, tmp_path, damage):
         (unit / "model").write_text("x")
         needle = unit / "model"
     else:
-        ck = torch.load(unit / "model" / "last.pt", weights_only=False)
+        ck = torch.load(unit / "model" / "last.pt", weights_only=True)
         ck["epoch"] = 5
         torch.save(ck, unit / "model" / "last.pt")
         needle = "epoch 5"

@@ -35,23 +35,45 @@ def parse(argv):
     return config.from_args(parser().parse_args(argv))
 
 
+RESUME = "rerun the same command to resume"
+
+
+def one_line(e):
+    """An error's message on one line: an error raised in a DataLoader worker (torch's
+    "Caught X in DataLoader worker process N" and the worker's traceback) as the worker's
+    own last line, else the message's first line."""
+    lines = [ln.strip() for ln in str(e).strip().splitlines() if ln.strip()]
+    if not lines:
+        return type(e).__name__
+    if len(lines) > 1 and any(ln.startswith("Original Traceback") for ln in lines):
+        return lines[-1]
+    return lines[0]
+
+
 def main(argv=None):
     cfg = parse(argv)
     try:
         Experiment(cfg).run()
     except (ExperimentError, FoldError, MixError, ValueError) as e:
-        print(f"day2night.experiment: error: {e}", file=sys.stderr)
+        print(f"day2night.experiment: error: {one_line(e)}", file=sys.stderr)
         return 2
     except OSError as e:
-        print(f"day2night.experiment: error: {e}", file=sys.stderr)
+        print(f"day2night.experiment: error: {one_line(e)}", file=sys.stderr)
         return 2
+    except (RuntimeError, MemoryError) as e:
+        # a killed DataLoader worker, torch out of memory...: the run stopped after its last
+        # complete epoch (last.pt), so the same command resumes it
+        what = "a DataLoader worker died" if "DataLoader worker" in str(e) else \
+            f"training stopped ({type(e).__name__})"
+        print(f"day2night.experiment: error: {what}: {one_line(e)[:300]}; {RESUME}",
+              file=sys.stderr)
+        return 1
     except ImportError as e:
         print(f"day2night.experiment: error: {e} (pip install torch: the train extra; from a "
               "checkout scripts/dev-install.sh installs it)", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
-        print("day2night.experiment: interrupted: rerun the same command to resume",
-              file=sys.stderr)
+        print(f"day2night.experiment: interrupted: {RESUME}", file=sys.stderr)
         return 130
     return 0
 

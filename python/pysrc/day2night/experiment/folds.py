@@ -11,6 +11,7 @@ The permutations come from ``numpy.random.RandomState`` (the release's generator
 stream numpy keeps fixed across versions).
 """
 
+import collections
 import json
 
 import numpy as np
@@ -37,7 +38,8 @@ def _check_count(ids, folds):
     folds = int(folds)
     if folds < 2:
         raise FoldError(f"folds = {folds}: cross-validation needs at least 2 folds")
-    dup = sorted({s for s in ids if ids.count(s) > 1})
+    count = collections.Counter(ids)
+    dup = sorted(s for s, n in count.items() if n > 1)
     if dup:
         raise FoldError(f"scene ids appear more than once in the real set: {', '.join(dup)}")
     if folds > len(ids):
@@ -121,7 +123,8 @@ def check_folds(manifest):
             raise FoldError(f"fold {s['fold']}: an empty train, val or test list")
         tested += s["test"]
     if sorted(tested) != sorted(scenes):
-        dup = sorted({t for t in tested if tested.count(t) > 1})
+        count = collections.Counter(tested)
+        dup = sorted(t for t, n in count.items() if n > 1)
         raise FoldError(
             f"test folds overlap or miss scenes (repeated: {dup[:3]}, "
             f"missing: {sorted(all_set - set(tested))[:3]})"
@@ -147,17 +150,4 @@ def read_folds(path):
         raise FoldError(f"{path}: malformed fold manifest ({e})") from None
     except FoldError as e:
         raise FoldError(f"{path}: {e}") from None
-    return manifest
-
-
-def make_run_folds(scenes, folds=3, seed=0, folds_file=None):
-    """A run's new fold manifest: seeded (:func:`make_folds`), or the lists of ``folds_file``
-    (the release's ``k_fold_indices_saved.p`` or its JSON export; release_folds.py) mapped
-    onto the sorted ``scenes``, recorded with the run's ``seed``."""
-    if folds_file is None:
-        return make_folds(scenes, folds, seed=seed)
-    from .release_folds import read_release_folds, to_manifest
-
-    manifest = to_manifest(read_release_folds(folds_file), scenes, source=folds_file)
-    manifest["seed"] = int(seed)
     return manifest

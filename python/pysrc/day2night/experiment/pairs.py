@@ -23,12 +23,17 @@ import day2night
 
 from ..isos import NOISY_ISOS
 from ..train import cache as input_cache
+from ..train.preprocess import GAMMA
 from ..atomic import write_bytes
 from ..png import read_png
 from ..train.preprocess import network_input
 from ..train.targets import render_target, srgb8
 from .release_noise import noise_key, release_noisy_plane
 
+
+
+#: The gamma id of every input a run writes (the release's 1/2.2: preprocess.network_input).
+RUN_GAMMA_ID = input_cache.gamma_id(GAMMA)
 
 
 class PairError(ValueError):
@@ -72,6 +77,10 @@ def _migrate(xp, yp):
     if x.dtype != np.float32 or x.ndim != 3 or x.shape[2] != 3:
         raise PairError(f"{old}: {x.dtype} {x.shape} is not a float32 H x W x 3 input of the "
                         "first cache format; delete it to have it made again")
+    if not (np.isfinite(x).all() and x.min(initial=0) >= 0 and x.max(initial=0) <= 1):
+        raise PairError(f"{old}: an input of the first cache format holding values that are "
+                        "not finite or outside [0, 1] (a run writes neither); delete it to "
+                        "have it made again")
     enc = input_cache.encode(x)
     if not np.array_equal(input_cache.decode(enc).view(np.uint32), x.view(np.uint32)):
         raise PairError(f"{old}: migrating it did not give the same bits")  # pragma: no cover
@@ -100,6 +109,11 @@ def check_cached(xp, yp):
         y = np.load(yp, mmap_mode="r", allow_pickle=False)
     except (OSError, ValueError, EOFError) as e:
         raise ValueError(f"{yp}: damaged cached array ({_first_line(e)})") from None
+    if head["encoding"] == input_cache.FLOAT32 or head["gamma_id"] != RUN_GAMMA_ID:
+        raise ValueError(
+            f"{xp}: damaged cached array: a {input_cache.ENCODINGS[head['encoding']]} store "
+            f"with gamma id {head['gamma_id']}; a run writes 14-bit codes on the release's "
+            f"1/2.2 table (gamma id {RUN_GAMMA_ID})")
     hw = (head["height"], head["width"])
     if y.dtype != np.uint8 or y.shape != (*hw, 3):
         raise ValueError(f"{yp}: damaged cached array: {y.dtype} {y.shape}, expected uint8 "

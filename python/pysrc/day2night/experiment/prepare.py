@@ -15,7 +15,7 @@ import day2night
 from ..isos import NOISY_ISOS
 from . import folds as folds_mod
 from . import mix as mix_mod
-from . import protocol, realset, rows, runfolder
+from . import protocol, realset, records, release_folds, rows, runfolder
 from ..atomic import write_json
 from .config import CONFIG_KEYS, PAPER_VALUES, ExperimentError  # noqa: F401
 from .protocol import LEGACY_CONFIG
@@ -75,9 +75,11 @@ def check_day_images(days):
                                   "one)")
 
 
-def check_config(out, record):
+def check_config(out, record, restart=()):
     """An earlier run's config.json in ``out`` against this run's ``record``
-    (ExperimentConfig.record): the first option that differs is an error."""
+    (ExperimentConfig.record): the first option that differs is an error; then the records
+    of the units (but those --restart-unit names, ``restart``) and of the cached pairs
+    (records.py), which stand in for config.json when it is gone."""
     path = pathlib.Path(out) / "config.json"
     if path.is_file():
         # a key missing from a run made before the protocol options: the value that ran then
@@ -91,6 +93,7 @@ def check_config(out, record):
                 f"not {record.get(k, PAPER_VALUES.get(k))!r}: "
                 "rerun with the same options to resume, or choose another -o folder"
             )
+    records.check(out, record, restart, path.is_file())
 
 
 def read_inputs(day, real, tasks):
@@ -123,9 +126,11 @@ def plan_folds(out, config, inputs, run_rows):
             raise ExperimentError(
                 f"{fpath}: its scenes differ from the real set's: {runfolder.FOLDS_ADVICE} "
                 "(and the units trained on the old folds), or choose another -o folder")
+        check_folds_source(fpath, folds, config)
     else:
-        folds = folds_mod.make_run_folds(sorted(inputs.scenes), config.folds, seed=config.seed,
-                                         folds_file=config.folds_file)
+        folds = release_folds.make_run_folds(sorted(inputs.scenes), config.folds,
+                                             seed=config.seed, folds_file=config.folds_file,
+                                             folds_sha256=config.folds_sha256)
     mixes = {}
     for r in run_rows:
         if r.per_fold:
@@ -135,6 +140,23 @@ def plan_folds(out, config, inputs, run_rows):
             ]
     isos = protocol.run_isos(config.synth_iso, inputs.days, config.seed)
     return Plan(folds=folds, mixes=protocol.mixes_with_isos(mixes, isos), new=new)
+
+
+def check_folds_source(path, manifest, config):
+    """An earlier run's folds.json made the way this run makes its folds: seeded, or from
+    the same fold file (its SHA-256, when the manifest records one). A fold file's lists
+    are never relabelled as seeded folds, nor the other way round."""
+    src = manifest.get("source")
+    src = src if isinstance(src, dict) else None
+    made = f"the fold file {src.get('file')}" if src else "seeded folds (--seed)"
+    now = f"--folds-file {config.folds_file}" if config.folds_file else "seeded folds"
+    same = (src is None) == (config.folds_file is None) and (
+        src is None or src.get("sha256") in (None, config.folds_sha256))
+    if not same:
+        raise ExperimentError(
+            f"{path}: made from {made}, this run has {now}: rerun with the options that "
+            f"made it, or {runfolder.FOLDS_ADVICE} (and the units trained on the old "
+            "folds), or choose another -o folder")
 
 
 def check_run_folder(out, work, restart, scenes, epochs, extra_seeds=()):
@@ -164,9 +186,10 @@ def check_run_folder(out, work, restart, scenes, epochs, extra_seeds=()):
     runfolder.check_data(out)
 
 
-def write_setup(out, record, plan, restart):
+def write_setup(out, record, plan, restart, unit_ids=()):
     """RUN/config.json (``record``), folds.json (new folds only), mixes.json; then the
-    folders of the units named by --restart-unit (``restart``) deleted."""
+    folders of the units named by --restart-unit (``restart``) deleted, and the options
+    records of the units ``unit_ids`` and of RUN/data written (records.py)."""
     out = pathlib.Path(out)
     out.mkdir(parents=True, exist_ok=True)
     write_json(out / "config.json", record)
@@ -178,3 +201,4 @@ def write_setup(out, record, plan, restart):
         if udir.exists():
             shutil.rmtree(udir)
             log(f"--restart-unit {uid}: deleted {udir}")
+    records.write(out, record, unit_ids)

@@ -18,7 +18,6 @@ option              day2night                    release
 rendered them with ``--isp release``, else ``day2night``."""
 
 import dataclasses
-import hashlib
 import json
 import pathlib
 
@@ -28,7 +27,8 @@ import day2night
 
 from ..isos import NOISY_ISOS  # noqa: F401  (re-exported)
 from . import mix as mix_mod
-from .release_folds import read_release_folds
+from . import release_folds
+from .folds import FoldError
 
 TARGETS = ("release", "day2night")
 NOISE = ("day2night", "release")
@@ -71,17 +71,20 @@ def check_flags(protocol=None, targets=None, noise=None, synth_iso=None, folds_f
 
 
 def fold_file(folds_file):
-    """(absolute path, SHA-256) of the fold file ``folds_file`` ((None, None) without one)."""
-    sha = None
+    """(absolute path, SHA-256, number of folds) of the fold file ``folds_file`` ((None,
+    None, None) without one): read once (capped, a regular file only), parsed, and those
+    same bytes hashed (release_folds.read_release_file)."""
+    sha = count = None
     if folds_file is not None:
+        # read once (capped, a regular file only), parsed, and those bytes hashed
         path = pathlib.Path(folds_file)
         try:
-            sha = hashlib.sha256(path.read_bytes()).hexdigest()
-        except OSError as e:
-            raise ProtocolError(f"--folds-file {path}: cannot read it ({e.strerror or e})") \
-                from None
+            lists, sha = release_folds.read_release_file(path)
+        except FoldError as e:
+            raise ProtocolError(str(e)) from None
+        count = len(lists["test_index_all"])
         folds_file = str(path.resolve())
-    return folds_file, sha
+    return folds_file, sha, count
 
 
 def _json_lines(path):
@@ -174,10 +177,9 @@ def for_run(config):
     file's is an error."""
     isps = real_target_isps(config.real)
     real = "release" if isps and set(isps.values()) == {"release"} else "day2night"
-    path, sha = fold_file(config.folds_file)
+    path, sha, count = fold_file(config.folds_file)
     counted = {}
     if path is not None:
-        count = len(read_release_folds(path)["test_index_all"])
         if config.folds is not None and int(config.folds) != count:
             raise ProtocolError(f"--folds {config.folds}: the fold file {path} holds {count} "
                                 "folds (leave --folds out)")

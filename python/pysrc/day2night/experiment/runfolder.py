@@ -195,6 +195,22 @@ def check_pair(xp, yp):
     if xs != ys:
         raise RunFolderError(
             f"{xp}: its shape {xs} differs from its target {yp.name}'s {ys}; {DATA_ADVICE}")
+    if not values_in_unit_range(xp):
+        raise RunFolderError(
+            f"{xp}: damaged cached array: values that are not finite or outside [0, 1] (a run "
+            f"writes neither); {DATA_ADVICE}")
+
+
+def values_in_unit_range(path, rows=256):
+    """Whether a float32 H x W x 3 ``.npy`` file holds finite values in [0, 1] only (read
+    memory-mapped, ``rows`` rows at a time)."""
+    a = np.load(path, mmap_mode="r", allow_pickle=False)
+    for top in range(0, a.shape[0], rows):
+        part = np.asarray(a[top:top + rows])
+        if not (np.isfinite(part).all() and part.min(initial=0) >= 0
+                and part.max(initial=0) <= 1):
+            return False
+    return True
 
 
 def check_data(out):

@@ -60,13 +60,15 @@ class Experiment:
             if c.device == "cuda" and not torch.cuda.is_available():
                 raise ExperimentError("--device cuda: torch sees no CUDA device (use --device "
                                       "cpu)")
-        prepare.check_config(self.out, c.record())
+        prepare.check_config(self.out, c.record(), c.restart_unit)
         self.inputs = prepare.read_inputs(c.day, c.real, self.tasks)
         self.rows, self.left_out = burst.burst_rows(c, self.inputs, self.rows)
         self.plan = prepare.plan_folds(self.out, c, self.inputs, self.rows)
         prepare.check_run_folder(self.out, self.work(), c.restart_unit, self.inputs.scenes,
                                  c.epochs, c.seed_list[1:])
-        prepare.write_setup(self.out, c.record(), self.plan, c.restart_unit)
+        prepare.write_setup(self.out, c.record(), self.plan, c.restart_unit,
+                            [runfolder.unit_id(t, r.id, f, s)
+                             for s, t, r, f, _ in self.seeded_work()])
         write_json(self.out / "left_out.json", self.left_out)
         if self.runlog is not None:
             self.runlog.open(self.out / "log.txt")

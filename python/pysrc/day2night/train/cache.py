@@ -131,13 +131,37 @@ def info(a, name="input"):
     gid = int(a[8])
     if enc not in ENCODINGS or gid not in GAMMAS:
         raise CacheFormatError(f"{name}: unknown encoding {enc} or gamma id {gid}")
+    _check_header(a, name, enc, gid)
     size = {CFA14: h * w + 12 * w + 12 * max(h - 4, 0), RGB14: 3 * h * w,
             FLOAT32: 6 * h * w}[enc]
     if a.shape[0] != HEADER + size:
         raise CacheFormatError(f"{name}: {a.shape[0]} values, its header ({h}x{w}, "
                                f"{ENCODINGS[enc]}) needs {HEADER + size}: truncated or damaged")
-    return {"encoding": enc, "height": h, "width": w, "gamma": GAMMAS[gid],
+    return {"encoding": enc, "height": h, "width": w, "gamma": GAMMAS[gid], "gamma_id": gid,
             "pattern": tuple(int(v) for v in a[9:13]), "version": v}
+
+
+def _check_header(a, name, enc, gid):
+    """The header values :func:`encode` writes: a Bayer pattern (CFA14) or zeros, a gamma
+    id of 0 for the float32 bits, zeros after the pattern."""
+    pattern = tuple(int(v) for v in a[9:13])
+    if enc == CFA14 and pattern not in PATTERNS:
+        raise CacheFormatError(f"{name}: CFA pattern {pattern} in its header is not a 2x2 "
+                               "Bayer pattern (colours 0..2, one R, one B, two G on a "
+                               "diagonal): damaged")
+    if enc != CFA14 and any(pattern):
+        raise CacheFormatError(f"{name}: CFA pattern {pattern} in the header of a "
+                               f"{ENCODINGS[enc]} store (it has none): damaged")
+    if enc == FLOAT32 and gid != 0:
+        raise CacheFormatError(f"{name}: gamma id {gid} in the header of a float32 store "
+                               "(it has none): damaged")
+    if any(int(v) for v in a[13:HEADER]):
+        raise CacheFormatError(f"{name}: header values 13..15 are not 0: damaged")
+
+
+def gamma_id(gamma):
+    """The header's id of a gamma (``GAMMAS``): 1 for the release's 1/2.2, 0 for linear."""
+    return next(k for k, v in GAMMAS.items() if v == gamma)
 
 
 def nbytes_per_pixel(a):
@@ -149,7 +173,10 @@ def nbytes_per_pixel(a):
 def decode(a, name="input"):
     """The float32 H x W x 3 input of a store."""
     i = info(a, name)
-    return decode_window(a, 0, 0, i["height"], i["width"], i)
+    try:
+        return decode_window(a, 0, 0, i["height"], i["width"], i)
+    except CacheFormatError as e:
+        raise CacheFormatError(str(e).replace("input store", name, 1)) from None
 
 
 def _body(a, i):
@@ -174,7 +201,7 @@ def decode_window(a, top, left, hh, ww, i=None):
         return np.array(body[top:top + hh, left:left + ww])
     t = preprocess._table(i["gamma"])
     if i["encoding"] == RGB14:
-        return t[body[top:top + hh, left:left + ww]]
+        return _lookup(t, body[top:top + hh, left:left + ww])
     r0, r1 = max(top - 1, 0), min(top + hh + 1, h)
     c0, c1 = max(left - 1, 0), min(left + ww + 1, w)
     p = i["pattern"]
@@ -186,7 +213,15 @@ def decode_window(a, top, left, hh, ww, i=None):
     else:
         codes = np.zeros((hh, ww, 3), np.uint16)  # all of it lies on the rings
     _put_rings(codes, a, i, top, left)
-    return t[codes]
+    return _lookup(t, codes)
+
+
+def _lookup(table, codes):
+    """``table[codes]``; a code past the table (a damaged store) is a CacheFormatError."""
+    if codes.size and int(codes.max()) >= len(table):
+        raise CacheFormatError(f"input store: code {int(codes.max())} past the "
+                               f"{len(table)}-entry table: damaged")
+    return table[codes]
 
 
 def _put_rings(codes, a, i, top, left):

@@ -17,11 +17,13 @@ Small pure pieces: ``make_model``, ``make_loader``, ``train_epoch``, ``evaluate`
   validation sums are all-reduced, and only rank 0 writes checkpoints.
 """
 
+import collections
 import contextlib
 import dataclasses
 import json
 import math
 import os
+import pickle  # its UnpicklingError only: torch.load(weights_only=True) raises it
 import sys
 import time
 
@@ -121,9 +123,28 @@ def _state(model):
 
 
 def save_checkpoint(path, **state):
-    """torch.save to a temporary file, then rename: never a half-written checkpoint."""
+    """torch.save to a temporary file, then rename: never a half-written checkpoint. The
+    state holds tensors and plain values only (dicts, lists, tuples, numbers, strings,
+    None), so :func:`load_checkpoint` reads it with ``weights_only=True``."""
     with open_atomic(path) as f:
         torch.save(state, f)
+
+
+def scheduler_state(scheduler):
+    """The scheduler's state_dict in plain values: MultiStepLR's ``milestones`` Counter as a
+    dict (:func:`load_scheduler` turns it back)."""
+    state = dict(scheduler.state_dict())
+    if isinstance(state.get("milestones"), collections.Counter):
+        state["milestones"] = {int(k): int(v) for k, v in state["milestones"].items()}
+    return state
+
+
+def load_scheduler(scheduler, state):
+    """``scheduler.load_state_dict`` of :func:`scheduler_state`'s plain values."""
+    state = dict(state)
+    if isinstance(state.get("milestones"), dict):
+        state["milestones"] = collections.Counter(state["milestones"])
+    scheduler.load_state_dict(state)
 
 
 class CheckpointError(ValueError):
@@ -135,10 +156,17 @@ RESUME_STATE = ("model", "optimizer", "scheduler", "config", "epoch", "history",
 
 
 def load_checkpoint(path, device="cpu", keys=("model", "config", "epoch")):
-    """The dict of a checkpoint; a file torch cannot read whole (truncated, garbage) or one
-    without ``keys`` is a :class:`CheckpointError` naming it."""
+    """The dict of a checkpoint, read with ``weights_only=True`` (tensors and plain values:
+    a checkpoint is never unpickled, so one from elsewhere cannot run code); a file torch
+    cannot read whole (truncated, garbage), one holding other objects, or one without
+    ``keys`` is a :class:`CheckpointError` naming it."""
     try:
-        ck = torch.load(path, map_location=device, weights_only=False)
+        ck = torch.load(path, map_location=device, weights_only=True)
+    except pickle.UnpicklingError as e:
+        first = str(e).strip().splitlines()[0] if str(e).strip() else ""
+        raise CheckpointError(
+            f"{path}: a checkpoint holding objects other than tensors and plain values is "
+            f"not loaded (loading it could run code; {first[:160]})") from None
     except Exception as e:  # torch raises RuntimeError, EOFError, UnpicklingError, OSError...
         first = str(e).strip().splitlines()[0] if str(e).strip() else ""
         raise CheckpointError(f"{path}: damaged checkpoint, torch cannot read it "
@@ -248,7 +276,7 @@ class _Run:
             _check_resume(self.last, ck, self.cfg)
             self.model.load_state_dict(ck["model"])
             self.optimizer.load_state_dict(ck["optimizer"])
-            self.scheduler.load_state_dict(ck["scheduler"])
+            load_scheduler(self.scheduler, ck["scheduler"])
             self.history, self.best_val = ck["history"], ck["best_val"]
             self.first, self.initial = ck["epoch"] + 1, ck.get("initial")
             if self.history:
@@ -287,7 +315,7 @@ class _Run:
             if improved:
                 save_checkpoint(self.best, model=state, **meta)
             save_checkpoint(self.last, model=state, optimizer=self.optimizer.state_dict(),
-                            scheduler=self.scheduler.state_dict(), **meta)
+                            scheduler=scheduler_state(self.scheduler), **meta)
         self.bar.end(epoch, loss, val_loss, val_psnr, row["seconds"])
         if self.world > 1:
             torch.distributed.barrier()
