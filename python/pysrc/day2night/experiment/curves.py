@@ -94,14 +94,21 @@ class Scale:
         return PAD_T + self.ph * (1 - (f - self.y0) / (self.y1 - self.y0))
 
     def ticks(self):
-        """Values of the y axis' labels: 1, 2 and 5 per decade (log), or five steps."""
+        """Values of the y axis' labels: 1, 2 and 5 per decade, or 1 to 9 when that gives
+        fewer than three (log); else five steps."""
         if not self.log:
             return [self.y0 + (self.y1 - self.y0) * k / 4 for k in range(5)]
-        out = []
-        for d in range(math.floor(self.y0), math.ceil(self.y1) + 1):
-            out += [m * 10.0 ** d for m in (1, 2, 5)
-                    if self.y0 - 1e-9 <= math.log10(m * 10.0 ** d) <= self.y1 + 1e-9]
+        for mantissas in ((1, 2, 5), range(1, 10)):
+            out = [m * 10.0 ** d for d in range(math.floor(self.y0), math.ceil(self.y1) + 1)
+                   for m in mantissas
+                   if self.y0 - 1e-9 <= math.log10(m * 10.0 ** d) <= self.y1 + 1e-9]
+            if len(out) >= 3:
+                break
         return out
+
+    def epoch_ticks(self):
+        """Up to five distinct whole epochs from 0 to the last."""
+        return sorted({round(self.x1 * k / 4) for k in range(5)})
 
 
 def _scale(lines):
@@ -124,8 +131,7 @@ def _axes(s):
         parts.append(f'<line x1="{PAD_L - 3}" y1="{yy:.1f}" x2="{PAD_L}" y2="{yy:.1f}" '
                      'stroke="black"/>')
         parts.append(f'<text x="{PAD_L - 5}" y="{yy + 3:.1f}" text-anchor="end">{v:.3g}</text>')
-    for k in range(5):
-        ep = round(s.x1 * k / 4)
+    for ep in s.epoch_ticks():
         parts.append(f'<text x="{s.x(ep):.1f}" y="{PAD_T + ph + 12}" '
                      f'text-anchor="middle">{ep}</text>')
     parts.append(f'<text x="{PAD_L + pw / 2}" y="{PAD_T + ph + 24}" '

@@ -81,11 +81,11 @@ def _run_cell(r, key, metric, digits, top):
         lines.append(f'<span class="ci">[{e(fmt(c["ci_low"], digits))}, '
                      f'{e(fmt(c["ci_high"], digits))}]</span>')
     if num(c.get("seed_sd")) is not None:
-        lines.append(f'<span class="ci">seed sd {e(fmt(c["seed_sd"], digits))}</span>')
+        lines.append(f'<span class="ci">sd over seeds {e(fmt(c["seed_sd"], digits))}</span>')
     g = ((r.get("gain") or {}).get(key) or {}).get(metric)
     if isinstance(g, dict):
-        lines.append(f'<span class="gain">{e(fmt(g.get("mean"), digits, sign=True))} '
-                     f'[{e(fmt(g.get("ci_low"), digits, sign=True))}, '
+        lines.append(f'<span class="gain">gain {e(fmt(g.get("mean"), digits, sign=True))}'
+                     f'<br>[{e(fmt(g.get("ci_low"), digits, sign=True))}, '
                      f'{e(fmt(g.get("ci_high"), digits, sign=True))}]</span>')
     return f"<td{cls}>" + "<br>".join(lines) + "</td>"
 
