@@ -206,6 +206,8 @@ def test_labels_are_escaped_and_tables_are_html(page):
     out, _, _ = page
     src = (out / "index.html").read_text()
     assert "Day &lt;b&gt;&amp;" in src and "Day <b>&" not in src
+    # nothing from the network: the only URL is the SVG namespace
+    assert src.replace('xmlns="http://www.w3.org/2000/svg"', "").count("://") == 0
     p = parse(out / "index.html")
     classes = [a.get("class") for tag, a in p.tags if tag == "table"]
     assert classes.count("scores") == 2 and classes.count("comparisons") == 1
