@@ -25,8 +25,10 @@ except ImportError as e:  # the trainer's tests skip the same way (scripts/test.
                 allow_module_level=True)
 
 import experiment_mini as mini  # noqa: E402
-from conftest import FIXTURES, cli_path  # noqa: E402
+from conftest import FIXTURES, cli_path, require_tool  # noqa: E402
+from report_browser import browser_checks, markdown_visible  # noqa: E402
 
+from day2night.experiment import report  # noqa: E402
 from day2night.png import read_png  # noqa: E402
 
 EPOCHS = 3
@@ -235,6 +237,32 @@ def test_report_page_shows_test_scenes(full_run):
     for s in srcs:
         assert (out / s).is_file(), s
     assert not list(out.rglob("*.tmp"))
+
+
+def test_report_page_of_the_run_in_headless_chromium(full_run):
+    """The real run's page (python/tests/test_experiment_report.py tests it on a made-up
+    table): HTML tables, no markdown, every image loads, --show 3 shows 3 scenes per row."""
+    chromium = require_tool("chromium", "chromium")
+    out, r = full_run
+    got = browser_checks(chromium, out / "index.html")
+    t = json.loads((out / "table.json").read_text())
+    tasks = {x["task"] for x in t["rows"]}
+    assert got["tables"].count("scores") == len(tasks)
+    assert markdown_visible(got["text"]) == []
+    assert got["broken"] == []
+    # --show's default: 3 scenes, one per fold, shown by every row that writes images
+    shown = report.scenes_to_show(t["folds"], 3)[0]
+    assert len(shown) == 3
+    assert all(set(f["test"]) & set(shown) for f in t["folds"])
+    page = (out / "index.html").read_text()
+    for x in t["rows"]:
+        if x.get("kind") == "burst":
+            continue
+        for sid in shown:
+            for k in (["clean"] if x["task"] == "clean" else ["1600", "3200"]):
+                assert f'src="img/{x["task"]}/{x["row"]}/{sid}_{k}_pred.png"' in page
+    assert got["images"] >= 4 * len(shown) * len(t["rows"])
+    assert "--show 3: showing" not in r.stderr  # 6 scenes: no "showing fewer" line
 
 
 @pytest.fixture(scope="session")

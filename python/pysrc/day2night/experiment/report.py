@@ -1,79 +1,159 @@
-"""RUN/index.html: the table, the validation L1 per epoch of every row (inline SVG, also
-RUN/val_l1_<task>.svg) and a few test scenes per row (input, prediction, target, Delta E 2000
-map, as PNGs under RUN/img/)."""
+"""RUN/index.html, the run's report: what was run (preset label, options, protocol, how it
+differs from the paper, rows left out), Tables 1 and 2 as HTML tables with confidence
+intervals, gains and the paper's numbers (report_tables.py), the comparisons against the
+reference row, the learning curves per row (curves.py; also RUN/curves_<task>.svg), and the
+shown test scenes of every row with every test scene's scores (report_grid.py). Also writes
+the curves as TensorBoard event files under RUN/tb (tb.py).
+
+Every text from table.json goes through html.escape; the page refers to nothing outside the
+run folder."""
 
 import html
 import pathlib
 
-from ..isos import NOISY_ISOS
-from . import curves
 from ..atomic import write_text
-from .table import markdown
+from . import curves, report_grid, report_tables, tb
+from .prepare import log
+
+e = html.escape
+STYLE = """body{font-family:sans-serif;margin:1em;max-width:1500px}
+table{border-collapse:collapse;margin:0.5em 0}
+th,td{border:1px solid #ccc;padding:3px 6px;font-size:13px;vertical-align:top}
+table.scores td{text-align:right;white-space:nowrap}
+table.scores tbody th{text-align:left;min-width:11em}
+.ci{color:#555;font-size:11px}.gain{color:#246;font-size:11px}
+td.paper,th.paper{background:#f4f1e8;color:#444}
+td.best,span.best{background:#d9f2d9;font-weight:bold}
+tr.untrained,tr.burst{color:#777;font-style:italic;background:#fafafa}
+td.better{background:#cdeccd}td.worse{background:#f6cccc}td.same{background:#eee}
+table.grid td{padding:1px}table.grid th{font-weight:normal;text-align:left}
+td.missing{width:192px;font-size:11px;color:#a00}
+.key,.note{font-size:12px;color:#333;max-width:1100px}
+dl.run{display:grid;grid-template-columns:max-content auto;gap:2px 12px;font-size:13px}
+dl.run dt{font-weight:bold}dl.run dd{margin:0}"""
+LABELS = {"paper": "the paper's settings (--preset paper)",
+          "mini": "the mini preset (--preset mini: learns on a CPU; not the paper's numbers)",
+          "smoke": "a smoke run (settings below both presets: not the paper's numbers)",
+          "custom": "custom settings (a preset with flags that override it)"}
 
 
-def _img(src, caption):
-    return (
-        f'<figure><img src="{html.escape(src)}" width="192" loading="lazy">'
-        f"<figcaption>{html.escape(caption)}</figcaption></figure>"
-    )
+def scenes_to_show(splits, n):
+    """(scenes, why) for ``--show n``: up to ``n`` scenes taken in turn from the folds' test
+    lists (fold 0's first, fold 1's first, ..., then the second of each), so every row, the
+    synthetic ones (tested on every scene) and the per-fold ones (each scene in one fold's
+    test list), has a prediction for each; ``why`` says why there are fewer than ``n``."""
+    lists = [list(s.get("test") or []) for s in splits]
+    order = [lst[i] for i in range(max(map(len, lists), default=0)) for lst in lists
+             if i < len(lst)]
+    scenes = order[:n]
+    why = None
+    if len(scenes) < n:
+        why = (f"--show {n}: showing {len(scenes)} test scene(s), all the real set has "
+               "(every scene is in one fold's test list)")
+    return scenes, why
 
 
-def _scores(unit, sid, key):
-    for i in unit["images"]:
-        if i["scene"] == sid and i["input"] == str(key):
-            return i
-    return None
+def _value(v):
+    if v is None:
+        return "-"
+    return " ".join(map(str, v)) if isinstance(v, (list, tuple)) else str(v)
+
+
+def _pairs(items):
+    """``key value, key value, ...`` of a dict's items, sorted ("-" for none)."""
+    return ", ".join(f"{k} {_value(v)}" for k, v in sorted(items)) or "-"
+
+
+def _dl(items):
+    body = "".join(f"<dt>{e(str(k))}</dt><dd>{e(str(v))}</dd>" for k, v in items)
+    return f'<dl class="run">{body}</dl>'
+
+
+def run_section(t):
+    """What was run: the label, options, protocol, seeds, bootstrap and the deviations."""
+    cfg = t.get("config") or {}
+    label = t.get("label")
+    what = LABELS.get(label, "-" if label is None else label)
+    if label is None and t.get("smoke"):
+        what = "- (a network narrower than the paper's: not the paper's numbers)"
+    items = [("run", what), ("protocol", _pairs((t.get("protocol") or {}).items()))]
+    seeds = t.get("seeds")
+    items.append(("training seeds", "-" if not seeds else ", ".join(map(str, seeds))))
+    b = t.get("bootstrap") or {}
+    items.append(("confidence intervals", "-" if not b else
+                  f"{round(100 * float(b.get('level', 0.95)))} % bootstrap, "
+                  f"{b.get('replicates', '-')} replicates, seed {b.get('seed', '-')}: "
+                  f"{b.get('method', '-')}"))
+    items.append(("reference row of the comparisons", t.get("compare_to") or "-"))
+    items.append(("options (config.json)", _pairs(cfg.items())))
+    dev = t.get("not_the_paper") or []
+    parts = ['<h2 id="run">The run</h2>', _dl(items)]
+    parts.append("<p><b>Differs from the paper's protocol:</b> "
+                 + (e("; ".join(dev)) if dev else "nothing listed") + ".</p>")
+    return parts + left_out(t)
+
+
+def left_out(t):
+    """The rows not in the tables and why (table.json "left_out")."""
+    rows = t.get("left_out") or []
+    if not rows:
+        return []
+    items = "".join(f"<li>{e(str(r.get('task', '-')))} task, row "
+                    f"{e(str(r.get('row', '-')))}: {e(str(r.get('why', '-')))}</li>"
+                    for r in rows)
+    return ["<p><b>Rows left out:</b></p>", f"<ul>{items}</ul>"]
 
 
 def _curves(out, t, tasks):
-    """Validation L1 per epoch of each row (curves.py), inline and as RUN/val_l1_<task>.svg."""
-    parts = []
+    """The learning curves of each task (curves.py), inline and as RUN/curves_<task>.svg."""
+    parts = ['<h2 id="curves">Learning curves</h2>',
+             '<p class="note">Per row, every unit (fold, seed) in its own colour: the training '
+             "loss (solid) and the validation L1 (dashed) per epoch, epoch 0 the untrained "
+             "network; one logarithmic scale per task. Synthetic rows validate on the "
+             "synthetic validation images, per-fold rows on their fold's real validation "
+             "scenes. TensorBoard: <code>tensorboard --logdir tb</code> in the run folder."
+             "</p>"]
+    drawn = False
     for task in tasks:
         chart = curves.svg(t, task)
         if chart is not None:
-            write_text(out / f"val_l1_{task}.svg", chart)
-            parts += [f"<h2>Validation L1 per epoch ({html.escape(task)} task)</h2>",
-                      chart]
+            write_text(out / f"curves_{task}.svg", chart)
+            parts += [f"<h3>{e(task)} task</h3>", chart]
+            drawn = True
+    return parts if drawn else parts[:1] + ["<p>No unit has a training history.</p>"]
+
+
+def _scenes_head(scenes, why):
+    parts = ['<h2 id="scenes">Test scenes</h2>',
+             '<p class="note">Per row: the network input, the prediction, the target and the '
+             "per-pixel Delta E 2000 of prediction and target (display sRGB; black 0, white 10 "
+             "or more) of the shown scenes, then every test scene's scores. Shown: "
+             f"{e(', '.join(scenes)) if scenes else 'none (--show 0)'}.</p>"]
+    if why:
+        parts.append(f'<p class="note">{e(why)}</p>')
     return parts
 
 
-def write(out, t, tasks, report_scenes):
-    """RUN/index.html of the table ``t`` (table.build's) of a run of ``tasks``, showing the
-    test scenes ``report_scenes``."""
+def write(out, t, tasks, report_scenes, show=None):
+    """RUN/index.html (and RUN/curves_<task>.svg, RUN/tb) of the table ``t`` (table.build's)
+    of a run of ``tasks``, showing the test scenes ``report_scenes`` (:func:`scenes_to_show`
+    of ``--show`` ``show``)."""
     out = pathlib.Path(out)
-    parts = [
-        "<!doctype html><meta charset=utf-8><title>day2night experiment</title>",
-        "<style>body{font-family:sans-serif;margin:1em}figure{display:inline-block;margin:2px}"
-        "figcaption{font-size:11px}pre{background:#f4f4f4;padding:8px}</style>",
-        "<h1>day2night experiment: Tables 1 and 2</h1>",
-        f"<pre>{html.escape(markdown(t))}</pre>",
-        "<p>Delta E maps: CIEDE2000 per pixel, black 0, white 10 or more.</p>",
-    ]
+    why = None
+    if show is not None and len(report_scenes) < show:
+        why = scenes_to_show(t.get("folds") or [], show)[1]
+    parts = ["<!doctype html>", '<html lang="en"><head><meta charset="utf-8">',
+             "<title>day2night experiment</title>", f"<style>{STYLE}</style></head><body>",
+             "<h1>day2night experiment: Tables 1 and 2</h1>"]
+    parts += run_section(t)
+    for task in tasks:
+        parts += report_tables.task_table(t, task)
+    parts += report_tables.comparisons(t)
     parts += _curves(out, t, tasks)
-    for r in t["rows"]:
-        task, row = r["task"], r["row"]
-        parts.append(f"<h2>{html.escape(r['label'])} ({task} task)</h2>")
-        keys = ["clean"] if task == "clean" else list(NOISY_ISOS)
-        for sid in report_scenes:
-            unit = next((u for u in r["units"] if sid in u.get("test_scenes", [])), None)
-            if unit is None:
-                continue
-            for key in keys:
-                parts += _scene(task, row, unit, sid, key)
+    parts += _scenes_head(report_scenes, why)
+    parts += report_grid.section(out, t, report_scenes)
+    parts.append("</body></html>")
     write_text(out / "index.html", "\n".join(parts) + "\n")
-
-
-def _scene(task, row, unit, sid, key):
-    """The figures of one test input of a row: input, prediction, target, Delta E map."""
-    s = _scores(unit, sid, key)
-    stem = f"{sid}_{key}"
-    sc = "" if s is None else (
-        f" PSNR {s['psnr'] if isinstance(s['psnr'], str) else round(s['psnr'], 2)}"
-        f", SSIM {s['ssim'] if isinstance(s['ssim'], str) else round(s['ssim'], 4)}"
-        f", Delta E {round(float(s['delta_e']), 3)}")
-    return ["<div>",
-            _img(f"img/{task}/scenes/{stem}_input.png", f"{sid} input ({key})"),
-            _img(f"img/{task}/{row}/{stem}_pred.png", f"prediction, fold {unit['fold']}:{sc}"),
-            _img(f"img/{task}/scenes/{stem}_target.png", "target"),
-            _img(f"img/{task}/{row}/{stem}_de.png", "Delta E 2000"),
-            "</div>"]
+    written = tb.write(out, t)
+    if isinstance(written, str):
+        log(written)

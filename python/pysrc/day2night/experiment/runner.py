@@ -75,7 +75,9 @@ class Experiment:
         for gone in self.left_out:
             log(f"row {gone['row']} ({gone['task']} task) left out: {gone['why']}")
         self.source = PairSource(self.out, c, self.inputs, self.target_isps, self.tasks)
-        self.report_scenes = self.plan.splits[0]["test"][: c.show]
+        self.report_scenes, why = report.scenes_to_show(self.plan.splits, c.show)
+        if why:
+            log(why)
         self._log_setup()
 
     def _log_setup(self):
@@ -187,6 +189,6 @@ class Experiment:
         t = table.build(self.config, self.out, self.plan.splits, len(self.inputs.scenes),
                         len(self.inputs.days), left_out=self.left_out)
         table.write(self.out, t)
-        report.write(self.out, t, self.tasks, self.report_scenes)
+        report.write(self.out, t, self.tasks, self.report_scenes, self.config.show)
         log(f"wrote {self.out / 'table.md'}, table.json and index.html")
         return t
