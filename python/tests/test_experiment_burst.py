@@ -241,7 +241,7 @@ def test_the_command_writes_the_row_into_the_table_without_torch_or_training(sta
     assert [g["row"] for g in gone] == ["burst"]
     t = json.loads((out2 / "table.json").read_text())
     assert t["rows"] == [] and t["left_out"] == gone
-    assert "Left out: the burst row of the noisy task: the real set holds 1 frame(s)" in \
+    assert "Left out: burst (noisy task): the real set holds 1 frame(s)" in \
         (out2 / "table.md").read_text()
     assert "row burst (noisy task) left out: the real set holds 1" in r.stderr
 

@@ -52,7 +52,7 @@ def burst_rows(config, inputs, run_rows=None):
     if ROW not in [r.id for r in run_rows]:
         # not run: without --captures config.resolve leaves it out of the default rows
         return run_rows, [] if config.captures else [{"task": TASK, "row": ROW,
-                                                       "why": NO_CAPTURES}]
+                                                       "why": unavailable(config, inputs)}]
     why = unavailable(config, inputs)
     if why:
         return [r for r in run_rows if r.id != ROW], [{"task": TASK, "row": ROW, "why": why}]

@@ -44,6 +44,13 @@ BY_ID = {r.id: r for r in ROWS}
 UNTRAINED = Row("untrained", "Untrained (the initial weights)", "untrained")
 
 
+def with_untrained(rows):
+    """``rows`` with the untrained row first when any of them trains a network (a run of
+    the burst row alone trains nothing, needs no torch and has no initial weights)."""
+    rows = list(rows)
+    return [UNTRAINED] + rows if any(r.source != "burst" for r in rows) else rows
+
+
 def select(ids):
     """Rows by id, in the table's order; unknown ids are an error naming them."""
     if not ids:

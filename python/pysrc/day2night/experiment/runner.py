@@ -104,7 +104,7 @@ class Experiment:
     def work(self):
         """Every unit of one seed, in order: (task, row, fold, split); the untrained row
         first in each task."""
-        return rows.work(self.tasks, [rows.UNTRAINED] + self.rows, self.plan.splits)
+        return rows.work(self.tasks, rows.with_untrained(self.rows), self.plan.splits)
 
     def seeded_work(self):
         """Every unit of the run: (seed, task, row, fold, split), the units of --seed first

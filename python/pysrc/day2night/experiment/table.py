@@ -21,7 +21,7 @@ import numpy as np
 from ..isos import NOISY_ISOS
 from ..atomic import write_json, write_text
 from . import stats
-from .rows import UNTRAINED, select, tasks_of, test_keys
+from .rows import UNTRAINED, select, tasks_of, test_keys, with_untrained
 from .rows import units as row_units
 from .runfolder import read_scores, unit_dir, unit_id
 from .stats import bootstrap_seed
@@ -174,7 +174,7 @@ def build(config, out, splits, n_scenes, n_days, left_out=()):
     gone = {(g["task"], g["row"]) for g in dropped}
     ref = config.compare_to or UNTRAINED.id
     for task in tasks_of(config.task):
-        for row in [UNTRAINED] + select(list(config.rows)):
+        for row in with_untrained(select(list(config.rows))):
             if (row.source == "burst" and task != "noisy") or (task, row.id) in gone:
                 continue
             if row.source == "burst" and not _burst_done(out, task, row):
@@ -185,7 +185,8 @@ def build(config, out, splits, n_scenes, n_days, left_out=()):
             rows_out.append(_row(config, task, row, per_seed, st))
     comparisons = []
     for r in rows_out:
-        r["gain"] = None if r["row"] == UNTRAINED.id else _gain(st, r)
+        r["gain"] = None if r["row"] == UNTRAINED.id or (r["task"], UNTRAINED.id) not in \
+            st.values else _gain(st, r)
         if r["row"] != ref and (r["task"], ref) in st.values:
             comparisons += _comparisons(st, r, ref)
     return {
