@@ -13,9 +13,9 @@ use day2night::encode::png::encode_u8;
 use day2night::isp::release_input::{
     release_codes, release_table, CfaPlane, FrameFacts, RELEASE_GAMMA,
 };
-use day2night::isp::render_crop::{render_linear_crop_with, CROP_MARGIN};
+use day2night::isp::render::{render_crop, CropSamples, RenderOptions};
+use day2night::isp::render_crop::CROP_MARGIN;
 use day2night::isp::tone::DisplayTone;
-use day2night::isp::Demosaic;
 use day2night::noise::apply::apply_noise_crop_with;
 use day2night::raw::crop::Crop;
 use day2night::synth::config::JobConfig;
@@ -124,16 +124,18 @@ fn main() {
             apply_noise_crop_with(&day.raw, &crop, &mut noisy, &np.params, np.seed, false)
                 .expect("noise");
             lap(3, &mut t);
-            let rgb = render_linear_crop_with(
-                &day.raw,
-                Some(plan.night_neutral),
-                Demosaic::default(),
-                &outer,
-                &plane,
-                &crop,
-                plan.opcodes,
-            )
-            .expect("target");
+            let opts = RenderOptions {
+                neutral: Some(plan.night_neutral),
+                opcodes: plan.opcodes,
+                crop: false,
+                orient: false,
+                ..RenderOptions::default()
+            };
+            let samples = CropSamples::Stored {
+                outer: &outer,
+                plane: &plane,
+            };
+            let rgb = render_crop(&day.raw, &opts, &crop, samples).expect("target");
             lap(4, &mut t);
             let codes = release_codes(
                 &CfaPlane {

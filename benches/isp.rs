@@ -6,7 +6,9 @@
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
 use day2night::encode::exr::{encode_exr, ExrCompression, ExrOptions};
 use day2night::isp::demosaic::{demosaic, Demosaic};
-use day2night::isp::render::{apply_matrix, color_matrix, render_linear, RenderOptions};
+use day2night::isp::render::{
+    apply_matrix, color_matrix, render, render_with, Execution, RenderOptions,
+};
 use day2night::isp::RgbImage;
 use day2night::raw::meta::RawMeta;
 use day2night::raw::{Bayer, RawImage};
@@ -103,7 +105,7 @@ fn print_cpu_time(raw: &RawImage) {
         let n = 5;
         let (c0, t0) = (cpu_seconds(), std::time::Instant::now());
         for _ in 0..n {
-            black_box(render_linear(raw, &opts).unwrap());
+            black_box(render(raw, &opts).unwrap());
         }
         let wall = t0.elapsed().as_secs_f64() / n as f64;
         if let (Some(a), Some(b)) = (c0, cpu_seconds()) {
@@ -160,12 +162,12 @@ fn benches(c: &mut Criterion) {
                 demosaic: d,
                 ..RenderOptions::default()
             };
-            b.iter(|| black_box(render_linear(&raw, &opts).unwrap()))
+            b.iter(|| black_box(render(&raw, &opts).unwrap()))
         });
     }
     g.finish();
 
-    let lin: RgbImage = render_linear(&raw, &RenderOptions::default()).unwrap();
+    let lin: RgbImage = render(&raw, &RenderOptions::default()).unwrap();
     let mut g = c.benchmark_group("write_12mp");
     g.sample_size(10).warm_up_time(Duration::from_millis(500));
     // (compression, half, zip level): every compression at the default level, then the
@@ -249,7 +251,7 @@ fn benches(c: &mut Criterion) {
 /// of the PNG quantizer (lookup and formula), interleaved so that both see the same load.
 fn print_cpu_time_render_png(raw: &RawImage) {
     let opts = RenderOptions::default();
-    let lin = render_linear(raw, &opts).unwrap();
+    let lin = render(raw, &opts).unwrap();
     let n = 8;
     let mut cpu = [0.0f64; 4];
     let mut wall = [0.0f64; 4];
@@ -257,9 +259,9 @@ fn print_cpu_time_render_png(raw: &RawImage) {
         for (k, cell) in cpu.iter_mut().enumerate() {
             let (c0, t0) = (cpu_seconds().unwrap_or(0.0), std::time::Instant::now());
             match k {
-                0 => drop(black_box(render_linear(raw, &opts).unwrap())),
+                0 => drop(black_box(render(raw, &opts).unwrap())),
                 1 => drop(black_box(
-                    day2night::isp::render::render_linear_reference(raw, &opts).unwrap(),
+                    render_with(raw, &opts, Execution::WholeFrame).unwrap(),
                 )),
                 2 => drop(black_box(day2night::encode::png::encode_u8(
                     &lin,
@@ -312,13 +314,13 @@ fn render_png_benches(c: &mut Criterion) {
         .measurement_time(Duration::from_secs(4));
     let opts = RenderOptions::default();
     g.bench_function("render_linear_mhc", |b| {
-        b.iter(|| black_box(render_linear(&raw, &opts).unwrap()))
+        b.iter(|| black_box(render(&raw, &opts).unwrap()))
     });
     // the unfused whole-image path the banded render replaced (same output bits)
     g.bench_function("render_linear_mhc_reference", |b| {
-        b.iter(|| black_box(day2night::isp::render::render_linear_reference(&raw, &opts).unwrap()))
+        b.iter(|| black_box(render_with(&raw, &opts, Execution::WholeFrame).unwrap()))
     });
-    let lin = render_linear(&raw, &opts).unwrap();
+    let lin = render(&raw, &opts).unwrap();
     g.bench_function("encode_u8_srgb", |b| {
         b.iter(|| black_box(day2night::encode::png::encode_u8(&lin, Default::default())))
     });

@@ -7,7 +7,7 @@
 use day2night::dng::opcodes::{
     encode_list, AreaSpec, GainMap, Opcode, OpcodeKind, OpcodeList, WarpPlane, WarpPlane2,
 };
-use day2night::isp::render::{render_linear, RenderOptions};
+use day2night::isp::render::{render, RenderOptions};
 use day2night::raw::meta::RawMeta;
 use day2night::raw::{Bayer, RawImage};
 use std::hint::black_box;
@@ -237,7 +237,7 @@ fn main() {
     for _ in 0..runs {
         for (i, (_, img)) in cases.iter().enumerate() {
             let t = Instant::now();
-            black_box(render_linear(img, &opts).unwrap());
+            black_box(render(img, &opts).unwrap());
             times[i].push(t.elapsed().as_secs_f64());
         }
     }

@@ -5,7 +5,7 @@
 //! `cargo run --release --example make_bench_input -- /tmp/day.dng`
 //! `cargo run --release --example exr_speed -- /tmp/day.dng [RUNS]`
 use day2night::encode::exr::{encode_exr, ExrCompression, ExrOptions};
-use day2night::isp::render::{render_linear, RenderOptions};
+use day2night::isp::render::{render, RenderOptions};
 use day2night::isp::RgbImage;
 use exr::prelude::*;
 use std::io::Cursor;
@@ -63,7 +63,7 @@ fn main() -> std::result::Result<(), Box<dyn std::error::Error>> {
     let runs: usize = std::env::args().nth(2).map_or(Ok(3), |s| s.parse())?;
     let img = day2night::dng::read::read_dng(std::path::Path::new(&p))?;
     let t = Instant::now();
-    let rgb = render_linear(&img, &RenderOptions::default())?;
+    let rgb = render(&img, &RenderOptions::default())?;
     let px = (rgb.width * rgb.height) as f64;
     eprintln!(
         "render_linear {}x{} {:.0} ms",

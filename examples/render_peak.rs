@@ -8,7 +8,7 @@
 //! `render-only` skips the PNG samples (peak memory of the render alone).
 use day2night::dng::read::read_dng;
 use day2night::encode::png::{encode_u8, encode_u8_slow};
-use day2night::isp::render::{render_linear, render_linear_reference, RenderOptions};
+use day2night::isp::render::{render, render_with, Execution, RenderOptions};
 use std::hint::black_box;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
@@ -24,9 +24,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     for _ in 0..repeat {
         let t = std::time::Instant::now();
         let rgb = if reference {
-            render_linear_reference(&raw, &opts)?
+            render_with(&raw, &opts, Execution::WholeFrame)?
+                .ok_or("the whole-frame render is always made")?
+                .image
         } else {
-            render_linear(&raw, &opts)?
+            render(&raw, &opts)?
         };
         let t_render = t.elapsed();
         let t = std::time::Instant::now();

@@ -5,7 +5,7 @@ use crate::diagnostics::warn_lines;
 use crate::errors::{py_err, value_err};
 use crate::pool::on_pool;
 use crate::raw::Raw;
-use day2night::isp::render::{render_linear, RenderOptions};
+use day2night::isp::render::RenderOptions;
 use day2night::isp::Demosaic;
 use pyo3::prelude::*;
 
@@ -67,6 +67,7 @@ pub(crate) fn render<'py>(
         crop,
         orient,
         opcodes,
+        ..RenderOptions::default()
     };
     let name = raw.get().file_name.clone();
     // The command line's warnings: skipped optional opcodes, opcodes that make their samples
@@ -76,7 +77,7 @@ pub(crate) fn render<'py>(
             on_pool(move || {
                 use day2night::isp::opcodes::check::check_render;
                 let checked = check_render(&day.raw, opts.opcodes, opts.crop, opts.orient)?;
-                let rgb = render_linear(&day.raw, &opts)?;
+                let rgb = day2night::isp::render(&day.raw, &opts)?;
                 let mut w = checked.warnings;
                 w.extend(day2night::isp::flat::warning(&rgb, "the render"));
                 Ok((rgb, w))

@@ -7,10 +7,7 @@ use day2night::encode::exr::{
 use day2night::encode::png::{write_png, write_tiff, PngOptions};
 use day2night::encode::target_files::TargetFiles;
 use day2night::isp::opcodes::OpcodeMode;
-use day2night::isp::render::{
-    render_input_bands_sized, render_input_opts, render_linear, render_linear_bands_sized,
-    resolve_neutral, RenderOptions,
-};
+use day2night::isp::render::{render, render_bands, resolve_neutral, Output, RenderOptions};
 use day2night::isp::tone::DisplayTone;
 use day2night::isp::Demosaic;
 use day2night::output::OutputPolicy;
@@ -181,6 +178,11 @@ pub fn run(args: RenderArgs) -> CmdResult {
         super::warn_all(&args.input, &flat.warning("the render"));
     };
     let opts = RenderOptions {
+        output: if args.camera_rgb {
+            Output::Camera
+        } else {
+            Output::Linear
+        },
         demosaic,
         neutral: Some(n),
         crop: !args.no_crop,
@@ -205,33 +207,21 @@ pub fn run(args: RenderArgs) -> CmdResult {
     // EXR (ZIP, ZIPS, none) and 8-bit PNG are written band by band as the render makes them
     // (the same bytes as the whole-image writers); the rest from the whole image.
     let streamed = match format {
-        Format::Exr if encodes_rows(&exr_opts) => stream(
-            &img,
-            &opts,
-            args.camera_rgb,
-            &policy,
-            &flat,
-            |dims, policy| {
+        Format::Exr if encodes_rows(&exr_opts) => {
+            stream(&img, &opts, &policy, &flat, |dims, policy| {
                 TargetFiles::create(dims, Some(&args.output), (&exr_opts, &attrs), None, policy)
-            },
-        )
-        .map_err(in_file)?,
-        Format::Png if !sixteen => stream(
-            &img,
-            &opts,
-            args.camera_rgb,
-            &policy,
-            &flat,
-            |dims, policy| {
-                TargetFiles::create(
-                    dims,
-                    None,
-                    (&exr_opts, &[]),
-                    Some((&args.output, tone)),
-                    policy,
-                )
-            },
-        )
+            })
+            .map_err(in_file)?
+        }
+        Format::Png if !sixteen => stream(&img, &opts, &policy, &flat, |dims, policy| {
+            TargetFiles::create(
+                dims,
+                None,
+                (&exr_opts, &[]),
+                Some((&args.output, tone)),
+                policy,
+            )
+        })
         .map_err(in_file)?,
         _ => false,
     };
@@ -239,11 +229,7 @@ pub fn run(args: RenderArgs) -> CmdResult {
         say_flat();
         return Ok(());
     }
-    let rgb = if args.camera_rgb {
-        render_input_opts(&img, &opts).map_err(in_file)?
-    } else {
-        render_linear(&img, &opts).map_err(in_file)?
-    };
+    let rgb = render(&img, &opts).map_err(in_file)?;
     flat.image(&rgb);
     say_flat();
     match format {
@@ -355,7 +341,6 @@ fn run_release(args: &RenderArgs) -> CmdResult {
 fn stream<'p>(
     img: &day2night::raw::RawImage,
     opts: &RenderOptions,
-    camera_rgb: bool,
     policy: &'p OutputPolicy,
     flat: &day2night::isp::flat::FlatCheck,
     open: impl FnOnce((usize, usize), &'p OutputPolicy) -> day2night::Result<TargetFiles<'p>>,
@@ -376,11 +361,7 @@ fn stream<'p>(
             "a band came before the render started",
         )),
     };
-    let made = if camera_rgb {
-        render_input_bands_sized(img, opts, start, band)?
-    } else {
-        render_linear_bands_sized(img, opts, start, band)?
-    };
+    let made = render_bands(img, opts, start, band)?;
     match (made, files.get()) {
         (Some(_), Some(f)) => f.finish().map(|_| true),
         _ => Ok(false),

@@ -6,7 +6,7 @@
 //! encodes one band of [`BAND`] rows, from any thread, and appends it to each file as soon
 //! as every band above it is written (a band that comes early waits in a small reorder
 //! buffer; the render makes bands nearly in order and at most a few ahead:
-//! [`crate::isp::render::render_linear_bands_sized`]); [`TargetFiles::finish`] completes
+//! [`crate::isp::render::render_bands`]); [`TargetFiles::finish`] completes
 //! the files (the EXR offset table, the PNG's IEND) and hands them to the output policy
 //! (sync and rename, or deferred). The bytes are those of the whole-image writers
 //! ([`crate::encode::exr::write_exr`], [`crate::encode::png::write_png`]); on any error,

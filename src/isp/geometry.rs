@@ -87,7 +87,7 @@ pub fn oriented_source(
     }
 }
 
-/// Where the pixels of a rendered image come from: [`super::render_linear`]'s DefaultCrop and
+/// Where the pixels of a rendered image come from: [`super::render`]'s DefaultCrop and
 /// Orientation of an active area, as a map from displayed pixels to active-area sites (for
 /// drawing things computed in active-area coordinates, e.g. light masks, over a render).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -100,7 +100,7 @@ pub struct DisplayGeometry {
 }
 
 impl DisplayGeometry {
-    /// The geometry `render_linear` applies (crop and orientation on) to an active area of
+    /// The geometry a render applies (crop and orientation on) to an active area of
     /// `aw` x `ah` described by `meta`.
     pub fn new(meta: &RawMeta, aw: usize, ah: usize) -> DisplayGeometry {
         let (x0, y0, cw, ch) = default_crop(meta, aw, ah);

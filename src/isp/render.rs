@@ -1,41 +1,315 @@
-//! The render pipeline: normalize -> white balance -> demosaic -> camera -> XYZ -> linear
-//! sRGB -> DefaultCrop -> orientation. Every stage is parallel over rows and deterministic.
+//! The render pipeline's public API: one [`RenderOptions`] record (what to make) and one
+//! [`Execution`] (how to run it): [`render`], [`render_with`], [`render_bands`] and
+//! [`render_crop`]. Every execution runs the stages of [`STAGES`] in that order, taken from
+//! one [`Plan`] (see [`super::stages`] and docs/isp.md, "The pipeline"):
+//!
+//! * the whole frame ([`Execution::WholeFrame`]): every stage on whole images, the
+//!   reference the others equal bit for bit;
+//! * bands of output rows ([`Execution::Bands`], [`render_bands`]): DefaultCrop and
+//!   orientation cut the output into bands, each band computing the active-area rectangle it
+//!   shows (`render_bands.rs` without opcodes, `opcodes/banded.rs` with them);
+//! * a crop of the active area ([`render_crop`]), from its own samples (`render_crop.rs`)
+//!   or cut from the whole frame's;
+//! * a LinearRaw image (`render_linear_raw.rs`): already demosaiced, whole frame.
+//!
+//! [`Execution::Auto`] ([`render`]) takes bands when the demosaicer and the opcodes allow
+//! (bilinear, MHC; no TrimBounds), else the whole frame. Every stage is parallel over rows
+//! and deterministic.
 
-use super::color::normalize_neutral;
-use super::demosaic::{demosaic_rows, row_kernel, Demosaic, Post, RowKernel};
+use super::demosaic::{demosaic_rows, row_kernel, Post};
+use super::opcodes::banded::Tune;
+use super::opcodes::pipeline;
 use super::opcodes::warp_window::WindowStats;
-use super::opcodes::{self, pipeline, OpcodeMode};
 use super::RgbImage;
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::normalize::Normalizer;
+use crate::raw::crop::Crop;
 use crate::raw::RawImage;
 
 pub use super::geometry::{
     apply_geometry, default_crop, orient_image, oriented_source, DisplayGeometry,
 };
 use super::place::{collect_bands, collect_bands_of};
-use super::render_bands::{banded, banded_any};
-pub use super::render_bands::{
-    render_input_bands_sized, render_linear_bands, render_linear_bands_sized,
-};
+use super::render_bands::{banded_any, bands_with};
 pub use super::render_parts::{
-    apply_matrix, color_matrix, resolve_neutral, Bands, RenderOptions, BAND,
+    apply_matrix, color_matrix, resolve_neutral, Bands, Output, RenderOptions, BAND,
 };
-pub(crate) use super::render_parts::{clip_row, matrix_row};
+use super::stages::Plan;
+pub use super::stages::{Stage, STAGES};
+
+/// How a render runs its stages (the pixels are the same, bit for bit).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Execution {
+    /// Bands when the demosaicer and the opcodes allow, else the whole frame ([`render`]).
+    #[default]
+    Auto,
+    /// Every stage on the whole frame: the reference.
+    WholeFrame,
+    /// Bands of `rows` output rows (the renders use [`BAND`]), the warps' windows holding at
+    /// most `limit` lines before the whole-image path runs (`None`: the renders' limit).
+    /// Not possible (`None` from [`render_with`]) with Menon, a TrimBounds or a LinearRaw
+    /// image.
+    Bands {
+        /// Output rows per band.
+        rows: usize,
+        /// Lines a warp's window may hold.
+        limit: Option<usize>,
+    },
+}
+
+impl Execution {
+    /// Every kind of execution, for tests that compare them.
+    pub const ALL: [Execution; 3] = [
+        Execution::Auto,
+        Execution::WholeFrame,
+        Execution::Bands {
+            rows: BAND,
+            limit: None,
+        },
+    ];
+}
+
+/// What [`render_with`] made: the image, what the warps' window did (all zero without a
+/// warp or outside bands) and the stages the execution ran.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Rendered {
+    /// The render.
+    pub image: RgbImage,
+    /// The warp window's statistics ([`Execution::Bands`]).
+    pub window: WindowStats,
+    /// The stages run, in pipeline order ([`STAGES`] for every execution).
+    pub stages: Vec<Stage>,
+}
+
+/// Where [`render_crop`] takes the crop's samples from.
+#[derive(Debug, Clone, Copy)]
+pub enum CropSamples<'a> {
+    /// The stored samples `plane` (row-major) of the active-area rectangle `outer`, which
+    /// must hold the crop grown by [`CROP_MARGIN`](super::render_crop::CROP_MARGIN) and cut
+    /// to the active area ([`Crop::grown`]); the frame's LinearizationTable is ignored (the
+    /// samples are linear). Bilinear and MHC only, and opcodes that act pointwise only
+    /// ([`crate::isp::opcodes::Prepared::needs_whole_frame`]).
+    Stored {
+        /// The rectangle the samples cover.
+        outer: &'a Crop,
+        /// Its samples.
+        plane: &'a [u16],
+    },
+    /// The frame's own samples: the whole frame is rendered and the crop cut from it (what
+    /// opcodes that need the whole frame ask for).
+    Frame,
+}
+
+/// The render of `img` as `opts` asks ([`Execution::Auto`]).
+pub fn render(img: &RawImage, opts: &RenderOptions) -> Result<RgbImage> {
+    let plan = Plan::new(img, opts)?;
+    let rgb = auto(&plan)?;
+    plan.finish("automatic");
+    Ok(rgb)
+}
+
+/// The render of `img` as `opts` asks, run as `how` says, with what it ran; `None` when the
+/// execution is not possible for this image ([`Execution::Bands`]). For tests and
+/// benchmarks: every execution gives the pixels of [`render`].
+pub fn render_with(
+    img: &RawImage,
+    opts: &RenderOptions,
+    how: Execution,
+) -> Result<Option<Rendered>> {
+    let plan = Plan::new(img, opts)?;
+    let mut window = WindowStats::default();
+    let image = match how {
+        Execution::Auto => Some(auto(&plan)?),
+        Execution::WholeFrame => Some(whole_frame(&plan)?),
+        Execution::Bands { rows, limit } => bands(&plan, rows, limit, &mut window)?,
+    };
+    Ok(image.map(|image| {
+        plan.finish("chosen");
+        Rendered {
+            image,
+            window,
+            stages: plan.ran(),
+        }
+    }))
+}
+
+/// The render handed to a consumer band by band: `start(width, height)` is called once
+/// with the output size, before any band, then `f(first_row, width, rows)` on each band of
+/// [`BAND`] output rows (`rows` interleaved RGB, `width` pixels per row); the results come
+/// back in band order with the output size ([`Bands`]). The rows are exactly those of
+/// [`render`]'s image, so consumers that encode them (EXR blocks, 8-bit PNG samples) write
+/// the same bytes as from the whole image, without holding it. `None` (and neither
+/// `start` nor `f` called) when the render is not made in bands: Menon, a TrimBounds in
+/// OpcodeList3, the network input of a LinearRaw image (use [`render`]). A LinearRaw linear
+/// render is made whole and handed out in bands.
+///
+/// Bands are made nearly in order: each thread takes the lowest band not yet taken, and no
+/// band is started more than 2 x threads + 1 bands beyond the lowest unfinished one, so a
+/// consumer that writes the bands in order (holding those that come early) holds a few
+/// bands at most. `f` must not wait for other rayon work (no parallel iterator or `join`
+/// inside): other threads may be waiting for its band.
+pub fn render_bands<T, S, F>(
+    img: &RawImage,
+    opts: &RenderOptions,
+    start: S,
+    f: F,
+) -> Result<Option<Bands<T>>>
+where
+    T: Send,
+    S: FnOnce(usize, usize) -> Result<()>,
+    F: Fn(usize, usize, &[f32]) -> Result<T> + Sync,
+{
+    let linear_raw = img.meta.linear_raw.is_some();
+    if linear_raw && opts.output == Output::Camera {
+        return Ok(None);
+    }
+    if !linear_raw && row_kernel(opts.demosaic).is_none() {
+        return Ok(None);
+    }
+    let plan = Plan::new(img, opts)?;
+    let got = if linear_raw {
+        Some(super::render_linear_raw::bands(&plan, start, f)?)
+    } else {
+        bands_with(&plan, start, f)?
+    };
+    if got.is_some() {
+        plan.finish("band-wise");
+    }
+    Ok(got)
+}
+
+/// The render of the active-area rectangle `crop` of the frame `frame` (levels, colour and
+/// opcodes from `frame`), from `samples`: the same pixels as the region of the whole
+/// frame's render before DefaultCrop and orientation, so `opts` must turn both off. The
+/// result is `crop.width x crop.height`, aligned with the crop's CFA samples.
+pub fn render_crop(
+    frame: &RawImage,
+    opts: &RenderOptions,
+    crop: &Crop,
+    samples: CropSamples,
+) -> Result<RgbImage> {
+    if opts.crop || opts.orient {
+        return Err(Error::invalid(
+            "a crop render is made before DefaultCrop and orientation: turn crop and orient off",
+        ));
+    }
+    let rgb = match samples {
+        CropSamples::Stored { outer, plane } => {
+            super::render_crop::stored(frame, opts, outer, plane, crop)?
+        }
+        CropSamples::Frame => {
+            let plan = Plan::new(frame, opts)?;
+            let rgb = frame_region(&plan, crop)?;
+            plan.finish("crop");
+            rgb
+        }
+    };
+    Ok(rgb)
+}
+
+/// The region `crop` of the whole frame's render (no DefaultCrop, no orientation).
+fn frame_region(plan: &Plan, crop: &Crop) -> Result<RgbImage> {
+    let p = match plan.opcodes() {
+        Some(p) if plan.img.meta.linear_raw.is_none() => p,
+        _ => return cut(&whole_frame(plan)?, crop),
+    };
+    let colour = plan.colour();
+    let post = move |row: &mut [f32]| colour.row(row);
+    plan.geometry();
+    let n = plan.neutral()?;
+    let method = plan.demosaic();
+    let norm = plan.normalizer()?;
+    pipeline::render_frame_region(plan.img, p, norm, n, method, &post, crop)
+}
+
+/// The rectangle `crop` of `img`.
+fn cut(img: &RgbImage, crop: &Crop) -> Result<RgbImage> {
+    if crop.width == 0
+        || crop.height == 0
+        || crop.left + crop.width > img.width
+        || crop.top + crop.height > img.height
+    {
+        return Err(Error::invalid(format!(
+            "the crop {crop:?} is not inside the {}x{} render",
+            img.width, img.height
+        )));
+    }
+    let mut out = RgbImage::try_new(crop.width, crop.height)?;
+    for (y, row) in out.data.chunks_exact_mut(3 * crop.width).enumerate() {
+        let i = 3 * ((crop.top + y) * img.width + crop.left);
+        row.copy_from_slice(&img.data[i..][..3 * crop.width]);
+    }
+    Ok(out)
+}
+
+/// [`Execution::Auto`]: bands when possible, else the whole frame.
+fn auto(plan: &Plan) -> Result<RgbImage> {
+    if plan.img.meta.linear_raw.is_some() {
+        return super::render_linear_raw::render(plan);
+    }
+    if let Some(kernel) = row_kernel(plan.method()) {
+        if let Some(rgb) = banded_any(plan, kernel, Tune::default(), collect_bands)? {
+            return Ok(rgb);
+        }
+    }
+    whole_frame(plan)
+}
+
+/// [`Execution::Bands`] of `rows` output rows.
+fn bands(
+    plan: &Plan,
+    rows: usize,
+    limit: Option<usize>,
+    stats: &mut WindowStats,
+) -> Result<Option<RgbImage>> {
+    if plan.img.meta.linear_raw.is_some() {
+        return Ok(None);
+    }
+    let Some(kernel) = row_kernel(plan.method()) else {
+        return Ok(None);
+    };
+    let rows = rows.max(1);
+    let tune = Tune {
+        band: rows,
+        limit,
+        stats: Some(stats),
+    };
+    banded_any(plan, kernel, tune, collect_bands_of(rows))
+}
+
+/// [`Execution::WholeFrame`]: every stage on whole images.
+fn whole_frame(plan: &Plan) -> Result<RgbImage> {
+    let img = plan.img;
+    if img.meta.linear_raw.is_some() {
+        return super::render_linear_raw::render(plan);
+    }
+    let colour = plan.colour();
+    let post = move |row: &mut [f32]| colour.row(row);
+    let (crop, orient) = plan.geometry();
+    let n = plan.neutral()?;
+    let method = plan.demosaic();
+    let norm = plan.normalizer()?;
+    match plan.opcodes() {
+        Some(p) => pipeline::render_frame(img, p, norm, n, method, &post, (crop, orient)),
+        None => {
+            let rgb = demosaic_whole(img, norm, n, method, &post)?;
+            Ok(apply_geometry(rgb, &img.meta, crop, orient))
+        }
+    }
+}
 
 /// Normalized, white-balanced (clipped to [0, 1]) and demosaiced camera RGB of the whole
-/// active area, not clipped after demosaicing: no colour matrix, no crop, no orientation.
-/// Normalization uses the shared [`Normalizer`] (DNG chapter 5), fused with the white
+/// active area of a file without opcodes, `post` applied to every row: no crop, no
+/// orientation. Normalization ([`Normalizer`], DNG chapter 5) is fused with the white
 /// balance into the demosaicer's input, in parallel over rows.
-fn render_camera_with(
+fn demosaic_whole(
     img: &RawImage,
-    neutral: [f64; 3],
-    method: Demosaic,
+    norm: Normalizer,
+    n: [f64; 3],
+    method: super::Demosaic,
     post: &Post,
 ) -> Result<RgbImage> {
     let bayer = img.bayer()?;
-    let n = normalize_neutral(neutral)?;
-    let norm = Normalizer::new(img)?;
     let a = img.active_area();
     let (w, h) = (a.width(), a.height());
     let (top, left) = (a.top as usize, a.left as usize);
@@ -58,248 +332,29 @@ fn render_camera_with(
     ))
 }
 
-/// White-balanced demosaiced camera RGB of the whole active area, not clipped after
-/// demosaicing (see [`render_camera`]).
-pub fn render_camera_unclipped(
-    img: &RawImage,
-    neutral: [f64; 3],
-    method: Demosaic,
-) -> Result<RgbImage> {
-    render_with(img, neutral, method, &|_| {}, false, false)
-}
-
-/// [`render_camera_unclipped`] clipped to [0, 1]: the network input before geometry.
-pub fn render_camera(img: &RawImage, neutral: [f64; 3], method: Demosaic) -> Result<RgbImage> {
-    if img.meta.linear_raw.is_some() {
-        return super::render_linear_raw::render_camera(
-            img,
-            neutral,
-            false,
-            false,
-            OpcodeMode::Apply,
-        );
-    }
-    render_with(img, neutral, method, &clip_row, false, false)
-}
-
-/// The render: demosaic with `post` applied to each finished row, then DefaultCrop (if
-/// `crop`) and orientation (if `orient`). Single-pass demosaicers (bilinear, MHC) run
-/// banded ([`render_banded`]); Menon runs on the whole image and is then cut and turned
-/// ([`render_camera_with`] + [`apply_geometry`]). `post` must act on each pixel on its
-/// own (both paths apply it to different row segments).
-fn render_with(
-    img: &RawImage,
-    neutral: [f64; 3],
-    method: Demosaic,
-    post: &Post,
-    crop: bool,
-    orient: bool,
-) -> Result<RgbImage> {
-    match row_kernel(method) {
-        Some(kernel) => render_banded(img, neutral, kernel, post, crop, orient),
-        None => Ok(apply_geometry(
-            render_camera_with(img, neutral, method, post)?,
-            &img.meta,
-            crop,
-            orient,
-        )),
-    }
-}
-
-fn render_banded(
-    img: &RawImage,
-    neutral: [f64; 3],
-    kernel: RowKernel,
-    post: &Post,
-    crop: bool,
-    orient: bool,
-) -> Result<RgbImage> {
-    banded(img, neutral, kernel, post, crop, orient, collect_bands)
-}
-
-/// The network input of the paper: normalized, white-balanced, demosaiced camera RGB
-/// (no colour matrix), with the same DefaultCrop and orientation as [`render_linear`]'s
-/// defaults so that input and target align. `neutral` None = the file's neutral.
-/// The file's opcode lists are applied ([`render_input_with`] chooses).
-pub fn render_input(
-    img: &RawImage,
-    neutral: Option<[f64; 3]>,
-    method: Demosaic,
-) -> Result<RgbImage> {
-    render_input_with(img, neutral, method, OpcodeMode::Apply)
-}
-
-/// [`render_input`] with the opcode lists applied or ignored.
-pub fn render_input_with(
-    img: &RawImage,
-    neutral: Option<[f64; 3]>,
-    method: Demosaic,
-    mode: OpcodeMode,
-) -> Result<RgbImage> {
-    render_input_opts(
-        img,
-        &RenderOptions {
-            demosaic: method,
-            neutral,
-            crop: true,
-            orient: true,
-            opcodes: mode,
-        },
-    )
-}
-
-/// The network input (see [`render_input`]) with the crop, orientation and opcode choices
-/// of `opts`.
-pub fn render_input_opts(img: &RawImage, opts: &RenderOptions) -> Result<RgbImage> {
-    let n = resolve_neutral(&img.meta, opts.neutral)?;
-    if img.meta.linear_raw.is_some() {
-        return super::render_linear_raw::render_camera(
-            img,
-            n,
-            opts.crop,
-            opts.orient,
-            opts.opcodes,
-        );
-    }
-    if let Some(p) = opcodes::active_image(img, opts.opcodes)? {
-        if let Some(kernel) = row_kernel(opts.demosaic) {
-            let ends = (opts.crop, opts.orient);
-            let got = banded_any(img, Some(&p), n, kernel, &clip_row, ends, collect_bands)?;
-            if let Some(rgb) = got {
-                return Ok(rgb);
-            }
-        }
-        return pipeline::render_frame(
-            img,
-            &p,
-            n,
-            opts.demosaic,
-            &clip_row,
-            opts.crop,
-            opts.orient,
-        );
-    }
-    render_with(img, n, opts.demosaic, &clip_row, opts.crop, opts.orient)
-}
-
-/// Linear sRGB (Rec.709 primaries, D65) render of a raw image, values in [0, 1].
-/// Demosaic, colour matrix, DefaultCrop and orientation are fused per band of output rows
-/// for bilinear and MHC (no whole-image intermediate buffer); see `render_banded`.
-pub fn render_linear(img: &RawImage, opts: &RenderOptions) -> Result<RgbImage> {
-    if img.meta.linear_raw.is_some() {
-        return super::render_linear_raw::render_linear(img, opts);
-    }
-    let n = resolve_neutral(&img.meta, opts.neutral)?;
-    let m = color_matrix(&img.meta, n)?;
-    let mf = m.map(|r| r.map(|v| v as f32));
-    let post = move |row: &mut [f32]| matrix_row(row, &mf);
-    if let Some(p) = opcodes::active_image(img, opts.opcodes)? {
-        if let Some(kernel) = row_kernel(opts.demosaic) {
-            let ends = (opts.crop, opts.orient);
-            let got = banded_any(img, Some(&p), n, kernel, &post, ends, collect_bands)?;
-            if let Some(rgb) = got {
-                return Ok(rgb);
-            }
-        }
-        return pipeline::render_frame(img, &p, n, opts.demosaic, &post, opts.crop, opts.orient);
-    }
-    render_with(img, n, opts.demosaic, &post, opts.crop, opts.orient)
-}
-
-/// [`render_linear`] of a file with opcodes made in bands of `band` output rows (any
-/// height; the renders use [`BAND`]), `None` when its opcodes are not banded. For tests:
-/// it must equal [`render_linear_whole_frame`] bit for bit.
-#[doc(hidden)]
-pub fn render_linear_banded_by(
-    img: &RawImage,
-    opts: &RenderOptions,
-    band: usize,
-) -> Result<Option<RgbImage>> {
-    Ok(render_linear_windowed(img, opts, band, None)?.map(|(rgb, _)| rgb))
-}
-
-/// [`render_linear_banded_by`] whose warps' window may hold `limit` lines before the
-/// whole-image path runs (`None`: the renders' limit), with what the window did (all
-/// zero without a warp). For tests and benchmarks.
-#[doc(hidden)]
-pub fn render_linear_windowed(
-    img: &RawImage,
-    opts: &RenderOptions,
-    band: usize,
-    limit: Option<usize>,
-) -> Result<Option<(RgbImage, WindowStats)>> {
-    let (Some(kernel), Some(p)) = (
-        row_kernel(opts.demosaic),
-        opcodes::active_image(img, opts.opcodes)?,
-    ) else {
-        return Ok(None);
-    };
-    let n = resolve_neutral(&img.meta, opts.neutral)?;
-    let m = color_matrix(&img.meta, n)?;
-    let mf = m.map(|r| r.map(|v| v as f32));
-    let post = move |row: &mut [f32]| matrix_row(row, &mf);
-    let ends = (opts.crop, opts.orient);
-    let band = band.max(1);
-    let mut stats = WindowStats::default();
-    let tune = opcodes::banded::Tune {
-        band,
-        limit,
-        stats: Some(&mut stats),
-    };
-    let rows = opcodes::banded::RowRender {
-        neutral: n,
-        kernel,
-        post: &post,
-    };
-    let got = opcodes::banded::render(img, &p, rows, ends, tune, collect_bands_of(band))?;
-    Ok(got.map(|rgb| (rgb, stats)))
-}
-
-/// The whole-frame opcode render ([`pipeline::render_frame`]: every stage on whole
-/// images), the reference the banded opcode render must equal bit for bit. Kept for tests
-/// and benchmarks; files without applicable opcodes take [`render_linear`].
-#[doc(hidden)]
-pub fn render_linear_whole_frame(img: &RawImage, opts: &RenderOptions) -> Result<RgbImage> {
-    let Some(p) = opcodes::active_image(img, opts.opcodes)? else {
-        return render_linear(img, opts);
-    };
-    let n = resolve_neutral(&img.meta, opts.neutral)?;
-    let m = color_matrix(&img.meta, n)?;
-    let mf = m.map(|r| r.map(|v| v as f32));
-    let post = move |row: &mut [f32]| matrix_row(row, &mf);
-    pipeline::render_frame(img, &p, n, opts.demosaic, &post, opts.crop, opts.orient)
-}
-
-/// The unfused reference of [`render_linear`]: whole-image demosaic (colour matrix per
-/// row), then [`apply_geometry`]. Kept for tests and benchmarks (the banded render must
-/// equal it bit for bit).
-#[doc(hidden)]
-pub fn render_linear_reference(img: &RawImage, opts: &RenderOptions) -> Result<RgbImage> {
-    let n = resolve_neutral(&img.meta, opts.neutral)?;
-    let m = color_matrix(&img.meta, n)?;
-    let mf = m.map(|r| r.map(|v| v as f32));
-    let rgb = render_camera_with(img, n, opts.demosaic, &move |row: &mut [f32]| {
-        matrix_row(row, &mf)
-    })?;
-    Ok(apply_geometry(rgb, &img.meta, opts.crop, opts.orient))
-}
-
-/// The unfused reference of [`render_input`] (see [`render_linear_reference`]).
-#[doc(hidden)]
-pub fn render_input_reference(
-    img: &RawImage,
-    neutral: Option<[f64; 3]>,
-    method: Demosaic,
-) -> Result<RgbImage> {
-    let n = resolve_neutral(&img.meta, neutral)?;
-    let rgb = render_camera_with(img, n, method, &clip_row)?;
-    Ok(apply_geometry(rgb, &img.meta, true, true))
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::isp::Demosaic;
     use crate::raw::{Bayer, RawMeta, Rect};
+
+    /// The whole-frame execution's image (the reference).
+    fn whole(img: &RawImage, opts: &RenderOptions) -> RgbImage {
+        let r = render_with(img, opts, Execution::WholeFrame)
+            .unwrap()
+            .unwrap();
+        assert_eq!(r.stages, STAGES.to_vec());
+        r.image
+    }
+
+    /// The network input's options: demosaic `d`, crop and orientation on.
+    fn input(d: Demosaic) -> RenderOptions {
+        RenderOptions {
+            output: Output::Camera,
+            demosaic: d,
+            ..RenderOptions::default()
+        }
+    }
 
     fn numbered(w: usize, h: usize) -> RgbImage {
         let mut img = RgbImage::new(w, h);
@@ -363,7 +418,7 @@ mod tests {
         img.meta.default_crop_size = Some([10.0, 6.0]);
         img.meta.orientation = 6;
         for d in Demosaic::ALL {
-            let out = render_linear(
+            let out = render(
                 &img,
                 &RenderOptions {
                     demosaic: d,
@@ -378,9 +433,9 @@ mod tests {
                 }
             }
         }
-        let inp = render_input(&img, None, Demosaic::Bilinear).unwrap();
+        let inp = render(&img, &input(Demosaic::Bilinear)).unwrap();
         assert_eq!((inp.width, inp.height), (6, 10));
-        let off = render_linear(
+        let off = render(
             &img,
             &RenderOptions {
                 crop: false,
@@ -550,8 +605,8 @@ mod tests {
                                     neutral: None,
                                     ..RenderOptions::default()
                                 };
-                                let a = render_linear(&img, &opts).unwrap();
-                                let b = render_linear_reference(&img, &opts).unwrap();
+                                let a = render(&img, &opts).unwrap();
+                                let b = whole(&img, &opts);
                                 assert_eq!(
                                     bits(&a),
                                     bits(&b),
@@ -561,7 +616,7 @@ mod tests {
                                 let f = |y0: usize, bw: usize, rows: &[f32]| {
                                     Ok((y0, bw, rows.to_vec()))
                                 };
-                                match render_linear_bands(&img, &opts, f).unwrap() {
+                                match render_bands(&img, &opts, |_, _| Ok(()), f).unwrap() {
                                     Some(Bands {
                                         width: bw,
                                         height: bh,
@@ -590,15 +645,11 @@ mod tests {
                                     None => assert_eq!(d, Demosaic::Menon),
                                 }
                             }
-                            let a = render_input(&img, None, d).unwrap();
-                            let b = render_input_reference(&img, None, d).unwrap();
+                            let a = render(&img, &input(d)).unwrap();
+                            let b = whole(&img, &input(d));
                             assert_eq!(bits(&a), bits(&b), "input {w}x{h} {bayer} {d}");
                         }
                     }
-                    let n = resolve_neutral(&img.meta, None).unwrap();
-                    let a = render_camera_unclipped(&img, n, d).unwrap();
-                    let b = render_camera_with(&img, n, d, &|_| {}).unwrap();
-                    assert_eq!(bits(&a), bits(&b), "camera {w}x{h} {bayer} {d}");
                 }
             }
         }
@@ -610,12 +661,12 @@ mod tests {
         for o in [1, 6] {
             let mut img = img.clone();
             img.meta.orientation = o;
-            let a = render_linear(&img, &RenderOptions::default()).unwrap();
+            let a = render(&img, &RenderOptions::default()).unwrap();
             let pool = rayon::ThreadPoolBuilder::new()
                 .num_threads(1)
                 .build()
                 .unwrap();
-            let b = pool.install(|| render_linear(&img, &RenderOptions::default()).unwrap());
+            let b = pool.install(|| render(&img, &RenderOptions::default()).unwrap());
             assert_eq!(bits(&a), bits(&b));
         }
     }
@@ -630,12 +681,12 @@ mod tests {
             demosaic: Demosaic::Menon,
             ..RenderOptions::default()
         };
-        let a = render_linear(&img, &opts).unwrap();
+        let a = render(&img, &opts).unwrap();
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(1)
             .build()
             .unwrap();
-        let b = pool.install(|| render_linear(&img, &opts).unwrap());
+        let b = pool.install(|| render(&img, &opts).unwrap());
         assert_eq!(a, b);
     }
 }

@@ -1,36 +1,47 @@
 //! The banded render: the output geometry cut into bands (`place`: DefaultCrop and
 //! orientation, each band asking for the active-area rectangle it shows), the plain path's
 //! rectangle renderer (`banded`: normalize, white balance, demosaic, `post`), and the
-//! band-wise consumers of the render ([`render_linear_bands_sized`],
-//! [`render_input_bands_sized`]) that `synth` and `render` write their targets from. Files
-//! with opcodes take `super::opcodes::banded`'s rectangle renderer through the same
-//! `place`.
+//! band-wise consumer of the render ([`bands_with`], behind
+//! [`render_bands`](super::render::render_bands)) that `synth` and `render` write their
+//! targets from: the bands executions of the pipeline. Files with opcodes take
+//! `super::opcodes::banded`'s rectangle renderer through the same `place`.
 
 use super::color::normalize_neutral;
 use super::demosaic::{demosaic_rect, row_kernel, Post, RowDemosaic, RowKernel};
-use super::opcodes;
+use super::opcodes::{self, banded::Tune};
 use super::place::{place, BandBody};
-use super::render_parts::{
-    clip_row, color_matrix, matrix_row, resolve_neutral, Bands, RenderOptions, BAND,
-};
+use super::render_parts::{Bands, BAND};
+use super::stages::Plan;
 use crate::error::{Error, Result};
 use crate::normalize::{Normalizer, SiteTable};
 use crate::raw::RawImage;
 
-/// The set-up of the whole render (`render::render_banded`): the plain path's rectangle
-/// renderer (normalize, white balance, demosaic, `post`), placed by [`place`].
+/// How [`banded`] makes a row: normalization, white balance by `neutral`, the row
+/// demosaicer `kernel`, and `post` on every output row.
+pub(crate) struct PlainRows<'a> {
+    pub(crate) norm: Normalizer,
+    pub(crate) neutral: [f64; 3],
+    pub(crate) kernel: RowKernel,
+    pub(crate) post: &'a Post,
+}
+
+/// The plain path's banded render (no opcodes): its rectangle renderer (normalize, white
+/// balance, demosaic, `post`), placed by [`place`] in bands of `band` output rows.
 pub(crate) fn banded<R>(
     img: &RawImage,
-    neutral: [f64; 3],
-    kernel: RowKernel,
-    post: &Post,
-    crop: bool,
-    orient: bool,
+    rows: PlainRows,
+    (crop, orient): (bool, bool),
+    band: usize,
     run: impl FnOnce(usize, usize, &BandBody) -> Result<R>,
 ) -> Result<R> {
+    let PlainRows {
+        norm,
+        neutral,
+        kernel,
+        post,
+    } = rows;
     let bayer = img.bayer()?;
     let n = normalize_neutral(neutral)?;
-    let norm = Normalizer::new(img)?;
     let a = img.active_area();
     let (w, h) = (a.width(), a.height());
     let (top, left) = (a.top as usize, a.left as usize);
@@ -94,98 +105,20 @@ pub(crate) fn banded<R>(
         demosaic_rect(cfa, rows, cols, fill, post, emit);
         Ok(())
     };
-    place(&img.meta, (w, h), crop, orient, BAND, &rect, run)
+    place(&img.meta, (w, h), crop, orient, band, &rect, run)
 }
 
-/// Band-wise consumer of [`render_linear`](super::render::render_linear): the render is
-/// made band by band ([`BAND`] output rows each, in parallel, into a per-thread buffer) and
-/// `f(first_row, width, rows)` is called on each band (`rows` is interleaved linear RGB,
-/// `width` pixels per row); the results come back in band order with the output size
-/// ([`Bands`]). The rows are exactly those of
-/// [`render_linear`](super::render::render_linear)'s image (same code), so consumers that
-/// encode them (EXR blocks, 8-bit PNG samples) write the same bytes as from the whole
-/// image, without holding it. `None` when the demosaicer is not banded (Menon): use
-/// [`render_linear`](super::render::render_linear). See [`render_linear_bands_sized`] for
-/// the order in which bands are made.
-pub fn render_linear_bands<T, F>(
-    img: &RawImage,
-    opts: &RenderOptions,
-    f: F,
-) -> Result<Option<Bands<T>>>
-where
-    T: Send,
-    F: Fn(usize, usize, &[f32]) -> Result<T> + Sync,
-{
-    render_linear_bands_sized(img, opts, |_, _| Ok(()), f)
-}
-
-/// [`render_linear_bands`] that first calls `start(width, height)` with the output size,
-/// once, before any band (not at all when it returns `None`), e.g. to open a file that `f`
-/// writes the bands into.
-///
-/// Bands are made nearly in order: each thread takes the lowest band not yet taken, and no
-/// band is started more than 2 x threads + 1 bands beyond the lowest unfinished one, so a
-/// consumer that writes the bands in order (holding those that come early) holds a few
-/// bands at most. `f` must not wait for other rayon work (no parallel iterator or `join`
-/// inside): other threads may be waiting for its band.
-pub fn render_linear_bands_sized<T, S, F>(
-    img: &RawImage,
-    opts: &RenderOptions,
-    start: S,
-    f: F,
-) -> Result<Option<Bands<T>>>
+/// [`render_bands`](super::render::render_bands) of a CFA image: `None` when the
+/// demosaicer is not banded (Menon) or OpcodeList3 has a TrimBounds.
+pub(crate) fn bands_with<T, S, F>(plan: &Plan, start: S, f: F) -> Result<Option<Bands<T>>>
 where
     T: Send,
     S: FnOnce(usize, usize) -> Result<()>,
     F: Fn(usize, usize, &[f32]) -> Result<T> + Sync,
 {
-    if img.meta.linear_raw.is_some() {
-        return super::render_linear_raw::render_linear_bands(img, opts, start, f);
-    }
-    bands_with(img, opts, false, start, f)
-}
-
-/// [`render_linear_bands_sized`] of the network input
-/// ([`render_input_opts`](super::render::render_input_opts): camera RGB clipped to [0, 1],
-/// no colour matrix); `None` also for a LinearRaw image (render it whole).
-pub fn render_input_bands_sized<T, S, F>(
-    img: &RawImage,
-    opts: &RenderOptions,
-    start: S,
-    f: F,
-) -> Result<Option<Bands<T>>>
-where
-    T: Send,
-    S: FnOnce(usize, usize) -> Result<()>,
-    F: Fn(usize, usize, &[f32]) -> Result<T> + Sync,
-{
-    if img.meta.linear_raw.is_some() {
-        return Ok(None);
-    }
-    bands_with(img, opts, true, start, f)
-}
-
-fn bands_with<T, S, F>(
-    img: &RawImage,
-    opts: &RenderOptions,
-    camera: bool,
-    start: S,
-    f: F,
-) -> Result<Option<Bands<T>>>
-where
-    T: Send,
-    S: FnOnce(usize, usize) -> Result<()>,
-    F: Fn(usize, usize, &[f32]) -> Result<T> + Sync,
-{
-    let Some(kernel) = row_kernel(opts.demosaic) else {
+    let Some(kernel) = row_kernel(plan.method()) else {
         return Ok(None);
     };
-    let p = opcodes::active_image(img, opts.opcodes)?;
-    let n = resolve_neutral(&img.meta, opts.neutral)?;
-    let m = color_matrix(&img.meta, n)?;
-    let mf = m.map(|r| r.map(|v| v as f32));
-    let matrix = move |row: &mut [f32]| matrix_row(row, &mf);
-    let post: &Post = if camera { &clip_row } else { &matrix };
     let run = |ow: usize, oh: usize, body: &BandBody| {
         start(ow, oh)?;
         let nb = oh.div_ceil(BAND);
@@ -202,39 +135,43 @@ where
             bands,
         })
     };
-    banded_any(
-        img,
-        p.as_ref(),
-        n,
-        kernel,
-        post,
-        (opts.crop, opts.orient),
-        run,
-    )
+    banded_any(plan, kernel, Tune::default(), run)
 }
 
-/// The banded render of `img` with `post`: the opcode path ([`opcodes::banded`]) when `p`
-/// is some (`None` when its opcodes cannot be banded: a TrimBounds), else
-/// the plain one.
+/// The banded render of `plan` with the row demosaicer `kernel` (the plan's), bands of
+/// `tune.band` rows handed to `run` as [`place`] does: the opcode path
+/// ([`opcodes::banded`]) when opcode lists apply (`None` when they cannot be banded: a
+/// TrimBounds), else the plain one ([`banded`]).
 pub(crate) fn banded_any<R>(
-    img: &RawImage,
-    p: Option<&opcodes::Prepared>,
-    n: [f64; 3],
+    plan: &Plan,
     kernel: RowKernel,
-    post: &Post,
-    (crop, orient): (bool, bool),
+    tune: Tune,
     run: impl FnOnce(usize, usize, &BandBody) -> Result<R>,
 ) -> Result<Option<R>> {
-    match p {
+    plan.demosaic();
+    let colour = plan.colour();
+    let post = move |row: &mut [f32]| colour.row(row);
+    let ends = plan.geometry();
+    let n = plan.neutral()?;
+    let norm = plan.normalizer()?;
+    match plan.opcodes() {
         Some(p) => {
-            let tune = opcodes::banded::Tune::default();
             let rows = opcodes::banded::RowRender {
+                norm,
                 neutral: n,
                 kernel,
-                post,
+                post: &post,
             };
-            opcodes::banded::render(img, p, rows, (crop, orient), tune, run)
+            opcodes::banded::render(plan.img, p, rows, ends, tune, run)
         }
-        None => banded(img, n, kernel, post, crop, orient, run).map(Some),
+        None => {
+            let rows = PlainRows {
+                norm,
+                neutral: n,
+                kernel,
+                post: &post,
+            };
+            banded(plan.img, rows, ends, tune.band, run).map(Some)
+        }
     }
 }

@@ -1,5 +1,5 @@
-//! The linear render of a crop: the same pixels as [`super::render_linear`]'s whole-frame
-//! render (before DefaultCrop and orientation), computed from the clean samples of the crop
+//! The render of a crop ([`super::render::CropSamples::Stored`]): the same pixels as the
+//! whole-frame render (before DefaultCrop and orientation), computed from the clean samples of the crop
 //! and the `PAD`-sample neighbourhood the demosaicer reads, so a training crop's target
 //! costs its own size, not the frame's.
 //!
@@ -9,13 +9,13 @@
 //! (mirrored at the frame's edges, never at the crop's) and passed through the colour
 //! matrix. The result equals the frame render's region bit for bit.
 
-use super::color::normalize_neutral;
-use super::demosaic::{demosaic_rect, row_kernel, Demosaic, RowDemosaic, PAD};
-use super::opcodes::{self, pipeline, OpcodeMode};
-use super::render_parts::{color_matrix, matrix_row, resolve_neutral};
+use super::demosaic::{demosaic_rect, row_kernel, RowDemosaic, RowKernel, PAD};
+use super::opcodes::pipeline;
+use super::render_parts::RenderOptions;
+use super::stages::Plan;
 use super::RgbImage;
 use crate::error::{Error, Result};
-use crate::normalize::{Normalizer, SiteTable};
+use crate::normalize::SiteTable;
 use crate::raw::crop::Crop;
 use crate::raw::{RawImage, RawMeta};
 use rayon::prelude::*;
@@ -23,46 +23,23 @@ use rayon::prelude::*;
 /// Samples of margin a crop render needs around the crop (the demosaicer's reach).
 pub const CROP_MARGIN: usize = PAD;
 
-/// Linear sRGB (Rec.709, D65) render of the active-area rectangle `crop` of a frame whose
-/// levels and colour metadata are `frame`'s (a LinearizationTable is ignored: the samples
-/// are linear), white-balanced by `neutral` (None = the frame's AsShotNeutral), from
-/// `plane`, the samples of the rectangle `outer` (row-major), which must contain `crop`
-/// grown by [`CROP_MARGIN`] and cut to the active area ([`Crop::grown`]). No DefaultCrop,
-/// no orientation: the result is `crop.width x crop.height`, aligned with the crop's CFA
-/// samples. Bilinear and MHC only (Menon needs the whole frame). The frame's opcode lists
-/// are applied ([`render_linear_crop_with`] chooses).
-pub fn render_linear_crop(
-    frame: &RawImage,
-    neutral: Option<[f64; 3]>,
-    method: Demosaic,
-    outer: &Crop,
-    plane: &[u16],
-    crop: &Crop,
-) -> Result<RgbImage> {
-    render_linear_crop_with(
-        frame,
-        neutral,
-        method,
-        outer,
-        plane,
-        crop,
-        OpcodeMode::Apply,
-    )
-}
-
-/// [`render_linear_crop`] with the frame's opcode lists applied or ignored. With opcodes
-/// that need the whole frame ([`crate::isp::opcodes::Prepared::needs_whole_frame`]: bad
-/// pixels, warps, TrimBounds) this is an error: render the frame and cut the region
+/// [`CropSamples::Stored`](super::render::CropSamples::Stored): the render of the
+/// active-area rectangle `crop` of `frame` (levels, colour and opcodes from it; a
+/// LinearizationTable is ignored: the samples are linear) from `plane`, the samples of the
+/// rectangle `outer` (row-major), which must contain `crop` grown by [`CROP_MARGIN`] and
+/// cut to the active area ([`Crop::grown`]). Bilinear and MHC only (Menon needs the whole
+/// frame). With opcodes that need the whole frame
+/// ([`crate::isp::opcodes::Prepared::needs_whole_frame`]: bad pixels, warps, TrimBounds)
+/// this is an error: render from [`CropSamples::Frame`](super::render::CropSamples::Frame)
 /// (`synth::night` does).
-pub fn render_linear_crop_with(
+pub(crate) fn stored(
     frame: &RawImage,
-    neutral: Option<[f64; 3]>,
-    method: Demosaic,
+    opts: &RenderOptions,
     outer: &Crop,
     plane: &[u16],
     crop: &Crop,
-    mode: OpcodeMode,
 ) -> Result<RgbImage> {
+    let method = opts.demosaic;
     let Some(kernel) = row_kernel(method) else {
         return Err(Error::unsupported(format!(
             "a crop render needs a row demosaicer (bilinear or mhc), not {}",
@@ -83,16 +60,34 @@ pub fn render_linear_crop_with(
             "the crop's sample plane does not cover the crop and its margin",
         ));
     }
+    let plan = Plan::new(frame, opts)?;
+    let rgb = stored_plan(&plan, kernel, outer, plane, crop)?;
+    plan.finish("crop");
+    Ok(rgb)
+}
+
+fn stored_plan(
+    plan: &Plan,
+    kernel: RowKernel,
+    outer: &Crop,
+    plane: &[u16],
+    crop: &Crop,
+) -> Result<RgbImage> {
+    let frame = plan.img;
+    let a = frame.active_area();
+    let (w, h) = (a.width(), a.height());
     let bayer = frame.bayer()?;
-    let n = normalize_neutral(resolve_neutral(&frame.meta, neutral)?)?;
-    let m = color_matrix(&frame.meta, n)?;
-    let mf = m.map(|r| r.map(|v| v as f32));
-    let post = move |row: &mut [f32]| matrix_row(row, &mf);
-    if let Some(p) = opcodes::active_image(frame, mode)? {
+    let n = plan.neutral()?;
+    let colour = plan.colour();
+    let post = move |row: &mut [f32]| colour.row(row);
+    // Before DefaultCrop and orientation: `render_crop` checked that both are off.
+    plan.geometry();
+    let method = plan.demosaic();
+    let norm = plan.normalizer()?.without_linearization();
+    if let Some(p) = plan.opcodes() {
         let stored = pipeline::StoredCrop { outer, plane };
-        return pipeline::render_crop(frame, &p, n, method, stored, crop, &post);
+        return pipeline::render_crop(frame, p, (norm, n), method, stored, crop, &post);
     }
-    let norm = Normalizer::new(frame)?.without_linearization();
     let inv = [1.0 / n[0], 1.0, 1.0 / n[2]];
     let site = |x: u16, r: usize, c: usize, black: f64| -> f32 {
         let y = norm.normalize_with_black(x, black) * inv[bayer.color_at(r, c) as usize];

@@ -8,14 +8,15 @@
 //! balance by the neutral; the camera -> linear sRGB matrix; DefaultCrop and orientation.
 //! The opcodes are those of the shared stage ([`super::opcodes`], with the LinearRaw rules of
 //! [`super::opcodes::unsupported_reason_linear_raw`]) and follow
-//! [`RenderOptions::opcodes`]. No demosaicing: the demosaic option is ignored. `render.rs`
-//! dispatches here when [`RawMeta::linear_raw`](crate::raw::meta::RawMeta::linear_raw) is
-//! set.
+//! [`RenderOptions::opcodes`](super::render::RenderOptions::opcodes). No demosaicing: the
+//! demosaic option is ignored. Every execution of `render.rs` runs this whole-frame form
+//! when [`RawMeta::linear_raw`](crate::raw::meta::RawMeta::linear_raw) is set.
 
 use super::color::normalize_neutral;
 use super::opcodes::pipeline::{apply_list3, finish_geometry, stage1_planes, Stage3};
 use super::opcodes::{self, apply_region, OpcodeMode, Prepared, Region, StageRect};
-use super::render_parts::{color_matrix, matrix_row, resolve_neutral, Bands, RenderOptions, BAND};
+use super::render_parts::{Bands, BAND};
+use super::stages::{Plan, Stage};
 use super::RgbImage;
 use crate::dng::opcodes::ListId;
 use crate::error::{Error, Result};
@@ -152,18 +153,13 @@ fn white_balance(rgb: &mut RgbImage, n: [f64; 3]) {
     });
 }
 
-/// White-balanced camera RGB before geometry, its extent and the active area's size.
-fn balanced(
-    img: &RawImage,
-    neutral: [f64; 3],
-    mode: OpcodeMode,
-) -> Result<(RgbImage, StageRect, (usize, usize))> {
+/// White-balanced camera RGB before geometry.
+fn balanced(img: &RawImage, neutral: [f64; 3], mode: OpcodeMode) -> Result<RgbImage> {
     let n = normalize_neutral(neutral)?;
     let p = opcodes::active_image(img, mode)?;
-    let (mut rgb, b) = stage_rgb(img, p.as_ref())?;
+    let (mut rgb, _) = stage_rgb(img, p.as_ref())?;
     white_balance(&mut rgb, n);
-    let a = img.active_area();
-    Ok((rgb, b, (a.width(), a.height())))
+    Ok(rgb)
 }
 
 /// Normalized, white-balanced camera RGB of the active area, each sample clipped to
@@ -175,37 +171,39 @@ pub fn camera_rgb(img: &RawImage, neutral: [f64; 3]) -> Result<RgbImage> {
 
 /// [`camera_rgb`] with the opcode lists applied or ignored.
 pub fn camera_rgb_with(img: &RawImage, neutral: [f64; 3], mode: OpcodeMode) -> Result<RgbImage> {
-    Ok(balanced(img, neutral, mode)?.0)
+    balanced(img, neutral, mode)
 }
 
-/// Linear sRGB render (see the module docs); the LinearRaw form of
-/// [`super::render::render_linear`].
-pub fn render_linear(img: &RawImage, opts: &RenderOptions) -> Result<RgbImage> {
-    let n = resolve_neutral(&img.meta, opts.neutral)?;
-    let m = color_matrix(&img.meta, n)?;
-    let mf = m.map(|r| r.map(|v| v as f32));
-    let (mut rgb, b, area) = balanced(img, n, opts.opcodes)?;
+/// The render of the plan's LinearRaw image (see the module docs): its whole-frame
+/// execution, for every [`super::render::Execution`] that makes one.
+pub(crate) fn render(plan: &Plan) -> Result<RgbImage> {
+    let img = plan.img;
+    let colour = plan.colour();
+    let n = plan.neutral()?;
+    // The samples are normalized per plane by `stage_rgb` (LinearRaw levels, not the CFA
+    // normalizer), and they are already demosaiced: the demosaic stage is the identity.
+    plan.run(Stage::Normalize);
+    plan.run(Stage::Demosaic);
+    let (mut rgb, b) = stage_rgb(img, plan.opcodes())?;
+    white_balance(&mut rgb, n);
     let w = rgb.width.max(1);
     rgb.data
         .par_chunks_mut(3 * w)
-        .for_each(|row| matrix_row(row, &mf));
-    finish_geometry(rgb, b, &img.meta, area, opts.crop, opts.orient)
+        .for_each(|row| colour.row(row));
+    let a = img.active_area();
+    let (crop, orient) = plan.geometry();
+    finish_geometry(rgb, b, &img.meta, (a.width(), a.height()), crop, orient)
 }
 
-/// [`render_linear`] handed to `f` band by band ([`BAND`] rows) after `start(width,
-/// height)`, as [`super::render::render_linear_bands_sized`] does; always `Some`.
-pub fn render_linear_bands<T, S, F>(
-    img: &RawImage,
-    opts: &RenderOptions,
-    start: S,
-    f: F,
-) -> Result<Option<Bands<T>>>
+/// [`render`] handed to `f` band by band ([`BAND`] rows) after `start(width, height)`, as
+/// [`super::render::render_bands`] does.
+pub(crate) fn bands<T, S, F>(plan: &Plan, start: S, f: F) -> Result<Bands<T>>
 where
     T: Send,
     S: FnOnce(usize, usize) -> Result<()>,
     F: Fn(usize, usize, &[f32]) -> Result<T> + Sync,
 {
-    let rgb = render_linear(img, opts)?;
+    let rgb = render(plan)?;
     let (ow, oh) = (rgb.width, rgb.height);
     start(ow, oh)?;
     let band = 3 * ow * BAND;
@@ -213,24 +211,11 @@ where
         let rows = &rgb.data[bi * band..((bi + 1) * band).min(rgb.data.len())];
         f(bi * BAND, ow, rows)
     })?;
-    Ok(Some(Bands {
+    Ok(Bands {
         width: ow,
         height: oh,
         bands,
-    }))
-}
-
-/// White-balanced camera RGB with DefaultCrop and orientation if asked (the network
-/// input's form; see [`super::render::render_input`]), the opcode lists per `mode`.
-pub fn render_camera(
-    img: &RawImage,
-    neutral: [f64; 3],
-    crop: bool,
-    orient: bool,
-    mode: OpcodeMode,
-) -> Result<RgbImage> {
-    let (rgb, b, area) = balanced(img, neutral, mode)?;
-    finish_geometry(rgb, b, &img.meta, area, crop, orient)
+    })
 }
 
 #[cfg(test)]
@@ -239,6 +224,7 @@ mod tests {
     use crate::dng::opcodes::{
         encode_list, AreaSpec, Opcode, OpcodeKind, OpcodeList, FLAG_OPTIONAL,
     };
+    use crate::isp::render::{render as render_linear, render_bands, RenderOptions};
     use crate::raw::meta::RawMeta;
     use crate::raw::{Bayer, Levels};
 
@@ -473,7 +459,7 @@ mod tests {
         let img = image(w, h, data, vec![10.0, 20.0, 30.0], vec![4095.0; 3]);
         let opts = RenderOptions::default();
         let whole = render_linear(&img, &opts).unwrap();
-        let bands = render_linear_bands(&img, &opts, |_, _| Ok(()), |_, _, rows| Ok(rows.to_vec()))
+        let bands = render_bands(&img, &opts, |_, _| Ok(()), |_, _, rows| Ok(rows.to_vec()))
             .unwrap()
             .unwrap();
         assert_eq!((bands.width, bands.height), (whole.width, whole.height));

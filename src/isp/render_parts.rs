@@ -1,5 +1,6 @@
-//! What every render shares (the plain CFA render of `render.rs`, the LinearRaw render of
-//! `render_linear_raw.rs`, the crop render of `render_crop.rs`): the options, the neutral a
+//! What every execution of the render shares (the plain CFA render of `render_bands.rs`,
+//! the LinearRaw render of `render_linear_raw.rs`, the crop render of `render_crop.rs`, the
+//! opcode render of `opcodes/`): the options, the neutral a
 //! render white-balances by, the camera -> linear sRGB matrix and its application to rows,
 //! and the band size and result of the banded render. Kept apart so that those renders use
 //! it without using each other.
@@ -13,9 +14,22 @@ use crate::error::{Error, Result};
 use crate::raw::meta::RawMeta;
 use rayon::prelude::*;
 
-/// Options of [`render_linear`](super::render::render_linear).
+/// What a render makes: the linear sRGB target or the network input.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Output {
+    /// Linear sRGB (Rec.709 primaries, D65), values in [0, 1]: the colour matrix applied.
+    #[default]
+    Linear,
+    /// The network input of the paper: white-balanced, demosaiced camera RGB clipped to
+    /// [0, 1], no colour matrix.
+    Camera,
+}
+
+/// Options of a render ([`render`](super::render::render)).
 #[derive(Debug, Clone, PartialEq)]
 pub struct RenderOptions {
+    /// Linear sRGB or the network input's camera RGB.
+    pub output: Output,
     /// Demosaicing method.
     pub demosaic: Demosaic,
     /// White balance by this camera neutral instead of the file's AsShotNeutral
@@ -33,6 +47,7 @@ pub struct RenderOptions {
 impl Default for RenderOptions {
     fn default() -> Self {
         RenderOptions {
+            output: Output::Linear,
             demosaic: Demosaic::default(),
             neutral: None,
             crop: true,
@@ -62,7 +77,7 @@ pub fn resolve_neutral(meta: &RawMeta, override_neutral: Option<[f64; 3]>) -> Re
 /// Output rows per band of the banded render.
 pub const BAND: usize = 32;
 
-/// What [`render_linear_bands`](super::render::render_linear_bands) returns: the output size and one result per band, in order.
+/// What [`render_bands`](super::render::render_bands) returns: the output size and one result per band, in order.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Bands<T> {
     /// Output width.

@@ -23,7 +23,7 @@ use crate::encode::exr::{standard_attributes, write_exr, ExrOptions};
 use crate::encode::png::{write_png, PngOptions};
 use crate::error::{Error, Result};
 use crate::isp::opcodes::check::check_render;
-use crate::isp::render::{render_linear, RenderOptions};
+use crate::isp::render::{render, RenderOptions};
 use crate::output::{DeferredSyncs, OutputPolicy};
 use serde::Serialize;
 
@@ -129,7 +129,7 @@ pub fn write_scene(
         super::release_targets::write(clean, neutral, &dng, which, sink, &mut stages)?;
     } else if render_png || opts.target.exr() {
         check_render(clean, ropts.opcodes, ropts.crop, ropts.orient)?;
-        let rgb = render_linear(clean, &ropts)?;
+        let rgb = render(clean, &ropts)?;
         if render_png {
             let p = sink.path(Kind::Target, ".png");
             crate::dataset::ensure_parent(&p)?;

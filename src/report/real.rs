@@ -7,7 +7,7 @@ use super::thumb::{downscale, fit, Rgb8};
 use crate::error::{Error, Result};
 use crate::isp::color::CameraColor;
 use crate::isp::render::DisplayGeometry;
-use crate::isp::{render_linear, RenderOptions, RgbImage};
+use crate::isp::{RenderOptions, RgbImage};
 use crate::synth::masks::PreparedMask;
 use crate::synth::sidecar::Sidecar;
 use crate::synth::LightKind;
@@ -19,7 +19,7 @@ pub struct LibraryVisuals;
 
 fn render(path: &Path) -> Result<RgbImage> {
     let raw = crate::dng::read::read_dng(path)?;
-    render_linear(&raw, &RenderOptions::default())
+    crate::isp::render(&raw, &RenderOptions::default())
 }
 
 fn px(img: &RgbImage, r: usize, c: usize) -> [f32; 3] {

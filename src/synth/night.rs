@@ -20,7 +20,7 @@
 //! noise draws from its own documented stream
 //! ([`crate::noise::apply::apply_noise_crop_with`]; the physics model's draws are per site,
 //! so a crop gets the frame's samples: [`crate::noise::apply_physics_noise_crop`])
-//! and the target is the crop's region of the frame's render ([`crate::isp::render_crop::render_linear_crop`]).
+//! and the target is the crop's region of the frame's render ([`crate::isp::render::render_crop`]).
 //!
 //! ```no_run
 //! use day2night::synth::night::{synthesize, Request};
@@ -42,12 +42,10 @@ use super::relight::{run_clean, run_clean_crop, RunReport};
 use super::{night_meta, run_noise, with_noisy_rows, Plan};
 use crate::error::{Error, Result};
 use crate::isp::flat::{self, FlatCheck};
-use crate::isp::opcodes::{self, pipeline};
-use crate::isp::render::{
-    color_matrix, matrix_row, render_input_with, render_linear_bands_sized, Bands,
-};
-use crate::isp::render_crop::{render_linear_crop_with, CROP_MARGIN};
-use crate::isp::{render_linear, Demosaic, RenderOptions, RgbImage};
+use crate::isp::opcodes;
+use crate::isp::render::{render, render_bands, render_crop, Bands, CropSamples, Output};
+use crate::isp::render_crop::CROP_MARGIN;
+use crate::isp::{RenderOptions, RgbImage};
 use crate::raw::crop::{crop_meta, Crop};
 use crate::raw::rows::RowSource;
 use crate::raw::{RawImage, RawMeta};
@@ -78,7 +76,7 @@ pub enum TargetOut<B> {
 /// (hence `Sync`): `clean` once, `noisy` once per ISO in plan order and, for a burst,
 /// per frame of that ISO (frame 0 first; all from one task),
 /// for a banded target `target_start` once, `target_band` for every band in parallel
-/// (nearly top to bottom: see [`crate::isp::render::render_linear_bands_sized`]) then
+/// (nearly top to bottom: see [`crate::isp::render::render_bands`]) then
 /// `target` once, `input` last. After an error, `target` may never be called: a sink
 /// that opened files in `target_start` discards them when it is dropped.
 pub trait NightSink: Sync {
@@ -114,7 +112,7 @@ pub trait NightSink: Sync {
     /// One band of the target: output rows from `y0`, `width` pixels each, interleaved
     /// linear RGB. Only called when [`NightSink::banded`], after
     /// [`NightSink::target_start`]. It must not wait for other rayon work (see
-    /// [`crate::isp::render::render_linear_bands_sized`]).
+    /// [`crate::isp::render::render_bands`]).
     fn target_band(&self, _y0: usize, _width: usize, _rows: &[f32]) -> Result<Self::Band> {
         Err(Error::invalid("this sink does not take target bands"))
     }
@@ -246,12 +244,12 @@ fn whole_frame<S: NightSink>(
                         target_flat.rows(rows);
                         sink.target_band(y0, w, rows)
                     };
-                    if let Some(bands) = render_linear_bands_sized(clean, &ropts, start, f)? {
+                    if let Some(bands) = render_bands(clean, &ropts, start, f)? {
                         start_noise();
                         return sink.target(TargetOut::Bands(bands));
                     }
                 }
-                let rgb = render_linear(clean, &ropts)?;
+                let rgb = render(clean, &ropts)?;
                 target_flat.image(&rgb);
                 start_noise();
                 sink.target(TargetOut::Image(rgb))
@@ -266,7 +264,13 @@ fn whole_frame<S: NightSink>(
     report.warnings.extend(target_flat.warning(TARGET));
     if req.input {
         let src = first_noisy.as_ref().unwrap_or(&clean);
-        let rgb = render_input_with(src, Some(neutral), Default::default(), plan.opcodes)?;
+        let opts = RenderOptions {
+            output: Output::Camera,
+            neutral: Some(neutral),
+            opcodes: plan.opcodes,
+            ..RenderOptions::default()
+        };
+        let rgb = render(src, &opts)?;
         report.warnings.extend(flat::warning(&rgb, INPUT));
         sink.input(&rgb)?;
     }
@@ -343,6 +347,14 @@ fn cropped<S: NightSink>(
                         return Ok(());
                     }
                     let mode = plan.opcodes;
+                    // The crop's target: before DefaultCrop and orientation.
+                    let opts = RenderOptions {
+                        neutral: Some(plan.night_neutral),
+                        opcodes: mode,
+                        crop: false,
+                        orient: false,
+                        ..RenderOptions::default()
+                    };
                     let rgb = match opcodes::active(&day.meta, mode)? {
                         // Bad pixels, warps, TrimBounds: the crop's region of the frame's
                         // render (the whole frame is synthesized for it).
@@ -350,27 +362,15 @@ fn cropped<S: NightSink>(
                             let (mut full, _) = run_clean(day, plan)?;
                             full.meta =
                                 night_meta(&day.meta, plan, plan.clean_iso, &plan.clean_noise);
-                            let n = plan.night_neutral;
-                            let mf = color_matrix(&full.meta, n)?.map(|r| r.map(|v| v as f32));
-                            let post = move |row: &mut [f32]| matrix_row(row, &mf);
-                            pipeline::render_frame_region(
-                                &full,
-                                &p,
-                                n,
-                                Demosaic::default(),
-                                &post,
-                                crop,
-                            )?
+                            render_crop(&full, &opts, crop, CropSamples::Frame)?
                         }
-                        _ => render_linear_crop_with(
-                            day,
-                            Some(plan.night_neutral),
-                            Demosaic::default(),
-                            &outer,
-                            &plane,
-                            crop,
-                            mode,
-                        )?,
+                        _ => {
+                            let stored = CropSamples::Stored {
+                                outer: &outer,
+                                plane: &plane,
+                            };
+                            render_crop(day, &opts, crop, stored)?
+                        }
                     };
                     target_flat.image(&rgb);
                     sink.target(TargetOut::Image(rgb))

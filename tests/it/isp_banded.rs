@@ -4,11 +4,10 @@
 //! on these renders.
 use crate::common;
 
+use crate::isp_opcodes_banded::whole;
 use day2night::dng::read::read_dng;
 use day2night::encode::png::{encode_u8, encode_u8_slow};
-use day2night::isp::render::{
-    render_input, render_input_reference, render_linear, render_linear_reference, RenderOptions,
-};
+use day2night::isp::render::{render, Output, RenderOptions};
 use day2night::isp::tone::DisplayTone;
 use day2night::isp::{Demosaic, RgbImage};
 use std::path::PathBuf;
@@ -62,8 +61,8 @@ fn banded_render_equals_reference_on_real_files() {
                         crop,
                         ..RenderOptions::default()
                     };
-                    let a = render_linear(&img, &opts).unwrap();
-                    let b = render_linear_reference(&img, &opts).unwrap();
+                    let a = render(&img, &opts).unwrap();
+                    let b = whole(&img, &opts).unwrap();
                     assert!(
                         bits(&a) == bits(&b),
                         "{} {d} orientation {o:?} crop {crop}: banded != reference",
@@ -75,8 +74,13 @@ fn banded_render_equals_reference_on_real_files() {
                         }
                     }
                 }
-                let a = render_input(&img, None, d).unwrap();
-                let b = render_input_reference(&img, None, d).unwrap();
+                let input = RenderOptions {
+                    output: Output::Camera,
+                    demosaic: d,
+                    ..RenderOptions::default()
+                };
+                let a = render(&img, &input).unwrap();
+                let b = whole(&img, &input).unwrap();
                 assert!(bits(&a) == bits(&b), "{} {d} input", f.display());
             }
         }

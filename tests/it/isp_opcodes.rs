@@ -11,7 +11,7 @@ use day2night::dng::opcodes::{
 };
 use day2night::dng::read_dng;
 use day2night::isp::opcodes::{gain_map, warp, OpcodeMode, StageRect};
-use day2night::isp::render::{render_linear, RenderOptions};
+use day2night::isp::render::{render, RenderOptions};
 use day2night::isp::RgbImage;
 use day2night::raw::{Bayer, RawImage, RawMeta};
 
@@ -126,14 +126,14 @@ fn gain_map_undoes_a_falloff_divided_into_the_stored_values() {
             vec![],
         ],
     );
-    let want = render_linear(&flat, &raw_opts(OpcodeMode::Apply)).unwrap();
-    let got = render_linear(&shaded, &raw_opts(OpcodeMode::Apply)).unwrap();
+    let want = render(&flat, &raw_opts(OpcodeMode::Apply)).unwrap();
+    let got = render(&shaded, &raw_opts(OpcodeMode::Apply)).unwrap();
     assert_eq!(got.count_non_finite(), 0);
     let e = rel_errors(&got, &want);
     let (med, max) = (e[e.len() / 2], e[e.len() - 1]);
     assert!(med < 0.002 && max < 0.01, "median {med}, max {max}");
     // ignored, the falloff stays: corners are far off
-    let off = render_linear(&shaded, &raw_opts(OpcodeMode::Ignore)).unwrap();
+    let off = render(&shaded, &raw_opts(OpcodeMode::Ignore)).unwrap();
     let e = rel_errors(&off, &want);
     assert!(e[e.len() * 95 / 100] > 0.3, "p95 {}", e[e.len() * 95 / 100]);
 }
@@ -178,7 +178,7 @@ fn warp_rectilinear_moves_dots_where_the_formula_says() {
             )],
         ],
     );
-    let out = render_linear(&img, &raw_opts(OpcodeMode::Apply)).unwrap();
+    let out = render(&img, &raw_opts(OpcodeMode::Apply)).unwrap();
     assert_eq!((out.width, out.height), (w, h));
     let model = warp::Warp::new(
         vec![warp::Model::Rectilinear { kr, kt }],
@@ -258,8 +258,8 @@ fn list1_acts_on_stored_values_before_the_black_level() {
             pre.data[r * w + c] = (black + lin * range).round() as u16;
         }
     }
-    let a = render_linear(&with, &raw_opts(OpcodeMode::Apply)).unwrap();
-    let b = render_linear(&pre, &raw_opts(OpcodeMode::Apply)).unwrap();
+    let a = render(&with, &raw_opts(OpcodeMode::Apply)).unwrap();
+    let b = render(&pre, &raw_opts(OpcodeMode::Apply)).unwrap();
     let e = rel_errors(&a, &b);
     assert!(e[e.len() - 1] < 2e-4, "max {}", e[e.len() - 1]);
 }
@@ -280,7 +280,7 @@ fn degenerate_maps_give_finite_renders() {
                 vec![],
             ],
         );
-        let out = match render_linear(&img, &RenderOptions::default()) {
+        let out = match render(&img, &RenderOptions::default()) {
             Ok(o) => o,
             Err(e) => {
                 // the parser refuses non-finite gains, naming them
@@ -477,8 +477,8 @@ fn adobe_sdk_gain_map_renders_as_its_gains_say() {
     };
     let a = plain.active_area();
     let gm = gain_map::Prepared::new(map, StageRect::of_size(a.width(), a.height()));
-    let p = render_linear(&plain, &raw_opts(OpcodeMode::Apply)).unwrap();
-    let s = render_linear(&shaded, &raw_opts(OpcodeMode::Apply)).unwrap();
+    let p = render(&plain, &raw_opts(OpcodeMode::Apply)).unwrap();
+    let s = render(&shaded, &raw_opts(OpcodeMode::Apply)).unwrap();
     // shaded render / plain render = the gain, where neither clips
     let mut e = vec![];
     for y in 0..p.height {
@@ -533,12 +533,12 @@ fn opcode_renders_are_identical_for_any_thread_count() {
             demosaic: d,
             ..RenderOptions::default()
         };
-        let a = render_linear(&img, &opts).unwrap();
+        let a = render(&img, &opts).unwrap();
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(1)
             .build()
             .unwrap();
-        let b = pool.install(|| render_linear(&img, &opts).unwrap());
+        let b = pool.install(|| render(&img, &opts).unwrap());
         assert_eq!(a, b, "{d}");
         assert_eq!(a.count_non_finite(), 0);
     }

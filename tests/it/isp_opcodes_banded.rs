@@ -12,10 +12,10 @@ use day2night::dng::opcodes::{
 use day2night::dng::read_dng;
 use day2night::encode::exr::{standard_attributes, write_exr, ExrOptions};
 use day2night::encode::png::{write_png, PngOptions};
+use day2night::isp::opcodes::warp_window::WindowStats;
 use day2night::isp::opcodes::{prepare, OpcodeMode};
 use day2night::isp::render::{
-    render_input_opts, render_linear, render_linear_banded_by, render_linear_bands,
-    render_linear_whole_frame, resolve_neutral, RenderOptions,
+    render, render_bands, render_with, resolve_neutral, Execution, Output, RenderOptions, STAGES,
 };
 use day2night::isp::RgbImage;
 use day2night::output::OutputPolicy;
@@ -102,8 +102,32 @@ pub(crate) fn bits(img: &RgbImage) -> (usize, usize, Vec<u32>) {
     )
 }
 
+/// The whole-frame execution's image (the reference every execution equals), which ran
+/// every stage of the pipeline.
+pub(crate) fn whole(img: &RawImage, opts: &RenderOptions) -> day2night::Result<RgbImage> {
+    let r = render_with(img, opts, Execution::WholeFrame)?
+        .ok_or_else(|| day2night::Error::invalid("the whole frame is always rendered"))?;
+    assert_eq!(r.stages, STAGES.to_vec());
+    Ok(r.image)
+}
+
+/// The execution in bands of `rows` output rows, a warp's window holding at most `limit`
+/// lines: the image and what the window did; `None` when the render is not banded.
+pub(crate) fn in_bands(
+    img: &RawImage,
+    opts: &RenderOptions,
+    rows: usize,
+    limit: Option<usize>,
+) -> day2night::Result<Option<(RgbImage, WindowStats)>> {
+    let r = render_with(img, opts, Execution::Bands { rows, limit })?;
+    Ok(r.map(|r| {
+        assert_eq!(r.stages, STAGES.to_vec());
+        (r.image, r.window)
+    }))
+}
+
 /// The lists of every case: local opcodes in lists 1-2, in-place list 3, and each warp.
-fn cases(w: u32, h: u32) -> Vec<(&'static str, [Vec<Opcode>; 3])> {
+pub(crate) fn cases(w: u32, h: u32) -> Vec<(&'static str, [Vec<Opcode>; 3])> {
     let bad_list = OpcodeKind::FixBadPixelsList {
         bayer_phase: 0,
         points: vec![[5, 5], [20, 31], [0, 0]],
@@ -208,11 +232,13 @@ fn banded_opcode_render_equals_the_whole_frame_render() {
                 img.meta.default_crop_origin = crop.then_some([3.0, 1.0]);
                 img.meta.default_crop_size = crop.then_some([aw as f64 - 5.0, ah as f64 - 6.0]);
                 let opts = RenderOptions::default();
-                let whole = render_linear_whole_frame(&img, &opts).unwrap();
+                let whole = whole(&img, &opts).unwrap();
                 assert_eq!(whole.count_non_finite(), 0);
                 let what = format!("{name}, orientation {orientation}, crop {crop}");
                 for band in [1, 5, 32, 33, 200] {
-                    let got = render_linear_banded_by(&img, &opts, band).unwrap();
+                    let got = in_bands(&img, &opts, band, None)
+                        .unwrap()
+                        .map(|(rgb, _)| rgb);
                     let got = got.unwrap_or_else(|| panic!("{what}: not banded"));
                     assert_eq!(bits(&got), bits(&whole), "{what}, bands of {band} rows");
                 }
@@ -221,12 +247,12 @@ fn banded_opcode_render_equals_the_whole_frame_render() {
                         .num_threads(threads)
                         .build()
                         .unwrap();
-                    let got = pool.install(|| render_linear(&img, &opts).unwrap());
+                    let got = pool.install(|| render(&img, &opts).unwrap());
                     assert_eq!(bits(&got), bits(&whole), "{what}, {threads} threads");
                     // the band-wise consumer (synth's targets, `render`) sees the same rows
                     let bands = pool
                         .install(|| {
-                            render_linear_bands(&img, &opts, |_, _, rows| Ok(rows.to_vec()))
+                            render_bands(&img, &opts, |_, _| Ok(()), |_, _, rows| Ok(rows.to_vec()))
                         })
                         .unwrap()
                         .unwrap();
@@ -270,8 +296,8 @@ fn no_op_opcodes_are_dropped_and_cost_nothing() {
         opcodes: OpcodeMode::Ignore,
         ..RenderOptions::default()
     };
-    let a = render_linear(&img, &RenderOptions::default()).unwrap();
-    let b = render_linear(&img, &ignore).unwrap();
+    let a = render(&img, &RenderOptions::default()).unwrap();
+    let b = render(&img, &ignore).unwrap();
     assert_eq!(bits(&a), bits(&b));
     // a repeated FixBadPixelsList is dropped (a second pass writes the same means)
     let list = OpcodeKind::FixBadPixelsList {
@@ -399,9 +425,13 @@ fn render_streams_the_bytes_of_the_whole_image_writers() {
                 ..RenderOptions::default()
             };
             let rgb = if camera {
-                render_input_opts(&img, &opts).unwrap()
+                let camera = RenderOptions {
+                    output: Output::Camera,
+                    ..opts.clone()
+                };
+                render(&img, &camera).unwrap()
             } else {
-                render_linear(&img, &opts).unwrap()
+                render(&img, &opts).unwrap()
             };
             let extra: &[&str] = if camera { &["--camera-rgb"] } else { &[] };
             // EXR

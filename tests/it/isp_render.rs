@@ -3,7 +3,7 @@
 use crate::common;
 
 use day2night::dng::read::read_dng;
-use day2night::isp::render::{default_crop, render_input, render_linear, RenderOptions};
+use day2night::isp::render::{default_crop, render, Output, RenderOptions};
 use day2night::isp::Demosaic;
 use std::path::{Path, PathBuf};
 
@@ -33,14 +33,19 @@ fn every_fixture_renders_with_every_method() {
                 demosaic: d,
                 ..RenderOptions::default()
             };
-            let out = render_linear(&img, &opts).unwrap_or_else(|e| panic!("{}: {e}", f.display()));
+            let out = render(&img, &opts).unwrap_or_else(|e| panic!("{}: {e}", f.display()));
             assert_eq!((out.width, out.height), (cw, ch), "{}", f.display());
             assert!(
                 out.data.iter().all(|v| (0.0..=1.0).contains(v)),
                 "{}",
                 f.display()
             );
-            let inp = render_input(&img, None, d).unwrap();
+            let input = RenderOptions {
+                output: Output::Camera,
+                demosaic: d,
+                ..RenderOptions::default()
+            };
+            let inp = render(&img, &input).unwrap();
             assert_eq!((inp.width, inp.height), (cw, ch));
         }
     }

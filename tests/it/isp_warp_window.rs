@@ -9,15 +9,13 @@
 use crate::common;
 use crate::dngbuild::Builder;
 use crate::isp_opcodes_banded::{bits, frame, op, with_lists};
+use crate::isp_opcodes_banded::{in_bands, whole};
 use day2night::dng::opcodes::{
     encode_list, AreaSpec, Opcode, OpcodeKind, OpcodeList, WarpPlane, WarpPlane2,
 };
 use day2night::dng::read_dng;
 use day2night::encode::exr::{standard_attributes, write_exr, ExrOptions};
-use day2night::isp::render::{
-    render_linear, render_linear_bands, render_linear_whole_frame, render_linear_windowed,
-    resolve_neutral, RenderOptions,
-};
+use day2night::isp::render::{render, render_bands, resolve_neutral, RenderOptions};
 use day2night::output::OutputPolicy;
 use day2night::raw::RawImage;
 
@@ -134,10 +132,10 @@ fn windowed_warps_equal_the_whole_frame_render() {
                 img.meta.default_crop_origin = crop.then_some([3.0, 1.0]);
                 img.meta.default_crop_size = crop.then_some([aw - 5.0, ah - 6.0]);
                 let opts = RenderOptions::default();
-                let whole = render_linear_whole_frame(&img, &opts).unwrap();
+                let whole = whole(&img, &opts).unwrap();
                 let what = format!("{name}, orientation {orientation}, crop {crop}");
                 for band in [1, 4, 32, 33, 200] {
-                    let (got, stats) = render_linear_windowed(&img, &opts, band, None)
+                    let (got, stats) = in_bands(&img, &opts, band, None)
                         .unwrap()
                         .unwrap_or_else(|| panic!("{what}: not banded"));
                     assert_eq!(bits(&got), bits(&whole), "{what}, bands of {band}");
@@ -145,11 +143,11 @@ fn windowed_warps_equal_the_whole_frame_render() {
                 }
                 for threads in 1..=3 {
                     let p = pool(threads);
-                    let got = p.install(|| render_linear(&img, &opts).unwrap());
+                    let got = p.install(|| render(&img, &opts).unwrap());
                     assert_eq!(bits(&got), bits(&whole), "{what}, {threads} threads");
                     let bands = p
                         .install(|| {
-                            render_linear_bands(&img, &opts, |_, _, rows| Ok(rows.to_vec()))
+                            render_bands(&img, &opts, |_, _| Ok(()), |_, _, rows| Ok(rows.to_vec()))
                         })
                         .unwrap()
                         .unwrap();
@@ -157,7 +155,7 @@ fn windowed_warps_equal_the_whole_frame_render() {
                     assert_eq!(rows, whole.data, "{what}, streamed, {threads} threads");
                     // Bands of 3 lines: many strips shared and dropped across threads.
                     let (got, stats) = p
-                        .install(|| render_linear_windowed(&img, &opts, 3, None))
+                        .install(|| in_bands(&img, &opts, 3, None))
                         .unwrap()
                         .unwrap();
                     assert_eq!(
@@ -185,10 +183,10 @@ fn the_window_holds_a_small_part_of_a_long_image() {
     for (w, h, orientation) in [(40, 1200, 1), (40, 1200, 3), (1200, 40, 6), (1200, 40, 7)] {
         let img = long(w, h, orientation);
         let opts = RenderOptions::default();
-        let whole = render_linear_whole_frame(&img, &opts).unwrap();
+        let whole = whole(&img, &opts).unwrap();
         // One thread makes the bands in order: the peak is the planned one.
         let (got, stats) = pool(1)
-            .install(|| render_linear_windowed(&img, &opts, 8, None))
+            .install(|| in_bands(&img, &opts, 8, None))
             .unwrap()
             .unwrap();
         assert_eq!(bits(&got), bits(&whole), "orientation {orientation}");
@@ -199,7 +197,7 @@ fn the_window_holds_a_small_part_of_a_long_image() {
         assert!(stats.peak_lines > 0, "{stats:?}");
         // Three threads: a few bands more in flight, still a small part.
         let (got, stats) = pool(3)
-            .install(|| render_linear_windowed(&img, &opts, 8, None))
+            .install(|| in_bands(&img, &opts, 8, None))
             .unwrap()
             .unwrap();
         assert_eq!(bits(&got), bits(&whole));
@@ -216,14 +214,12 @@ fn a_warp_reaching_across_the_image_falls_back_and_still_matches() {
     for orientation in [1u16, 3, 6, 8] {
         let mut img = with_lists(frame(w, h), [vec![], vec![], vec![op(wild.clone())]]);
         img.meta.orientation = orientation;
-        let whole = render_linear_whole_frame(&img, &opts).unwrap();
-        let (got, stats) = render_linear_windowed(&img, &opts, 32, None)
-            .unwrap()
-            .unwrap();
+        let whole = whole(&img, &opts).unwrap();
+        let (got, stats) = in_bands(&img, &opts, 32, None).unwrap().unwrap();
         assert!(stats.fallback, "orientation {orientation}: {stats:?}");
         assert!(stats.planned_lines > 256, "{stats:?}");
         assert_eq!(bits(&got), bits(&whole), "orientation {orientation}");
-        let got = render_linear(&img, &opts).unwrap();
+        let got = render(&img, &opts).unwrap();
         assert_eq!(
             bits(&got),
             bits(&whole),
@@ -240,10 +236,8 @@ fn a_warp_reaching_across_the_image_falls_back_and_still_matches() {
     for (n, fallback) in [(8, false), (9, true)] {
         let mut img = with_lists(frame(61, 83), [vec![], vec![], nine[..n].to_vec()]);
         img.meta.orientation = 6;
-        let whole = render_linear_whole_frame(&img, &opts).unwrap();
-        let (got, stats) = render_linear_windowed(&img, &opts, 7, None)
-            .unwrap()
-            .unwrap();
+        let whole = whole(&img, &opts).unwrap();
+        let (got, stats) = in_bands(&img, &opts, 7, None).unwrap().unwrap();
         assert_eq!(stats.fallback, fallback, "{n} warps: {stats:?}");
         assert_eq!(bits(&got), bits(&whole), "{n} warps");
     }
@@ -253,10 +247,10 @@ fn a_warp_reaching_across_the_image_falls_back_and_still_matches() {
         for orientation in [1u16, 6] {
             let mut img = with_lists(frame(61, 83), [vec![], vec![], list3.clone()]);
             img.meta.orientation = orientation;
-            let whole = render_linear_whole_frame(&img, &opts).unwrap();
+            let whole = whole(&img, &opts).unwrap();
             for threads in 1..=3 {
                 let (got, stats) = pool(threads)
-                    .install(|| render_linear_windowed(&img, &opts, 5, Some(1)))
+                    .install(|| in_bands(&img, &opts, 5, Some(1)))
                     .unwrap()
                     .unwrap();
                 assert!(stats.fallback, "{name}: {stats:?}");
@@ -290,7 +284,7 @@ fn render_of_a_turned_warp_writes_the_whole_frame_bytes() {
         neutral: Some(n),
         ..RenderOptions::default()
     };
-    let whole = render_linear_whole_frame(&img, &opts).unwrap();
+    let whole = whole(&img, &opts).unwrap();
     let got = t.path().join("got.exr");
     let o = common::cli("render", &src, &got, &[]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));

@@ -42,6 +42,7 @@ mod isp_exr;
 mod isp_opcode_checks;
 mod isp_opcodes;
 mod isp_opcodes_banded;
+mod isp_pipeline;
 mod isp_release;
 mod isp_render;
 mod isp_warp_window;

@@ -109,7 +109,13 @@ struct Frame<'a> {
 }
 
 impl<'a> Frame<'a> {
-    fn new(img: &'a RawImage, p: &'a Prepared, n: [f64; 3], kernel: RowKernel) -> Result<Self> {
+    fn new(
+        img: &'a RawImage,
+        p: &'a Prepared,
+        norm: Normalizer,
+        n: [f64; 3],
+        kernel: RowKernel,
+    ) -> Result<Self> {
         let bayer = img.bayer()?;
         let (aw, ah, top, left) = checked_active(img)?;
         let (l1, l2) = (p.list(ListId::List1), p.list(ListId::List2));
@@ -122,7 +128,7 @@ impl<'a> Frame<'a> {
         let mut f = Frame {
             img,
             p,
-            norm: Normalizer::new(img)?,
+            norm,
             bayer,
             kernel,
             aw,
@@ -333,9 +339,11 @@ impl<'a> Frame<'a> {
     }
 }
 
-/// How [`render`] makes a row: white balance by `neutral`, the row demosaicer `kernel`, and
-/// `post` on every output row.
+/// How [`render`] makes a row: normalization by `norm`, white balance by `neutral`, the row
+/// demosaicer `kernel`, and `post` on every output row.
 pub(crate) struct RowRender<'a> {
+    /// The normalizer of the stage-1 samples.
+    pub(crate) norm: Normalizer,
     /// The neutral the white balance divides by.
     pub(crate) neutral: [f64; 3],
     /// The row demosaicer.
@@ -390,12 +398,13 @@ pub(crate) fn render<R>(
         .filter(|&i| moves_pixels(&l3[i].kind))
         .collect();
     let RowRender {
+        norm,
         neutral,
         kernel,
         post,
     } = rows;
     let n = normalize_neutral(neutral)?;
-    let f = Frame::new(img, p, n, kernel)?;
+    let f = Frame::new(img, p, norm, n, kernel)?;
     let dims = (f.aw, f.ah);
     let band = tune.band.max(1);
     let Some(&first) = at.first() else {

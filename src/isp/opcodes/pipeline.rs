@@ -320,7 +320,13 @@ pub(crate) fn checked_active(img: &RawImage) -> Result<(usize, usize, usize, usi
 
 /// The stage-3 image of the whole frame of `img` with the opcodes `p` (white balanced by
 /// the normalized neutral `n`), before `post`.
-fn frame_stage3(img: &RawImage, p: &Prepared, n: [f64; 3], method: Demosaic) -> Result<Stage3> {
+fn frame_stage3(
+    img: &RawImage,
+    p: &Prepared,
+    norm: Normalizer,
+    n: [f64; 3],
+    method: Demosaic,
+) -> Result<Stage3> {
     let bayer = img.bayer()?;
     let (aw, ah, top, left) = checked_active(img)?;
     let l1 = p.list(ListId::List1);
@@ -334,7 +340,6 @@ fn frame_stage3(img: &RawImage, p: &Prepared, n: [f64; 3], method: Demosaic) -> 
             (img.width, img.height),
         ))
     };
-    let norm = Normalizer::new(img)?;
     let sw = img.width;
     let at = |r: usize, c: usize| stored[(r + top) * sw + left + c];
     let whole = Crop::whole(aw, ah);
@@ -354,16 +359,17 @@ fn frame_stage3(img: &RawImage, p: &Prepared, n: [f64; 3], method: Demosaic) -> 
 /// The active-area rectangle `region` of the whole-frame render of `img` with the opcodes
 /// `p` (no DefaultCrop, no orientation): what a crop's target is when the opcodes need the
 /// whole frame. Errors when a TrimBounds removed part of `region`.
-pub fn render_frame_region(
+pub(crate) fn render_frame_region(
     img: &RawImage,
     p: &Prepared,
+    norm: Normalizer,
     neutral: [f64; 3],
     method: Demosaic,
     post: &Post,
     region: &Crop,
 ) -> Result<RgbImage> {
     let n = normalize_neutral(neutral)?;
-    let s3 = frame_stage3(img, p, n, method)?;
+    let s3 = frame_stage3(img, p, norm, n, method)?;
     let b = s3.extent;
     let inside = region.top as i64 >= b.t
         && region.left as i64 >= b.l
@@ -384,22 +390,22 @@ pub fn render_frame_region(
     Ok(out)
 }
 
-/// The whole-frame render of `img` with the opcodes `p`: white balance by `neutral`,
-/// `method`, `post` on every row of the stage-3 image, then DefaultCrop (if `crop`) and
-/// orientation (if `orient`).
-pub fn render_frame(
+/// The whole-frame render of `img` with the opcodes `p`: normalization by `norm`, white
+/// balance by `neutral`, `method`, `post` on every row of the stage-3 image, then
+/// DefaultCrop (if `crop`) and orientation (if `orient`).
+pub(crate) fn render_frame(
     img: &RawImage,
     p: &Prepared,
+    norm: Normalizer,
     neutral: [f64; 3],
     method: Demosaic,
     post: &Post,
-    crop: bool,
-    orient: bool,
+    (crop, orient): (bool, bool),
 ) -> Result<RgbImage> {
     let n = normalize_neutral(neutral)?;
     let a = img.active_area();
     let (aw, ah) = (a.width(), a.height());
-    let mut s3 = frame_stage3(img, p, n, method)?;
+    let mut s3 = frame_stage3(img, p, norm, n, method)?;
     let w = s3.rgb.width.max(1);
     s3.rgb.data.par_chunks_mut(3 * w).for_each(post);
     finish_geometry(s3.rgb, s3.extent, &img.meta, (aw, ah), crop, orient)
@@ -454,14 +460,15 @@ pub struct StoredCrop<'a> {
 }
 
 /// The render of the active-area rectangle `crop` of a frame (levels and colour from
-/// `frame`, LinearizationTable ignored as in [`crate::isp::render_crop`]) from the stored
+/// `frame`, normalized by `norm`: LinearizationTable ignored as in
+/// [`crate::isp::render_crop`]) from the stored
 /// samples `stored` (whose rectangle holds the crop and the demosaicer's margin), with the
 /// pointwise opcodes `p`: the same expressions as [`render_frame`], so the result equals
 /// the frame render's region (before DefaultCrop and orientation).
-pub fn render_crop(
+pub(crate) fn render_crop(
     frame: &RawImage,
     p: &Prepared,
-    neutral: [f64; 3],
+    (norm, neutral): (Normalizer, [f64; 3]),
     method: Demosaic,
     stored: StoredCrop,
     crop: &Crop,
@@ -493,7 +500,6 @@ pub fn render_crop(
             (frame.width, frame.height),
         ))
     };
-    let norm = Normalizer::new(frame)?.without_linearization();
     let at = |r: usize, c: usize| values[(r - outer.top) * outer.width + (c - outer.left)];
     let s2 = stage2(&norm, &at, outer, p.list(ListId::List2), (aw, ah))?;
     let rgb = demosaic_stage(&s2, bayer, inverse_wb(n), method, crop, (aw, ah))?;
