@@ -43,6 +43,7 @@ mod isp_opcode_checks;
 mod isp_opcodes;
 mod isp_opcodes_banded;
 mod isp_release;
+mod isp_release_checks;
 mod isp_render;
 mod isp_warp_window;
 mod layers;
