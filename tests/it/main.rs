@@ -61,6 +61,7 @@ mod png_rows;
 mod real_pairs;
 mod real_pairs_bad;
 mod release_compat;
+mod release_compat_noise;
 mod release_version;
 mod release_workflow;
 mod runs_concurrent;
