@@ -202,7 +202,7 @@ fn capped(kib: u64, args: &[&std::ffi::OsStr]) -> Output {
 /// frame, 1.1 GB, turned by its Orientation) renders or is refused with a limits error,
 /// never an abort.
 #[test]
-#[ignore = "slow: a 96 MP render with the release's Menon demosaic (minutes in a debug build; scripts/test.sh --slow)"]
+#[ignore = "slow: a 96 MP render with the release's Menon demosaic (4.7 min in a debug build; scripts/test.sh --slow)"]
 fn slow_release_isp_renders_96_mp_under_a_3_gib_address_space_cap() {
     let t = tempfile::tempdir().unwrap();
     let dng = t.path().join("big.dng");
