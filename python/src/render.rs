@@ -48,15 +48,13 @@ pub(crate) fn render<'py>(
         }
         let day = raw.get().day.clone();
         let neutral = neutral.map(|(r, g, b)| [r, g, b]);
-        let img = py
+        let r = py
             .detach(move || {
-                on_pool(move || {
-                    let l = day2night::isp::release::render_linear(&day.raw, neutral, orient)?;
-                    Ok(l.to_rgb_image())
-                })
+                on_pool(move || day2night::isp::release::render_f32(&day.raw, neutral, orient))
             })
             .map_err(py_err)?;
-        return rgb_array(py, img);
+        warn_lines(py, &raw.get().file_name, &r.warnings)?;
+        return rgb_array(py, r.image.into_rgb_image());
     }
     let method: Demosaic = demosaic.parse().map_err(py_err)?;
     let opcodes: day2night::isp::opcodes::OpcodeMode = opcodes.parse().map_err(py_err)?;
@@ -155,12 +153,14 @@ pub(crate) fn render_release_u8<'py>(
 ) -> PyResult<Bound<'py, PyAny>> {
     let day = raw.get().day.clone();
     let neutral = neutral.map(|(r, g, b)| [r, g, b]);
-    let (w, h, bytes) = py
+    let r = py
         .detach(move || {
             on_pool(move || day2night::isp::release::render_u8(&day.raw, neutral, orient))
         })
         .map_err(py_err)?;
-    let arr = numpy::ndarray::Array3::from_shape_vec((h, w, 3), bytes)
+    warn_lines(py, &raw.get().file_name, &r.warnings)?;
+    let (w, h) = (r.image.width, r.image.height);
+    let arr = numpy::ndarray::Array3::from_shape_vec((h, w, 3), r.image.data)
         .map_err(|e| value_err(e.to_string()))?;
     Ok(numpy::IntoPyArray::into_pyarray(arr, py).into_any())
 }

@@ -70,3 +70,52 @@ def test_matches_the_release_render(raw):
     assert ours.shape == ref.shape
     off = np.abs(ours.astype(int) - ref.astype(int))
     assert (off <= 1).mean() >= 0.999, off.max()
+
+
+def without_white_balance(src, dst):
+    """``src`` with its AsShotNeutral entry renamed to an unassigned tag (50777): a DNG
+    with no white balance, everything else byte for byte."""
+    b = bytearray(src.read_bytes())
+    assert b[:2] == b"II"
+    ifd = int.from_bytes(b[4:8], "little")
+    for i in range(int.from_bytes(b[ifd:ifd + 2], "little")):
+        e = ifd + 2 + 12 * i
+        if int.from_bytes(b[e:e + 2], "little") == 50728:
+            b[e:e + 2] = (50777).to_bytes(2, "little")
+            break
+    else:
+        raise AssertionError("no AsShotNeutral in IFD0")
+    dst.write_bytes(bytes(b))
+    return dst
+
+
+def test_no_white_balance_is_refused_as_the_default_isp_refuses_it(day_dng, tmp_path):
+    raw = day2night.read_dng(without_white_balance(day_dng, tmp_path / "nowb.dng"))
+    want = "neither AsShotNeutral nor AsShotWhiteXY"
+    with pytest.raises(ValueError, match=want):
+        day2night.render(raw)
+    with pytest.raises(ValueError, match=want):
+        day2night.render(raw, isp="release")
+    with pytest.raises(ValueError, match=want):
+        render_target(raw, isp="release")
+    # A neutral given renders it.
+    assert render_target(raw, isp="release", neutral=(0.5, 1.0, 0.6)).shape == (504, 496, 3)
+
+
+@pytest.mark.parametrize("fill", [0, 65535])
+def test_a_constant_render_warns(fill):
+    meta = {"cfa_pattern": "RGGB", "black_level": 0, "white_level": 65535,
+            "as_shot_neutral": (0.5, 1.0, 0.6), "iso": 100,
+            "linearization_table": [fill] * 4096}
+    data = (np.arange(48 * 64, dtype=np.uint16).reshape(48, 64) * 7) % 4096
+    with pytest.warns(UserWarning):
+        raw = day2night.Raw.from_array(data, meta, name="flat")
+    for render in (lambda: day2night.render(raw, isp="release"),
+                   lambda: render_target(raw, isp="release")):
+        with pytest.warns(day2night.RenderConstantWarning, match="the render is constant"):
+            out = render()
+        assert out.min() == out.max()
+    with pytest.warns(day2night.RenderConstantWarning):
+        lin = day2night.render(raw, isp="release")
+    # All black, or one saturated colour everywhere.
+    assert lin.max() == 0.0 if fill == 0 else lin.min() > 0.0

@@ -301,11 +301,13 @@ fn run_release(args: &RenderArgs) -> CmdResult {
     let (neutral, compression, zip_level) = neutral_and_exr(args)?;
     let (policy, img) = policy_and_input(args)?;
     let in_file = |e: day2night::Error| lib(e.in_file(&args.input));
-    let linear =
-        day2night::isp::release::render_linear(&img, neutral, !args.no_orient).map_err(in_file)?;
+    // The white balance is resolved (or refused) before any pixel work.
+    let meta = day2night::isp::release::ReleaseMeta::of(&img, neutral).map_err(in_file)?;
+    let (orient, neutral) = (!args.no_orient, Some(meta.neutral));
     match format {
         Format::Exr => {
-            let meta = day2night::isp::release::ReleaseMeta::of(&img, neutral).map_err(in_file)?;
+            let r = day2night::isp::release::render_f32(&img, neutral, orient).map_err(in_file)?;
+            super::warn_all(&args.input, &r.warnings);
             let mut attrs = standard_attributes(&args.input, meta.neutral);
             attrs.push(("day2night:isp".into(), "release".into()));
             attrs.push((
@@ -317,14 +319,16 @@ fn run_release(args: &RenderArgs) -> CmdResult {
                 compression,
                 zip_level,
             };
-            write_exr(&linear.to_rgb_image(), &args.output, &opts, &attrs, &policy).map_err(lib)
+            let rgb = r.image.into_rgb_image();
+            write_exr(&rgb, &args.output, &opts, &attrs, &policy).map_err(lib)
         }
         _ => {
-            let bytes = linear.to_u8();
+            let r = day2night::isp::release::render_u8(&img, neutral, orient).map_err(in_file)?;
+            super::warn_all(&args.input, &r.warnings);
             day2night::encode::png_rows::write_png_rgb8(
-                &bytes,
-                linear.width,
-                linear.height,
+                &r.image.data,
+                r.image.width,
+                r.image.height,
                 DisplayTone::Release,
                 &args.output,
                 &policy,

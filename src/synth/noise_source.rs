@@ -2,10 +2,11 @@
 //! and 3). The first of these that applies:
 //!
 //! 1. `--noise-model FILE` (a warning when the file records another camera);
-//! 2. the input's own NoiseProfile, at its Exif ISO;
+//! 2. the input's own NoiseProfile, at its Exif ISO (not under `--compat release`);
 //! 3. the embedded table when it is this camera's own (the paper's phone, the Samsung
 //!    Galaxy S20 FE: [`embedded::for_camera`]), or under `--compat release` (the release
-//!    applies it to every input; a warning unless the input is the S20 FE);
+//!    applies it to every input, whatever its NoiseProfile; a warning unless the input is
+//!    the S20 FE);
 //! 4. an estimate from the day image itself at its Exif ISO ([`crate::noise::estimate`](mod@crate::noise::estimate)),
 //!    when it can be trusted;
 //! 5. the embedded table, with a warning that names it as another camera's noise, says why
@@ -129,9 +130,14 @@ pub fn choose_noise_model(
         return Ok(from_file(m, &cam));
     }
     let iso = img.meta.exif.iso.filter(|&i| i > 0);
+    let release = opts.compat.embedded_noise;
     let mut profile_problem = None;
+    let mut unused_profile = None;
     if let (Some(p), Some(iso)) = (&img.meta.noise_profile, iso) {
         match NoiseModel::from_dng_profile(p, bayer, iso) {
+            // `--compat release`: the release's table whatever the input says (the
+            // release never reads a NoiseProfile).
+            Ok(_) if release => unused_profile = Some(iso),
             Ok(m) => {
                 return Ok(NoiseChoice {
                     provenance: NoiseProvenance {
@@ -147,11 +153,16 @@ pub fn choose_noise_model(
         }
     }
     // What became of the input's NoiseProfile, in words: refused when read (its values
-    // given), present but unusable, present without an ISO to scale it by, or absent.
-    let profile_words = match (&profile_problem, &img.meta.noise_profile) {
-        (Some(p), _) => p.clone(),
-        (None, Some(_)) => "its NoiseProfile cannot be scaled without its ISO".into(),
-        (None, None) => match &img.meta.noise_profile_problem {
+    // given), present but unusable, present without an ISO to scale it by, set aside by
+    // --compat release, or absent.
+    let profile_words = match (&profile_problem, unused_profile, &img.meta.noise_profile) {
+        (Some(p), _, _) => p.clone(),
+        (None, Some(iso), _) => format!(
+            "--compat release keeps the release's noise table rather than the input's \
+             NoiseProfile (at ISO {iso})"
+        ),
+        (None, None, Some(_)) => "its NoiseProfile cannot be scaled without its ISO".into(),
+        (None, None, None) => match &img.meta.noise_profile_problem {
             Some(why) => format!("the input's NoiseProfile is not used ({why})"),
             None => "the input has no NoiseProfile".into(),
         },
@@ -172,12 +183,25 @@ pub fn choose_noise_model(
             warnings: Diagnostics::new(),
         });
     }
-    if opts.compat.embedded_noise {
+    if release {
+        let (why, note) = match unused_profile {
+            Some(iso) => (
+                profile_words,
+                format!(
+                    "--compat release: the release's table, not the input's NoiseProfile \
+                     (at ISO {iso})"
+                ),
+            ),
+            None => (
+                format!("{profile_words} and --compat release keeps the release's noise table"),
+                "--compat release: the release's table".into(),
+            ),
+        };
         return Ok(embedded_elsewhere(
             &cam,
             Code::NoiseCompatTable,
-            &format!("{profile_words} and --compat release keeps the release's noise table"),
-            "--compat release: the release's table",
+            &why,
+            &note,
         ));
     }
     let Some(iso) = iso else {
@@ -448,6 +472,53 @@ mod tests {
             .choice
             .warnings
             .is_empty());
+    }
+
+    /// `--compat release` uses the release's table even when the input has a usable
+    /// NoiseProfile and an ISO (issue 42), and its warning and provenance say so.
+    #[test]
+    fn release_compat_sets_a_usable_noise_profile_aside_and_says_so() {
+        let i = img(Some(100), true, "Canon", "EOS 5D");
+        let r = choose(&i, None, true, trusted_estimate());
+        assert_eq!(r.choice.provenance.source, NoiseSource::EmbeddedS20Fe);
+        assert_eq!(r.choice.model.isos, embedded::noise_model().isos);
+        assert!(!r.estimated);
+        let w = &r.choice.warnings[0].message;
+        assert!(
+            w.starts_with(
+                "noise: --compat release keeps the release's noise table rather than the \
+                 input's NoiseProfile (at ISO 100); using the embedded noise table"
+            ),
+            "{w}"
+        );
+        assert!(w.contains("not Canon EOS 5D's"), "{w}");
+        assert_eq!(r.choice.warnings[0].code, Code::NoiseCompatTable);
+        let note = &r.choice.provenance.note;
+        assert!(
+            note.starts_with(
+                "--compat release: the release's table, not the input's NoiseProfile (at ISO 100)"
+            ),
+            "{note}"
+        );
+        // Without the preset the same input keeps its own NoiseProfile.
+        let r = choose(&i, None, false, trusted_estimate());
+        assert_eq!(r.choice.provenance.source, NoiseSource::NoiseProfile);
+        // A model file still comes first under the preset.
+        let r = choose(&i, Some(file_model(None)), true, trusted_estimate());
+        assert_eq!(r.choice.provenance.source, NoiseSource::File);
+        // The paper's phone with a NoiseProfile: its own table, no warning, the note says why.
+        let i = img(Some(100), true, "samsung", "SM-G781B");
+        let r = choose(&i, None, true, trusted_estimate());
+        assert_eq!(r.choice.provenance.source, NoiseSource::EmbeddedS20Fe);
+        assert!(r.choice.warnings.is_empty(), "{:?}", r.choice.warnings);
+        assert!(
+            r.choice
+                .provenance
+                .note
+                .starts_with("--compat release keeps"),
+            "{}",
+            r.choice.provenance.note
+        );
     }
 
     #[test]

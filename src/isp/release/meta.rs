@@ -28,7 +28,8 @@ pub struct ReleaseMeta {
     /// CFAPattern colours (0 red, 1 green, 2 blue), row-major, applied from the top-left
     /// corner of the release's image whatever its offset in the active area.
     pub cfa: [u8; 4],
-    /// The neutral that white-balances and picks the colour matrix.
+    /// The neutral that white-balances and picks the colour matrix: the caller's, else
+    /// AsShotNeutral as stored, else AsShotWhiteXY converted (green = 1).
     pub neutral: [f64; 3],
     /// ColorMatrix1, row-major (all ones when absent, as the release does).
     pub cm1: [f64; 9],
@@ -43,7 +44,10 @@ pub struct ReleaseMeta {
 
 impl ReleaseMeta {
     /// The release's view of `raw`'s metadata; `neutral` replaces the file's AsShotNeutral
-    /// (the release's night targets use the synthetic neutral).
+    /// (the release's night targets use the synthetic neutral). Without either, AsShotWhiteXY
+    /// is converted through the colour matrices as the project's ISP converts it
+    /// ([`resolve_neutral`](crate::isp::render_parts::resolve_neutral)); with none of the
+    /// three the render is refused with that ISP's error.
     pub fn of(raw: &RawImage, neutral: Option<[f64; 3]>) -> Result<ReleaseMeta> {
         let m = &raw.meta;
         if m.linear_raw.is_some() {
@@ -63,11 +67,12 @@ impl ReleaseMeta {
                 )))
             }
         };
-        let neutral = match neutral {
-            Some(n) => n,
-            None => stored_neutral(raw)
-                .or(m.as_shot_neutral)
-                .unwrap_or([1.0; 3]),
+        // The release divides by AsShotNeutral as stored (it requires the tag). Without
+        // one, the white balance is what the project's ISP uses (docs/isp.md): AsShotWhiteXY
+        // through the colour matrices, else the same refusal.
+        let neutral = match (neutral, stored_neutral(raw).or(m.as_shot_neutral)) {
+            (Some(n), _) | (None, Some(n)) => n,
+            (None, None) => crate::isp::render_parts::resolve_neutral(m, None)?,
         };
         if neutral.iter().any(|v| !(v.is_finite() && *v > 0.0)) {
             return Err(Error::invalid(format!(
