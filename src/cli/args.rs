@@ -4,13 +4,15 @@
 use super::{usage, Failure};
 use day2night::encode::exr::ExrOptions;
 
-/// `--isp` (render, real-pairs): the ISP of a rendered target.
+/// `--isp` (render, real-pairs): the ISP of a rendered target. Its values have no doc
+/// comments: they would be clap's help of each value, which turns `--help` into the long
+/// layout.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
 pub enum IspArg {
-    /// day2night's ISP (docs/isp.md).
+    // day2night's ISP (docs/isp.md).
     #[value(name = "day2night")]
     Day2night,
-    /// The authors' release's target render reproduced (docs/isp.md).
+    // The authors' release's target render reproduced (docs/isp.md).
     Release,
 }
 

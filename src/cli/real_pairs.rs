@@ -5,16 +5,17 @@ use super::{usage, CmdResult, Failure};
 use day2night::realpairs::{self, Layout, LayoutChoice, PairOptions, RunOptions, TargetKind};
 use std::path::PathBuf;
 
-/// `--layout` (docs/real-pairs.md).
+/// `--layout` (docs/real-pairs.md). Its values have no doc comments: they would be clap's
+/// help of each value, which turns the whole `--help` into the long layout.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
 pub enum LayoutArg {
-    /// Detect from the folder.
+    // Detect from the folder.
     Auto,
-    /// A folder per scene of RAW_0_00<ISO>*.dng frames.
+    // A folder per scene of RAW_0_00<ISO>*.dng frames.
     Release,
-    /// The release's night_real/{clean,clean_raw,dng/iso_<ISO>}/NNN.*.
+    // The release's night_real/{clean,clean_raw,dng/iso_<ISO>}/NNN.*.
     ReleaseProcessed,
-    /// A folder per scene of DNGs, grouped by the ISO in each DNG.
+    // A folder per scene of DNGs, grouped by the ISO in each DNG.
     Simple,
 }
 
@@ -29,14 +30,14 @@ impl From<LayoutArg> for LayoutChoice {
     }
 }
 
-/// `--target`.
+/// `--target` (no doc comments on the values, as [`LayoutArg`]).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
 pub enum TargetArg {
-    /// 8-bit sRGB PNG.
+    // 8-bit sRGB PNG.
     Png,
-    /// Linear EXR.
+    // Linear EXR.
     Exr,
-    /// Both.
+    // Both.
     Both,
 }
 
@@ -80,7 +81,7 @@ pub struct RealPairsArgs {
     /// -o/--output OUT (shared with `dataset`).
     #[command(flatten)]
     pub out: OutFolder,
-    /// Input layout.
+    /// Input layout (docs/real-pairs.md).
     #[arg(long, value_enum, default_value_t = LayoutArg::Auto, value_name = "LAYOUT")]
     pub layout: LayoutArg,
     /// Release layouts: the noisy ISOs expected (frames RAW_0_00<ISO, 4 digits>*, or
@@ -91,7 +92,7 @@ pub struct RealPairsArgs {
     /// noisy input, in raw pixels.
     #[arg(long = "max-motion", default_value_t = realpairs::DEFAULT_MAX_MOTION_PX, value_name = "PX")]
     pub max_motion: f64,
-    /// Targets.
+    /// Targets (png: 8-bit sRGB, exr: linear).
     #[arg(long, value_enum, default_value_t = TargetArg::Png, value_name = "KIND")]
     pub target: TargetArg,
     /// ISP of the rendered targets: release is the authors' release ISP as `render --isp
