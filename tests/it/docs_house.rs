@@ -61,7 +61,7 @@ fn benchmarks_md_opens_with_todays_figures() {
         );
     }
     assert!(
-        rest[end..].starts_with("## Appendix"),
+        rest[end..].trim_start().starts_with("## Appendix"),
         "the dated runs follow as an appendix"
     );
 }
