@@ -200,7 +200,10 @@ pub struct SynthOptions {
     pub opcodes: OpcodeMode,
     /// Burst frames and their motion (`--burst N`); absent from serialized options for a
     /// single frame, so single-frame sidecars and dataset fingerprints are unchanged.
-    #[serde(default, skip_serializing_if = "burst::BurstOptions::is_single")]
+    #[serde(
+        default = "options::burst_defaults",
+        skip_serializing_if = "burst::BurstOptions::is_single"
+    )]
     pub burst: burst::BurstOptions,
     /// Factor on the noise model's standard deviation at every ISO (`--noise-gain`; 1: the
     /// model as calibrated, absent from serialized options).

@@ -553,3 +553,17 @@ fn the_burst_defaults_and_ranges_are_the_tables() {
     }
     assert_eq!(d.finish(Spelling::Python).unwrap(), JobConfig::default());
 }
+
+#[test]
+fn a_serialized_single_frame_reads_back_with_the_burst_defaults() {
+    // a single frame's JSON has no burst: reading it back must give the table's burst, not
+    // BurstOptions' blank (0 frames), or every sidecar's options would fail validate
+    let json = serde_json::to_string(&SynthOptions::default()).unwrap();
+    assert!(!json.contains("burst"));
+    let back: SynthOptions = serde_json::from_str(&json).unwrap();
+    assert_eq!(back, SynthOptions::default());
+    back.validate().unwrap();
+    let partial: crate::synth::burst::BurstOptions =
+        serde_json::from_str(r#"{"frames": 3}"#).unwrap();
+    assert_eq!(partial.shake, burst_defaults().shake);
+}
