@@ -15,8 +15,12 @@ current). The names are a contract: scripts depend on these spellings, and chang
 a breaking change.
 
 Conventions of every command:
-- errors go to stderr as `day2night: <file>: <reason>`; nothing but the requested output goes
-  to stdout; exit code 0 on success, 1 for bad input or failed work, 2 for bad usage;
+- errors go to stderr as `day2night: <file>: <reason>` (`day2night: <reason>` when no file is
+  concerned); nothing but the requested output goes to stdout; exit code 0 on success, 1 for
+  bad input, failed work or a refused output (an existing file without `--overwrite`, a
+  non-empty folder that is not a dataset, two inputs that would share output names, an
+  output folder that is the input folder), 2 for bad usage (an unknown flag, a value out of
+  its range or not one of its choices, flags that do not go together);
 - warnings go to stderr, each once, as `warning[CODE]: <subject>: <message>` (the subject is
   the file, scene or option it is about); `--json` outputs and sidecars carry them as
   `{"code", "subject", "message"}`; every CODE is listed in docs/warnings.md;

@@ -23,7 +23,7 @@ pub enum Error {
     #[error("invalid parameter: {0}")]
     InvalidParam(String),
     /// An output exists and overwriting was not requested, or an output would replace an input.
-    #[error("refusing to overwrite {}: {reason}", path.display())]
+    #[error("{}: refusing to overwrite: {reason}", path.display())]
     WouldOverwrite {
         /// The output that would be replaced.
         path: PathBuf,

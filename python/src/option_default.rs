@@ -15,7 +15,7 @@ pub(crate) fn python_default<'py>(
     d: &OptionDef,
 ) -> PyResult<Bound<'py, PyAny>> {
     let bad = |t: &str| value_err(format!("option {}: default {t:?} is not its kind", d.name));
-    let Some(t) = d.default else {
+    let Some(t) = d.default_text() else {
         return Ok(match d.kind {
             Kind::Switch => PyBool::new(py, false).to_owned().into_any(),
             _ => py.None().into_bound(py),

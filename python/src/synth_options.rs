@@ -114,11 +114,11 @@ pub(crate) fn table_dict(py: pyo3::Python<'_>) -> PyResult<Bound<'_, PyDict>> {
         };
         e.set_item("python", scope)?;
         e.set_item("note", note)?;
-        e.set_item("default", o.default)?;
+        e.set_item("default", o.default_text())?;
         e.set_item("python_default", python_default(py, o)?)?;
         e.set_item("kind", kind_name(&o.kind))?;
         let choices = match o.kind {
-            Kind::Choice(c) => Some(c.iter().map(|c| c.name).collect::<Vec<_>>()),
+            Kind::Choice(c) => Some(c.iter().map(|c| c.shown()).collect::<Vec<_>>()),
             _ => None,
         };
         e.set_item("choices", choices)?;
@@ -147,11 +147,8 @@ fn option_err(e: OptionError) -> PyErr {
 fn value(d: &OptionDef, key: &str, v: &Bound<'_, PyAny>) -> PyResult<Value> {
     // None is the unset state of an option unset by default (the default its signature
     // shows), and of the texts and paths whose setters take it.
-    let none_ok = (d.default.is_none() && !matches!(d.kind, Kind::Switch))
-        || !matches!(
-            d.kind,
-            Kind::Switch | Kind::Float { .. } | Kind::Int { late: true, .. }
-        );
+    let none_ok = (d.default_text().is_none() && !matches!(d.kind, Kind::Switch))
+        || !matches!(d.kind, Kind::Switch | Kind::Float { .. });
     if none_ok && v.is_none() {
         return Ok(Value::Unset);
     }

@@ -4,6 +4,18 @@
 use super::{usage, Failure};
 use day2night::encode::exr::ExrOptions;
 
+/// `--isp` (render, real-pairs): the ISP of a rendered target. Its values have no doc
+/// comments: they would be clap's help of each value, which turns `--help` into the long
+/// layout.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum IspArg {
+    // day2night's ISP (docs/isp.md).
+    #[value(name = "day2night")]
+    Day2night,
+    // The authors' release's target render reproduced (docs/isp.md).
+    Release,
+}
+
 /// `--max-pixels N` (global): a pixel count with an optional K/M/G suffix.
 pub fn parse_max_pixels(s: &str) -> Result<u64, String> {
     day2night::limits::Limits::parse_pixels(s).map_err(|e| e.to_string())

@@ -1,8 +1,55 @@
 //! `day2night real-pairs`: real night test/training pairs from captures (docs/real-pairs.md).
+use super::args::IspArg;
 use super::dataset::{OutFolder, RunFlags};
 use super::{usage, CmdResult, Failure};
-use day2night::realpairs::{self, LayoutChoice, PairOptions, RunOptions, TargetKind};
+use day2night::realpairs::{self, Layout, LayoutChoice, PairOptions, RunOptions, TargetKind};
 use std::path::PathBuf;
+
+/// `--layout` (docs/real-pairs.md). Its values have no doc comments: they would be clap's
+/// help of each value, which turns the whole `--help` into the long layout.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum LayoutArg {
+    // Detect from the folder.
+    Auto,
+    // A folder per scene of RAW_0_00<ISO>*.dng frames.
+    Release,
+    // The release's night_real/{clean,clean_raw,dng/iso_<ISO>}/NNN.*.
+    ReleaseProcessed,
+    // A folder per scene of DNGs, grouped by the ISO in each DNG.
+    Simple,
+}
+
+impl From<LayoutArg> for LayoutChoice {
+    fn from(l: LayoutArg) -> LayoutChoice {
+        match l {
+            LayoutArg::Auto => LayoutChoice::Auto,
+            LayoutArg::Release => LayoutChoice::Fixed(Layout::Release),
+            LayoutArg::ReleaseProcessed => LayoutChoice::Fixed(Layout::ReleaseProcessed),
+            LayoutArg::Simple => LayoutChoice::Fixed(Layout::Simple),
+        }
+    }
+}
+
+/// `--target` (no doc comments on the values, as [`LayoutArg`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum TargetArg {
+    // 8-bit sRGB PNG.
+    Png,
+    // Linear EXR.
+    Exr,
+    // Both.
+    Both,
+}
+
+impl From<TargetArg> for TargetKind {
+    fn from(t: TargetArg) -> TargetKind {
+        match t {
+            TargetArg::Png => TargetKind::Png,
+            TargetArg::Exr => TargetKind::Exr,
+            TargetArg::Both => TargetKind::Both,
+        }
+    }
+}
 
 /// Arguments of `day2night real-pairs`.
 #[derive(Debug, clap::Args)]
@@ -34,9 +81,9 @@ pub struct RealPairsArgs {
     /// -o/--output OUT (shared with `dataset`).
     #[command(flatten)]
     pub out: OutFolder,
-    /// Input layout: auto, release, release-processed or simple.
-    #[arg(long, default_value = "auto", value_name = "LAYOUT")]
-    pub layout: String,
+    /// Input layout (docs/real-pairs.md).
+    #[arg(long, value_enum, default_value_t = LayoutArg::Auto, value_name = "LAYOUT")]
+    pub layout: LayoutArg,
     /// Release layouts: the noisy ISOs expected (frames RAW_0_00<ISO, 4 digits>*, or
     /// dng/iso_<ISO>/NNN.dng in the processed tree); a missing one is an error.
     #[arg(long, default_value_t = isos_text(&realpairs::RELEASE_NOISY_ISOS), value_name = "ISO,ISO")]
@@ -45,14 +92,14 @@ pub struct RealPairsArgs {
     /// noisy input, in raw pixels.
     #[arg(long = "max-motion", default_value_t = realpairs::DEFAULT_MAX_MOTION_PX, value_name = "PX")]
     pub max_motion: f64,
-    /// Targets: png (8-bit sRGB), exr (linear) or both.
-    #[arg(long, default_value = "png", value_name = "KIND")]
-    pub target: String,
-    /// ISP of the rendered targets: day2night (default) or release, the authors' release
-    /// ISP as `render --isp release` does it (its own crop and orientation; docs/isp.md).
-    /// A target copied from the release's processed tree is copied either way.
-    #[arg(long, default_value = "day2night", value_name = "ISP")]
-    pub isp: String,
+    /// Targets (png: 8-bit sRGB, exr: linear).
+    #[arg(long, value_enum, default_value_t = TargetArg::Png, value_name = "KIND")]
+    pub target: TargetArg,
+    /// ISP of the rendered targets: release is the authors' release ISP as `render --isp
+    /// release` does it (its own crop and orientation; docs/isp.md). A target copied from
+    /// the release's processed tree is copied either way.
+    #[arg(long, value_enum, default_value_t = IspArg::Day2night, value_name = "ISP")]
+    pub isp: IspArg,
     /// --jobs, --overwrite, --json, --quiet (shared with `dataset`).
     #[command(flatten)]
     pub run: RunFlags,
@@ -79,21 +126,6 @@ fn parse_isos(s: &str) -> Result<Vec<u32>, Failure> {
 
 /// Run `day2night real-pairs`.
 pub fn run(args: RealPairsArgs) -> CmdResult {
-    let layout: LayoutChoice = args
-        .layout
-        .parse()
-        .map_err(|e| usage(format!("--layout: {e}")))?;
-    let release_isp = match args.isp.as_str() {
-        "day2night" => false,
-        "release" => true,
-        i => return Err(usage(format!("--isp {i:?}: use day2night or release"))),
-    };
-    let target = match args.target.as_str() {
-        "png" => TargetKind::Png,
-        "exr" => TargetKind::Exr,
-        "both" => TargetKind::Both,
-        t => return Err(usage(format!("--target {t:?}: use png, exr or both"))),
-    };
     if !(args.max_motion.is_finite() && args.max_motion >= 0.0) {
         return Err(usage(format!(
             "--max-motion {}: expected a number of pixels >= 0",
@@ -102,11 +134,11 @@ pub fn run(args: RealPairsArgs) -> CmdResult {
     }
     let jobs = args.run.jobs()?;
     let pairs = PairOptions {
-        layout,
+        layout: args.layout.into(),
         release_isos: parse_isos(&args.iso)?,
         max_motion_px: args.max_motion,
-        target,
-        release_isp,
+        target: args.target.into(),
+        release_isp: args.isp == IspArg::Release,
     };
     let opts = RunOptions {
         scenes_dir: args.scenes.clone(),

@@ -1,5 +1,5 @@
 //! `day2night render IN.dng -o OUT.exr|png|tif`: the software ISP on one DNG.
-use super::args::{lib, parse_neutral, parse_zip_level};
+use super::args::{lib, parse_neutral, parse_zip_level, IspArg};
 use super::{usage, CmdResult};
 use day2night::encode::exr::{
     encodes_rows, standard_attributes, write_exr, ExrCompression, ExrOptions,
@@ -70,13 +70,13 @@ pub struct RenderArgs {
     /// Replace an existing output.
     #[arg(long)]
     pub overwrite: bool,
-    /// ISP: day2night (default) or release, the authors' release's target render reproduced
-    /// (docs/isp.md): Menon demosaic, its colour matrices, gamma 2.2 + s-curve, its own crop
-    /// and orientation, opcodes and DefaultCrop ignored. With release, --demosaic, --tone and
-    /// --opcodes may only name what it does (menon, release, ignore); --camera-rgb,
-    /// --no-crop, --bits 16 and TIFF are refused; .exr gets its linear sRGB.
-    #[arg(long, default_value = "day2night", value_name = "ISP")]
-    pub isp: String,
+    /// ISP: release is the authors' release's target render reproduced (docs/isp.md): Menon
+    /// demosaic, its colour matrices, gamma 2.2 + s-curve, its own crop and orientation,
+    /// opcodes and DefaultCrop ignored. With release, --demosaic, --tone and --opcodes may
+    /// only name what it does (menon, release, ignore); --camera-rgb, --no-crop, --bits 16
+    /// and TIFF are refused; .exr gets its linear sRGB.
+    #[arg(long, value_enum, default_value_t = IspArg::Day2night, value_name = "ISP")]
+    pub isp: IspArg,
 }
 
 enum Format {
@@ -149,10 +149,8 @@ fn output_format(args: &RenderArgs) -> Result<(Format, bool), super::Failure> {
 
 /// Run `day2night render`.
 pub fn run(args: RenderArgs) -> CmdResult {
-    match args.isp.as_str() {
-        "day2night" => {}
-        "release" => return run_release(&args),
-        other => return Err(usage(format!("--isp {other}: use day2night or release"))),
+    if args.isp == IspArg::Release {
+        return run_release(&args);
     }
     let demosaic: Demosaic = args.demosaic.parse().map_err(usage)?;
     let (neutral, compression, zip_level) = neutral_and_exr(&args)?;

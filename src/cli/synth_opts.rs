@@ -4,12 +4,13 @@
 //! knows the options.
 
 use super::{usage, Failure};
-use clap::builder::{PossibleValue, PossibleValuesParser};
+use clap::builder::{PossibleValue, PossibleValuesParser, TypedValueParser};
 use clap::error::ErrorKind;
 use clap::{value_parser, Arg, ArgAction, ArgMatches, Command};
 use day2night::synth::config::JobConfig;
 use day2night::synth::job::SynthJob;
-use day2night::synth::options::{Draft, Kind, OptionDef, Spelling, Value, Width, OPTIONS};
+use day2night::synth::options::{Choice, Draft, Kind, OptionDef, Spelling, Value, Width, OPTIONS};
+use std::ffi::OsStr;
 use std::path::{Path, PathBuf};
 
 /// The synthesis and output flags given (or defaulted), in table order: the same flags,
@@ -34,18 +35,64 @@ fn arg(d: &'static OptionDef) -> Arg {
         },
         Kind::Float { .. } => a.value_parser(value_parser!(f64)),
         Kind::Path => a.value_parser(value_parser!(PathBuf)),
-        Kind::Choice(choices) => a.value_parser(PossibleValuesParser::new(
-            choices
-                .iter()
-                .map(|c| PossibleValue::new(c.name).help(c.help)),
-        )),
+        Kind::Choice(choices) => a.value_parser(ChoiceParser::new(choices)),
         Kind::Switch | Kind::Text | Kind::Isos | Kind::Numbers(_) | Kind::Pair { .. } => {
             a.value_parser(value_parser!(String))
         }
     };
-    match d.default {
+    match d.default_text() {
         Some(v) => a.default_value(v),
         None => a,
+    }
+}
+
+/// The values of a [`Kind::Choice`] option: clap's list of its names (with their help and
+/// aliases, shown in `--help` and in the error for another value), and a name that takes a
+/// parameter (`truncated:K`) followed by one, which the option's setter parses.
+#[derive(Clone)]
+struct ChoiceParser {
+    choices: &'static [Choice],
+    names: PossibleValuesParser,
+}
+
+impl ChoiceParser {
+    fn new(choices: &'static [Choice]) -> ChoiceParser {
+        let names = choices.iter().map(|c| {
+            PossibleValue::new(c.shown())
+                .help(c.help)
+                .aliases(c.aliases.iter().copied())
+        });
+        ChoiceParser {
+            choices,
+            names: PossibleValuesParser::new(names),
+        }
+    }
+}
+
+impl TypedValueParser for ChoiceParser {
+    type Value = String;
+
+    fn parse_ref(
+        &self,
+        cmd: &Command,
+        arg: Option<&Arg>,
+        value: &OsStr,
+    ) -> Result<String, clap::Error> {
+        match value.to_str() {
+            Some(t)
+                if self
+                    .choices
+                    .iter()
+                    .any(|c| c.param.is_some() && c.accepts(t)) =>
+            {
+                Ok(t.to_string())
+            }
+            _ => self.names.parse_ref(cmd, arg, value),
+        }
+    }
+
+    fn possible_values(&self) -> Option<Box<dyn Iterator<Item = PossibleValue> + '_>> {
+        self.names.possible_values()
     }
 }
 

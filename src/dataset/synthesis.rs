@@ -11,8 +11,8 @@ use super::{ensure_parent, Kind, Processor, Sink, Unit, UnitInfo};
 use crate::encode::exr::ExrOptions;
 use crate::error::Result;
 use crate::output::OutputPolicy;
-use crate::synth::burst::BurstOptions;
 use crate::synth::job::{compression_name, DayInput, OutputKind, OutputSink, SynthJob};
+use crate::synth::options::burst_defaults;
 use crate::synth::{Compat, SynthOptions};
 use std::borrow::Cow;
 use std::path::{Path, PathBuf};
@@ -141,7 +141,7 @@ fn options_fingerprint(options: &SynthOptions) -> String {
     let mut reference = serde_json::to_value(SynthOptions::default()).unwrap_or_default();
     // Parts left out of the JSON at their default: compare with their own defaults.
     if let Some(r) = reference.as_object_mut() {
-        r.insert("burst".into(), json_of(&BurstOptions::default()));
+        r.insert("burst".into(), json_of(&burst_defaults()));
         r.insert("compat".into(), json_of(&Compat::default()));
     }
     serde_json::to_string(&tree.pruned(&reference, "", FINGERPRINT_V1_FIELDS)).unwrap_or(text)
@@ -363,7 +363,7 @@ mod tests {
         let text = serde_json::to_string(&o).unwrap();
         let mut tree: Ordered = serde_json::from_str(&text).unwrap();
         let mut reference = serde_json::to_value(SynthOptions::default()).unwrap();
-        reference["burst"] = json_of(&BurstOptions::default());
+        reference["burst"] = json_of(&burst_defaults());
         let Ordered::Object(top) = &mut tree else {
             panic!()
         };

@@ -200,7 +200,10 @@ pub struct SynthOptions {
     pub opcodes: OpcodeMode,
     /// Burst frames and their motion (`--burst N`); absent from serialized options for a
     /// single frame, so single-frame sidecars and dataset fingerprints are unchanged.
-    #[serde(default, skip_serializing_if = "burst::BurstOptions::is_single")]
+    #[serde(
+        default = "options::burst_defaults",
+        skip_serializing_if = "burst::BurstOptions::is_single"
+    )]
     pub burst: burst::BurstOptions,
     /// Factor on the noise model's standard deviation at every ISO (`--noise-gain`; 1: the
     /// model as calibrated, absent from serialized options).
@@ -263,12 +266,6 @@ pub use crate::bounds::MAX_LIGHTS;
 impl SynthOptions {
     /// Error on out-of-range options.
     pub fn validate(&self) -> Result<()> {
-        if self.bulbs.unwrap_or(0) > MAX_LIGHTS || self.local_lights.unwrap_or(0) > MAX_LIGHTS {
-            return Err(Error::invalid(format!(
-                "at most {} lights or bulbs",
-                MAX_LIGHTS
-            )));
-        }
         for &iso in &self.isos {
             crate::bounds::iso("", iso)?;
         }
@@ -279,7 +276,7 @@ impl SynthOptions {
                 plan_bounds::MAX_NOISE_ENTRIES
             )));
         }
-        // the numbers' ranges of the option table
+        // the ranges of the option table (counts, numbers, the burst's)
         options::check_fields(self)?;
         if let MaskEval::Truncated { k } = self.mask_eval {
             if !(k > 0.0 && k.is_finite()) {
@@ -291,7 +288,6 @@ impl SynthOptions {
                 "compat.truncate_noise truncates the noisy raws when truncating: it needs truncate",
             ));
         }
-        self.burst.validate()?;
         let s = &self.sampler;
         if s.max_mahalanobis.is_nan()
             || s.max_mahalanobis <= 0.0

@@ -134,8 +134,9 @@ impl Plan {
 /// [`check_transform`](super::burst::checks::check_transform) checks it (the one check of a
 /// replayed transform: rigid, consistent with its pose, its valid rectangle allowed).
 fn burst(b: &BurstPlan, (w, h): (usize, usize), extent: f64) -> Result<()> {
-    use super::burst::checks::{check_transform, Names, TRANSLATION_TOLERANCE};
-    use super::burst::motion::{BurstOptions, MAX_FRAMES};
+    use super::burst::checks::{check_transform, TRANSLATION_TOLERANCE};
+    use super::burst::motion::BurstOptions;
+    use super::options::{check_fields_of, MAX_FRAMES};
     if !(2..=MAX_FRAMES).contains(&b.frames) || b.transforms.len() != b.frames as usize {
         return Err(field(
             "burst",
@@ -146,13 +147,21 @@ fn burst(b: &BurstPlan, (w, h): (usize, usize), extent: f64) -> Result<()> {
             ),
         ));
     }
-    BurstOptions {
-        frames: b.frames,
-        motion: b.motion,
-        shake: b.shake,
-        interp: b.interp,
-    }
-    .check(&Names::SIDECAR)?;
+    // the ranges of the burst's options, the option table's, named as the plan's fields
+    let options = super::SynthOptions {
+        burst: BurstOptions {
+            frames: b.frames,
+            motion: b.motion,
+            shake: b.shake,
+            interp: b.interp,
+        },
+        ..super::SynthOptions::default()
+    };
+    check_fields_of(
+        &options,
+        |d| d.sidecar.is_some_and(|f| f.starts_with("burst.")),
+        |d| format!("plan field {}", d.sidecar.unwrap_or(d.name)),
+    )?;
     let want = [(w as f64 - 1.0) / 2.0, (h as f64 - 1.0) / 2.0];
     for (k, &c) in b.centre.iter().enumerate() {
         in_range(&format!("burst.centre[{k}]"), c, -extent, extent)?;

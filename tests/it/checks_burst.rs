@@ -53,13 +53,13 @@ fn option_rules_and_messages_speak_in_flags_and_rounded_values() {
             "--shake-step has no effect with --motion none",
         ),
         (
-            vec!["--burst", "1", "--motion", "shake"],
+            vec!["--burst", "1", "--motion", "none"],
             "--motion needs a burst (--burst N with N > 1)",
         ),
         (vec!["--shake-step", "2"], "--shake-step needs a burst"),
         (
             vec!["--burst", "3", "--shake-step", "1e308"],
-            "--shake-step (px): 1e308 is outside [0, 1000]",
+            "--shake-step: 1e308 is outside 0..=1000",
         ),
     ] {
         let o = synth(&day, &out, &args);

@@ -256,3 +256,37 @@ fn convert_takes_its_output_as_an_argument_or_an_option() {
     let o = run(&["convert".as_ref(), input.as_os_str()]);
     assert_eq!(o.status.code(), Some(2));
 }
+
+/// docs/cli.md's conventions for a refused output: `day2night: <file>: <reason>` (the file
+/// first, then the refusal), exit code 1 (a refused output, not bad usage: issue 43).
+#[test]
+fn refused_outputs_name_the_file_first_and_exit_1() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = common::root().join("fixtures/day.dng");
+    let a = dir.path().join("a.dng");
+    std::fs::write(&a, b"not yet").unwrap();
+    let o = run(&["convert".as_ref(), input.as_os_str(), a.as_os_str()]);
+    assert_eq!(o.status.code(), Some(1), "{}", text(&o.stderr));
+    error_lines_have_the_form(&o, &a);
+    assert!(
+        text(&o.stderr).contains(": refusing to overwrite: it exists"),
+        "{}",
+        text(&o.stderr)
+    );
+    // a non-empty folder that is not a dataset
+    let days = dir.path().join("days");
+    std::fs::create_dir(&days).unwrap();
+    std::fs::copy(&input, days.join("day.dng")).unwrap();
+    let out = dir.path().join("out");
+    std::fs::create_dir(&out).unwrap();
+    std::fs::write(out.join("notes.txt"), b"mine").unwrap();
+    let o = run(&[
+        "dataset".as_ref(),
+        days.as_os_str(),
+        "-o".as_ref(),
+        out.as_os_str(),
+        "-q".as_ref(),
+    ]);
+    assert_eq!(o.status.code(), Some(1), "{}", text(&o.stderr));
+    error_lines_have_the_form(&o, &out);
+}

@@ -34,6 +34,7 @@ mod dng_opcodes;
 mod dng_read;
 mod dng_robustness;
 mod dng_roundtrip;
+mod docs_house;
 mod fixtures_reproducible;
 mod fuzz_regressions;
 mod isp_banded;

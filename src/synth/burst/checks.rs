@@ -1,13 +1,13 @@
 //! Every check of a burst, spelled once for every entry point (docs/synthesis.md, "Bursts"):
-//! the options as the command line and Python give them ([`BurstRequest::resolve`]), the
-//! shake step against the image size before the draw ([`check_step_fits`]), the frames'
-//! valid areas after it ([`valid_area_warnings`]), and a replayed sidecar's transforms
-//! ([`check_transform`]). Messages name the option in the caller's spelling ([`Names`]),
-//! the value rounded ([`crate::bounds::short`]) and the allowed range.
+//! the rules between its options ([`check_rules`]; each option's range and choices are the
+//! option table's, src/synth/options/table.rs, checked there), the shake step against the
+//! image size before the draw ([`check_step_fits`]), the frames' valid areas after it
+//! ([`valid_area_warnings`]), and a replayed sidecar's transforms ([`check_transform`]).
+//! Messages name the option in the caller's spelling, the value rounded
+//! ([`crate::bounds::short`]) and the allowed range.
 
 use super::interp::Interp;
-use super::motion::{rigid, valid_rect, BurstOptions, FrameTransform, Motion, MAX_FRAMES};
-use super::motion::{MAX_ROLL_DEG, MAX_STEP_PX};
+use super::motion::{rigid, valid_rect, BurstOptions, FrameTransform, Motion};
 use crate::bounds::short;
 use crate::diagnostics::{Code, Warning};
 use crate::error::{Error, Result};
@@ -27,181 +27,60 @@ pub const ROTATION_TOLERANCE: f64 = 1e-9;
 /// image's extent (rounding of sampled transforms is about 1e-13 px).
 pub const TRANSLATION_TOLERANCE: f64 = 1e-9;
 
-/// How the caller spells the burst options in messages.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct Names {
-    /// Frames per ISO.
-    pub burst: &'static str,
-    /// The motion model.
-    pub motion: &'static str,
-    /// The walk's translation step.
-    pub shake_step: &'static str,
-    /// The walk's rotation step.
-    pub shake_roll: &'static str,
-    /// The warp's interpolant.
-    pub warp_interp: &'static str,
+/// An option as a message names it where the caller is not known (the planner): both the
+/// flag and the Python keyword, `--shake-step (Python shake_step)`.
+pub fn either(flag: &str) -> String {
+    format!("--{flag} (Python {})", flag.replace('-', "_"))
 }
 
-impl Names {
-    /// The command line's flags.
-    pub const CLI: Names = Names {
-        burst: "--burst",
-        motion: "--motion",
-        shake_step: "--shake-step",
-        shake_roll: "--shake-roll",
-        warp_interp: "--warp-interp",
-    };
-    /// Python's keyword arguments.
-    pub const PYTHON: Names = Names {
-        burst: "burst",
-        motion: "motion",
-        shake_step: "shake_step",
-        shake_roll: "shake_roll",
-        warp_interp: "warp_interp",
-    };
-    /// A sidecar's plan fields (`synth --replay`).
-    pub const SIDECAR: Names = Names {
-        burst: "plan field burst.frames",
-        motion: "plan field burst.motion",
-        shake_step: "plan field burst.shake.step_px",
-        shake_roll: "plan field burst.shake.roll_deg",
-        warp_interp: "plan field burst.interp",
-    };
-    /// Both spellings, for checks run where the caller is not known (the planner).
-    pub const EITHER: Names = Names {
-        burst: "--burst (Python burst)",
-        motion: "--motion (Python motion)",
-        shake_step: "--shake-step (Python shake_step)",
-        shake_roll: "--shake-roll (Python shake_roll)",
-        warp_interp: "--warp-interp (Python warp_interp)",
-    };
-}
-
-/// The burst options as a caller gave them: `None` for an option not given.
-#[derive(Debug, Clone, Default, PartialEq)]
-pub struct BurstRequest {
-    /// Frames per ISO (`None`: 1).
-    pub frames: Option<i128>,
-    /// Motion model by name.
-    pub motion: Option<String>,
-    /// Shake step, px.
-    pub shake_step: Option<f64>,
-    /// Shake roll, degrees.
-    pub shake_roll: Option<f64>,
-    /// Interpolant by name.
-    pub warp_interp: Option<String>,
-}
-
-impl BurstRequest {
-    /// The options these values ask for, or the first error in `n`'s spelling: each value in
-    /// its range; the motion options only with a burst of more than one frame; the shake step
-    /// and roll only with `shake` motion (with `none` they would be ignored).
-    pub fn resolve(&self, n: &Names) -> Result<BurstOptions> {
-        let mut b = BurstOptions::default();
-        if let Some(f) = self.frames {
-            b.frames = u32::try_from(f)
-                .ok()
-                .filter(|f| (1..=MAX_FRAMES).contains(f))
-                .ok_or_else(|| {
-                    Error::invalid(format!(
-                        "{}: {f} is outside 1..={MAX_FRAMES} (frames per ISO)",
-                        n.burst
-                    ))
-                })?;
-        }
-        if let Some(m) = &self.motion {
-            b.motion = m
-                .parse()
-                .map_err(|_| Error::invalid(format!("{}: {m:?} (use none or shake)", n.motion)))?;
-        }
-        if let Some(k) = &self.warp_interp {
-            b.interp = k.parse::<Interp>().map_err(|_| {
-                Error::invalid(format!(
-                    "{}: {k:?} (use {})",
-                    n.warp_interp,
-                    Interp::ALL.map(|i| i.name()).join(", ")
-                ))
-            })?;
-        }
-        if let Some(v) = self.shake_step {
-            b.shake.step_px = v;
-        }
-        if let Some(v) = self.shake_roll {
-            b.shake.roll_deg = v;
-        }
-        b.check(n)?;
-        let given = [
-            (n.motion, self.motion.is_some()),
-            (n.shake_step, self.shake_step.is_some()),
-            (n.shake_roll, self.shake_roll.is_some()),
-            (n.warp_interp, self.warp_interp.is_some()),
+/// The rules between the burst options, which the option table's checks of each value
+/// (range, choice) cannot make: the motion options only with a burst of more than one
+/// frame, the shake step and roll only with `shake` motion (with `none` they would be
+/// ignored). An option at its default (`defaults`, the table's) changes nothing and is not
+/// refused. `spell` names an option (by its table name) as the caller spells it.
+pub fn check_rules(
+    b: &BurstOptions,
+    defaults: &BurstOptions,
+    spell: &dyn Fn(&str) -> String,
+) -> Result<()> {
+    let set = [
+        ("motion", b.motion != defaults.motion),
+        ("shake-step", b.shake.step_px != defaults.shake.step_px),
+        ("shake-roll", b.shake.roll_deg != defaults.shake.roll_deg),
+        ("warp-interp", b.interp != defaults.interp),
+    ];
+    let set: Vec<String> = set.iter().filter(|g| g.1).map(|g| spell(g.0)).collect();
+    let burst = spell("burst");
+    if b.is_single() && !set.is_empty() {
+        return Err(Error::invalid(format!(
+            "{} need{} a burst ({burst} N with N > 1); {burst} is {}",
+            set.join(", "),
+            if set.len() == 1 { "s" } else { "" },
+            b.frames
+        )));
+    }
+    if b.motion == Motion::None {
+        let shake = [
+            ("shake-step", b.shake.step_px != defaults.shake.step_px),
+            ("shake-roll", b.shake.roll_deg != defaults.shake.roll_deg),
         ];
-        let given: Vec<&str> = given.iter().filter(|g| g.1).map(|g| g.0).collect();
-        if b.is_single() && !given.is_empty() {
+        if let Some((name, _)) = shake.iter().find(|g| g.1) {
+            let motion = spell("motion");
             return Err(Error::invalid(format!(
-                "{} need{} a burst ({} N with N > 1); {} is {}",
-                given.join(", "),
-                if given.len() == 1 { "s" } else { "" },
-                n.burst,
-                n.burst,
-                b.frames
+                "{} has no effect with {motion} none (the frames do not move): drop it, or \
+                 use {motion} shake",
+                spell(name)
             )));
         }
-        if b.motion == Motion::None {
-            let shake = [
-                (n.shake_step, self.shake_step.is_some()),
-                (n.shake_roll, self.shake_roll.is_some()),
-            ];
-            if let Some((name, _)) = shake.iter().find(|g| g.1) {
-                return Err(Error::invalid(format!(
-                    "{name} has no effect with {} none (the frames do not move): drop it, or \
-                     use {} shake",
-                    n.motion, n.motion
-                )));
-            }
-        }
-        Ok(b)
     }
+    Ok(())
 }
 
-impl BurstOptions {
-    /// Error on out-of-range values ([`BurstOptions::check`], naming both the flag and the
-    /// Python argument).
-    pub fn validate(&self) -> Result<()> {
-        self.check(&Names::EITHER)
-    }
-
-    /// Error unless every value is in its range, naming the option in `n`'s spelling with
-    /// the value rounded.
-    pub fn check(&self, n: &Names) -> Result<()> {
-        if !(1..=MAX_FRAMES).contains(&self.frames) {
-            return Err(Error::invalid(format!(
-                "{}: {} is outside 1..={MAX_FRAMES} (frames per ISO)",
-                n.burst, self.frames
-            )));
-        }
-        let s = &self.shake;
-        crate::bounds::in_range(
-            &format!("{} (px)", n.shake_step),
-            s.step_px,
-            0.0,
-            MAX_STEP_PX,
-        )?;
-        crate::bounds::in_range(
-            &format!("{} (degrees)", n.shake_roll),
-            s.roll_deg,
-            0.0,
-            MAX_ROLL_DEG,
-        )
-    }
-}
-
-/// Error when a value of `opts` is out of its range, or its shake step is too large for a
-/// `w x h` active area: above
+/// Error when the shake step of `opts` (each value already in its range:
+/// [`crate::synth::SynthOptions::validate`]) is too large for a `w x h` active area: above
 /// [`MAX_STEP_FRACTION`] of its smaller side (for a burst that shakes). Called by the planner
 /// before [`super::motion::plan_burst`] draws anything.
 pub fn check_step_fits(opts: &BurstOptions, (w, h): (usize, usize)) -> Result<()> {
-    opts.validate()?;
     if opts.is_single() || opts.motion != Motion::Shake {
         return Ok(());
     }
@@ -210,7 +89,7 @@ pub fn check_step_fits(opts: &BurstOptions, (w, h): (usize, usize)) -> Result<()
         return Err(Error::invalid(format!(
             "{}: {} px is too large for the {w}x{h} active area (at most {} px, a quarter of \
              its smaller side; docs/synthesis.md, \"Bursts\")",
-            Names::EITHER.shake_step,
+            either("shake-step"),
             short(opts.shake.step_px),
             short(max)
         )));
@@ -243,7 +122,7 @@ pub fn valid_area_warnings(transforms: &[FrameTransform], (w, h): (usize, usize)
         small.len(),
         transforms.len(),
         small.join(", "),
-        Names::EITHER.shake_step
+        either("shake-step")
     );
     vec![Warning::new(Code::BurstValidArea, message)]
 }
@@ -385,7 +264,7 @@ mod tests {
                 step_px: 3.0,
                 roll_deg: 0.5,
             },
-            ..BurstOptions::default()
+            ..crate::synth::options::burst_defaults()
         };
         let wh = (120, 80);
         (plan_burst(&o, wh, (9, "a.dng", 0)).unwrap().unwrap(), wh)
@@ -469,34 +348,43 @@ mod tests {
     }
 
     #[test]
-    fn requests_follow_the_command_line_rules() {
-        let r = |f: Option<i128>, m: Option<&str>, s: Option<f64>| BurstRequest {
-            frames: f,
-            motion: m.map(String::from),
-            shake_step: s,
-            ..BurstRequest::default()
+    fn the_rules_between_the_options_name_them_as_the_caller_does() {
+        let d = crate::synth::options::burst_defaults();
+        let python = |n: &str| n.replace('-', "_");
+        let cli = |n: &str| format!("--{n}");
+        let e = |b: BurstOptions, spell: &dyn Fn(&str) -> String| {
+            check_rules(&b, &d, spell).unwrap_err().to_string()
         };
-        let e = |q: BurstRequest, n: &Names| q.resolve(n).unwrap_err().to_string();
-        let m = e(r(Some(1), Some("shake"), None), &Names::PYTHON);
+        let none = BurstOptions {
+            motion: Motion::None,
+            ..d
+        };
+        let m = e(none, &python);
         assert!(
             m.contains("motion needs a burst (burst N with N > 1)"),
             "{m}"
         );
-        let m = e(r(None, None, Some(2.0)), &Names::CLI);
+        let mut stepped = d;
+        stepped.shake.step_px = 2.0;
+        let m = e(stepped, &cli);
         assert!(m.contains("--shake-step needs a burst"), "{m}");
-        let m = e(r(Some(-1), None, None), &Names::PYTHON);
-        assert!(m.contains("burst: -1 is outside 1..=64"), "{m}");
-        let m = e(r(Some(3), Some("none"), Some(5.0)), &Names::CLI);
+        let m = e(
+            BurstOptions {
+                frames: 3,
+                ..BurstOptions {
+                    motion: Motion::None,
+                    ..stepped
+                }
+            },
+            &cli,
+        );
         assert!(
             m.contains("--shake-step has no effect with --motion none"),
             "{m}"
         );
-        let m = e(r(Some(3), None, Some(1e308)), &Names::CLI);
-        assert!(
-            m.contains("--shake-step (px): 1e308 is outside [0, 1000]"),
-            "{m}"
-        );
-        assert!(r(Some(3), Some("none"), None).resolve(&Names::CLI).is_ok());
+        // a value at its default changes nothing: not refused
+        check_rules(&d, &d, &cli).unwrap();
+        check_rules(&BurstOptions { frames: 3, ..none }, &d, &cli).unwrap();
     }
 
     #[test]
@@ -507,7 +395,7 @@ mod tests {
                 step_px: 50.0,
                 roll_deg: 0.0,
             },
-            ..BurstOptions::default()
+            ..crate::synth::options::burst_defaults()
         };
         let e = check_step_fits(&o, (64, 48)).unwrap_err().to_string();
         assert!(e.contains("64x48") && e.contains("at most 12 px"), "{e}");

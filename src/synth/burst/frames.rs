@@ -39,6 +39,14 @@ pub fn transform(plan: &Plan, frame: u32) -> Result<&FrameTransform> {
         .ok_or_else(|| Error::invalid(format!("the plan has no burst frame {frame}")))
 }
 
+/// The interpolant of the plan's burst (a frame other than 00 exists only in a burst).
+fn interp_of(plan: &Plan) -> Result<super::Interp> {
+    plan.burst
+        .as_ref()
+        .map(|b| b.interp)
+        .ok_or_else(|| Error::invalid("the plan has no burst"))
+}
+
 /// The noisy raw of frame `frame` at the plan's `index`-th ISO as rows made on demand,
 /// handed to `f` with its ISO and output metadata. Frame 0 is exactly the single-frame
 /// noisy raw ([`with_noisy_rows`]).
@@ -53,6 +61,7 @@ pub fn with_frame_rows<T>(
         return with_noisy_rows(clean, plan, index, f);
     }
     let t = transform(plan, frame)?;
+    let interp = interp_of(plan)?;
     let np = noise_plan(plan, index)?;
     let seed = frame_noise_seed(np.seed, frame);
     let meta = night_meta(&clean.meta, plan, np.iso, &np.params);
@@ -67,7 +76,6 @@ pub fn with_frame_rows<T>(
             rows: 0..a.height(),
             cols: 0..a.width(),
         };
-        let interp = plan.burst.as_ref().map(|b| b.interp).unwrap_or_default();
         Warper::new(src, &lv, t.inverse(), interp)
     });
     let run = |map: &dyn ActiveRowMap| {
@@ -138,9 +146,9 @@ impl RowSource for FrameRows<'_> {
 /// same region of the whole frame's clean samples.
 pub fn frame_clean_crop(day: &RawImage, plan: &Plan, crop: &Crop, frame: u32) -> Result<Vec<u16>> {
     let t = transform(plan, frame)?;
+    let interp = interp_of(plan)?;
     let (aw, ah) = (plan.active_width, plan.active_height);
     crop.check(aw, ah)?;
-    let interp = plan.burst.as_ref().map(|b| b.interp).unwrap_or_default();
     let inv = t.inverse();
     // the taps' window plus the demosaicer's neighbourhood, with even offsets
     let (wr, wc) = Warper::source_window(

@@ -4,14 +4,13 @@
 use serde::{Deserialize, Serialize};
 
 /// A separable interpolation kernel.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum Interp {
     /// Bilinear (2 taps per axis): blurs, no overshoot.
     Bilinear,
     /// Catmull-Rom cubic convolution (Keys 1981, a = -0.5; 4 taps per axis): interpolating,
-    /// third-order accurate (the default).
-    #[default]
+    /// third-order accurate.
     CatmullRom,
     /// Lanczos with 3 lobes (6 taps per axis), weights normalized to sum 1.
     Lanczos3,

@@ -21,21 +21,14 @@ use crate::synth::rng::{stream_key, SynthRng};
 use serde::{Deserialize, Serialize};
 use sha2::{Digest, Sha256};
 
-/// Most frames of a burst.
-pub const MAX_FRAMES: u32 = 64;
-/// Largest step of the translation walk (px per frame).
-pub const MAX_STEP_PX: f64 = 1000.0;
-/// Largest step of the rotation walk (degrees per frame).
-pub const MAX_ROLL_DEG: f64 = 5.0;
-
-/// The motion between the frames of a burst.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+/// The motion between the frames of a burst (`--motion`; its default is the option
+/// table's, src/synth/options/table.rs).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Motion {
     /// A tripod: every frame is the identity (frames differ by their noise only).
     None,
-    /// A hand-held camera: translation and roll as a random walk (the default).
-    #[default]
+    /// A hand-held camera: translation and roll as a random walk.
     Shake,
 }
 
@@ -50,8 +43,8 @@ impl std::str::FromStr for Motion {
     }
 }
 
-/// The hand-held walk's parameters (docs/synthesis.md, "Bursts": where the defaults come
-/// from).
+/// The hand-held walk's parameters (`--shake-step`, `--shake-roll`; docs/synthesis.md,
+/// "Bursts": where the defaults come from).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct Shake {
     /// Standard deviation of each frame's translation step, per axis, in pixels.
@@ -60,20 +53,14 @@ pub struct Shake {
     pub roll_deg: f64,
 }
 
-impl Default for Shake {
-    fn default() -> Shake {
-        Shake {
-            step_px: 0.6,
-            roll_deg: 0.015,
-        }
-    }
-}
-
 /// What a burst is made of (`synth --burst N --motion ...`); part of
 /// [`crate::synth::SynthOptions`], left out of serialized options for a single frame so
-/// that single-frame sidecars and dataset fingerprints are unchanged.
+/// that single-frame sidecars and dataset fingerprints are unchanged. Its defaults, ranges
+/// and choices are the option table's (src/synth/options/table.rs): the defaults are
+/// [`crate::synth::options::burst_defaults`], and a field a serialized burst lacks takes its
+/// default from there.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(default)]
+#[serde(default = "crate::synth::options::burst_defaults")]
 pub struct BurstOptions {
     /// Frames per ISO (1 = one noisy raw per ISO, as without a burst).
     pub frames: u32,
@@ -86,12 +73,18 @@ pub struct BurstOptions {
 }
 
 impl Default for BurstOptions {
+    /// The blank that [`crate::synth::SynthOptions`]'s defaults start from (no frame, no
+    /// motion), on which the option table sets its defaults; not the defaults themselves,
+    /// which are [`crate::synth::options::burst_defaults`].
     fn default() -> BurstOptions {
         BurstOptions {
-            frames: 1,
-            motion: Motion::Shake,
-            shake: Shake::default(),
-            interp: Interp::default(),
+            frames: 0,
+            motion: Motion::None,
+            shake: Shake {
+                step_px: 0.0,
+                roll_deg: 0.0,
+            },
+            interp: Interp::Bilinear,
         }
     }
 }
@@ -400,7 +393,7 @@ mod tests {
     fn the_walk_is_seeded_and_none_is_identity() {
         let o = BurstOptions {
             frames: 8,
-            ..BurstOptions::default()
+            ..crate::synth::options::burst_defaults()
         };
         let a = plan_burst(&o, (400, 300), (1, "a.dng", 0))
             .unwrap()
@@ -423,12 +416,20 @@ mod tests {
             .unwrap()
             .unwrap();
         assert!(p.transforms.iter().all(|t| t.is_identity()));
-        assert!(plan_burst(&BurstOptions::default(), (4, 4), (0, "x", 0))
-            .unwrap()
-            .is_none());
+        assert!(plan_burst(
+            &crate::synth::options::burst_defaults(),
+            (4, 4),
+            (0, "x", 0)
+        )
+        .unwrap()
+        .is_none());
         assert_eq!(frame_noise_seed(77, 0), 77);
         assert_ne!(frame_noise_seed(77, 1), frame_noise_seed(77, 2));
-        let bad = BurstOptions { frames: 65, ..o };
+        // a count out of the table's range is refused with the options (not here)
+        let bad = crate::synth::SynthOptions {
+            burst: BurstOptions { frames: 65, ..o },
+            ..Default::default()
+        };
         assert!(bad.validate().is_err());
     }
 }

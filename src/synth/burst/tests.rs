@@ -162,7 +162,7 @@ fn burst_plan(day: &RawImage, motion: Motion, physics: bool) -> Plan {
                 step_px: 3.0,
                 roll_deg: 0.3,
             },
-            ..BurstOptions::default()
+            ..crate::synth::options::burst_defaults()
         },
         ..SynthOptions::default()
     };

@@ -1,6 +1,7 @@
 //! The synthesis options, each declared once ([`OPTIONS`], in `table.rs`): its name, kind,
-//! default, range or choices, help text, how Python spells and reaches it, the sidecar field
-//! it lands in, and how its value sets a [`JobConfig`]. The command line's `synth` and
+//! default ([`OptDefault`]: a value, or an explicit "none"), range or choices, help text,
+//! how Python spells and reaches it, the sidecar field it lands in, and how its value sets a
+//! [`JobConfig`]. The command line's `synth` and
 //! `dataset` flags (src/cli/synth.rs), Python's keyword arguments (python/src/synth_options.rs)
 //! and the option lists of docs/cli.md and docs/python.md are made from this table, and a
 //! test (tests/it/cli_options.rs, python/tests/test_options_table.py) fails when one of them
@@ -13,13 +14,14 @@
 //! integer's or a number's range, a choice's name), [`Draft::finish`] applies what depends
 //! on several options (the release preset, the burst's checks) and checks the whole. The
 //! table's defaults are [`crate::synth::SynthOptions`]'s ([`with_defaults`]), and its number
-//! ranges are what [`crate::synth::SynthOptions::validate`] checks ([`check_fields`]).
+//! ranges are what [`crate::synth::SynthOptions::validate`] checks ([`check_fields`]). The
+//! burst's options are entries like the others: their defaults, ranges and choices are here,
+//! and src/synth/burst keeps only the rules between them ([`crate::synth::burst::checks`]).
 
 mod table;
 
-pub use table::{CONSTANTS, OPTIONS};
+pub use table::{CONSTANTS, MAX_FRAMES, MAX_ROLL_DEG, MAX_STEP_PX, OPTIONS};
 
-use super::burst::checks::{BurstRequest, Names};
 use super::config::JobConfig;
 use super::SynthOptions;
 use crate::bounds::short;
@@ -34,8 +36,7 @@ pub enum Kind {
     /// A switch: present or not (Python: a bool).
     Switch,
     /// An integer within `lo..=hi`, parsed on the command line as [`Width`] (its own
-    /// message for a value that does not fit). With `late`, Python checks only the type:
-    /// the range is part of a check of several options in [`Draft::finish`].
+    /// message for a value that does not fit); [`Draft::set`] checks the range.
     Int {
         /// Lowest value.
         lo: u64,
@@ -43,19 +44,20 @@ pub enum Kind {
         hi: u64,
         /// The command line's integer type.
         width: Width,
-        /// The range is checked in [`Draft::finish`], not by the front end.
-        late: bool,
+        /// The [`SynthOptions`] field it sets (unset: 0), which [`SynthOptions::validate`]
+        /// checks against `lo..=hi` (a sidecar can hold any value); None: not a field.
+        field: Option<fn(&SynthOptions) -> u64>,
     },
     /// A finite number within `range`, which [`Draft::set`] checks and the help shows.
     Float {
         /// The values it takes.
         range: Range,
         /// The [`SynthOptions`] field it sets, which [`SynthOptions::validate`] checks
-        /// against `range` (a sidecar can hold any value); None: not a field of its own
-        /// (a burst's, checked with the burst).
+        /// against `range` (a sidecar can hold any value); None: not a field.
         field: Option<fn(&SynthOptions) -> f64>,
     },
-    /// Text the setter parses (a list, a neutral, a mode with a parameter...).
+    /// Free text the setter parses. An option whose values are a fixed set of names is a
+    /// [`Kind::Choice`] instead (a test walks the table for it); no entry is text today.
     Text,
     /// A comma-separated list of ISOs, or `none` (Python: also an int or a sequence of ints).
     Isos,
@@ -71,7 +73,7 @@ pub enum Kind {
     },
     /// A file path (some options also take a name, e.g. `paper`).
     Path,
-    /// One of a few names.
+    /// One of a few names (a name may take a parameter, `truncated:K`, or have aliases).
     Choice(&'static [Choice]),
 }
 
@@ -98,6 +100,14 @@ impl Range {
         Range {
             lo: Bound::Excluded(lo),
             hi: Bound::Unbounded,
+        }
+    }
+
+    /// The numbers from `lo` to `hi`, both included.
+    pub const fn between(lo: f64, hi: f64) -> Range {
+        Range {
+            lo: Bound::Included(lo),
+            hi: Bound::Included(hi),
         }
     }
 
@@ -226,6 +236,53 @@ pub struct Choice {
     pub name: &'static str,
     /// What it means (one line).
     pub help: &'static str,
+    /// Other spellings of the same value (accepted, not listed).
+    pub aliases: &'static [&'static str],
+    /// The value as shown when the name takes a parameter, `name:PARAM` (`truncated:K`):
+    /// `name:` and any text are accepted, and the setter parses the text. None: the name
+    /// alone.
+    pub param: Option<&'static str>,
+}
+
+impl Choice {
+    /// A plain name: no alias, no parameter.
+    pub const fn new(name: &'static str, help: &'static str) -> Choice {
+        Choice {
+            name,
+            help,
+            aliases: &[],
+            param: None,
+        }
+    }
+
+    /// The value as a list of choices shows it (`truncated:K`).
+    pub fn shown(&self) -> &'static str {
+        self.param.unwrap_or(self.name)
+    }
+
+    /// Whether `text` spells this value: its name, an alias, or `name:...` when it takes a
+    /// parameter (the setter checks the parameter).
+    pub fn accepts(&self, text: &str) -> bool {
+        match self.param {
+            Some(_) => text
+                .strip_prefix(self.name)
+                .is_some_and(|rest| rest.starts_with(':')),
+            None => self.name == text || self.aliases.contains(&text),
+        }
+    }
+}
+
+/// An option's default: a value, or an explicit "none" (the option is unset unless given).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum OptDefault {
+    /// The default as typed on the command line (`--help` shows `[default: ...]`).
+    Value(&'static str),
+    /// None: the option is off unless given (a switch, a file not read, no preset).
+    Off,
+    /// None: unset unless given, and then worked out from the other options or the input as
+    /// the text says (`--help` shows `[default: <text>]`); e.g. `--bulbs`: 5 with the
+    /// release formula, 0 with the paper's.
+    Derived(&'static str),
 }
 
 /// Where Python reaches an option.
@@ -255,9 +312,8 @@ pub struct OptionDef {
     pub value_name: &'static str,
     /// What the value is.
     pub kind: Kind,
-    /// The default as typed on the command line (shown as `[default: ...]`); None: the
-    /// option is unset unless given (its help says what that means).
-    pub default: Option<&'static str>,
+    /// The default: a value, or an explicit none (off, or worked out as its text says).
+    pub default: OptDefault,
     /// Help text (one paragraph, no final period: the `--help` line).
     pub help: &'static str,
     /// Where Python reaches it.
@@ -280,11 +336,31 @@ impl OptionDef {
         self.name.replace('-', "_")
     }
 
+    /// The default's text as typed on the command line, or None when the option is unset by
+    /// default ([`OptDefault::Off`], [`OptDefault::Derived`]).
+    pub fn default_text(&self) -> Option<&'static str> {
+        match self.default {
+            OptDefault::Value(t) => Some(t),
+            OptDefault::Off | OptDefault::Derived(_) => None,
+        }
+    }
+
     /// The help text with what the kind says of the value: an integer's range when it is
     /// narrower than its type (`[range: 1..=64]`), a number's when it has a bound
-    /// (`[range: > 0]`). The range is written once, in the kind: [`Draft::set`] checks it
-    /// and the help shows it.
+    /// (`[range: > 0]`); and a default that is not a value (`[default: none]`, or how it is
+    /// worked out). The range is written once, in the kind: [`Draft::set`] checks it and the
+    /// help shows it; a value default is shown by the front end (clap's `[default: ...]`).
     pub fn help_text(&self) -> String {
+        let text = self.help_with_range();
+        match (self.default, self.kind) {
+            (OptDefault::Derived(how), _) => format!("{text} [default: {how}]"),
+            (OptDefault::Off, Kind::Switch) | (OptDefault::Value(_), _) => text,
+            (OptDefault::Off, _) => format!("{text} [default: none]"),
+        }
+    }
+
+    /// The help text with the kind's range.
+    fn help_with_range(&self) -> String {
         match self.kind {
             Kind::Int { lo, hi, width, .. } if (lo, hi) != (0, width.max()) => {
                 format!("{} [range: {lo}..={hi}]", self.help)
@@ -303,7 +379,7 @@ impl OptionDef {
     /// The default as the command line's parser hands it to [`Draft::set`] (an integer, a
     /// number, a path or text), or None when the option is unset by default.
     pub fn default_value(&self) -> Option<Value> {
-        let text = self.default?;
+        let text = self.default_text()?;
         Some(match self.kind {
             Kind::Int { .. } => text
                 .parse()
@@ -351,7 +427,6 @@ pub fn with_defaults(blank: SynthOptions) -> SynthOptions {
         replay: None,
         release: false,
         opcodes: None,
-        burst: BurstRequest::default(),
     };
     for def in OPTIONS.iter().filter(|d| d.sidecar.is_some()) {
         if let Some(v) = def.default_value() {
@@ -363,13 +438,48 @@ pub fn with_defaults(blank: SynthOptions) -> SynthOptions {
     draft.config.options
 }
 
-/// Error unless each field of `o` that a [`Kind::Float`] option sets is in the option's
-/// range: the one check of the range, as [`Draft::set`] makes it, for options that did not
-/// come through the table (a sidecar's, a library caller's). The message names the flag and
-/// the Python keyword.
+/// The burst options at the table's defaults (`SynthOptions::default().burst`; what a
+/// sidecar's burst without a field holds for it).
+pub fn burst_defaults() -> crate::synth::burst::BurstOptions {
+    SynthOptions::default().burst
+}
+
+/// Error unless each field of `o` that an [`Kind::Int`], [`Kind::Float`] or [`Kind::Pair`]
+/// option sets is in the option's range: the one check of the range, as [`Draft::set`]
+/// makes it, for options that did not come through the table (a sidecar's, a library
+/// caller's). The message names the flag and the Python keyword.
 pub fn check_fields(o: &SynthOptions) -> Result<()> {
-    for def in OPTIONS {
+    check_fields_of(
+        o,
+        |_| true,
+        |def| {
+            format!(
+                "{} (Python {})",
+                def.spelled(Spelling::Cli),
+                def.python_name()
+            )
+        },
+    )
+}
+
+/// [`check_fields`] for the options `which` selects, each named as `name` spells it (a
+/// sidecar's plan: `plan field burst.shake.step_px`).
+pub fn check_fields_of(
+    o: &SynthOptions,
+    which: impl Fn(&OptionDef) -> bool,
+    name: impl Fn(&OptionDef) -> String,
+) -> Result<()> {
+    for def in OPTIONS.iter().filter(|d| which(d)) {
         let fault = match def.kind {
+            Kind::Int {
+                lo,
+                hi,
+                field: Some(get),
+                ..
+            } => {
+                let n = get(o);
+                (!(lo..=hi).contains(&n)).then(|| format!("{n} is outside {lo}..={hi}"))
+            }
             Kind::Float {
                 range,
                 field: Some(get),
@@ -381,11 +491,7 @@ pub fn check_fields(o: &SynthOptions) -> Result<()> {
             _ => None,
         };
         if let Some(m) = fault {
-            return Err(Error::invalid(format!(
-                "{} (Python {}): {m}",
-                def.spelled(Spelling::Cli),
-                def.python_name()
-            )));
+            return Err(Error::invalid(format!("{}: {m}", name(def))));
         }
     }
     Ok(())
@@ -406,7 +512,7 @@ pub enum Value {
     Unset,
     /// A switch.
     Switch(bool),
-    /// An integer (Python's may be outside the range when it is checked late).
+    /// An integer (Python's may be outside the range: [`Draft::set`] checks it).
     Int(i128),
     /// A number.
     Float(f64),
@@ -462,8 +568,6 @@ pub struct Draft {
     release: bool,
     /// `--opcodes`, applied after the release preset.
     opcodes: Option<OpcodeMode>,
-    /// The burst options, checked together.
-    burst: BurstRequest,
 }
 
 impl Draft {
@@ -475,9 +579,8 @@ impl Draft {
     }
 
     /// Apply `value` to the option `def`; an error names the option in `spelling`. What
-    /// the kind says of the value is checked here, the one check of it: an integer's range
-    /// (a `late` range is part of a check of several options in [`Draft::finish`]), a
-    /// number's range, a choice's name (so a setter reads only names of its list).
+    /// the kind says of the value is checked here, the one check of it: an integer's range,
+    /// a number's range, a choice's name (so a setter reads only names of its list).
     pub fn set(
         &mut self,
         def: &OptionDef,
@@ -489,15 +592,9 @@ impl Draft {
             error,
         };
         match (def.kind, &value) {
-            (
-                Kind::Int {
-                    lo,
-                    hi,
-                    late: false,
-                    ..
-                },
-                Value::Int(n),
-            ) if *n < i128::from(lo) || *n > i128::from(hi) => {
+            (Kind::Int { lo, hi, .. }, Value::Int(n))
+                if *n < i128::from(lo) || *n > i128::from(hi) =>
+            {
                 return Err(named(Error::invalid(format!("{n} is outside {lo}..={hi}"))));
             }
             (Kind::Float { range, .. }, v) => {
@@ -510,8 +607,8 @@ impl Draft {
                     return Err(named(Error::invalid(m)));
                 }
             }
-            (Kind::Choice(choices), Value::Text(t)) if !choices.iter().any(|c| c.name == t) => {
-                let names: Vec<&str> = choices.iter().map(|c| c.name).collect();
+            (Kind::Choice(choices), Value::Text(t)) if !choices.iter().any(|c| c.accepts(t)) => {
+                let names: Vec<&str> = choices.iter().map(Choice::shown).collect();
                 let list = match names.split_last() {
                     Some((last, [])) => last.to_string(),
                     Some((last, rest)) => format!("{} or {last}", rest.join(", ")),
@@ -525,7 +622,7 @@ impl Draft {
     }
 
     /// The configuration: the release preset applied (it checks the options it fixes),
-    /// then `--opcodes`, the burst options checked together, the whole validated.
+    /// then `--opcodes`, the rules between the burst options, the whole validated.
     pub fn finish(mut self, spelling: Spelling) -> std::result::Result<JobConfig, OptionError> {
         let named = |name: &str, error: Error| OptionError {
             option: Some(match spelling {
@@ -547,15 +644,17 @@ impl Draft {
         if let Some(m) = self.opcodes {
             self.config.options.opcodes = m;
         }
-        let names = match spelling {
-            Spelling::Cli => Names::CLI,
-            Spelling::Python => Names::PYTHON,
-        };
         let whole = |error| OptionError {
             option: None,
             error,
         };
-        self.config.options.burst = self.burst.resolve(&names).map_err(whole)?;
+        let spell = |name: &str| find(name).map_or_else(|| name.into(), |d| d.spelled(spelling));
+        crate::synth::burst::checks::check_rules(
+            &self.config.options.burst,
+            &burst_defaults(),
+            &spell,
+        )
+        .map_err(whole)?;
         self.config.options.validate().map_err(whole)?;
         self.config
             .exr

@@ -2,14 +2,21 @@
 //! module). A new option is one entry here (docs/architecture.md, "Adding a synthesis
 //! option").
 
-use super::{Choice, Constant, Kind, OptionDef, Python, Range, Value, Width};
+use super::{Choice, Constant, Kind, OptDefault, OptionDef, Python, Range, Value, Width};
 use crate::bounds::{EXR_ZIP_LEVEL_RANGE, MAX_LIGHTS, SEED_RANGE};
 use crate::encode::exr::ExrCompression;
 use crate::error::{Error, Result};
-use crate::synth::burst::motion::MAX_FRAMES;
+use crate::synth::burst::{Interp, Motion};
 use crate::synth::config::{parse_isos, parse_neutral};
 use crate::synth::{Covariance, MaskEval, Mode, RelightFormula};
 use std::path::PathBuf;
+
+/// Most frames of a burst (`--burst`).
+pub const MAX_FRAMES: u32 = 64;
+/// Largest step of the hand-held walk's translation (`--shake-step`, px per frame).
+pub const MAX_STEP_PX: f64 = 1000.0;
+/// Largest step of the hand-held walk's rotation (`--shake-roll`, degrees per frame).
+pub const MAX_ROLL_DEG: f64 = 5.0;
 
 /// Every synthesis option, in the order `--help` lists them.
 pub static OPTIONS: &[OptionDef] = &[
@@ -20,9 +27,9 @@ pub static OPTIONS: &[OptionDef] = &[
             lo: SEED_RANGE.0,
             hi: SEED_RANGE.1,
             width: Width::U64,
-            late: false,
+            field: None,
         },
-        default: Some("0"),
+        default: OptDefault::Value("0"),
         help: "Master seed; each (input, variant) has its own random stream keyed by (seed, input \
 name, variant), never by position or thread count (dataset: the name is the path relative to \
 DAY_DIR)",
@@ -42,7 +49,7 @@ carries its seed)",
         name: "iso",
         value_name: "LIST|none",
         kind: Kind::Isos,
-        default: Some("1600,3200"),
+        default: OptDefault::Value("1600,3200"),
         help: "ISOs of the noisy outputs, comma-separated, or `none`",
         python: Python::Parameter,
         python_alias: None,
@@ -61,24 +68,12 @@ carries its seed)",
         name: "mode",
         value_name: "MODE",
         kind: Kind::Choice(&[
-            Choice {
-                name: "local",
-                help: "Several local lights (the paper's method)",
-            },
-            Choice {
-                name: "global",
-                help: "One night illuminant",
-            },
-            Choice {
-                name: "dimmed",
-                help: "Dimmed day image (baseline)",
-            },
-            Choice {
-                name: "day",
-                help: "The day image itself (baseline)",
-            },
+            Choice::new("local", "Several local lights (the paper's method)"),
+            Choice::new("global", "One night illuminant"),
+            Choice::new("dimmed", "Dimmed day image (baseline)"),
+            Choice::new("day", "The day image itself (baseline)"),
         ]),
-        default: Some("local"),
+        default: OptDefault::Value("local"),
         help: "Relighting mode",
         python: Python::Parameter,
         python_alias: None,
@@ -93,16 +88,10 @@ carries its seed)",
         name: "relight-formula",
         value_name: "RELIGHT_FORMULA",
         kind: Kind::Choice(&[
-            Choice {
-                name: "release",
-                help: "The authors' released code",
-            },
-            Choice {
-                name: "paper",
-                help: "The paper's equation",
-            },
+            Choice::new("release", "The authors' released code"),
+            Choice::new("paper", "The paper's equation"),
         ]),
-        default: Some("release"),
+        default: OptDefault::Value("release"),
         help: "Local relighting formula",
         python: Python::Keyword,
         python_alias: Some("formula"),
@@ -120,10 +109,10 @@ carries its seed)",
             lo: 0,
             hi: MAX_LIGHTS as u64,
             width: Width::U32,
-            late: false,
+            field: Some(|o| o.bulbs.map_or(0, u64::from)),
         },
-        default: None,
-        help: "Saturated bulbs (default 5 with the release formula, 0 with the paper's)",
+        default: OptDefault::Derived("5 with the release formula, 0 with the paper's"),
+        help: "Saturated bulbs",
         python: Python::Keyword,
         python_alias: None,
         synth_only: false,
@@ -140,10 +129,10 @@ carries its seed)",
             lo: 0,
             hi: MAX_LIGHTS as u64,
             width: Width::U32,
-            late: false,
+            field: Some(|o| o.local_lights.map_or(0, u64::from)),
         },
-        default: None,
-        help: "Local lights besides the ambient (default 4 release; paper: 4 to 6 drawn)",
+        default: OptDefault::Derived("4 with the release formula; the paper's draws 4 to 6"),
+        help: "Local lights besides the ambient",
         python: Python::Keyword,
         python_alias: None,
         synth_only: false,
@@ -160,7 +149,7 @@ carries its seed)",
             range: Range::at_least(0.0),
             field: Some(|o| o.ambient_gain),
         },
-        default: Some("0.05"),
+        default: OptDefault::Value("0.05"),
         help: "Gain of the ambient light in the release formula's local relighting (the authors' \
 released code)",
         python: Python::Keyword,
@@ -179,7 +168,7 @@ released code)",
             range: Range::at_least(0.0),
             field: Some(|o| o.bulb_gain),
         },
-        default: Some("50,100"),
+        default: OptDefault::Value("50,100"),
         help: "Range of the saturated bulbs' gain, each drawn uniformly (the authors' released \
 code)",
         python: Python::Keyword,
@@ -195,12 +184,13 @@ code)",
         name: "illuminants",
         value_name: "paper|cie|FILE.json",
         kind: Kind::Path,
-        default: None,
+        default: OptDefault::Derived(
+            "`paper` for the paper's phone (Samsung SM-G780*/SM-G781*) and under --compat \
+release, `cie` for every other camera",
+        ),
         help: "Night illuminant dictionary: `paper` (the paper phone's gray cards, its camera \
 RGB), `cie` (CIE 015:2018 night lamps through each file's colour matrices) or a JSON file \
-(camera neutrals, a Gaussian, xy lamps; `./paper` for a file named paper). Default: `paper` for \
-the paper's phone (Samsung SM-G780*/SM-G781*) and under --compat release, `cie` for every other \
-camera",
+(camera neutrals, a Gaussian, xy lamps; `./paper` for a file named paper)",
         python: Python::Keyword,
         python_alias: None,
         synth_only: false,
@@ -214,16 +204,10 @@ camera",
         name: "covariance",
         value_name: "COVARIANCE",
         kind: Kind::Choice(&[
-            Choice {
-                name: "unbiased",
-                help: "1/(M-1) (released code)",
-            },
-            Choice {
-                name: "ml",
-                help: "1/M (the paper's equation 2)",
-            },
+            Choice::new("unbiased", "1/(M-1) (released code)"),
+            Choice::new("ml", "1/M (the paper's equation 2)"),
         ]),
-        default: Some("unbiased"),
+        default: OptDefault::Value("unbiased"),
         help: "Illuminant covariance estimator",
         python: Python::Keyword,
         python_alias: None,
@@ -238,8 +222,8 @@ camera",
         name: "brightness",
         value_name: "FILE.json",
         kind: Kind::Path,
-        default: None,
-        help: "Night brightness dictionary (JSON): dim to a drawn mean instead of U(0.55, 0.9)",
+        default: OptDefault::Off,
+        help: "Night brightness dictionary (JSON): dim to a drawn mean instead of by --dim-range",
         python: Python::Keyword,
         python_alias: None,
         synth_only: false,
@@ -256,7 +240,7 @@ camera",
             range: Range::above(0.0),
             field: Some(|o| o.dim_range),
         },
-        default: Some("0.55,0.9"),
+        default: OptDefault::Value("0.55,0.9"),
         help: "Range of the uniform dimming factor without a brightness dictionary (the paper's \
 U(0.55, 0.9))",
         python: Python::Keyword,
@@ -272,10 +256,11 @@ U(0.55, 0.9))",
         name: "noise-model",
         value_name: "FILE.json",
         kind: Kind::Path,
-        default: None,
-        help: "Noise model (day2night-noise-model/1 JSON); default: the input's NoiseProfile, \
-else (the paper's phone: its embedded table) an estimate from the image at its ISO, else the \
-embedded paper phone table with a warning. See docs/noise.md",
+        default: OptDefault::Derived(
+            "the input's NoiseProfile, else (the paper's phone: its embedded table) an estimate \
+from the image at its ISO, else the embedded paper phone table with a warning",
+        ),
+        help: "Noise model (day2night-noise-model/1 JSON). See docs/noise.md",
         python: Python::Keyword,
         python_alias: None,
         synth_only: false,
@@ -292,7 +277,7 @@ embedded paper phone table with a warning. See docs/noise.md",
             range: Range::above(0.0),
             field: Some(|o| o.noise_gain),
         },
-        default: Some("1"),
+        default: OptDefault::Value("1"),
         help: "Factor on the noise model's standard deviation at every ISO (S and O times K^2; a \
 Gaussian model only): noisier or cleaner inputs than the calibrated camera at the same Exif ISO, \
 for a network robust to a noise calibration that is off",
@@ -309,7 +294,7 @@ for a network robust to a noise calibration that is off",
         name: "replay",
         value_name: "SIDECAR.json",
         kind: Kind::Path,
-        default: None,
+        default: OptDefault::Off,
         help: "Re-run a sidecar's plan on its input (one input): byte-identical outputs",
         python: Python::Absent("the command line's `synth` only: Python has no replay"),
         python_alias: None,
@@ -324,7 +309,7 @@ for a network robust to a noise calibration that is off",
         name: "day-neutral",
         value_name: "R,G,B",
         kind: Kind::Numbers(3),
-        default: None,
+        default: OptDefault::Derived("the input's AsShotNeutral"),
         help: "Day neutral r,g,b overriding (or replacing a missing) AsShotNeutral",
         python: Python::Keyword,
         python_alias: None,
@@ -345,10 +330,20 @@ for a network robust to a noise calibration that is off",
     OptionDef {
         name: "mask-eval",
         value_name: "MASK_EVAL",
-        kind: Kind::Text,
-        default: Some("separable"),
-        help: "Mask evaluation: separable (default), exact, truncated:K (K sigmas), or release \
-(the authors' sampled kernel resized bilinearly)",
+        kind: Kind::Choice(&[
+            Choice::new(
+                "separable",
+                "Each light's row and column factors (f32): the fastest",
+            ),
+            Choice::new("exact", "The 2-D exponential per pixel in f64 (reference)"),
+            Choice {
+                param: Some("truncated:K"),
+                ..Choice::new("truncated", "As exact, masks zeroed beyond K sigmas")
+            },
+            Choice::new("release", "The authors' sampled kernel resized bilinearly"),
+        ]),
+        default: OptDefault::Value("separable"),
+        help: "Mask evaluation",
         python: Python::Keyword,
         python_alias: None,
         synth_only: false,
@@ -361,11 +356,30 @@ for a network robust to a noise calibration that is off",
     OptionDef {
         name: "exr-compression",
         value_name: "KIND",
-        kind: Kind::Text,
-        default: Some("zip"),
-        help: "EXR compression (lossless: zip (default, the fastest), piz (slower; larger on \
-synth targets, smaller on noisy images), zips, rle, none; lossy for half: pxr24, b44, b44a). \
-See docs/benchmarks.md",
+        kind: Kind::Choice(&[
+            Choice {
+                aliases: &["zip16"],
+                ..Choice::new("zip", "Lossless, zlib in 16-row blocks: the fastest")
+            },
+            Choice::new(
+                "piz",
+                "Lossless wavelet: slower; larger on synth targets, smaller on noisy images",
+            ),
+            Choice {
+                aliases: &["zip1"],
+                ..Choice::new("zips", "Lossless, zlib row by row")
+            },
+            Choice::new("rle", "Lossless run-length"),
+            Choice {
+                aliases: &["uncompressed"],
+                ..Choice::new("none", "Uncompressed")
+            },
+            Choice::new("pxr24", "Lossy for half"),
+            Choice::new("b44", "Lossy for half: 4x4 blocks"),
+            Choice::new("b44a", "Lossy for half: b44, flat blocks smaller"),
+        ]),
+        default: OptDefault::Value("zip"),
+        help: "EXR compression. See docs/benchmarks.md",
         python: Python::Files,
         python_alias: None,
         synth_only: false,
@@ -382,11 +396,11 @@ See docs/benchmarks.md",
             lo: EXR_ZIP_LEVEL_RANGE.0 as u64,
             hi: EXR_ZIP_LEVEL_RANGE.1 as u64,
             width: Width::U8,
-            late: false,
+            field: None,
         },
-        default: Some("1"),
-        help: "Compression effort of zip/zips EXRs: 1 (default, fastest: day2night's run-length \
-+ Huffman encoder) or 2 to 9 (miniz_oxide's zlib levels: 6 is 1.4 % smaller, 9 is 2 % smaller, \
+        default: OptDefault::Value("1"),
+        help: "Compression effort of zip/zips EXRs: 1 (the fastest: day2night's run-length + \
+Huffman encoder) or 2 to 9 (miniz_oxide's zlib levels: 6 is 1.4 % smaller, 9 is 2 % smaller, \
 at 18x and 50x the compression time). Lossless at every level. See docs/benchmarks.md",
         python: Python::Files,
         python_alias: None,
@@ -403,10 +417,13 @@ at 18x and 50x the compression time). Lossless at every level. See docs/benchmar
     OptionDef {
         name: "opcodes",
         value_name: "MODE",
-        kind: Kind::Text,
-        default: None,
-        help: "DNG opcode lists of the input in the rendered targets and inputs: apply (default) \
-or ignore (implied by --compat release). The night DNGs keep the lists either way",
+        kind: Kind::Choice(&[
+            Choice::new("apply", "Apply them"),
+            Choice::new("ignore", "Ignore them (the authors' data preparation)"),
+        ]),
+        default: OptDefault::Derived("apply; ignore under --compat release"),
+        help: "DNG opcode lists of the input in the rendered targets and inputs. The night DNGs \
+keep the lists either way",
         python: Python::Keyword,
         python_alias: None,
         synth_only: false,
@@ -426,9 +443,9 @@ or ignore (implied by --compat release). The night DNGs keep the lists either wa
             lo: 1,
             hi: MAX_FRAMES as u64,
             width: Width::U32,
-            late: true,
+            field: Some(|o| u64::from(o.burst.frames)),
         },
-        default: Some("1"),
+        default: OptDefault::Value("1"),
         help: "Frames per ISO: a night burst of N noisy DNGs <stem>[_vK]_iso<ISO>_f<NN>.dng (1 = \
 one noisy DNG per ISO, as without a burst). See docs/synthesis.md, \"Bursts\"",
         python: Python::Keyword,
@@ -436,23 +453,31 @@ one noisy DNG per ISO, as without a burst). See docs/synthesis.md, \"Bursts\"",
         synth_only: false,
         sidecar: Some("burst.frames"),
         set: |d, v| {
-            d.burst.frames = Some(int(&v)?);
+            // in range: Draft::set checks the kind's
+            let n = int(&v)?;
+            d.config.options.burst.frames =
+                u32::try_from(n).map_err(|_| Error::invalid(format!("{n} is not a count")))?;
             Ok(())
         },
     },
     OptionDef {
         name: "motion",
-        value_name: "none|shake",
-        kind: Kind::Text,
-        default: None,
-        help: "Motion between the frames of a burst: none (a tripod) or shake (a hand-held \
-camera, the default)",
+        value_name: "MOTION",
+        kind: Kind::Choice(&[
+            Choice::new("none", "A tripod: the frames differ by their noise only"),
+            Choice::new(
+                "shake",
+                "A hand-held camera: translation and roll as a random walk",
+            ),
+        ]),
+        default: OptDefault::Value("shake"),
+        help: "Motion between the frames of a burst",
         python: Python::Keyword,
         python_alias: None,
         synth_only: false,
         sidecar: Some("burst.motion"),
         set: |d, v| {
-            d.burst.motion = opt(v, |v| text(&v))?;
+            d.config.options.burst.motion = text(&v)?.parse::<Motion>()?;
             Ok(())
         },
     },
@@ -460,18 +485,18 @@ camera, the default)",
         name: "shake-step",
         value_name: "PX",
         kind: Kind::Float {
-            range: Range::ANY,
-            field: None,
+            range: Range::between(0.0, MAX_STEP_PX),
+            field: Some(|o| o.burst.shake.step_px),
         },
-        default: None,
+        default: OptDefault::Value("0.6"),
         help: "Hand-held walk: standard deviation of each frame's translation step per axis, in \
-pixels [default: 0.6]",
+pixels",
         python: Python::Keyword,
         python_alias: None,
         synth_only: false,
         sidecar: Some("burst.shake.step_px"),
         set: |d, v| {
-            d.burst.shake_step = opt(v, |v| float(&v))?;
+            d.config.options.burst.shake.step_px = float(&v)?;
             Ok(())
         },
     },
@@ -479,33 +504,45 @@ pixels [default: 0.6]",
         name: "shake-roll",
         value_name: "DEG",
         kind: Kind::Float {
-            range: Range::ANY,
-            field: None,
+            range: Range::between(0.0, MAX_ROLL_DEG),
+            field: Some(|o| o.burst.shake.roll_deg),
         },
-        default: None,
-        help: "Hand-held walk: standard deviation of each frame's rotation step, in degrees \
-[default: 0.015]",
+        default: OptDefault::Value("0.015"),
+        help: "Hand-held walk: standard deviation of each frame's rotation step, in degrees",
         python: Python::Keyword,
         python_alias: None,
         synth_only: false,
         sidecar: Some("burst.shake.roll_deg"),
         set: |d, v| {
-            d.burst.shake_roll = opt(v, |v| float(&v))?;
+            d.config.options.burst.shake.roll_deg = float(&v)?;
             Ok(())
         },
     },
     OptionDef {
         name: "warp-interp",
         value_name: "KIND",
-        kind: Kind::Text,
-        default: None,
-        help: "Interpolant of the burst warp: catmull-rom (default), lanczos3 or bilinear",
+        kind: Kind::Choice(&[
+            Choice {
+                aliases: &["cubic"],
+                ..Choice::new(
+                    "catmull-rom",
+                    "Catmull-Rom cubic (4 taps per axis): interpolating, sharp",
+                )
+            },
+            Choice {
+                aliases: &["lanczos"],
+                ..Choice::new("lanczos3", "Lanczos, 3 lobes (6 taps per axis)")
+            },
+            Choice::new("bilinear", "Bilinear (2 taps per axis): blurs"),
+        ]),
+        default: OptDefault::Value("catmull-rom"),
+        help: "Interpolant of the burst warp",
         python: Python::Keyword,
         python_alias: None,
         synth_only: false,
         sidecar: Some("burst.interp"),
         set: |d, v| {
-            d.burst.warp_interp = opt(v, |v| text(&v))?;
+            d.config.options.burst.interp = text(&v)?.parse::<Interp>()?;
             Ok(())
         },
     },
@@ -513,24 +550,12 @@ pixels [default: 0.6]",
         name: "target",
         value_name: "TARGET",
         kind: Kind::Choice(&[
-            Choice {
-                name: "exr",
-                help: "Linear EXR",
-            },
-            Choice {
-                name: "png",
-                help: "sRGB PNG",
-            },
-            Choice {
-                name: "both",
-                help: "Both",
-            },
-            Choice {
-                name: "none",
-                help: "None",
-            },
+            Choice::new("exr", "Linear EXR"),
+            Choice::new("png", "sRGB PNG"),
+            Choice::new("both", "Both"),
+            Choice::new("none", "None"),
         ]),
-        default: Some("exr"),
+        default: OptDefault::Value("exr"),
         help: "Targets to render from the clean night raw",
         python: Python::Files,
         python_alias: None,
@@ -546,7 +571,7 @@ pixels [default: 0.6]",
         name: "input-exr",
         value_name: "",
         kind: Kind::Switch,
-        default: None,
+        default: OptDefault::Off,
         help: "Also write the network input (normalized, white-balanced, demosaiced noisy raw)",
         python: Python::Files,
         python_alias: None,
@@ -561,16 +586,10 @@ pixels [default: 0.6]",
         name: "compression",
         value_name: "COMPRESSION",
         kind: Kind::Choice(&[
-            Choice {
-                name: "none",
-                help: "Uncompressed",
-            },
-            Choice {
-                name: "ljpeg",
-                help: "Lossless JPEG",
-            },
+            Choice::new("none", "Uncompressed"),
+            Choice::new("ljpeg", "Lossless JPEG"),
         ]),
-        default: Some("none"),
+        default: OptDefault::Value("none"),
         help: "DNG compression",
         python: Python::Files,
         python_alias: None,
@@ -585,7 +604,7 @@ pixels [default: 0.6]",
         name: "truncate",
         value_name: "",
         kind: Kind::Switch,
-        default: None,
+        default: OptDefault::Off,
         help: "Truncate instead of rounding when denormalizing (released code, -0.5 DN bias)",
         python: Python::Keyword,
         python_alias: None,
@@ -599,11 +618,11 @@ pixels [default: 0.6]",
     OptionDef {
         name: "compat",
         value_name: "PRESET",
-        kind: Kind::Choice(&[Choice {
-            name: "release",
-            help: "The authors' released code where it is deterministic",
-        }]),
-        default: None,
+        kind: Kind::Choice(&[Choice::new(
+            "release",
+            "The authors' released code where it is deterministic",
+        )]),
+        default: OptDefault::Off,
         help: "Reproduce the authors' released code where it is deterministic: implies \
 --truncate and --mask-eval release, truncates the noisy raws too, divides by the day neutral as \
 stored (not normalized to green = 1), does not cut illuminant draws at Mahalanobis 3 and samples \
@@ -653,14 +672,6 @@ fn text(v: &Value) -> Result<String> {
     match v {
         Value::Text(s) => Ok(s.clone()),
         v => Err(Error::invalid(format!("{} is not text", shown(v)))),
-    }
-}
-
-/// None for [`Value::Unset`] (the option's default), else the value `f` reads.
-fn opt<T>(v: Value, f: impl FnOnce(Value) -> Result<T>) -> Result<Option<T>> {
-    match v {
-        Value::Unset => Ok(None),
-        v => f(v).map(Some),
     }
 }
 

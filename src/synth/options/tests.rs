@@ -41,7 +41,7 @@ fn names_are_unique_and_found() {
             "{}: help ends with a period",
             d.name
         );
-        if let (Kind::Choice(c), Some(v)) = (d.kind, d.default) {
+        if let (Kind::Choice(c), Some(v)) = (d.kind, d.default_text()) {
             assert!(c.iter().any(|c| c.name == v), "{}: default {v}", d.name);
         }
     }
@@ -54,7 +54,7 @@ fn serialized() -> serde_json::Value {
     let mut o = SynthOptions::default().release_compat().unwrap();
     o.burst = BurstOptions {
         frames: 3,
-        ..BurstOptions::default()
+        ..crate::synth::options::burst_defaults()
     };
     o.bulbs = Some(1);
     o.local_lights = Some(1);
@@ -167,7 +167,7 @@ fn new_options_set_their_fields() {
 #[test]
 fn ranges_are_written_once() {
     for d in OPTIONS {
-        if let Kind::Int { lo, hi, late, .. } = d.kind {
+        if let Kind::Int { lo, hi, .. } = d.kind {
             // the help shows the kind's range: the text does not spell it again
             for spelled in [format!("{lo} to {hi}"), format!("{lo}..={hi}")] {
                 assert!(
@@ -175,9 +175,6 @@ fn ranges_are_written_once() {
                     "{}: {spelled} in its help",
                     d.name
                 );
-            }
-            if late {
-                continue;
             }
             // and Draft::set checks it, naming the option
             let mut draft = Draft::new(1);
@@ -216,7 +213,7 @@ fn every_default_sets_its_field() {
             d.set(def, v, Spelling::Cli)
                 .unwrap_or_else(|e| panic!("{}: {e}", def.name));
         }
-        if let (Kind::Float { range, field }, Some(text)) = (def.kind, def.default) {
+        if let (Kind::Float { range, field }, Some(text)) = (def.kind, def.default_text()) {
             let x: f64 = text.parse().unwrap();
             assert!(
                 range.contains(x),
@@ -278,7 +275,7 @@ fn number_ranges_are_written_once() {
         let e = o.validate().unwrap_err().to_string();
         assert!(
             e.contains(&format!(
-                "--{} (Python {}): -1 is not",
+                "--{} (Python {}): -1 is ",
                 d.name,
                 d.python_name()
             )),
@@ -325,9 +322,13 @@ fn choices_are_checked_from_their_list() {
     for d in OPTIONS {
         if let Kind::Choice(choices) = d.kind {
             for c in choices {
+                let text = match c.param {
+                    Some(_) => format!("{}:3", c.name),
+                    None => c.name.to_string(),
+                };
                 let mut draft = Draft::new(1);
                 draft
-                    .set(d, Value::Text(c.name.into()), Spelling::Cli)
+                    .set(d, Value::Text(text), Spelling::Cli)
                     .unwrap_or_else(|e| panic!("{e}"));
             }
         }
@@ -359,7 +360,7 @@ fn pair_ranges_are_written_once() {
         );
         assert!(d.help_text().contains("[range: LO <= HI"), "{}", d.name);
         let default: Vec<f64> = d
-            .default
+            .default_text()
             .unwrap()
             .split(',')
             .map(|x| x.parse().unwrap())
@@ -402,4 +403,167 @@ fn pair_ranges_are_written_once() {
         .unwrap_err()
         .to_string();
     assert_eq!(e, "--bulb-gain: LO -1 is not >= 0");
+}
+
+#[test]
+fn every_entry_has_a_default_and_every_fixed_set_is_a_choice() {
+    // Issue 43: the table's defaults are values or an explicit none, never help text; an
+    // option whose values are a fixed set of names is a Choice (its names checked once).
+    for d in OPTIONS {
+        let help = d.help.to_ascii_lowercase();
+        assert!(
+            !help.contains("default"),
+            "{}: its help speaks of a default: give it in the entry's `default`",
+            d.name
+        );
+        match d.default {
+            OptDefault::Value(t) => {
+                assert!(!t.is_empty(), "{}", d.name);
+                let v = d.default_value().unwrap();
+                Draft::new(1)
+                    .set(d, v, Spelling::Cli)
+                    .unwrap_or_else(|e| panic!("{}: default {t:?}: {e}", d.name));
+            }
+            OptDefault::Derived(how) => assert!(!how.trim().is_empty(), "{}", d.name),
+            OptDefault::Off => {}
+        }
+        match d.kind {
+            Kind::Text => {
+                // free text: its help lists no names to pick from ("a, b or c")
+                assert!(
+                    !help.contains(" or ") && !help.contains("one of"),
+                    "{}: Kind::Text with a fixed set of values in its help: make it a Choice",
+                    d.name
+                );
+            }
+            Kind::Choice(choices) => {
+                for c in choices {
+                    let example = match c.param {
+                        Some(_) => format!("{}:1", c.name),
+                        None => c.name.to_string(),
+                    };
+                    assert!(c.accepts(&example), "{}: {}", d.name, c.name);
+                    for a in c.aliases {
+                        assert!(c.accepts(a), "{}: alias {a}", d.name);
+                    }
+                }
+                // and its help does not list them again
+                let listed = choices.iter().filter(|c| help.contains(c.name)).count();
+                assert!(listed < 2, "{}: its help lists its choices", d.name);
+            }
+            _ => {}
+        }
+    }
+    // the five that were text (issue 43)
+    for name in [
+        "mask-eval",
+        "exr-compression",
+        "opcodes",
+        "motion",
+        "warp-interp",
+    ] {
+        assert!(
+            matches!(find(name).unwrap().kind, Kind::Choice(_)),
+            "{name}"
+        );
+    }
+    assert!(!OPTIONS.iter().any(|d| matches!(d.kind, Kind::Text)));
+}
+
+#[test]
+fn a_choice_with_a_parameter_and_aliases_set() {
+    let mut d = Draft::new(1);
+    d.set(
+        find("mask-eval").unwrap(),
+        Value::Text("truncated:5".into()),
+        Spelling::Cli,
+    )
+    .unwrap();
+    d.set(
+        find("warp-interp").unwrap(),
+        Value::Text("cubic".into()),
+        Spelling::Cli,
+    )
+    .unwrap();
+    d.set(find("burst").unwrap(), Value::Int(3), Spelling::Cli)
+        .unwrap();
+    let o = d.finish(Spelling::Cli).unwrap().options;
+    assert_eq!(o.mask_eval, crate::synth::MaskEval::Truncated { k: 5.0 });
+    assert_eq!(o.burst.interp, crate::synth::burst::Interp::CatmullRom);
+    let e = Draft::new(1)
+        .set(
+            find("mask-eval").unwrap(),
+            Value::Text("fast".into()),
+            Spelling::Python,
+        )
+        .unwrap_err()
+        .to_string();
+    assert_eq!(
+        e,
+        "mask_eval: \"fast\" (use separable, exact, truncated:K or release)"
+    );
+    let e = Draft::new(1)
+        .set(
+            find("motion").unwrap(),
+            Value::Text("tripod".into()),
+            Spelling::Python,
+        )
+        .unwrap_err()
+        .to_string();
+    assert_eq!(e, "motion: \"tripod\" (use none or shake)");
+}
+
+#[test]
+fn the_burst_defaults_and_ranges_are_the_tables() {
+    let b = burst_defaults();
+    for (name, text) in [
+        ("burst", b.frames.to_string()),
+        ("shake-step", b.shake.step_px.to_string()),
+        ("shake-roll", b.shake.roll_deg.to_string()),
+        ("warp-interp", b.interp.name().to_string()),
+    ] {
+        assert_eq!(
+            find(name).unwrap().default_text(),
+            Some(text.as_str()),
+            "{name}"
+        );
+    }
+    assert_eq!(b.motion, crate::synth::burst::Motion::Shake);
+    // a sidecar's burst out of range is refused by the table's check, naming the option
+    let mut o = SynthOptions::default();
+    o.burst.frames = 65;
+    let e = o.validate().unwrap_err().to_string();
+    assert!(
+        e.contains("--burst (Python burst): 65 is outside 1..=64"),
+        "{e}"
+    );
+    o.burst.frames = 3;
+    o.burst.shake.roll_deg = 6.0;
+    let e = o.validate().unwrap_err().to_string();
+    assert!(
+        e.contains("--shake-roll (Python shake_roll): 6 is outside 0..=5"),
+        "{e}"
+    );
+    // a value at its default is not "given": passing every default is passing none
+    let mut d = Draft::new(1);
+    for def in OPTIONS {
+        if let Some(v) = def.default_value() {
+            d.set(def, v, Spelling::Python).unwrap();
+        }
+    }
+    assert_eq!(d.finish(Spelling::Python).unwrap(), JobConfig::default());
+}
+
+#[test]
+fn a_serialized_single_frame_reads_back_with_the_burst_defaults() {
+    // a single frame's JSON has no burst: reading it back must give the table's burst, not
+    // BurstOptions' blank (0 frames), or every sidecar's options would fail validate
+    let json = serde_json::to_string(&SynthOptions::default()).unwrap();
+    assert!(!json.contains("burst"));
+    let back: SynthOptions = serde_json::from_str(&json).unwrap();
+    assert_eq!(back, SynthOptions::default());
+    back.validate().unwrap();
+    let partial: crate::synth::burst::BurstOptions =
+        serde_json::from_str(r#"{"frames": 3}"#).unwrap();
+    assert_eq!(partial.shake, burst_defaults().shake);
 }
