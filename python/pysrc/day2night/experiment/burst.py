@@ -27,7 +27,7 @@ from . import rows as rows_mod
 from ..train.scores import score
 from ..train.targets import render_target
 from .realset import sha256_file
-from .unit import _report_images
+from .unit import _num, _report_images
 from .config import ExperimentError
 
 ROW = "burst"
@@ -204,15 +204,6 @@ def prediction(merged, y, geometry, targets):
         raise ExperimentError(f"{merged.file_name}: the burst mean's {targets} render does "
                               f"not cover the target's pixel grid ({y.shape[1]}x{y.shape[0]})")
     return got
-
-
-def _num(v):
-    f = float(v)
-    if f != f:
-        return "nan"
-    if f in (float("inf"), float("-inf")):
-        return "inf" if f > 0 else "-inf"
-    return f
 
 
 def score_scene(bursts, target, targets):
