@@ -87,7 +87,7 @@ pub fn oriented_source(
     }
 }
 
-/// Where the pixels of a rendered image come from: [`super::render`]'s DefaultCrop and
+/// Where the pixels of a rendered image come from: [`super::render()`]'s DefaultCrop and
 /// Orientation of an active area, as a map from displayed pixels to active-area sites (for
 /// drawing things computed in active-area coordinates, e.g. light masks, over a render).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

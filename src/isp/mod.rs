@@ -5,7 +5,7 @@
 //! normalize (the shared [`crate::normalize`] path), white balance by the neutral,
 //! demosaic ([`demosaic`]), camera -> XYZ (D50) -> linear sRGB/Rec.709 (D65) per DNG
 //! chapter 6 ([`color`], on the maths of [`crate::color`]), DefaultCrop and orientation.
-//! [`render`] runs it: an options record ([`RenderOptions`]) and an execution choice
+//! [`render()`] runs it: an options record ([`RenderOptions`]) and an execution choice
 //! ([`Execution`]: whole frame, bands, a crop). Display encodings (the sRGB OETF of
 //! [`crate::color::srgb`], the release's gamma + smoothstep tone) are in [`tone`].
 //! [`release`] is the authors' release ISP itself, stage for stage (`render --isp release`).

@@ -1,7 +1,7 @@
 //! The render pipeline's public API: one [`RenderOptions`] record (what to make) and one
 //! [`Execution`] (how to run it): [`render`], [`render_with`], [`render_bands`] and
 //! [`render_crop`]. Every execution runs the stages of [`STAGES`] in that order, taken from
-//! one [`Plan`] (see [`super::stages`] and docs/isp.md, "The pipeline"):
+//! one `Plan` (see [`super::stages`] and docs/isp.md, "The pipeline"):
 //!
 //! * the whole frame ([`Execution::WholeFrame`]): every stage on whole images, the
 //!   reference the others equal bit for bit;

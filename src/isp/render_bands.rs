@@ -1,7 +1,7 @@
 //! The banded render: the output geometry cut into bands (`place`: DefaultCrop and
 //! orientation, each band asking for the active-area rectangle it shows), the plain path's
 //! rectangle renderer (`banded`: normalize, white balance, demosaic, `post`), and the
-//! band-wise consumer of the render ([`bands_with`], behind
+//! band-wise consumer of the render (`bands_with`, behind
 //! [`render_bands`](super::render::render_bands)) that `synth` and `render` write their
 //! targets from: the bands executions of the pipeline. Files with opcodes take
 //! `super::opcodes::banded`'s rectangle renderer through the same `place`.

@@ -1,12 +1,12 @@
-//! The render pipeline as one ordered list of named stages ([`STAGES`]), and the [`Plan`]
+//! The render pipeline as one ordered list of named stages ([`STAGES`]), and the `Plan`
 //! every execution of a render ([`super::render::Execution`]: whole frame, bands, a crop,
 //! the LinearRaw form) takes its stages from (docs/isp.md, "The pipeline").
 //!
-//! A [`Plan`] is made once per render from the image and the [`RenderOptions`]: the
+//! A `Plan` is made once per render from the image and the [`RenderOptions`]: the
 //! neutral, the prepared opcode lists, the normalizer, the demosaicer, the colour stage,
 //! DefaultCrop and orientation. An execution asks the plan for each stage it runs (one
 //! accessor per stage, which records the asking); the render checks, when the execution
-//! returns, that it asked for every stage of [`STAGES`] ([`Plan::missing`]), and
+//! returns, that it asked for every stage of [`STAGES`] (`Plan::missing`), and
 //! [`super::render::render_with`] reports the stages it ran, so a test sees a stage that one
 //! execution runs and another does not. A stage the options turn off (`crop: false`, the
 //! opcodes ignored or absent) is asked for and runs as the identity.

@@ -6,7 +6,7 @@
 //! ([`prepare`]), and holds one file per opcode family: [`area`] (MapTable, MapPolynomial,
 //! Delta/Scale per row/column), [`gain_map`], [`vignette`], [`bad_pixels`], [`warp`]
 //! (WarpRectilinear, WarpFisheye) and [`trim`]. [`pipeline`] runs the stages for the
-//! renders of [`crate::isp::render`] and [`crate::isp::render_crop`].
+//! renders of [`crate::isp::render()`] and [`crate::isp::render_crop()`].
 //!
 //! Coordinates, as in the SDK: OpcodeList1 in stored-image coordinates (the whole stored
 //! image); OpcodeList2 and OpcodeList3 in active-area coordinates (the SDK's stage-2 image

@@ -12,7 +12,7 @@
 //!
 //! Only files with applicable opcodes take this path ([`super::active`]); it holds a
 //! normalized CFA plane and the RGB image of the active area (no banding). A crop's render
-//! ([`render_crop`]) computes the same expressions on the crop's rectangle, so it equals the
+//! (`render_crop`) computes the same expressions on the crop's rectangle, so it equals the
 //! frame render's region bit for bit, when every applied opcode is pointwise
 //! ([`super::Prepared::needs_whole_frame`]).
 
