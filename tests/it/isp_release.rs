@@ -146,7 +146,9 @@ fn contradictory_flags_are_refused() {
     let o = render_release(&day, &tif, &[]);
     assert!(!o.status.success() && !tif.exists());
     let o = cli("render", &day, &out, &["--isp", "libraw"]);
-    assert!(String::from_utf8_lossy(&o.stderr).contains("--isp libraw"));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(err.contains("'libraw'") && err.contains("--isp") && err.contains("release"));
 }
 
 /// Every file under `dir` whose name ends with `suffix`.
