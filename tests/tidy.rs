@@ -49,19 +49,7 @@ const PY_STRICT_FN_MAX: usize = 60;
 const PY_CLASS_MAX: usize = 150;
 
 /// Exceptions: (rule, file, reason). Every entry is a debt to pay back, not a rule.
-const ALLOW: &[(&str, &str, &str)] = &[
-    (
-        "py-import",
-        "python/pysrc/day2night/experiment/folds.py",
-        "its function-level import of release_folds hides the cycle below; helper \"folds\" \
-         (issue 43) rewrites folds.py and release_folds.py and breaks it",
-    ),
-    (
-        "py-cycle",
-        "python/pysrc/day2night/experiment/folds.py",
-        "folds.py <-> release_folds.py: helper \"folds\" (issue 43) breaks this cycle",
-    ),
-];
+const ALLOW: &[(&str, &str, &str)] = &[];
 
 /// One broken rule.
 #[derive(Debug, Clone, PartialEq, Eq, PartialOrd, Ord)]

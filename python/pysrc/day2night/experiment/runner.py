@@ -78,28 +78,7 @@ class Experiment:
         self.report_scenes, why = report.scenes_to_show(self.plan.splits, c.show)
         if why:
             log(why)
-        self._log_setup()
-
-    def _log_setup(self):
-        c, i = self.config, self.inputs
-        log(
-            f"{len(i.scenes)} real scenes, {len(i.days)} day images ({len(i.day_train)} train, "
-            f"{len(i.day_val)} val), {c.folds} folds, tasks {', '.join(self.tasks)}"
-        )
-        for note in protocol.notes(c, i.days, i.scenes, self.target_isps):
-            log(note)
-        if c.seeds > 1:
-            log(f"training seeds {', '.join(map(str, c.seed_list))} (folds and synthetic data "
-                f"of seed {c.seed})")
-        if c.label == "smoke":
-            log(
-                f"SMOKE RUN: network width {c.width} < 32 (the paper's UNet has 32); "
-                "its numbers are not the paper's"
-            )
-        elif c.label != "paper":
-            what = "MINI PRESET" if c.label == "mini" else "CUSTOM SETTINGS"
-            log(f"{what}: network width {c.width}, {c.epochs} epochs (the paper's: 32, 500); "
-                "its numbers are not the paper's")
+        log_setup(self.config, self.inputs, self.tasks, self.target_isps)
 
     def work(self):
         """Every unit of one seed, in order: (task, row, fold, split); the untrained row
@@ -192,3 +171,26 @@ class Experiment:
         report.write(self.out, t, self.tasks, self.report_scenes, self.config.show)
         log(f"wrote {self.out / 'table.md'}, table.json and index.html")
         return t
+
+
+def log_setup(c, i, tasks, target_isps):
+    """The run's opening lines: what it runs on, the protocol's notes, the seeds and how it
+    differs from the paper (``c`` the config, ``i`` prepare.Inputs)."""
+    log(
+        f"{len(i.scenes)} real scenes, {len(i.days)} day images ({len(i.day_train)} train, "
+        f"{len(i.day_val)} val), {c.folds} folds, tasks {', '.join(tasks)}"
+    )
+    for note in protocol.notes(c, i.days, i.scenes, target_isps):
+        log(note)
+    if c.seeds > 1:
+        log(f"training seeds {', '.join(map(str, c.seed_list))} (folds and synthetic data "
+            f"of seed {c.seed})")
+    if c.label == "smoke":
+        log(
+            f"SMOKE RUN: network width {c.width} < 32 (the paper's UNet has 32); "
+            "its numbers are not the paper's"
+        )
+    elif c.label != "paper":
+        what = "MINI PRESET" if c.label == "mini" else "CUSTOM SETTINGS"
+        log(f"{what}: network width {c.width}, {c.epochs} epochs (the paper's: 32, 500); "
+            "its numbers are not the paper's")
