@@ -58,14 +58,15 @@ def test_burst_options_follow_the_command_line_rules(raw, opts, exc, words):
 def test_the_same_rules_as_the_command_line(cli, day_dng, tmp_path):
     """Each pair: the command line refuses iff Python refuses."""
     raw = day2night.read_dng(day_dng)
-    for flags, kwargs in [
+    for i, (flags, kwargs) in enumerate([
         (["--burst", "1", "--motion", "shake"], dict(burst=1, motion="shake")),
         (["--shake-step", "2"], dict(shake_step=2.0)),
         (["--burst", "3", "--motion", "none", "--shake-step", "5"],
          dict(burst=3, motion="none", shake_step=5.0)),
         (["--burst", "2", "--motion", "none"], dict(burst=2, motion="none")),
-    ]:
-        r = cli("synth", day_dng, "-o", tmp_path / "o", "--iso", "1600", "--target", "none",
+    ]):
+        # a folder per case: an accepted case writes its outputs
+        r = cli("synth", day_dng, "-o", tmp_path / f"o{i}", "--iso", "1600", "--target", "none",
                 *flags, check=False)
         try:
             synth(raw, **kwargs)

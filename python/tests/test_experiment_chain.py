@@ -178,8 +178,9 @@ def test_one_seed_keeps_the_run_folder_layout(full_run):
         units = sorted(p.name for p in (out / "units" / task).iterdir())
         assert units == sorted(["untrained", "day", "dimmed", "global", "ours", "mix5", "mix10",
                                 "supervised", "fresh"])
+        # the scores and the options record of the unit (records.py), no model/
         assert sorted(p.name for p in (out / "units" / task / "untrained" / "all").iterdir()) \
-            == ["scores.json"]
+            == ["options.json", "scores.json"]
         s = json.loads((out / "units" / task / "ours" / "all" / "scores.json").read_text())
         assert sorted(s) == ["fold", "history", "images", "initial", "row", "task",
                              "test_scenes", "train_pairs", "val_pairs"]
