@@ -431,7 +431,9 @@ def markdown(t):
     return "\n".join(lines) + "\n"
 
 
-def write(out, t):
-    """RUN/table.json and RUN/table.md of the table ``t`` (:func:`build`'s)."""
+def write(out, t, md=None):
+    """RUN/table.json and RUN/table.md of the table ``t`` (:func:`build`'s; ``md``: its
+    :func:`markdown`, when already made)."""
+    md = markdown(t) if md is None else md
     write_json(pathlib.Path(out) / "table.json", t)
-    write_text(pathlib.Path(out) / "table.md", markdown(t))
+    write_text(pathlib.Path(out) / "table.md", md)
