@@ -4,7 +4,8 @@ trained: a file that cannot be used is a :class:`RunFolderError` naming it and s
 do (delete the file or the unit folder, or rerun with ``--restart-unit TASK/ROW/FOLD``).
 
 - ``config.json``, ``folds.json``, ``units/.../scores.json``: a JSON object of the expected
-  shape (a list, a number or garbage is refused);
+  shape (a list, a number or garbage is refused); a unit's scores each within its metric's
+  range, its history and initial validation drawable (scorecheck.py);
 - ``data/**/*.npy``: a complete ``.npy`` file (the header's shape and dtype times the item
   size is the file's size), input stores (``.in.npy``, ``day2night.train.cache``: header,
   version and size) or float32 H x W x 3 inputs of the first format beside uint8 H x W x 3
