@@ -585,5 +585,7 @@ fn a_scene_id_too_long_for_its_file_names_is_refused_before_anything_is_written(
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
     assert_eq!(meta(&out, &fits)["scene"], fits.as_str());
     assert_eq!(manifest(&out).len(), 1);
-    assert!(out.join(format!("real/noisy_raw/{fits}_iso3200.dng")).is_file());
+    assert!(out
+        .join(format!("real/noisy_raw/{fits}_iso3200.dng"))
+        .is_file());
 }
