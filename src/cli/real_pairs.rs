@@ -148,6 +148,16 @@ pub fn run(args: RealPairsArgs) -> CmdResult {
         on_scene: (!args.run.quiet).then_some(scene_line as fn(&realpairs::SceneDone<'_>)),
         checkpoint: None,
     };
+    // a scene id too long for its file names is bad usage (exit 2), found before the run
+    if let Err(e) = realpairs::discover::find_scenes(
+        &opts.scenes_dir,
+        std::slice::from_ref(&opts.out_dir),
+        pairs.layout,
+    ) {
+        if matches!(e.root(), day2night::error::Error::Limits(_)) {
+            return Err(usage(e));
+        }
+    }
     let summary = realpairs::run(&opts, &pairs)?;
     args.run.print_summary(&summary.describe(), &summary)?;
     args.out.fail_on(summary.failed, summary.scenes, "scenes")

@@ -157,10 +157,12 @@ pub fn find_scenes(
     if layout == Layout::ReleaseProcessed {
         let scenes = processed_scenes(root)?;
         check_unique_ids(root, &scenes)?;
+        check_id_lengths(&scenes)?;
         return Ok((layout, scenes));
     }
     let scenes = scene_folders(root, exclude)?;
     check_unique_ids(root, &scenes)?;
+    check_id_lengths(&scenes)?;
     let named = scenes
         .iter()
         .flat_map(|s| &s.files)
@@ -195,6 +197,26 @@ fn check_unique_ids(root: &Path, scenes: &[SceneDir]) -> Result<()> {
         }
     }
     Ok(())
+}
+
+/// Longest scene id, in bytes: a file name holds at most 255 bytes, and the longest name
+/// made from an id is the temporary name of a noisy input, `.<id>_iso<ISO>.dng.tmp-<pid>`
+/// (an ISO of up to 10 digits, a process id of up to 7: 31 bytes besides the id).
+pub const ID_MAX_BYTES: usize = 255 - ".tmp-".len() - 1 - 7 - "_iso".len() - 10 - ".dng".len();
+
+/// Error ([`Error::Limits`]) when a scene's output id ([`scene_id`]) is longer than
+/// [`ID_MAX_BYTES`]: its files could not be written (the file system's name limit). Checked
+/// before anything is written, naming the folder.
+fn check_id_lengths(scenes: &[SceneDir]) -> Result<()> {
+    match scenes.iter().find(|s| s.id.len() > ID_MAX_BYTES) {
+        Some(s) => Err(Error::Limits(format!(
+            "scene {:?}: its output id is {} bytes, longer than the {ID_MAX_BYTES} its file names allow (255 bytes per name, with the temporary suffix): rename the folder or file to a shorter name",
+            s.rel,
+            s.id.len()
+        ))
+        .in_file(&s.path)),
+        None => Ok(()),
+    }
 }
 
 fn file_name(rel: &str) -> &str {

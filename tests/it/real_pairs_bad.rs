@@ -554,3 +554,38 @@ fn the_release_renders_are_targets_of_the_scenes_size() {
         );
     }
 }
+
+/// A scene id longer than its file names allow (issue 47): a 225-byte folder name is refused
+/// before anything is written (exit 2, one line naming the folder and the fix); 224 bytes,
+/// the longest ([`realpairs::discover::ID_MAX_BYTES`]), are made, temporary names included.
+#[test]
+fn a_scene_id_too_long_for_its_file_names_is_refused_before_anything_is_written() {
+    assert_eq!(realpairs::discover::ID_MAX_BYTES, 224);
+    let d = tempfile::tempdir().unwrap();
+    let s = d.path().join("synth");
+    synth(&s, 2, &["--motion", "none"]);
+    let long = "n".repeat(225);
+    let root = d.path().join("long");
+    simple_scene(&root.join(&long), &s);
+    let out = d.path().join("out_long");
+    let o = real_pairs(&root, &out, &[]);
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert_eq!(err.trim().lines().count(), 1, "{err}");
+    assert!(
+        err.contains("225 bytes") && err.contains("224") && err.contains("rename"),
+        "{err}"
+    );
+    assert!(!out.exists(), "{:?}", files_under(&out));
+    let fits = "n".repeat(224);
+    let root = d.path().join("fits");
+    simple_scene(&root.join(&fits), &s);
+    let out = d.path().join("out_fits");
+    let o = real_pairs(&root, &out, &[]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    assert_eq!(meta(&out, &fits)["scene"], fits.as_str());
+    assert_eq!(manifest(&out).len(), 1);
+    assert!(out
+        .join(format!("real/noisy_raw/{fits}_iso3200.dng"))
+        .is_file());
+}

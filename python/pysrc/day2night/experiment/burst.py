@@ -22,7 +22,7 @@ import day2night
 
 from ..isos import NOISY_ISOS
 from ..atomic import write_json
-from . import pairs
+from . import names, pairs
 from . import rows as rows_mod
 from ..train.scores import score
 from ..train.targets import render_target
@@ -246,8 +246,8 @@ def run_unit(out, config, inputs, target_isps, source=None, report_scenes=(), lo
             images.append({"scene": sid, **rec})
             if source is not None and sid in report_scenes:
                 x = pairs.load(source.real(sid, iso)[0])
-                _report_images(pathlib.Path(out) / "img" / TASK, ROW, f"{sid}_{iso}", x, y,
-                               pred)
+                _report_images(pathlib.Path(out) / "img" / TASK, ROW,
+                               names.image_stem(sid, iso), x, y, pred)
     write_json(udir / "scores.json", {
         "task": TASK, "row": ROW, "fold": "all", "seed": None, "history": [], "initial": {},
         "images": images, "train_pairs": 0, "val_pairs": 0, "test_scenes": test,

@@ -35,6 +35,8 @@ class ExperimentError(ValueError):
     """Bad input of the experiment (the message names the file, scene or option)."""
 
 
+#: The most training seeds of ``--seeds`` (each one trains every unit again).
+MAX_SEEDS = 1000
 #: The sources a field's ``default_from`` may name (anything else is a value).
 SOURCES = (FROM_PRESET, FROM_PROTOCOL, FROM_REAL_SET, FROM_FOLD_FILE)
 
@@ -73,8 +75,8 @@ class ExperimentConfig:
     seed: int = opt(0, help="seed of the folds, the synthetic data and the first training "
                     "seed", record="always")
     seeds: int = opt(1, help="train every unit with N seeds: --seed, --seed+1, ..., "
-                     "--seed+N-1 (the folds and synthetic data stay those of --seed; the "
-                     "spread measures training variance, shown in the intervals)",
+                     "--seed+N-1 (1 to 1000; the folds and synthetic data stay those of "
+                     "--seed; the spread measures training variance, shown in the intervals)",
                      group=TRAINING, record="paper", paper=1, metavar="N")
     compare_to: str = opt(help="reference row of the table's paired comparisons (default: "
                           "day, the row the paper's claims are made against; untrained when "
@@ -250,9 +252,9 @@ def check_options(c):
         raise ExperimentError(f"--device {c.device!r}: use cpu or cuda")
     if not 0 <= c.seed <= 2**32 - 1:
         raise ExperimentError(f"--seed {c.seed}: use 0 to {2**32 - 1} (numpy's RandomState)")
-    if not 1 <= c.seeds <= 2**32 - c.seed:
-        raise ExperimentError(f"--seeds {c.seeds}: at least 1, and --seed + --seeds - 1 at "
-                              f"most {2**32 - 1}")
+    if not 1 <= c.seeds <= min(MAX_SEEDS, 2**32 - c.seed):
+        raise ExperimentError(f"--seeds {c.seeds}: 1 to {MAX_SEEDS}, and --seed + --seeds - 1 "
+                              f"at most {2**32 - 1}")
     if c.compare_to is not None and c.compare_to != rows.UNTRAINED.id:
         try:
             rows.select([c.compare_to])

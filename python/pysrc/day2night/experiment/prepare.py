@@ -180,7 +180,7 @@ def check_run_folder(out, work, restart, scenes, epochs, extra_seeds=()):
         if (udir / "scores.json").is_file():
             tests = split["test"] if split else sorted(scenes)
             runfolder.read_scores(out, udir / "scores.json", task, row.id, fold,
-                                  rows.test_keys(task), tests, seed)
+                                  rows.test_keys(task), tests, seed, epochs)
         elif row.source != "burst":  # the burst row has no checkpoints (burst.py)
             runfolder.check_checkpoints(out, uid, udir / "model", epochs)
     runfolder.check_data(out)

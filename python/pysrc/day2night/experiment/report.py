@@ -104,8 +104,9 @@ def left_out(t):
     return ["<p><b>Rows left out:</b></p>", f"<ul>{items}</ul>"]
 
 
-def _curves(out, t, tasks):
-    """The learning curves of each task (curves.py), inline and as RUN/curves_<task>.svg."""
+def _curves(files, t, tasks):
+    """The learning curves of each task (curves.py), inline and as RUN/curves_<task>.svg
+    (added to ``files``, {name: text})."""
     parts = ['<h2 id="curves">Learning curves</h2>',
              '<p class="note">Per row, every unit (fold, seed) in its own colour: the training '
              "loss (solid) and the validation L1 (dashed) per epoch, epoch 0 the untrained "
@@ -117,7 +118,7 @@ def _curves(out, t, tasks):
     for task in tasks:
         chart = curves.svg(t, task)
         if chart is not None:
-            write_text(out / f"curves_{task}.svg", chart)
+            files[f"curves_{task}.svg"] = chart
             parts += [f"<h3>{e(task)} task</h3>", chart]
             drawn = True
     return parts if drawn else parts[:1] + ["<p>No unit has a training history.</p>"]
@@ -138,7 +139,23 @@ def write(out, t, tasks, report_scenes, show=None):
     """RUN/index.html (and RUN/curves_<task>.svg, RUN/tb) of the table ``t`` (table.build's)
     of a run of ``tasks``, showing the test scenes ``report_scenes`` (:func:`scenes_to_show`
     of ``--show`` ``show``)."""
+    write_built(out, t, build(out, t, tasks, report_scenes, show))
+
+
+def write_built(out, t, files):
+    """The files :func:`build` made ({name: text}), then RUN/tb."""
+    for name, text in files.items():
+        write_text(pathlib.Path(out) / name, text)
+    written = tb.write(out, t)
+    if isinstance(written, str):
+        log(written)
+
+
+def build(out, t, tasks, report_scenes, show=None):
+    """{name: text} of RUN/index.html and RUN/curves_<task>.svg (:func:`write`), built in
+    memory (nothing written: a report is built whole before any of it is written)."""
     out = pathlib.Path(out)
+    files = {}
     why = None
     if show is not None and len(report_scenes) < show:
         why = scenes_to_show(t.get("folds") or [], show)[1]
@@ -149,11 +166,8 @@ def write(out, t, tasks, report_scenes, show=None):
     for task in tasks:
         parts += report_tables.task_table(t, task)
     parts += report_tables.comparisons(t)
-    parts += _curves(out, t, tasks)
+    parts += _curves(files, t, tasks)
     parts += _scenes_head(report_scenes, why)
     parts += report_grid.section(out, t, report_scenes)
     parts.append("</body></html>")
-    write_text(out / "index.html", "\n".join(parts) + "\n")
-    written = tb.write(out, t)
-    if isinstance(written, str):
-        log(written)
+    return {"index.html": "\n".join(parts) + "\n", **files}

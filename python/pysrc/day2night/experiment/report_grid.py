@@ -10,6 +10,7 @@ scenes) is said in its cell, not shown as a broken image."""
 import html
 import pathlib
 
+from .names import image_stem
 from .report_tables import fmt, inputs_of
 
 e = html.escape
@@ -45,7 +46,7 @@ def _scores_text(s):
 
 def _grid_row(out, r, unit, sid, key):
     task, row = r["task"], r["row"]
-    stem = f"{sid}_{key}"
+    stem = image_stem(sid, key)
     where = "" if unit.get("fold") in (None, "all") else f"<br>fold {e(str(unit['fold']))}"
     inp = "merged raw" if key == "clean" else f"ISO {key}"
     return ("<tr>"

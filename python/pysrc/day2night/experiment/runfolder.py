@@ -4,7 +4,8 @@ trained: a file that cannot be used is a :class:`RunFolderError` naming it and s
 do (delete the file or the unit folder, or rerun with ``--restart-unit TASK/ROW/FOLD``).
 
 - ``config.json``, ``folds.json``, ``units/.../scores.json``: a JSON object of the expected
-  shape (a list, a number or garbage is refused);
+  shape (a list, a number or garbage is refused); a unit's scores each within its metric's
+  range, its history and initial validation drawable (scorecheck.py);
 - ``data/**/*.npy``: a complete ``.npy`` file (the header's shape and dtype times the item
   size is the file's size), input stores (``.in.npy``, ``day2night.train.cache``: header,
   version and size) or float32 H x W x 3 inputs of the first format beside uint8 H x W x 3
@@ -14,18 +15,17 @@ do (delete the file or the unit folder, or rerun with ``--restart-unit TASK/ROW/
   back to (``last.pt`` is replaced after every epoch), so a damaged one is an error."""
 
 import json
-import math
 import os
 import pathlib
 
 import numpy as np
 
 from . import folds as folds_mod
+from . import scorecheck
 from .pairs import check_cached
 from ..train.trainer import RESUME_STATE, CheckpointError, load_checkpoint
 
 SCORE_KEYS = ("psnr", "ssim", "delta_e")
-NON_FINITE = ("inf", "-inf", "nan")
 
 
 class RunFolderError(ValueError):
@@ -107,14 +107,9 @@ def read_folds(path, folds, seed):
     return m
 
 
-def _score_ok(v):
-    if isinstance(v, str):
-        return v in NON_FINITE
-    return isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
-
-
-def _scores_problem(s, task, row_id, fold, keys):
-    """What is wrong with a unit's scores (a string), or None."""
+def _scores_problem(s, task, row_id, fold, keys, epochs=None):
+    """What is wrong with a unit's scores (a string), or None (scorecheck.py: each score in
+    its metric's range, the history and initial drawable)."""
     for k, want in (("task", task), ("row", row_id), ("fold", fold)):
         if s.get(k) != want:
             return f"its {k} is {s.get(k)!r}, not {want!r}"
@@ -122,15 +117,20 @@ def _scores_problem(s, task, row_id, fold, keys):
     if not isinstance(images, list) or not isinstance(tests, list) \
             or not all(isinstance(t, str) for t in tests):
         return "no list of images or of test scenes"
-    if not isinstance(s.get("history"), list):
-        return "no history list"
+    why = scorecheck.history_problem(s.get("history"), epochs) or \
+        scorecheck.initial_problem(s.get("initial"))
+    if why:
+        return why
     seen = set()
     for i in images:
-        if not isinstance(i, dict) or not all(_score_ok(i.get(m, 0.0)) for m in SCORE_KEYS):
+        if not isinstance(i, dict):
             return f"an image record that is not scores: {str(i)[:80]}"
         if any(m not in i for m in SCORE_KEYS) or i.get("input") not in keys \
                 or not isinstance(i.get("scene"), str):
             return f"an image record without scores or input: {str(i)[:80]}"
+        why = next(filter(None, (scorecheck.score_problem(m, i[m]) for m in SCORE_KEYS)), None)
+        if why:
+            return f"an image record of scene {i['scene'][:60]!r}: {why}"
         seen.add((i.get("scene"), i["input"]))
     want = {(t, k) for t in tests for k in keys}
     if seen != want:
@@ -138,12 +138,13 @@ def _scores_problem(s, task, row_id, fold, keys):
     return None
 
 
-def read_scores(out, path, task, row_id, fold, keys, tests=None, seed=None):
-    """A done unit's scores.json, checked against its task, row, fold, inputs ``keys`` and
-    (when given) its test scenes ``tests``; ``seed``: an extra seed's unit (unit_id)."""
+def read_scores(out, path, task, row_id, fold, keys, tests=None, seed=None, epochs=None):
+    """A done unit's scores.json, checked against its task, row, fold, inputs ``keys``,
+    (when given) its test scenes ``tests`` and the run's ``epochs``; ``seed``: an extra
+    seed's unit (unit_id)."""
     advice = unit_advice(out, unit_id(task, row_id, fold, seed))
     s = read_object(path, "unit scores", advice)
-    why = _scores_problem(s, task, row_id, fold, [str(k) for k in keys])
+    why = _scores_problem(s, task, row_id, fold, [str(k) for k in keys], epochs)
     if not why and tests is not None and sorted(s["test_scenes"]) != sorted(tests):
         why = "it was tested on other scenes than this run's fold (another real set?)"
     if why:

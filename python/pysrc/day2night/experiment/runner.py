@@ -167,8 +167,11 @@ class Experiment:
             self.run_unit(seed, task, row, fold, split, i, len(work))
         t = table.build(self.config, self.out, self.plan.splits, len(self.inputs.scenes),
                         len(self.inputs.days), left_out=self.left_out)
-        table.write(self.out, t)
-        report.write(self.out, t, self.tasks, self.report_scenes, self.config.show)
+        # everything built before anything is written: table.* and index.html of one run
+        md = table.markdown(t)
+        page = report.build(self.out, t, self.tasks, self.report_scenes, self.config.show)
+        table.write(self.out, t, md)
+        report.write_built(self.out, t, page)
         log(f"wrote {self.out / 'table.md'}, table.json and index.html")
         return t
 

@@ -5,7 +5,7 @@ import pathlib
 
 from ..isos import NOISY_ISOS
 from . import mix as mix_mod
-from . import pairs, protocol
+from . import names, pairs, protocol
 from .config import ExperimentError
 from .rows import test_keys
 
@@ -27,7 +27,8 @@ class PairSource:
     def real(self, sid, key):
         """(x_path, y_path) of real scene ``sid`` for input key "clean" or an ISO."""
         scene = self.inputs.scenes[sid]
-        name = f"{sid}_{key}" if key != "clean" else sid
+        stem = names.scene_stem(sid)  # within the file system's name limit
+        name = f"{stem}_{key}" if key != "clean" else stem
         folder = self.out / "data" / "real"
         iso = None if key == "clean" else int(key)
         return pairs.cached(folder, {key: name}, lambda: {key: self._real_pair(scene, iso)})[key]
@@ -42,7 +43,7 @@ class PairSource:
     def synth(self, mode, name, key):
         """(x_path, y_path) of day image ``name`` synthesized in ``mode`` for input ``key``."""
         folder = self.out / "data" / f"synth-{mode}"
-        stem = name.replace("/", "__").rsplit(".", 1)[0]
+        stem = names.day_stem(name)  # within the file system's name limit
         names = {}
         if "clean" in self.tasks:
             names["clean"] = stem

@@ -96,21 +96,27 @@ def _load_units(config, out, task, row, splits):
 
 
 def _per_scene(per_seed, key, metric, fold_of):
-    """{scene: [value per seed]} of one input and metric, each scene's value weighted so
-    that the mean over scenes is the row's (stats.py: a per-fold row's mean of fold means)."""
-    counts = {}
-    for _, units in per_seed[:1]:
-        for u in units:
-            counts[u["fold"]] = len(u["test_scenes"])
-    n, k = sum(counts.values()), len(counts)
+    """{scene: [value per seed]} of one input and metric (each scene's score from the model
+    that did not see it)."""
     out = {}
     for _, units in per_seed:
         for u in units:
-            w = 1.0 if u["fold"] == "all" else n / (k * counts[u["fold"]])
             for i in u["images"]:
                 if i["input"] == str(key) and i["scene"] in fold_of:
-                    out.setdefault(i["scene"], []).append(_value(i[metric]) * w)
+                    out.setdefault(i["scene"], []).append(_value(i[metric]))
     return out
+
+
+def _scene_weights(per_seed):
+    """({scene: weight}, per_fold) of a row: its weighted mean over scenes is the row's
+    (stats.py: a per-fold row's mean of fold means, a scene of fold k weighing n / (K n_k));
+    None for a row tested on every scene by one model (equal weights)."""
+    units = per_seed[0][1] if per_seed else []
+    if all(u["fold"] == "all" for u in units):
+        return None
+    counts = {u["fold"]: len(u["test_scenes"]) for u in units}
+    n, k = sum(counts.values()), len(counts)
+    return {sc: n / (k * counts[u["fold"]]) for u in units for sc in u["test_scenes"]}
 
 
 def _matrix(scenes_a, scenes_b=None):
@@ -131,23 +137,33 @@ def _interval(s):
 
 class _Stats:
     """The bootstrap of one table (its seed, fold of each scene, and the rows' per-scene
-    values per input and metric)."""
+    values per input and metric, with each row's scene weights)."""
 
     def __init__(self, config, splits):
         self.seed = bootstrap_seed(config.seed)
         self.fold_of = {sc: s["fold"] for s in splits for sc in s["test"]}
         self.values = {}  # (task, row) -> {(key, metric): {scene: [per seed]}}
+        self.weights = {}  # (task, row) -> {scene: weight} of a per-fold row, else None
 
     def add(self, task, row_id, per_seed):
         self.values[(task, row_id)] = {
             (str(k), m): _per_scene(per_seed, k, m, self.fold_of)
             for k in test_keys(task) for m in METRICS}
+        self.weights[(task, row_id)] = _scene_weights(per_seed)
+
+    def _of(self, key, common):
+        """(the scenes' weights or None, the scenes' folds when the row is per fold)."""
+        w = self.weights[key]
+        if w is None:
+            return None, None
+        return [w[sc] for sc in common], [self.fold_of[sc] for sc in common]
 
     def scores(self, task, row_id, seeds):
         out = {}
         for (k, m), d in self.values[(task, row_id)].items():
             common, (v,) = _matrix(d)
-            s = stats.summary(v, [self.fold_of[sc] for sc in common], self.seed)
+            w, folds = self._of((task, row_id), common)
+            s = stats.summary(v, folds, w, self.seed)
             out.setdefault(k, {})[m] = {**_interval(s), "seeds": seeds,
                                         "seed_means": s["seed_means"],
                                         "seed_sd": s["seed_sd"]}
@@ -159,7 +175,9 @@ class _Stats:
         a, b = self.values[(task, row_id)], self.values[(task, ref_id)]
         for km in a:
             common, (va, vb) = _matrix(a[km], b[km])
-            out[km] = stats.compare(va, vb, km[1], [self.fold_of[sc] for sc in common],
+            (wa, fa), (wb, fb) = self._of((task, row_id), common), self._of((task, ref_id),
+                                                                               common)
+            out[km] = stats.compare(va, vb, km[1], fa if fa is not None else fb, (wa, wb),
                                     self.seed)
         return out
 
@@ -298,7 +316,8 @@ def _cell(s, digits, sign=False):
     f = (lambda v: "-" if v is None else f"{v:+.{digits}f}") if sign and \
         not isinstance(s["mean"], str) else (lambda v: _fmt(v, digits))
     if s.get("ci_low") is None:
-        return f"{f(s['mean'])} (no interval)"
+        why = stats.TOO_FEW if s.get("note") == stats.TOO_FEW else "no interval"
+        return f"{f(s['mean'])} ({why})"
     return f"{f(s['mean'])} [{_fmt(s['ci_low'], digits)}, {_fmt(s['ci_high'], digits)}]"
 
 
@@ -338,10 +357,13 @@ def _header(t):
         "are the mean over the folds of each fold's test scenes.",
         f"Each cell: the mean [95 % interval] over the test scenes (n below)"
         f"{' and the seeds' if len(seeds) > 1 else ''}, by a {b['replicates']}-replicate "
-        f"bootstrap (scenes resampled within their folds"
-        f"{', seeds resampled' if len(seeds) > 1 else ''}; bootstrap seed {b['seed']}). The "
-        "gain over untrained and the comparisons are paired per-scene differences, "
-        "bootstrapped the same way.",
+        f"bootstrap (each scene's score from the model that did not see it, scenes "
+        f"resampled across the test set{', seeds resampled' if len(seeds) > 1 else ''}; "
+        f"bootstrap seed {b['seed']}), widened to the Student-t interval of its standard "
+        "error where that is wider. The gain over untrained and the comparisons are paired "
+        f"per-scene differences, bootstrapped the same way. Fewer than {stats.MIN_SCENES} "
+        f"test scenes, or a per-fold row with a fold of fewer than {stats.MIN_PER_FOLD}: "
+        f"{stats.TOO_FEW}, and no verdict.",
         "",
     ]
     return lines
@@ -381,7 +403,7 @@ def _comparison_lines(t, task, metrics, labels):
         key = c["input"] if c["input"] == "clean" else "ISO " + c["input"]
         lines.append(f"| {labels.get((task, c['row']), c['row'])} | {key} | "
                      f"{NAMES[c['metric']]} | {_cell(c, DIGITS[c['metric']], sign=True)} | "
-                     f"{c['verdict']} |")
+                     f"{c['verdict'] or 'no verdict'} |")
     return lines + [""]
 
 
@@ -409,7 +431,9 @@ def markdown(t):
     return "\n".join(lines) + "\n"
 
 
-def write(out, t):
-    """RUN/table.json and RUN/table.md of the table ``t`` (:func:`build`'s)."""
+def write(out, t, md=None):
+    """RUN/table.json and RUN/table.md of the table ``t`` (:func:`build`'s; ``md``: its
+    :func:`markdown`, when already made)."""
+    md = markdown(t) if md is None else md
     write_json(pathlib.Path(out) / "table.json", t)
-    write_text(pathlib.Path(out) / "table.md", markdown(t))
+    write_text(pathlib.Path(out) / "table.md", md)

@@ -9,7 +9,7 @@ import day2night
 
 from ..isos import NOISY_ISOS
 from .. import delta_e2000_map
-from . import pairs
+from . import names, pairs
 from ..png import write_png
 from ..train.config import TrainConfig
 from ..train.data import FixedPatches, FreshPatches, fresh_budget
@@ -27,7 +27,7 @@ def fresh_set(folder, days, config, task):
     folder.mkdir(parents=True, exist_ok=True)
     shapes, sides = {}, {}
     for name, path in days.items():
-        link = folder / name.replace("/", "__")
+        link = folder / names.day_link(name)
         if not link.exists():
             link.symlink_to(pathlib.Path(path).resolve())
         raw = day2night.read_dng(str(path))
@@ -129,7 +129,8 @@ def score_model(config, model, out, task, row, tests, report_scenes):
              "delta_e": _num(s["delta_e"])}
         )
         if sid in report_scenes:
-            _report_images(pathlib.Path(out) / "img" / task, row.id, f"{sid}_{key}", x, y, pred)
+            _report_images(pathlib.Path(out) / "img" / task, row.id, names.image_stem(sid, key),
+                           x, y, pred)
     return images
 
 
