@@ -124,7 +124,7 @@ def test_delta_e_maps_are_viridis_on_a_log_scale():
              (0.0, 1.0, 9.0, 50.0, 50.0, 50.0, 0.0)]
     assert [demap.LUT[i].tolist() for i in level] == img[0].tolist()
     # no map colour is white or near it: large errors never look like a missing image
-    assert demap.LUT.min(axis=1).max() < 60 and (demap.LUT.sum(axis=1) < 3 * 230).all()
+    assert demap.LUT.min(axis=1).max() < 100 and (demap.LUT.sum(axis=1) < 3 * 200).all()
     # luminance rises with the error (a perceptual, ordered scale)
     y = demap.LUT @ np.array([0.2126, 0.7152, 0.0722])
     assert (np.diff(y) > -0.5).all() and y[-1] > y[0] + 150
