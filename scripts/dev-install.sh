@@ -4,8 +4,10 @@
 #   scripts/dev-install.sh [VENV] [--no-train]        (default VENV: .venv)
 # 1. VENV is made if missing (python3 -m venv), with the wheel's build tools
 #    (scripts/wheel-requirements.txt: ziglang, cargo-zigbuild, ...) and maturin;
-# 2. scripts/wheel.sh builds the one wheel (the Python extension and the release `day2night`
-#    binary as its script; minutes the first time: README.md, "The two commands");
+# 2. the release `day2night` binary is built with `cargo build --release` (the one README.md's
+#    main command `cargo run --release -- synth ...` builds: nothing to compile again after
+#    it, and it after this), then scripts/wheel.sh builds the wheel of the Python extension
+#    with that binary as its script (D2N_WHEEL_BIN; a wheel for this machine);
 #    D2N_WHEEL=PATH installs that wheel instead (scripts/test.sh passes the one it built);
 # 3. the wheel goes into VENV with the `train` extra (torch; --no-train: without), replacing
 #    an earlier build of the same version;
@@ -42,7 +44,10 @@ if [ -z "$wheel" ]; then
       break
     fi
   done
-  wheel=$(D2N_WHEEL_PYTHON="$py" scripts/wheel.sh | tail -1)
+  echo "scripts/dev-install.sh: building the day2night binary (cargo build --release)" >&2
+  cargo build --quiet --release --locked --bin day2night || fail "cargo build --release failed"
+  bin="${CARGO_TARGET_DIR:-$PWD/target}/release/day2night"
+  wheel=$(D2N_WHEEL_BIN="$bin" D2N_WHEEL_PYTHON="$py" scripts/wheel.sh | tail -1)
 fi
 [ -f "$wheel" ] || fail "scripts/wheel.sh gave no wheel ($wheel)"
 version=$(sed -n 's/^version = "\(.*\)"/\1/p' python/pyproject.toml | head -1)

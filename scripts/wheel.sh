@@ -6,6 +6,9 @@
 #   scripts/wheel.sh [OUT_DIR]      (default $CARGO_TARGET_DIR/wheels or target/wheels)
 # Prints the wheel's path as its last line on stdout. Needs cargo, and maturin, ziglang and
 # cargo-zigbuild (PyPI) beside the python of $D2N_WHEEL_PYTHON (default: the one on PATH).
+# D2N_WHEEL_BIN=PATH puts that binary in the wheel instead of building the glibc 2.17 one
+# (scripts/dev-install.sh passes `cargo build --release`'s, the binary README.md's main
+# command builds, so a checkout compiles it once): such a wheel is for this machine only.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 root=$PWD
@@ -27,13 +30,20 @@ host=$(rustc -vV | sed -n 's/^host: //p')
 glibc=2.17
 export PATH="$tools:$PATH"
 
-# 1. The command-line binary, for glibc 2.17 (cargo-zigbuild's "<triple>.<glibc>" target).
-echo "scripts/wheel.sh: building the day2night binary for $host, glibc $glibc" >&2
-# Stripped, like the wheel's extension (pyproject.toml `strip = true`): the release profile
-# keeps line tables for backtraces, which a user's installed command does not need.
-CARGO_PROFILE_RELEASE_STRIP=symbols \
-  cargo-zigbuild zigbuild --quiet --release --locked --bin day2night --target "$host.$glibc" >&2
-bin="$target_dir/$host/release/day2night"
+# 1. The command-line binary, for glibc 2.17 (cargo-zigbuild's "<triple>.<glibc>" target),
+# unless D2N_WHEEL_BIN names one already built.
+bin="${D2N_WHEEL_BIN:-}"
+if [ -n "$bin" ]; then
+  [ -x "$bin" ] || { echo "scripts/wheel.sh: D2N_WHEEL_BIN=$bin is not an executable file" >&2; exit 1; }
+  echo "scripts/wheel.sh: the day2night binary $bin (D2N_WHEEL_BIN: this machine's, not glibc $glibc)" >&2
+else
+  echo "scripts/wheel.sh: building the day2night binary for $host, glibc $glibc" >&2
+  # Stripped, like the wheel's extension (pyproject.toml `strip = true`): the release profile
+  # keeps line tables for backtraces, which a user's installed command does not need.
+  CARGO_PROFILE_RELEASE_STRIP=symbols \
+    cargo-zigbuild zigbuild --quiet --release --locked --bin day2night --target "$host.$glibc" >&2
+  bin="$target_dir/$host/release/day2night"
+fi
 
 # 2. The wheel of the extension (abi3), tagged manylinux2014.
 echo "scripts/wheel.sh: building the wheel (maturin --zig, manylinux2014)" >&2

@@ -11,8 +11,35 @@ use day2night::error::ResultExt;
 use day2night::raw::RawImage;
 use day2night::synth::job::DayInput;
 use pyo3::prelude::*;
+use std::collections::HashMap;
 use std::path::PathBuf;
 use std::sync::{Arc, OnceLock};
+
+/// The frames' paths: each item through ``os.fsdecode`` (``str``, ``bytes`` or
+/// ``os.PathLike``; anything else is its ``TypeError``), refused when one file comes twice.
+fn frame_paths(py: Python<'_>, items: &[Bound<'_, PyAny>]) -> PyResult<Vec<PathBuf>> {
+    let fsdecode = py.import("os")?.getattr("fsdecode")?;
+    let mut paths: Vec<PathBuf> = Vec::with_capacity(items.len());
+    let mut seen: HashMap<PathBuf, usize> = HashMap::with_capacity(items.len());
+    for (i, item) in items.iter().enumerate() {
+        let path: PathBuf = fsdecode.call1((item,))?.extract()?;
+        // the file itself where it can be resolved (./a.dng, a link to a.dng); a path that
+        // cannot be (missing) is compared as given and fails when read
+        let key = std::fs::canonicalize(&path).unwrap_or_else(|_| path.clone());
+        if let Some(j) = seen.insert(key, i) {
+            return Err(value_err(format!(
+                "{}: merge got this frame twice (paths {} and {} of {}): a burst's frames \
+                 are distinct files, and a frame given twice would count double",
+                path.display(),
+                j,
+                i,
+                items.len()
+            )));
+        }
+        paths.push(path);
+    }
+    Ok(paths)
+}
 
 /// Read the frames one at a time and merge them (the command line's `merge`).
 fn merge_files(paths: &[PathBuf]) -> day2night::Result<(RawImage, MergeReport)> {
@@ -33,6 +60,11 @@ fn merge_files(paths: &[PathBuf]) -> day2night::Result<(RawImage, MergeReport)> 
 /// white; NoiseProfile divided by N; the metadata is the first frame's. Frames of another
 /// size, ActiveArea, CFA, level or ISO are a ``ValueError`` naming the file.
 ///
+/// ``paths`` is a list (or other sequence) of ``str``, ``bytes`` or ``os.PathLike`` paths
+/// (``os.fsdecode`` each). The same file twice (the same path after resolving ``.``, ``..``
+/// and links) is a ``ValueError`` naming it: averaging a frame twice weights it double, so
+/// duplicates are refused, not dropped.
+///
 /// Returns ``(raw, report)``: the merged ``Raw`` (in memory, named after the first frame)
 /// and the merge's report, the dict ``merge --json`` prints (``frames``, ``scale_factor``,
 /// ``exact``, ``white``, ``black``, ``saturated_sites``).
@@ -41,8 +73,9 @@ fn merge_files(paths: &[PathBuf]) -> day2night::Result<(RawImage, MergeReport)> 
 #[pyfunction]
 pub(crate) fn merge<'py>(
     py: Python<'py>,
-    paths: Vec<PathBuf>,
+    paths: Vec<Bound<'py, PyAny>>,
 ) -> PyResult<(Raw, Bound<'py, PyAny>)> {
+    let paths = frame_paths(py, &paths)?;
     if paths.len() < 2 {
         return Err(value_err(format!(
             "merge needs at least 2 frames, got {} (a single frame is already its own mean)",

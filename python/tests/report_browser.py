@@ -29,6 +29,9 @@ window.addEventListener("load", () => {
     pre: document.querySelectorAll("pre").length,
     best: [...document.querySelectorAll("td.best")].map(td => td.innerText.split("\\n")[0]),
     headers: [...document.querySelectorAll("table.grid thead th")].map(th => th.innerText),
+    toc: [...document.querySelectorAll("nav.toc a")].map(a => a.getAttribute("href")),
+    unresolved: [...document.querySelectorAll('a[href^="#"]')].map(a => a.getAttribute("href"))
+      .filter(h => !document.getElementById(decodeURIComponent(h.slice(1)))),
     text: text,
   };
   const pre = document.createElement("pre");
@@ -48,8 +51,9 @@ def _run(chromium, args, page):
 
 def browser_checks(chromium, page):
     """What headless chromium shows of ``page``: {"tables": [class per <table>],
-    "images", "broken" (src of each <img> that did not load), "text" (the rendered text),
-    ...}; the page itself is left as it is."""
+    "images", "broken" (src of each <img> that did not load), "toc" (the href of each link
+    of the table of contents), "unresolved" (each in-page link whose id is not on the page),
+    "text" (the rendered text), ...}; the page itself is left as it is."""
     page = pathlib.Path(page)
     src = page.read_text()
     copy = page.with_name(".browser-check.html")

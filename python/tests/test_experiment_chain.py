@@ -10,6 +10,7 @@ import os
 import pathlib
 import shutil
 import signal
+import stat
 import subprocess
 import sys
 
@@ -264,6 +265,36 @@ def test_report_page_of_the_run_in_headless_chromium(full_run):
                 assert f'src="img/{x["task"]}/{x["row"]}/{sid}_{k}_pred.png"' in page
     assert got["images"] >= 4 * len(shown) * len(t["rows"])
     assert "--show 3: showing" not in r.stderr  # 6 scenes: no "showing fewer" line
+
+
+def test_odd_scene_name_and_the_modes_of_a_run_under_umask_022(mini_set, cli):
+    """A scene named ``a#b?c%zz`` (real-pairs takes the folder's name) and a run made under
+    umask 022: every file and folder of RUN/ is 0644 / 0755 (index.html, table.*, img/,
+    tb/, the models, the data store, log.txt), and in chromium the page's images of that
+    scene load and every link of its contents reaches a heading."""
+    chromium = require_tool("chromium", "chromium")
+    root = mini_set["root"] / "odd"
+    captures, real, out = root / "captures", root / "real", root / "run"
+    shutil.copytree(mini_set["release"], captures)
+    (captures / "scene00").rename(captures / "a#b?c%zz")
+    old = os.umask(0o022)
+    try:
+        cli("real-pairs", captures, "-o", real)
+        mini.run_experiment(out, mini_set["day"], real, "--epochs", 1, "--width", WIDTH,
+                            "--rows", "ours", "--task", "clean", "--show", 6, env=env())
+    finally:
+        os.umask(old)
+    found = {p: stat.S_IMODE(p.stat().st_mode) for p in out.rglob("*") if not p.is_symlink()}
+    assert {p.name for p in found} >= {"index.html", "table.md", "table.json", "log.txt",
+                                       "img", "units", "best.pt", "scores.json"}
+    wrong = {str(p.relative_to(out)): oct(m) for p, m in found.items()
+             if m != (0o755 if p.is_dir() else 0o644)}
+    assert wrong == {}
+    page = (out / "index.html").read_text()
+    assert 'src="img/clean/ours/a%23b%3Fc%25zz_clean_pred.png"' in page
+    got = browser_checks(chromium, out / "index.html")
+    assert got["broken"] == [] and got["images"] == 4 * 6 * 2
+    assert len(got["toc"]) >= 5 and got["unresolved"] == []
 
 
 @pytest.fixture(scope="session")

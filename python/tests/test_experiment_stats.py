@@ -281,9 +281,10 @@ def test_table_json_has_scores_gains_and_comparisons(tmp_path):
     assert all(c["reference"] == "day" and c["seeds"] == [3, 4] for c in t["comparisons"])
     md = table.markdown(t)
     assert "**Smoke run**" in md and "Training seeds: 3, 4" in md
-    assert "30.45 [" in md and "gain over untrained (PSNR)" in md and "+20.00 [" in md
+    assert "30.45 [" in md and "gain over untrained (PSNR / SSIM / Delta E)" in md
+    assert "+20.00 [" in md
     assert "### Comparisons against Day (clean task)" in md and "| worse |" in md
-    assert "5 test scenes" in md and "inf (no interval)" in md
+    assert "5 test scenes" in md and "inf (a test scene's value is infinite" in md
 
 
 def test_one_seed_table_keeps_the_first_formats_means(tmp_path):

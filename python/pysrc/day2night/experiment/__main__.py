@@ -4,7 +4,9 @@ The flags are ExperimentConfig's fields (config.py: each one's default, help and
 written once there)."""
 
 import argparse
+import signal
 import sys
+import threading
 
 from . import config
 from .rows import ROWS
@@ -50,10 +52,42 @@ def one_line(e):
     return lines[0]
 
 
+#: The messages of interruptions that the same command resumes: a DataLoader worker killed
+#: from outside (the OOM killer, a signal), memory exhausted (torch's CPU and CUDA
+#: allocators). Any other RuntimeError is a bug or bad data, which a rerun repeats.
+WORKER_KILLED = ("is killed by signal", "exited unexpectedly")
+OUT_OF_MEMORY = ("out of memory", "can't allocate memory")
+
+
+class Terminated(BaseException):
+    """SIGTERM (a scheduler's stop, ``kill``), raised in the main thread like Ctrl-C."""
+
+
+def _on_sigterm(signum, frame):
+    raise Terminated()
+
+
+def stopped(e, unit=None):
+    """(exit status, one-line message) of a RuntimeError or MemoryError that stopped the run
+    (``unit``: the unit it was in, when known): "resume" only where resuming helps."""
+    msg, where = one_line(e)[:300], f" in {unit}" if unit else ""
+    if isinstance(e, MemoryError) or any(s in str(e) for s in OUT_OF_MEMORY):
+        return 1, (f"out of memory{where}: {msg}; free memory (or lower --batch / --workers) "
+                   f"and {RESUME} from its last complete epoch")
+    if "DataLoader worker" in str(e) and any(s in str(e) for s in WORKER_KILLED):
+        return 1, f"a DataLoader worker died{where}: {msg}; {RESUME}"
+    return 1, (f"{type(e).__name__}{where}: {msg} (not an interruption: the same command "
+               "stops here again; RUN/log.txt holds the run's output)")
+
+
 def main(argv=None):
     cfg = parse(argv)
+    exp = None
+    main_thread = threading.current_thread() is threading.main_thread()
+    previous = signal.signal(signal.SIGTERM, _on_sigterm) if main_thread else None
     try:
-        Experiment(cfg).run()
+        exp = Experiment(cfg)
+        exp.run()
     except (ExperimentError, FoldError, MixError, ValueError) as e:
         print(f"day2night.experiment: error: {one_line(e)}", file=sys.stderr)
         return 2
@@ -61,13 +95,9 @@ def main(argv=None):
         print(f"day2night.experiment: error: {one_line(e)}", file=sys.stderr)
         return 2
     except (RuntimeError, MemoryError) as e:
-        # a killed DataLoader worker, torch out of memory...: the run stopped after its last
-        # complete epoch (last.pt), so the same command resumes it
-        what = "a DataLoader worker died" if "DataLoader worker" in str(e) else \
-            f"training stopped ({type(e).__name__})"
-        print(f"day2night.experiment: error: {what}: {one_line(e)[:300]}; {RESUME}",
-              file=sys.stderr)
-        return 1
+        code, msg = stopped(e, getattr(exp, "current_unit", None))
+        print(f"day2night.experiment: error: {msg}", file=sys.stderr)
+        return code
     except ImportError as e:
         print(f"day2night.experiment: error: {e} (pip install torch: the train extra; from a "
               "checkout scripts/dev-install.sh installs it)", file=sys.stderr)
@@ -75,6 +105,12 @@ def main(argv=None):
     except KeyboardInterrupt:
         print(f"day2night.experiment: interrupted: {RESUME}", file=sys.stderr)
         return 130
+    except Terminated:
+        print(f"day2night.experiment: terminated (SIGTERM): {RESUME}", file=sys.stderr)
+        return 128 + signal.SIGTERM
+    finally:
+        if main_thread:
+            signal.signal(signal.SIGTERM, previous)
     return 0
 
 

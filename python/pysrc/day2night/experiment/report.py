@@ -10,9 +10,11 @@ run folder."""
 
 import html
 import pathlib
+import re
 
 from ..atomic import write_text
-from . import curves, report_grid, report_tables, tb
+from . import curves, demap, report_grid, report_tables, tb
+from . import tabletext as text
 from .prepare import log
 
 e = html.escape
@@ -30,7 +32,10 @@ table.grid td{padding:1px}table.grid th{font-weight:normal;text-align:left}
 td.missing{width:192px;font-size:11px;color:#a00}
 .key,.note{font-size:12px;color:#333;max-width:1100px}
 dl.run{display:grid;grid-template-columns:max-content auto;gap:2px 12px;font-size:13px}
-dl.run dt{font-weight:bold}dl.run dd{margin:0}"""
+dl.run dt{font-weight:bold}dl.run dd{margin:0}
+nav.toc{font-size:13px;border:1px solid #ccc;background:#fafafa;padding:4px 12px;
+display:inline-block}nav.toc ul{margin:2px 0;padding-left:1.4em}
+svg.scale text{font-family:sans-serif;fill:#333}"""
 LABELS = {"paper": "the paper's settings (--preset paper)",
           "mini": "the mini preset (--preset mini: learns on a CPU; not the paper's numbers)",
           "smoke": "a smoke run (settings below both presets: not the paper's numbers)",
@@ -76,7 +81,7 @@ def run_section(t):
     what = LABELS.get(label, "-" if label is None else label)
     if label is None and t.get("smoke"):
         what = "- (a network narrower than the paper's: not the paper's numbers)"
-    items = [("run", what), ("protocol", _pairs((t.get("protocol") or {}).items()))]
+    items = [("run", what), ("protocol", text.protocol_sentence(t.get("protocol")))]
     seeds = t.get("seeds")
     items.append(("training seeds", "-" if not seeds else ", ".join(map(str, seeds))))
     b = t.get("bootstrap") or {}
@@ -119,7 +124,7 @@ def _curves(files, t, tasks):
         chart = curves.svg(t, task)
         if chart is not None:
             files[f"curves_{task}.svg"] = chart
-            parts += [f"<h3>{e(task)} task</h3>", chart]
+            parts += [f'<h3 id="curves-{e(task)}">{e(task)} task</h3>', chart]
             drawn = True
     return parts if drawn else parts[:1] + ["<p>No unit has a training history.</p>"]
 
@@ -127,12 +132,36 @@ def _curves(files, t, tasks):
 def _scenes_head(scenes, why):
     parts = ['<h2 id="scenes">Test scenes</h2>',
              '<p class="note">Per row: the network input, the prediction, the target and the '
-             "per-pixel Delta E 2000 of prediction and target (display sRGB; black 0, white 10 "
-             "or more) of the shown scenes, then every test scene's scores. Shown: "
-             f"{e(', '.join(scenes)) if scenes else 'none (--show 0)'}.</p>"]
+             "per-pixel Delta E 2000 of prediction and target (display sRGB, in the colour "
+             "scale below) of the shown scenes, then every test scene's scores. Shown: "
+             f"{e(', '.join(scenes)) if scenes else 'none (--show 0)'}.</p>", demap.legend()]
     if why:
         parts.append(f'<p class="note">{e(why)}</p>')
     return parts
+
+
+HEADING = re.compile(r'<h([23]) id="([^"]+)">(.*?)</h\1>', re.S)
+
+
+def toc(parts):
+    """The table of contents of the page's ``parts``: a link to every <h2> and <h3> that has
+    an id, nested (found in the HTML itself, so a link never points at a missing id)."""
+    items, open_sub = [], False
+    for level, ident, title in HEADING.findall("\n".join(parts)):
+        label = re.sub(r"<[^>]*>", "", title)  # already escaped text
+        if level == "3" and not open_sub and items:
+            items[-1] = items[-1].removesuffix("</li>") + "<ul>"
+            open_sub = True
+        elif level == "2" and open_sub:
+            items.append("</ul></li>")
+            open_sub = False
+        items.append(f'<li><a href="#{ident}">{label}</a></li>')
+    if open_sub:
+        items.append("</ul></li>")
+    if not items:
+        return []
+    return ['<nav class="toc" aria-label="Contents"><b>Contents</b><ul>', *items,
+            "</ul></nav>"]
 
 
 def write(out, t, tasks, report_scenes, show=None):
@@ -170,4 +199,5 @@ def build(out, t, tasks, report_scenes, show=None):
     parts += _scenes_head(report_scenes, why)
     parts += report_grid.section(out, t, report_scenes)
     parts.append("</body></html>")
+    parts[5:5] = toc(parts)
     return {"index.html": "\n".join(parts) + "\n", **files}

@@ -9,9 +9,11 @@ scenes) is said in its cell, not shown as a broken image."""
 
 import html
 import pathlib
+import re
+import urllib.parse
 
 from .names import image_stem
-from .report_tables import fmt, inputs_of
+from .tabletext import DIGITS, fmt, inputs_of
 
 e = html.escape
 COLUMNS = ("input", "prediction", "target", "Delta E 2000")
@@ -30,18 +32,32 @@ def unit_of(r, sid):
     return next((u for u in r.get("units", []) if sid in (u.get("test_scenes") or [])), None)
 
 
+def url(path):
+    """A relative path as an attribute's URL: each segment percent-encoded (a scene named
+    ``a#b?c%zz`` is a file name, not a fragment or a query), then HTML-escaped by the
+    caller."""
+    return "/".join(urllib.parse.quote(seg, safe="") for seg in path.split("/"))
+
+
+def anchor(*parts):
+    """An id for a heading of the page: ``parts`` joined by "-", every character outside
+    [A-Za-z0-9_.-] replaced by "_" (so a link to it needs no encoding)."""
+    return re.sub(r"[^A-Za-z0-9_.-]", "_", "-".join(map(str, parts)))
+
+
 def _img(out, src, alt):
     if not (out / src).is_file():
         return (f'<td class="missing">{e(alt)}: no image (not written when this unit was '
                 "scored: a unit of an earlier run that showed other scenes)</td>")
-    return (f'<td><img src="{e(src)}" alt="{e(alt)}" width="192" loading="lazy"></td>')
+    return (f'<td><img src="{e(url(src))}" alt="{e(alt)}" width="192" loading="lazy"></td>')
 
 
 def _scores_text(s):
     if s is None:
         return "no score"
-    return (f"PSNR {fmt(s.get('psnr'), 2)} dB<br>SSIM {fmt(s.get('ssim'), 4)}<br>"
-            f"Delta E {fmt(s.get('delta_e'), 3)}")
+    return (f"PSNR {fmt(s.get('psnr'), DIGITS['psnr'])} dB<br>"
+            f"SSIM {fmt(s.get('ssim'), DIGITS['ssim'])}<br>"
+            f"Delta E {fmt(s.get('delta_e'), DIGITS['delta_e'])}")
 
 
 def _grid_row(out, r, unit, sid, key):
@@ -81,8 +97,8 @@ def score_table(r):
         fold = "" if u.get("fold") in (None, "all") else str(u["fold"])
         seed = "" if u.get("seed") is None else str(u["seed"])
         for i in u.get("images") or []:
-            cols = [i.get("scene"), i.get("input"), fold, seed, fmt(i.get("psnr"), 2),
-                    fmt(i.get("ssim"), 4), fmt(i.get("delta_e"), 3)]
+            cols = [i.get("scene"), i.get("input"), fold, seed,
+                    *(fmt(i.get(m), DIGITS[m]) for m in ("psnr", "ssim", "delta_e"))]
             lines.append("<tr>" + "".join(f"<td>{e(str(c))}</td>" for c in cols) + "</tr>")
     if not lines:
         return []
@@ -99,7 +115,8 @@ def section(out, t, scenes):
     parts = []
     for r in t.get("rows", []):
         label = r.get("label") or r["row"]
-        parts.append(f"<h3>{e(label)} ({e(r['task'])} task)</h3>")
+        parts.append(f'<h3 id="{anchor("scenes", r["task"], r["row"])}">{e(label)} '
+                     f"({e(r['task'])} task)</h3>")
         parts += grid(out, r, scenes)
         parts += score_table(r)
     return parts

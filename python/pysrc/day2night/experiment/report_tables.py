@@ -6,45 +6,18 @@ Read from table.json (docs/experiment.md, "table.json"): a table of format /1, w
 confidence intervals, gains, paper numbers or comparisons, renders with "-" in their place."""
 
 import html
-import math
 
-from ..isos import NOISY_ISOS
+from . import tabletext as text
+from .tabletext import METRICS, PAPER_METRICS, fmt, inputs_of, num
 
-METRICS = (("psnr", "PSNR", 2, +1), ("ssim", "SSIM", 4, +1), ("delta_e", "Delta E", 3, -1))
 #: Rows that are references, not candidates: never marked best.
 REFERENCE_KINDS = ("untrained", "burst")
 VERDICT_CLASS = {"better": "better", "worse": "worse", "not distinguishable": "same"}
-#: The metrics the paper reports per task (a "paper" column beside each).
-PAPER_METRICS = {"clean": ("psnr", "ssim", "delta_e"), "noisy": ("psnr", "ssim")}
 TITLES = {"clean": "Table 1: clean task (ISO 50 merged raw input)",
-          "noisy": "Table 2: noisy task (first frame at ISO {} and {})".format(*NOISY_ISOS)}
+          "noisy": "Table 2: noisy task (first frame at ISO {} and {})".format(
+              *inputs_of("noisy"))}
 
 e = html.escape
-
-
-def num(v):
-    """A float of a table.json number (the strings "inf", "-inf", "nan" too), or None."""
-    if v is None or isinstance(v, bool):
-        return None
-    try:
-        return float(v)
-    except (TypeError, ValueError):
-        return None
-
-
-def fmt(v, digits, sign=False):
-    """A number as the tables print it ("-" when absent, "inf"/"nan" as such)."""
-    f = num(v)
-    if f is None:
-        return "-"
-    if not math.isfinite(f):
-        return "nan" if f != f else ("inf" if f > 0 else "-inf")
-    return f"{f:+.{digits}f}" if sign else f"{f:.{digits}f}"
-
-
-def inputs_of(task):
-    """The inputs each test scene is scored on: the merged raw, or each noisy ISO."""
-    return ["clean"] if task == "clean" else [str(i) for i in NOISY_ISOS]
 
 
 def kind(r):
@@ -78,15 +51,13 @@ def _run_cell(r, key, metric, digits, top):
     cls = ' class="best"' if top is not None and mean is not None and mean == top else ""
     lines = [f"<b>{e(fmt(mean, digits))}</b>"]
     if "ci_low" in c:
-        lines.append(f'<span class="ci">[{e(fmt(c["ci_low"], digits))}, '
-                     f'{e(fmt(c["ci_high"], digits))}]</span>')
+        lines.append(f'<span class="ci">{e(text.bounds(c, digits))}</span>')
     if num(c.get("seed_sd")) is not None:
         lines.append(f'<span class="ci">sd over seeds {e(fmt(c["seed_sd"], digits))}</span>')
     g = ((r.get("gain") or {}).get(key) or {}).get(metric)
     if isinstance(g, dict):
         lines.append(f'<span class="gain">gain {e(fmt(g.get("mean"), digits, sign=True))}'
-                     f'<br>[{e(fmt(g.get("ci_low"), digits, sign=True))}, '
-                     f'{e(fmt(g.get("ci_high"), digits, sign=True))}]</span>')
+                     f'<br>{e(text.bounds(g, digits, sign=True))}</span>')
     return f"<td{cls}>" + "<br>".join(lines) + "</td>"
 
 
@@ -101,7 +72,7 @@ def _n_cell(r, key):
     seeds = c.get("seeds")
     if n is None and seeds is None:
         return "<td>-</td>"
-    s = "-" if seeds is None else str(len(seeds))
+    s = text.seeds_count(seeds)
     title = "" if not seeds else f' title="seeds {e(", ".join(map(str, seeds)))}"'
     return f"<td{title}>{e(str('-' if n is None else n))} / {e(s)}</td>"
 
@@ -110,7 +81,7 @@ def _head(task, keys):
     top = ['<tr><th rowspan="2">model</th><th rowspan="2">scenes / seeds</th>']
     sub = ["<tr>"]
     for key in keys:
-        name = "merged raw" if key == "clean" else f"ISO {key}"
+        name = text.input_name(key)
         top.append(f'<th colspan="{len(METRICS) + len(PAPER_METRICS[task])}">{e(name)}</th>')
         for metric, label, _, direction in METRICS:
             arrow = "higher is better" if direction > 0 else "lower is better"
@@ -162,29 +133,35 @@ def comparisons(t):
     if not comps:
         return head + ["<p>This table has no comparisons (written by an earlier version: "
                        "rerun the table to get them).</p>"]
-    rows = [_comparison_row(c) for c in comps]
+    labels = {(r.get("task"), r.get("row")): r.get("label") or r.get("row")
+              for r in t.get("rows", [])}
+    rows = [_comparison_row(c, labels) for c in comps]
     return head + [
         "<p>Paired per-scene difference row minus reference over the same test scenes: its "
         "mean and 95 % bootstrap interval. PSNR and SSIM: positive is better; Delta E: "
         "negative is better. The verdict is better or worse when the interval excludes 0, "
-        "else not distinguishable.</p>",
-        '<table class="comparisons"><thead><tr><th>task</th><th>row</th><th>reference</th>'
+        "else not distinguishable. Scenes: the test scenes paired; seeds: how many training "
+        "seeds.</p>",
+        '<table class="comparisons"><thead><tr><th>task</th><th>model</th><th>reference</th>'
         "<th>input</th><th>metric</th><th>mean difference</th><th>95 % interval</th>"
         "<th>scenes</th><th>seeds</th><th>verdict</th></tr></thead><tbody>",
         *rows, "</tbody></table>"]
 
 
-def _comparison_row(c):
+def _comparison_row(c, labels):
     metric = c.get("metric")
-    digits = next((d for m, _, d, _ in METRICS if m == metric), 4)
-    label = next((name for m, name, _, _ in METRICS if m == metric), metric or "-")
+    digits = text.DIGITS.get(metric, 4)
+    label = text.NAMES.get(metric, metric or "-")
     verdict = c.get("verdict") or "-"
+    task = c.get("task")
     seeds = c.get("seeds")
-    cols = [c.get("task"), c.get("row"), c.get("reference"), c.get("input"), label,
-            fmt(c.get("mean"), digits, sign=True),
-            f"[{fmt(c.get('ci_low'), digits, sign=True)}, "
-            f"{fmt(c.get('ci_high'), digits, sign=True)}]",
-            c.get("n_scenes"), "-" if seeds is None else ", ".join(map(str, seeds))]
+    cols = [task, labels.get((task, c.get("row")), c.get("row")),
+            labels.get((task, c.get("reference")), c.get("reference")),
+            None if c.get("input") is None else text.input_name(str(c["input"])), label,
+            fmt(c.get("mean"), digits, sign=True), text.bounds(c, digits, sign=True),
+            c.get("n_scenes")]
     tds = "".join(f"<td>{e(str('-' if v is None else v))}</td>" for v in cols)
+    title = "" if not seeds else f' title="seeds {e(", ".join(map(str, seeds)))}"'
+    tds += f"<td{title}>{e(text.seeds_count(seeds))}</td>"
     cls = VERDICT_CLASS.get(verdict, "same")
     return f'<tr>{tds}<td class="verdict {cls}">{e(verdict)}</td></tr>'

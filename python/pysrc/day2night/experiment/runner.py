@@ -99,6 +99,7 @@ class Experiment:
         where = f"unit {index}/{total}: task {task}, row {row.id} ({row.label}), fold {fold}"
         if c.seeds > 1:
             where += f", seed {c.seed if seed is None else seed}"
+        self.current_unit = where  # named by __main__'s line of an error, not a resume
         if (udir / "scores.json").is_file():
             log(f"{where}: done (scores.json), skipped")
             return
@@ -165,6 +166,7 @@ class Experiment:
         work = self.seeded_work()
         for i, (seed, task, row, fold, split) in enumerate(work, 1):
             self.run_unit(seed, task, row, fold, split, i, len(work))
+        self.current_unit = None
         t = table.build(self.config, self.out, self.plan.splits, len(self.inputs.scenes),
                         len(self.inputs.days), left_out=self.left_out)
         # everything built before anything is written: table.* and index.html of one run

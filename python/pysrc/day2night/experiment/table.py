@@ -21,6 +21,7 @@ import numpy as np
 from ..isos import NOISY_ISOS
 from ..atomic import write_json, write_text
 from . import stats
+from . import tabletext as text
 from .rows import UNTRAINED, select, tasks_of, test_keys, with_untrained
 from .rows import units as row_units
 from .runfolder import read_scores, unit_dir, unit_id
@@ -301,28 +302,6 @@ def deviations(config, n_scenes, n_days):
     return d
 
 
-def _fmt(v, digits):
-    if v is None:
-        return "-"
-    if isinstance(v, str):
-        return v
-    return f"{v:.{digits}f}"
-
-
-def _cell(s, digits, sign=False):
-    """``mean [ci_low, ci_high]`` of a summary (``sign``: a difference, signed)."""
-    if s is None:
-        return "-"
-    f = (lambda v: "-" if v is None else f"{v:+.{digits}f}") if sign and \
-        not isinstance(s["mean"], str) else (lambda v: _fmt(v, digits))
-    if s.get("ci_low") is None:
-        why = stats.TOO_FEW if s.get("note") == stats.TOO_FEW else "no interval"
-        return f"{f(s['mean'])} ({why})"
-    return f"{f(s['mean'])} [{_fmt(s['ci_low'], digits)}, {_fmt(s['ci_high'], digits)}]"
-
-
-DIGITS = {"psnr": 2, "ssim": 4, "delta_e": 4}
-NAMES = {"psnr": "PSNR", "ssim": "SSIM", "delta_e": "Delta E"}
 BANNERS = {
     "smoke": "**Smoke run** (below the mini preset: network width {width}, {epochs} epochs; "
              "the paper's UNet: width 32, 500 epochs). These are not the paper's numbers.",
@@ -348,9 +327,7 @@ def _header(t):
     lines += [
         f"Options: task {cfg['task']}, epochs {cfg['epochs']}, seed {cfg['seed']}, "
         f"folds {cfg['folds']}, width {cfg['width']}, device {cfg['device']}.",
-        f"Protocol: {p['protocol']} (targets {p['targets']}, noise {p['noise']}, synthetic ISO "
-        f"{p['synth_iso']}, folds {'from ' + p['folds_file'] if p['folds_file'] else 'seeded'}"
-        f"); AMP {p['amp'] or 'off'}, channels-last {'on' if p['channels_last'] else 'off'}.",
+        f"Protocol: {text.protocol_sentence(p)}",
         f"Training seeds: {', '.join(map(str, seeds))} ({len(seeds)} per unit; folds and "
         f"synthetic data of seed {seeds[0]}).",
         "Rows trained on synthesis only are tested on every real scene; rows with real data "
@@ -369,40 +346,58 @@ def _header(t):
     return lines
 
 
-def _table(rows, keys, metrics, title):
-    """One task's table: each (input, metric) cell with its interval, the PSNR gain over the
-    untrained row, and the paper's numbers."""
-    n = rows[0]["scores"][keys[0]][metrics[0]]["n_scenes"] if rows else 0
-    multi = len(keys) > 1
-    heads = [f"{'ISO ' + k + ' ' if multi else ''}{NAMES[m]}" for k in keys for m in metrics]
-    gain_head = "gain over untrained (PSNR" + (" " + " / ".join(keys) if multi else "") + ")"
-    lines = [f"## {title}, {n} test scenes", "",
-             "| model | " + " | ".join(heads) + f" | {gain_head} | paper |",
-             "|---" * (len(heads) + 3) + "|"]
+def _md_cell(r, k, m):
+    """A score cell: ``mean [95 % interval]``, and the spread over seeds when it has one."""
+    s = r["scores"][k][m]
+    sd = text.num(s.get("seed_sd"))
+    return text.cell(s, text.DIGITS[m]) + \
+        ("" if sd is None else f", sd over seeds {text.fmt(sd, text.DIGITS[m])}")
+
+
+def _table(rows, task, title):
+    """One task's table, the columns of the page's (tabletext.columns): scenes / seeds, each
+    (input, metric) with its interval, the gains over the untrained row in the same order,
+    and the paper's numbers."""
+    cols = text.columns(task)
+    first = rows[0]["scores"][cols[0][0]][cols[0][1]] if rows else {}
+    multi = len(text.inputs_of(task)) > 1
+    heads = [f"{'ISO ' + k + ' ' if multi else ''}{text.NAMES[m]}" for k, m in cols]
+    paper = [(k, m) for k, m in cols if m in text.PAPER_METRICS[task]]
+    paper_head = " / ".join(f"{'ISO ' + k + ' ' if multi else ''}{text.NAMES[m]}"
+                            for k, m in paper)
+    lines = [f"## {title}, {first.get('n_scenes', 0)} test scenes", "",
+             "| model | scenes / seeds | " + " | ".join(heads)
+             + f" | gain over untrained ({' / '.join(heads)}) | paper ({paper_head}) |",
+             "|---" * (len(heads) + 4) + "|"]
     for r in rows:
-        cells = [_cell(r["scores"][k][m], DIGITS[m]) for k in keys for m in metrics]
-        gain = " / ".join(_cell(r["gain"][k]["psnr"], 2, sign=True) for k in keys) \
-            if r["gain"] else "-"
+        s0 = r["scores"][cols[0][0]][cols[0][1]]
+        n = f"{s0.get('n_scenes', '-')} / {text.seeds_count(s0.get('seeds'))}"
+        cells = [_md_cell(r, k, m) for k, m in cols]
+        gain = " / ".join(text.cell(r["gain"][k][m], text.DIGITS[m], sign=True)
+                          for k, m in cols) if r["gain"] else "-"
         p = r["paper"]
-        ps = " / ".join(_fmt(p[k][m], DIGITS[m]) for k in keys for m in metrics) if p else "-"
-        lines.append(f"| {r['label']} | " + " | ".join(cells) + f" | {gain} | {ps} |")
+        ps = " / ".join(text.fmt(p[k][m], text.DIGITS[m]) for k, m in paper) if p else "-"
+        lines.append(f"| {r['label']} | {n} | " + " | ".join(cells) + f" | {gain} | {ps} |")
     return lines + [""]
 
 
-def _comparison_lines(t, task, metrics, labels):
-    comps = [c for c in t["comparisons"] if c["task"] == task and c["metric"] in metrics]
+def _comparison_lines(t, task, labels):
+    comps = [c for c in t["comparisons"] if c["task"] == task]
     if not comps:
         return []
     ref = labels.get((task, t["compare_to"]), t["compare_to"])
     lines = [f"### Comparisons against {ref} ({task} task)", "",
              "Paired per-scene difference row - reference (PSNR, SSIM: positive is better; "
              "Delta E: negative is better), its 95 % interval and the verdict at 95 %.", "",
-             "| model | input | metric | difference [95 % interval] | verdict |",
-             "|---|---|---|---|---|"]
+             "| model | input | metric | mean difference | 95 % interval | scenes | seeds "
+             "| verdict |",
+             "|---|---|---|---|---|---|---|---|"]
     for c in comps:
-        key = c["input"] if c["input"] == "clean" else "ISO " + c["input"]
-        lines.append(f"| {labels.get((task, c['row']), c['row'])} | {key} | "
-                     f"{NAMES[c['metric']]} | {_cell(c, DIGITS[c['metric']], sign=True)} | "
+        d = text.DIGITS[c["metric"]]
+        lines.append(f"| {labels.get((task, c['row']), c['row'])} | "
+                     f"{text.input_name(c['input'])} | {text.NAMES[c['metric']]} | "
+                     f"{text.fmt(c['mean'], d, sign=True)} | {text.bounds(c, d, sign=True)} | "
+                     f"{c.get('n_scenes', '-')} | {text.seeds_count(c.get('seeds'))} | "
                      f"{c['verdict'] or 'no verdict'} |")
     return lines + [""]
 
@@ -415,15 +410,14 @@ def markdown(t):
     labels = {(r["task"], r["row"]): r["label"] for r in t["rows"]}
     lo, hi = (str(i) for i in NOISY_ISOS)
     if "clean" in by_task:
-        lines += _table(by_task["clean"], ["clean"], METRICS,
-                        "Table 1: clean (ISO 50 merged raw input)")
+        lines += _table(by_task["clean"], "clean", "Table 1: clean (ISO 50 merged raw input)")
     if "noisy" in by_task:
-        lines += _table(by_task["noisy"], [lo, hi], ("psnr", "ssim"),
+        lines += _table(by_task["noisy"], "noisy",
                         f"Table 2: noisy (first frame at ISO {lo} and {hi})")
     if t["comparisons"]:
         lines += ["## Comparisons", ""]
-        lines += _comparison_lines(t, "clean", METRICS, labels)
-        lines += _comparison_lines(t, "noisy", ("psnr", "ssim"), labels)
+        lines += _comparison_lines(t, "clean", labels)
+        lines += _comparison_lines(t, "noisy", labels)
     if t["left_out"]:
         lines += ["Left out: " + "; ".join(f"{x['row']} ({x['task']} task): {x['why']}"
                                              for x in t["left_out"]) + ".", ""]

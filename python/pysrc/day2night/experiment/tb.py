@@ -15,7 +15,6 @@ nothing and says why."""
 
 import pathlib
 import shutil
-import tempfile
 import time
 
 try:
@@ -28,6 +27,7 @@ except ImportError as _e:  # the core package does not need it
     Event = Summary = EventFileWriter = None
     MISSING = str(_e)
 
+from ..atomic import create_temp_dir
 from .curves import finite
 
 #: (tag, history key) of the scalars, per epoch.
@@ -90,7 +90,7 @@ def write(out, t):
     if not todo:
         return "tb/ not written: no unit has a training history"
     out = pathlib.Path(out)
-    tmp = pathlib.Path(tempfile.mkdtemp(prefix=".tb.", suffix=".tmp", dir=out))
+    tmp = create_temp_dir(out, ".tb.")
     try:
         wall = time.time()
         for rel, pts in todo:

@@ -9,7 +9,7 @@ import day2night
 
 from ..isos import NOISY_ISOS
 from .. import delta_e2000_map
-from . import names, pairs
+from . import demap, names, pairs
 from ..png import write_png
 from ..train.config import TrainConfig
 from ..train.data import FixedPatches, FreshPatches, fresh_budget
@@ -81,9 +81,10 @@ def _u8(x):
     return (np.clip(np.asarray(x, np.float32), 0, 1) * 255).astype(np.uint8)
 
 
-def heat(de, scale=10.0):
-    """A Delta E map as an 8-bit greyscale image: 0 black, ``scale`` and more white."""
-    return (np.clip(de / scale, 0, 1) * 255).astype(np.uint8)
+def heat(de):
+    """A Delta E map as an 8-bit sRGB image in the report's colour map (demap.py: viridis,
+    logarithmic, 0 to demap.DE_MAX)."""
+    return demap.colour(de)
 
 
 def score_unit(config, out, task, row, fold, tests, result, report_scenes):
