@@ -6,11 +6,12 @@ written once there)."""
 import argparse
 import sys
 
-from . import config
+from . import config, plan
 from .rows import ROWS
 from .folds import FoldError
 from .mix import MixError
 from .runner import Experiment, ExperimentError
+from .distributed import UnitsFailed
 
 EPILOG = """rows: """ + ", ".join(f"{r.id} ({r.label})" for r in ROWS) + """
 
@@ -53,7 +54,13 @@ def one_line(e):
 def main(argv=None):
     cfg = parse(argv)
     try:
-        Experiment(cfg).run()
+        if cfg.plan:
+            plan.show(cfg)
+        else:
+            Experiment(cfg).run()
+    except UnitsFailed as e:
+        print(f"day2night.experiment: error: {e}", file=sys.stderr)
+        return 1
     except (ExperimentError, FoldError, MixError, ValueError) as e:
         print(f"day2night.experiment: error: {one_line(e)}", file=sys.stderr)
         return 2

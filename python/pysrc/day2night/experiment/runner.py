@@ -25,7 +25,8 @@ and score one unit), table.py and report.py."""
 import dataclasses
 import pathlib
 
-from . import burst, prepare, protocol, report, rows, runfolder, runlog, table, unit
+from . import burst, distributed, prepare, protocol, report, rows, runfolder, runlock, runlog
+from . import table, unit
 from ..atomic import write_json
 from .config import ExperimentConfig, ExperimentError, resolve  # noqa: F401
 from .prepare import day_images, log  # noqa: F401
@@ -49,6 +50,7 @@ class Experiment:
         self.report_scenes = []
         self.left_out = []  # [{"task", "row", "why"}]: rows the inputs cannot give (burst.py)
         self.runlog = None  # runlog.RunLog while run() runs: RUN/log.txt
+        self.lock = None  # RUN/driver.lock while run() runs (runlock.py)
 
     def prepare(self):
         """Read and check every input and what an earlier run left in RUN, then write config,
@@ -66,6 +68,7 @@ class Experiment:
         self.plan = prepare.plan_folds(self.out, c, self.inputs, self.rows)
         prepare.check_run_folder(self.out, self.work(), c.restart_unit, self.inputs.scenes,
                                  c.epochs, c.seed_list[1:])
+        self.lock = runlock.acquire(self.out)
         prepare.write_setup(self.out, c.record(), self.plan, c.restart_unit,
                             [runfolder.unit_id(t, r.id, f, s)
                              for s, t, r, f, _ in self.seeded_work()])
@@ -154,17 +157,25 @@ class Experiment:
         """The whole run: prepare, every unit, then table.md, table.json and index.html;
         its stderr and warnings logged (runlog.py: RUN/log.txt, each warning kind printed
         once, with its count at the end)."""
+        if self.config.ray is not None:  # --ray: its options and ray, before anything
+            distributed.check(self.config)
+            distributed.import_ray()
         with runlog.capture() as self.runlog:
             try:
                 return self._run()
             finally:
                 self.runlog = None
+                runlock.release(self.lock)
+                self.lock = None
 
     def _run(self):
         self.prepare()
         work = self.seeded_work()
-        for i, (seed, task, row, fold, split) in enumerate(work, 1):
-            self.run_unit(seed, task, row, fold, split, i, len(work))
+        if self.config.ray is not None:  # the units as Ray tasks (distributed.py)
+            distributed.run(self, work)
+        else:
+            for i, (seed, task, row, fold, split) in enumerate(work, 1):
+                self.run_unit(seed, task, row, fold, split, i, len(work))
         t = table.build(self.config, self.out, self.plan.splits, len(self.inputs.scenes),
                         len(self.inputs.days), left_out=self.left_out)
         table.write(self.out, t)
