@@ -8,7 +8,7 @@ this installs one from outside, in the workers, through the environment:
   epoch E (0-based) creates PATH and kills its worker process (``os._exit``) there, once
   for the whole run (PATH made exclusively): Ray retries the unit, which resumes from its
   last checkpoint;
-- ``D2N_TEST_FAIL_UNIT=TASK/ROW/FOLD``: that unit raises an error of its own when it starts
+- ``D2N_TEST_FAIL_UNIT=TASK/ROW/FOLD``: that unit (of the first seed) raises an error of its own when it starts
   training, on every attempt (a bad unit: not retried)."""
 
 import os
@@ -37,7 +37,8 @@ def install():
             os._exit(9)  # the worker process dies mid-unit, as a killed one does
 
     def wrapped(cfg, train_set, val_set, on_step=None):
-        if fail and pathlib.Path(cfg.out_dir).as_posix().endswith(f"/units/{fail}/model"):
+        where = pathlib.Path(cfg.out_dir).as_posix()
+        if fail and where.endswith(f"/units/{fail}/model") and "/seeds/" not in where:
             raise ValueError(f"injected failure of unit {fail}")
         return train(cfg, train_set, val_set, on_step=kill if kill_epoch else on_step)
 

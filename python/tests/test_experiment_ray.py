@@ -198,8 +198,10 @@ def test_two_nodes_run_one_experiment(serial, mini_set):
     port = _free_port()
     try:
         _ray_start(["--head", "--port", port, "--include-dashboard", "false",
-                    "--ray-client-server-port", _free_port()], tmps[0])
-        _ray_start(["--address", f"127.0.0.1:{port}"], tmps[1])
+                    "--ray-client-server-port", _free_port(), "--node-ip-address",
+                    "127.0.0.1"], tmps[0])
+        _ray_start(["--address", f"127.0.0.1:{port}", "--node-ip-address", "127.0.0.1"],
+                   tmps[1])
         out, r = run(mini_set, "ray_two_nodes", "--ray", f"127.0.0.1:{port}")
         assert "Ray: 2 node(s), 2 CPU" in r.stderr, r.stderr[-3000:]
         assert_same_results(serial, out)

@@ -104,6 +104,9 @@ def run(exp, work):
             f"and {cpus:g} CPU")
         state = copy.copy(exp)
         state.runlog = None  # the driver's log; a task logs to its stderr (Ray forwards it)
+        # the workers' current folder is not the driver's: every path absolute
+        state.out, state.source = exp.out.resolve(), copy.copy(exp.source)
+        state.source.out = state.out
         ref = ray.put(state)
         _make_pairs(ray, exp, ref, work)
         _run_units(ray, exp, ref, work, gpus, cpus)

@@ -42,6 +42,9 @@ class Experiment:
     real set or fold file is an error here, before anything is read or written)."""
 
     def __init__(self, config):
+        if config.ray is not None:  # --ray: its options and ray, before anything is read
+            distributed.check(config)
+            distributed.import_ray()
         self.config, self.target_isps = resolve(config)
         self.out = pathlib.Path(self.config.output)
         self.tasks = rows.tasks_of(self.config.task)
@@ -56,6 +59,8 @@ class Experiment:
         """Read and check every input and what an earlier run left in RUN, then write config,
         folds and mixes (nothing is written when anything is bad)."""
         c = self.config
+        if self.out.is_dir():  # one driver at a time (a new folder: locked when made)
+            self.lock = runlock.acquire(self.out)
         if any(r.source != "burst" for r in self.rows):  # the burst row trains nothing
             if not torch_available():
                 raise ExperimentError(f"training needs torch ({torch_missing()})")
@@ -68,7 +73,7 @@ class Experiment:
         self.plan = prepare.plan_folds(self.out, c, self.inputs, self.rows)
         prepare.check_run_folder(self.out, self.work(), c.restart_unit, self.inputs.scenes,
                                  c.epochs, c.seed_list[1:])
-        self.lock = runlock.acquire(self.out)
+        self.lock = self.lock or runlock.acquire(self.out)
         prepare.write_setup(self.out, c.record(), self.plan, c.restart_unit,
                             [runfolder.unit_id(t, r.id, f, s)
                              for s, t, r, f, _ in self.seeded_work()])
@@ -157,9 +162,6 @@ class Experiment:
         """The whole run: prepare, every unit, then table.md, table.json and index.html;
         its stderr and warnings logged (runlog.py: RUN/log.txt, each warning kind printed
         once, with its count at the end)."""
-        if self.config.ray is not None:  # --ray: its options and ray, before anything
-            distributed.check(self.config)
-            distributed.import_ray()
         with runlog.capture() as self.runlog:
             try:
                 return self._run()
