@@ -12,6 +12,7 @@ import json
 import os
 import pathlib
 import shutil
+import signal
 import socket
 import subprocess
 import sys
@@ -134,6 +135,29 @@ def test_a_failing_unit_fails_the_run_after_the_others(serial, mini_set):
     # the same command, the fault gone: only that unit runs, and the table is the serial one
     out, r = run(mini_set, "ray_failing", "--ray")
     assert r.stderr.count("was done already") == 9
+    assert_same_results(serial, out)
+
+
+def test_a_killed_driver_is_resumed_by_the_same_command(serial, mini_set):
+    out = mini_set["root"] / "ray_driver_killed"
+    cmd = [sys.executable, "-m", "day2night.experiment", "--day", str(mini_set["day"]),
+           "--real", str(mini_set["real"]), "-o", str(out), *map(str, ARGS), "--ray"]
+    # its own session: the kill takes the driver and the local Ray instance it started
+    p = subprocess.Popen(cmd, env=env(), stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
+                         text=True, start_new_session=True)
+    for line in p.stderr:  # killed once the first unit is done: the others are in flight
+        if "units: " in line and " done on node " in line:
+            os.killpg(p.pid, signal.SIGKILL)
+            break
+    p.wait()
+    p.stderr.close()
+    assert p.returncode == -signal.SIGKILL
+    assert (out / "driver.lock").is_file() and not (out / "table.json").exists()
+    done = len(unit_scores(out))
+    assert 1 <= done < 10
+    _, r = run(mini_set, "ray_driver_killed", "--ray")
+    assert "taking over the stale lock" in r.stderr
+    assert r.stderr.count("was done already") >= done
     assert_same_results(serial, out)
 
 
