@@ -8,8 +8,8 @@ this installs one from outside, in the workers, through the environment:
   epoch E (0-based) creates PATH and kills its worker process (``os._exit``) there, once
   for the whole run (PATH made exclusively): Ray retries the unit, which resumes from its
   last checkpoint;
-- ``D2N_TEST_FAIL_UNIT=TASK/ROW/FOLD``: that unit (of the first seed) raises an error of its own when it starts
-  training, on every attempt (a bad unit: not retried)."""
+- ``D2N_TEST_FAIL_UNIT=TASK/ROW/FOLD``: that unit (of the first seed) raises an error of
+  its own when it starts training, on every attempt (a bad unit: not retried)."""
 
 import os
 import pathlib
