@@ -59,8 +59,6 @@ class Experiment:
         """Read and check every input and what an earlier run left in RUN, then write config,
         folds and mixes (nothing is written when anything is bad)."""
         c = self.config
-        if self.out.is_dir():  # one driver at a time (a new folder: locked when made)
-            self.lock = runlock.acquire(self.out)
         if any(r.source != "burst" for r in self.rows):  # the burst row trains nothing
             if not torch_available():
                 raise ExperimentError(f"training needs torch ({torch_missing()})")
@@ -73,7 +71,6 @@ class Experiment:
         self.plan = prepare.plan_folds(self.out, c, self.inputs, self.rows)
         prepare.check_run_folder(self.out, self.work(), c.restart_unit, self.inputs.scenes,
                                  c.epochs, c.seed_list[1:])
-        self.lock = self.lock or runlock.acquire(self.out)
         prepare.write_setup(self.out, c.record(), self.plan, c.restart_unit,
                             [runfolder.unit_id(t, r.id, f, s)
                              for s, t, r, f, _ in self.seeded_work()])
@@ -164,6 +161,8 @@ class Experiment:
         once, with its count at the end)."""
         with runlog.capture() as self.runlog:
             try:
+                if self.out.is_dir():  # one driver at a time (a new folder: once made)
+                    self.lock = runlock.acquire(self.out)
                 return self._run()
             finally:
                 self.runlog = None
@@ -172,6 +171,7 @@ class Experiment:
 
     def _run(self):
         self.prepare()
+        self.lock = self.lock or runlock.acquire(self.out)
         work = self.seeded_work()
         if self.config.ray is not None:  # the units as Ray tasks (distributed.py)
             distributed.run(self, work)
