@@ -8,11 +8,12 @@ import signal
 import sys
 import threading
 
-from . import config
+from . import config, plan
 from .rows import ROWS
 from .folds import FoldError
 from .mix import MixError
 from .runner import Experiment, ExperimentError
+from .distributed import UnitsFailed
 
 EPILOG = """rows: """ + ", ".join(f"{r.id} ({r.label})" for r in ROWS) + """
 
@@ -86,8 +87,14 @@ def main(argv=None):
     main_thread = threading.current_thread() is threading.main_thread()
     previous = signal.signal(signal.SIGTERM, _on_sigterm) if main_thread else None
     try:
-        exp = Experiment(cfg)
-        exp.run()
+        if cfg.plan:
+            plan.show(cfg)
+        else:
+            exp = Experiment(cfg)
+            exp.run()
+    except UnitsFailed as e:
+        print(f"day2night.experiment: error: {e}", file=sys.stderr)
+        return 1
     except (ExperimentError, FoldError, MixError, ValueError) as e:
         print(f"day2night.experiment: error: {one_line(e)}", file=sys.stderr)
         return 2

@@ -29,6 +29,7 @@ from .protocol import NOISE, PROTOCOLS, SYNTH_ISO, TARGETS
 
 PROTOCOL = "protocol (each also set by --protocol release)"
 TRAINING = "training"
+SCALE = "at scale (Ray)"
 
 
 class ExperimentError(ValueError):
@@ -126,6 +127,20 @@ class ExperimentConfig:
     channels_last: bool = opt(False, help="channels-last memory format (for GPUs)",
                               group=TRAINING, record="paper", paper=False,
                               action="store_true")
+
+    # (where the units run: record None, they change no number; distributed.py, plan.py)
+    ray: str = opt(help="run the units as Ray tasks: on a local Ray instance using every "
+                   "GPU (or CPU with --device cpu) of this machine, or on the cluster at "
+                   "ADDRESS (docs/experiment.md, \"At the paper's scale\")", group=SCALE,
+                   nargs="?", const="local", metavar="ADDRESS")
+    num_gpus: float = opt(help="GPUs per unit with --ray (default: 1 with --device cuda, "
+                          "0 with cpu; a fraction lets units share a GPU)", group=SCALE,
+                          metavar="N")
+    cpus_per_unit: float = opt(help="CPUs per unit with --ray, for its loader (default: "
+                               "--workers, at least 1)", group=SCALE, metavar="N")
+    plan: bool = opt(False, help="print the units, their patch-steps, the estimated "
+                     "GPU-hours and the resources asked for; write nothing", group=SCALE,
+                     action="store_true")
 
     def with_preset(self):
         """This config with the preset's values (``paper`` without one) where it has none."""

@@ -25,7 +25,8 @@ and score one unit), table.py and report.py."""
 import dataclasses
 import pathlib
 
-from . import burst, prepare, protocol, report, rows, runfolder, runlog, table, unit
+from . import burst, distributed, prepare, protocol, report, rows, runfolder, runlock, runlog
+from . import table, unit
 from ..atomic import write_json
 from .config import ExperimentConfig, ExperimentError, resolve  # noqa: F401
 from .prepare import day_images, log  # noqa: F401
@@ -41,6 +42,9 @@ class Experiment:
     real set or fold file is an error here, before anything is read or written)."""
 
     def __init__(self, config):
+        if config.ray is not None:  # --ray: its options and ray, before anything is read
+            distributed.check(config)
+            distributed.import_ray()
         self.config, self.target_isps = resolve(config)
         self.out = pathlib.Path(self.config.output)
         self.tasks = rows.tasks_of(self.config.task)
@@ -49,6 +53,7 @@ class Experiment:
         self.report_scenes = []
         self.left_out = []  # [{"task", "row", "why"}]: rows the inputs cannot give (burst.py)
         self.runlog = None  # runlog.RunLog while run() runs: RUN/log.txt
+        self.lock = None  # RUN/driver.lock while run() runs (runlock.py)
 
     def prepare(self):
         """Read and check every input and what an earlier run left in RUN, then write config,
@@ -157,15 +162,23 @@ class Experiment:
         once, with its count at the end)."""
         with runlog.capture() as self.runlog:
             try:
+                if self.out.is_dir():  # one driver at a time (a new folder: once made)
+                    self.lock = runlock.acquire(self.out)
                 return self._run()
             finally:
                 self.runlog = None
+                runlock.release(self.lock)
+                self.lock = None
 
     def _run(self):
         self.prepare()
+        self.lock = self.lock or runlock.acquire(self.out)
         work = self.seeded_work()
-        for i, (seed, task, row, fold, split) in enumerate(work, 1):
-            self.run_unit(seed, task, row, fold, split, i, len(work))
+        if self.config.ray is not None:  # the units as Ray tasks (distributed.py)
+            distributed.run(self, work)
+        else:
+            for i, (seed, task, row, fold, split) in enumerate(work, 1):
+                self.run_unit(seed, task, row, fold, split, i, len(work))
         self.current_unit = None
         t = table.build(self.config, self.out, self.plan.splits, len(self.inputs.scenes),
                         len(self.inputs.days), left_out=self.left_out)

@@ -29,7 +29,10 @@ def fresh_set(folder, days, config, task):
     for name, path in days.items():
         link = folder / names.day_link(name)
         if not link.exists():
-            link.symlink_to(pathlib.Path(path).resolve())
+            try:
+                link.symlink_to(pathlib.Path(path).resolve())
+            except FileExistsError:  # made by a unit running beside this one (--ray)
+                pass
         raw = day2night.read_dng(str(path))
         shapes[link.name], sides[link.name] = _fixed_shape(config.targets, raw)
     files = sorted(shapes)  # NightPairs' order
