@@ -185,7 +185,7 @@ fn a_stage_added_to_the_list_runs_in_every_execution() {
             };
             let c = Crop {
                 top: 6,
-                left: 5,
+                left: 4,
                 width: 12,
                 height: 9,
             };
