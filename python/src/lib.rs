@@ -50,6 +50,7 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(render::render, m)?)?;
     m.add_function(wrap_pyfunction!(render::encode_u8, m)?)?;
     m.add_function(wrap_pyfunction!(render::render_release_u8, m)?)?;
+    m.add_function(wrap_pyfunction!(render::release_conflicts, m)?)?;
     m.add_function(wrap_pyfunction!(render::release_window, m)?)?;
     m.add_function(wrap_pyfunction!(network_input::release_codes, m)?)?;
     m.add_function(wrap_pyfunction!(network_input::demosaic_bilinear, m)?)?;

@@ -38,11 +38,11 @@ pub(crate) fn ssim(
     data_range: f64,
     window: &str,
 ) -> PyResult<f64> {
-    let window = match window {
-        "uniform" => SsimWindow::Uniform7,
-        "gaussian" => SsimWindow::Gaussian,
-        w => return Err(value_err(format!("window {w:?}: use uniform or gaussian"))),
-    };
+    // The names of `day2night eval --ssim-window` (SsimWindow's own), exactly as spelled.
+    let window = SsimWindow::ALL
+        .into_iter()
+        .find(|w| w.name() == window)
+        .ok_or_else(|| value_err(format!("window {window:?}: use uniform or gaussian")))?;
     let (a, b) = (float_rgb(pred, "pred")?, float_rgb(target, "target")?);
     let opts = SsimOptions { data_range, window };
     py.detach(move || on_pool(move || m_ssim(&a, &b, &opts)))

@@ -37,10 +37,13 @@ pub(crate) fn render<'py>(
     isp: &str,
 ) -> PyResult<Bound<'py, PyAny>> {
     if release_isp(isp)? {
-        release_conflicts(&[
-            ("demosaic", demosaic, "mhc", "menon"),
-            ("opcodes", opcodes, "apply", "ignore"),
-        ])?;
+        let given = [("demosaic", demosaic), ("opcodes", opcodes)];
+        if let Some(c) = day2night::isp::release::conflicts(given) {
+            let (name, value, own) = (c.option, c.value, c.own);
+            return Err(value_err(format!(
+                "{name}={value:?}: isp='release' uses {name}={own:?} (leave it out)"
+            )));
+        }
         if !crop {
             return Err(value_err(
                 "crop=False: isp='release' crops as the release does",
@@ -123,17 +126,16 @@ fn release_isp(isp: &str) -> PyResult<bool> {
     }
 }
 
-/// Keywords that `isp="release"` fixes: (name, value, default, the release's own); any
-/// other value is a ValueError naming the keyword.
-fn release_conflicts(fixed: &[(&str, &str, &str, &str)]) -> PyResult<()> {
-    for (name, value, default, own) in fixed {
-        if value != default && value != own {
-            return Err(value_err(format!(
-                "{name}={value:?}: isp='release' uses {name}={own:?} (leave it out)"
-            )));
-        }
-    }
-    Ok(())
+/// The first of `given` (keyword, value) that ``isp="release"`` refuses, as (keyword,
+/// value, the release's own value), or None: ``day2night::isp::release::conflicts``, the
+/// rule ``day2night render --isp release`` and ``render(isp="release")`` apply.
+///
+/// >>> day2night._native.release_conflicts([("tone", "gamma22")])
+/// ('tone', 'gamma22', 'release')
+#[pyfunction]
+pub(crate) fn release_conflicts(given: Vec<(String, String)>) -> Option<(String, String, String)> {
+    let given = given.iter().map(|(k, v)| (k.as_str(), v.as_str()));
+    day2night::isp::release::conflicts(given).map(|c| (c.option.into(), c.value, c.own.into()))
 }
 
 /// The release's 8-bit target of a raw (``day2night render --isp release -o x.png``, byte

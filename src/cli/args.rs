@@ -16,6 +16,15 @@ pub enum IspArg {
     Release,
 }
 
+/// The value parser of an option whose values are an enum's names: its `FromStr` (names,
+/// aliases, case) and its error message; clap shows the default from its `Display`.
+pub fn choice<T: std::str::FromStr>(s: &str) -> Result<T, String>
+where
+    T::Err: std::fmt::Display,
+{
+    s.parse().map_err(|e: T::Err| e.to_string())
+}
+
 /// `--max-pixels N` (global): a pixel count with an optional K/M/G suffix.
 pub fn parse_max_pixels(s: &str) -> Result<u64, String> {
     day2night::limits::Limits::parse_pixels(s).map_err(|e| e.to_string())

@@ -1,9 +1,9 @@
 //! `day2night eval PRED TARGET [--json]`: PSNR, SSIM and mean Delta E 2000.
-use super::args::lib;
+use super::args::{choice, lib};
 use super::{usage, CmdResult};
 use day2night::encode::read::open_bands;
 use day2night::metrics::banded::{evaluate, DEFAULT_BAND_ROWS};
-use day2night::metrics::{SsimOptions, SsimWindow};
+use day2night::metrics::{NonFinite, SsimOptions, SsimWindow};
 use std::path::PathBuf;
 
 /// Arguments of `day2night eval`.
@@ -32,31 +32,19 @@ pub struct EvalArgs {
     /// Data range for PSNR and SSIM.
     #[arg(long, default_value_t = 1.0, value_name = "R")]
     pub data_range: f64,
-    /// SSIM window: uniform (default, scikit-image) or gaussian.
-    #[arg(long, default_value = "uniform", value_name = "W")]
-    pub ssim_window: String,
-    /// NaN/Inf samples: error (default: refuse, naming the file and the count) or zero
-    /// (replace them by 0, with a warning; the JSON says so).
-    #[arg(long, default_value = "error", value_name = "MODE")]
-    pub nonfinite: String,
+    /// SSIM window: uniform (scikit-image) or gaussian.
+    #[arg(long, default_value_t = SsimWindow::default(), value_parser = choice::<SsimWindow>, value_name = "W")]
+    pub ssim_window: SsimWindow,
+    /// NaN/Inf samples: error (refuse, naming the file and the count) or zero (replace them
+    /// by 0, with a warning; the JSON says so).
+    #[arg(long, default_value_t = NonFinite::default(), value_parser = choice::<NonFinite>, value_name = "MODE")]
+    pub nonfinite: NonFinite,
 }
 
 /// Run `day2night eval`.
 pub fn run(args: EvalArgs) -> CmdResult {
-    let window = match args.ssim_window.to_ascii_lowercase().as_str() {
-        "uniform" => SsimWindow::Uniform7,
-        "gaussian" => SsimWindow::Gaussian,
-        w => {
-            return Err(usage(format!(
-                "--ssim-window {w:?}: use uniform or gaussian"
-            )))
-        }
-    };
-    let zero = match args.nonfinite.to_ascii_lowercase().as_str() {
-        "error" => false,
-        "zero" => true,
-        m => return Err(usage(format!("--nonfinite {m:?}: use error or zero"))),
-    };
+    let window = args.ssim_window;
+    let zero = args.nonfinite == NonFinite::Zero;
     if !(args.data_range.is_finite() && args.data_range > 0.0) {
         return Err(usage(format!(
             "--data-range {}: must be positive",
@@ -125,8 +113,8 @@ pub fn run(args: EvalArgs) -> CmdResult {
             "width": a.width,
             "height": a.height,
             "data_range": args.data_range,
-            "ssim_window": if window == SsimWindow::Gaussian { "gaussian" } else { "uniform" },
-            "nonfinite": if zero { "zero" } else { "error" },
+            "ssim_window": window.name(),
+            "nonfinite": args.nonfinite.name(),
             "nonfinite_replaced": r.non_finite,
         });
         // The warnings with their codes, when there are any.

@@ -1,5 +1,5 @@
 //! `day2night render IN.dng -o OUT.exr|png|tif`: the software ISP on one DNG.
-use super::args::{lib, parse_neutral, parse_zip_level, IspArg};
+use super::args::{choice, lib, parse_neutral, parse_zip_level, IspArg};
 use super::{usage, CmdResult};
 use day2night::encode::exr::{
     encodes_rows, standard_attributes, write_exr, ExrCompression, ExrOptions,
@@ -29,9 +29,9 @@ pub struct RenderArgs {
     /// Output file (.exr, .png, .tif or .tiff).
     #[arg(short, long, visible_alias = "out", value_name = "OUT")]
     pub output: PathBuf,
-    /// Demosaicing method: bilinear, mhc (default) or menon.
-    #[arg(long, default_value = "mhc", value_name = "METHOD")]
-    pub demosaic: String,
+    /// Demosaicing method: bilinear, mhc or menon.
+    #[arg(long, default_value_t = Demosaic::default(), value_parser = choice::<Demosaic>, value_name = "METHOD")]
+    pub demosaic: Demosaic,
     /// White balance by this camera neutral instead of the file's AsShotNeutral.
     #[arg(long, value_name = "R,G,B")]
     pub neutral: Option<String>,
@@ -41,16 +41,16 @@ pub struct RenderArgs {
     /// EXR: 32-bit float samples.
     #[arg(long)]
     pub float: bool,
-    /// EXR compression: none, rle, zips, zip (default), piz, pxr24, b44, b44a.
-    #[arg(long, default_value = "zip", value_name = "C")]
-    pub exr_compression: String,
+    /// EXR compression: none, rle, zips, zip, piz, pxr24, b44, b44a.
+    #[arg(long, default_value_t = ExrCompression::default(), value_parser = choice::<ExrCompression>, value_name = "C")]
+    pub exr_compression: ExrCompression,
     /// Compression effort of zip/zips EXRs: 1 (default, fastest, own encoder) to 9
     /// (miniz_oxide level 9: about 2 % smaller, much slower).
     #[arg(long = "exr-zip-level", default_value_t = 1, value_name = "N")]
     pub exr_zip_level: u8,
-    /// PNG/TIFF display encoding: srgb (default), gamma22, release (gamma 2.2 + smoothstep).
-    #[arg(long, default_value = "srgb", value_name = "TONE")]
-    pub tone: String,
+    /// PNG/TIFF display encoding: srgb, gamma22, release (gamma 2.2 + smoothstep).
+    #[arg(long, default_value_t = DisplayTone::default(), value_parser = choice::<DisplayTone>, value_name = "TONE")]
+    pub tone: DisplayTone,
     /// PNG/TIFF bits per sample: 8 or 16 (default: 8 for PNG, 16 for TIFF).
     #[arg(long, value_name = "N")]
     pub bits: Option<u8>,
@@ -63,10 +63,10 @@ pub struct RenderArgs {
     /// Do not apply the Orientation tag.
     #[arg(long)]
     pub no_orient: bool,
-    /// DNG opcode lists (lens shading GainMap, distortion WarpRectilinear, ...): apply
-    /// (default, as the Adobe DNG SDK) or ignore (as LibRaw and the authors' renders).
-    #[arg(long, default_value = "apply", value_name = "MODE")]
-    pub opcodes: String,
+    /// DNG opcode lists (lens shading GainMap, distortion WarpRectilinear, ...): apply (as
+    /// the Adobe DNG SDK) or ignore (as LibRaw and the authors' renders).
+    #[arg(long, default_value_t = OpcodeMode::default(), value_parser = choice::<OpcodeMode>, value_name = "MODE")]
+    pub opcodes: OpcodeMode,
     /// Replace an existing output.
     #[arg(long)]
     pub overwrite: bool,
@@ -115,7 +115,7 @@ fn neutral_and_exr(
         .map(parse_neutral)
         .transpose()
         .map_err(usage)?;
-    let compression: ExrCompression = args.exr_compression.parse().map_err(usage)?;
+    let compression = args.exr_compression;
     let zip_level = parse_zip_level(args.exr_zip_level)?;
     Ok((neutral, compression, zip_level))
 }
@@ -152,13 +152,8 @@ pub fn run(args: RenderArgs) -> CmdResult {
     if args.isp == IspArg::Release {
         return run_release(&args);
     }
-    let demosaic: Demosaic = args.demosaic.parse().map_err(usage)?;
+    let (demosaic, tone, opcodes) = (args.demosaic, args.tone, args.opcodes);
     let (neutral, compression, zip_level) = neutral_and_exr(&args)?;
-    let tone: DisplayTone = args.tone.parse().map_err(usage)?;
-    let opcodes: OpcodeMode = args
-        .opcodes
-        .parse()
-        .map_err(|e: day2night::Error| usage(format!("--opcodes: {e}")))?;
     let (format, sixteen) = output_format(&args)?;
     let (policy, img) = policy_and_input(&args)?;
     let in_file = |e: day2night::Error| lib(e.in_file(&args.input));
@@ -261,17 +256,16 @@ pub fn run(args: RenderArgs) -> CmdResult {
 /// The flags `--isp release` fixes, with the one value each may name: a contradiction is a
 /// usage error naming the flag.
 fn release_conflicts(args: &RenderArgs) -> Option<String> {
-    let fixed = [
-        ("--demosaic", args.demosaic.as_str(), ["mhc", "menon"]),
-        ("--tone", args.tone.as_str(), ["srgb", "release"]),
-        ("--opcodes", args.opcodes.as_str(), ["apply", "ignore"]),
+    let given = [
+        ("demosaic", args.demosaic.name()),
+        ("tone", args.tone.name()),
+        ("opcodes", args.opcodes.name()),
     ];
-    for (flag, value, [default, own]) in fixed {
-        if value != default && value != own {
-            return Some(format!(
-                "{flag} {value}: --isp release uses {flag} {own} (leave it out)"
-            ));
-        }
+    if let Some(c) = day2night::isp::release::conflicts(given) {
+        let (flag, value, own) = (c.option, c.value, c.own);
+        return Some(format!(
+            "--{flag} {value}: --isp release uses --{flag} {own} (leave it out)"
+        ));
     }
     let refused = [
         ("--camera-rgb", args.camera_rgb),

@@ -7,7 +7,7 @@
 //! The answer does not depend on the order in which bands arrive (any two different values
 //! anywhere make a plane vary), so it is the same for any thread count.
 
-use super::RgbImage;
+use super::rgb::RgbImage;
 use crate::diagnostics::{Code, Warning};
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 

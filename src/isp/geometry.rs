@@ -1,7 +1,7 @@
 //! Display geometry of renders: the DNG DefaultCrop, the TIFF/EXIF Orientation, and the
 //! map between displayed pixels and active-area sites.
 
-use super::RgbImage;
+use super::rgb::RgbImage;
 use crate::raw::RawMeta;
 use rayon::prelude::*;
 

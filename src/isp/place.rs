@@ -6,7 +6,7 @@
 
 use super::geometry::default_crop;
 use super::render_parts::BAND;
-use super::RgbImage;
+use super::rgb::RgbImage;
 use crate::error::Result;
 use crate::raw::meta::RawMeta;
 use rayon::prelude::*;

@@ -20,9 +20,8 @@ use super::demosaic::{demosaic_rows, row_kernel, Post};
 use super::opcodes::banded::Tune;
 use super::opcodes::pipeline;
 use super::opcodes::warp_window::WindowStats;
-use super::RgbImage;
+use super::rgb::RgbImage;
 use crate::error::{Error, Result};
-use crate::normalize::Normalizer;
 use crate::raw::crop::Crop;
 use crate::raw::RawImage;
 
@@ -30,6 +29,7 @@ pub use super::geometry::{
     apply_geometry, default_crop, orient_image, oriented_source, DisplayGeometry,
 };
 use super::place::{collect_bands, collect_bands_of};
+use super::pre_demosaic::{CfaSites, FillRow};
 use super::render_bands::{banded_any, bands_with};
 pub use super::render_parts::{
     apply_matrix, color_matrix, resolve_neutral, Bands, Output, RenderOptions, BAND,
@@ -213,13 +213,13 @@ fn frame_region(plan: &Plan, crop: &Crop) -> Result<RgbImage> {
         Some(p) if plan.img.meta.linear_raw.is_none() => p,
         _ => return cut(&whole_frame(plan)?, crop),
     };
-    let colour = plan.colour();
-    let post = move |row: &mut [f32]| colour.row(row);
+    let rows = plan.rows();
+    let post = move |row: &mut [f32]| rows.run(row);
     plan.geometry();
+    let sites = plan.cfa(true)?;
     let n = plan.neutral()?;
     let method = plan.demosaic();
-    let norm = plan.normalizer()?;
-    pipeline::render_frame_region(plan.img, p, norm, n, method, &post, crop)
+    pipeline::render_frame_region(plan.img, p, &sites, n, method, &post, crop)
 }
 
 /// The rectangle `crop` of `img`.
@@ -283,29 +283,29 @@ fn whole_frame(plan: &Plan) -> Result<RgbImage> {
     if img.meta.linear_raw.is_some() {
         return super::render_linear_raw::render(plan);
     }
-    let colour = plan.colour();
-    let post = move |row: &mut [f32]| colour.row(row);
+    let rows = plan.rows();
+    let post = move |row: &mut [f32]| rows.run(row);
     let (crop, orient) = plan.geometry();
-    let n = plan.neutral()?;
+    let sites = plan.cfa(true)?;
     let method = plan.demosaic();
-    let norm = plan.normalizer()?;
     match plan.opcodes() {
-        Some(p) => pipeline::render_frame(img, p, norm, n, method, &post, (crop, orient)),
+        Some(p) => {
+            let n = plan.neutral()?;
+            pipeline::render_frame(img, p, &sites, n, method, &post, (crop, orient))
+        }
         None => {
-            let rgb = demosaic_whole(img, norm, n, method, &post)?;
+            let rgb = demosaic_whole(img, &sites, method, &post)?;
             Ok(apply_geometry(rgb, &img.meta, crop, orient))
         }
     }
 }
 
-/// Normalized, white-balanced (clipped to [0, 1]) and demosaiced camera RGB of the whole
-/// active area of a file without opcodes, `post` applied to every row: no crop, no
-/// orientation. Normalization ([`Normalizer`], DNG chapter 5) is fused with the white
-/// balance into the demosaicer's input, in parallel over rows.
+/// The demosaiced camera RGB of the whole active area of a file without opcodes, its
+/// input filled by the pre-demosaic step ([`CfaSites`]), `post` applied to every row: no
+/// crop, no orientation.
 fn demosaic_whole(
     img: &RawImage,
-    norm: Normalizer,
-    n: [f64; 3],
+    sites: &CfaSites,
     method: super::Demosaic,
     post: &Post,
 ) -> Result<RgbImage> {
@@ -313,9 +313,9 @@ fn demosaic_whole(
     let a = img.active_area();
     let (w, h) = (a.width(), a.height());
     let (top, left) = (a.top as usize, a.left as usize);
-    let inv = [1.0 / n[0], 1.0, 1.0 / n[2]];
     let data = &img.data;
     let stride = img.width;
+    let cs: Vec<usize> = (0..w).collect();
     Ok(demosaic_rows(
         w,
         h,
@@ -323,10 +323,15 @@ fn demosaic_whole(
         method,
         |r, out| {
             let src = &data[(r + top) * stride + left..][..w];
-            for (c, (o, &x)) in out.iter_mut().zip(src).enumerate() {
-                let y = norm.normalize(x, r, c) * inv[bayer.color_at(r, c) as usize];
-                *o = y.clamp(0.0, 1.0) as f32;
-            }
+            let mut blacks = Vec::new();
+            let row = FillRow {
+                src,
+                offset: 0,
+                r,
+                w,
+                blacks: &mut blacks,
+            };
+            sites.fill(row, &cs, out);
         },
         post,
     ))

@@ -4,18 +4,18 @@
 //! costs its own size, not the frame's.
 //!
 //! Every pixel is computed by the same expressions as the banded whole-frame render: the
-//! CFA samples are normalized and white-balanced like there (tabulated per 2x2 position
-//! when the black level allows), demosaiced by `demosaic_rect` over the frame's geometry
+//! CFA samples go through the same pre-demosaic step
+//! ([`CfaSites`](super::pre_demosaic::CfaSites)), demosaiced by `demosaic_rect` over the frame's geometry
 //! (mirrored at the frame's edges, never at the crop's) and passed through the colour
 //! matrix. The result equals the frame render's region bit for bit.
 
 use super::demosaic::{demosaic_rect, row_kernel, RowDemosaic, RowKernel, PAD};
 use super::opcodes::pipeline;
+use super::pre_demosaic::FillRow;
 use super::render_parts::RenderOptions;
+use super::rgb::RgbImage;
 use super::stages::Plan;
-use super::RgbImage;
 use crate::error::{Error, Result};
-use crate::normalize::SiteTable;
 use crate::raw::crop::Crop;
 use crate::raw::{RawImage, RawMeta};
 use rayon::prelude::*;
@@ -77,32 +77,26 @@ fn stored_plan(
     let a = frame.active_area();
     let (w, h) = (a.width(), a.height());
     let bayer = frame.bayer()?;
-    let n = plan.neutral()?;
-    let colour = plan.colour();
-    let post = move |row: &mut [f32]| colour.row(row);
+    let r = plan.rows();
+    let post = move |row: &mut [f32]| r.run(row);
     // Before DefaultCrop and orientation: `render_crop` checked that both are off.
     plan.geometry();
     let method = plan.demosaic();
-    let norm = plan.normalizer()?.without_linearization();
+    let sites = plan.cfa(false)?;
     if let Some(p) = plan.opcodes() {
         let stored = pipeline::StoredCrop { outer, plane };
-        return pipeline::render_crop(frame, p, (norm, n), method, stored, crop, &post);
+        let n = plan.neutral()?;
+        return pipeline::render_crop(frame, p, (&sites, n), method, stored, crop, &post);
     }
-    let inv = [1.0 / n[0], 1.0, 1.0 / n[2]];
-    let site = |x: u16, r: usize, c: usize, black: f64| -> f32 {
-        let y = norm.normalize_with_black(x, black) * inv[bayer.color_at(r, c) as usize];
-        y.clamp(0.0, 1.0) as f32
-    };
-    let table = SiteTable::new(&norm, |r, c, x| site(x, r, c, norm.black_at(r, c)));
-    let fill = |r: usize, cs: &[usize], out: &mut [f32]| {
-        let src = &plane[(r - outer.top) * outer.width..][..outer.width];
-        for (o, &c) in out.iter_mut().zip(cs) {
-            let x = src[c - outer.left];
-            *o = match table.as_ref().and_then(|t| t.get(r, c, x)) {
-                Some(v) => v,
-                None => site(x, r, c, norm.black_at(r, c)),
-            };
-        }
+    let fill = |blacks: &mut Vec<f64>, r: usize, cs: &[usize], out: &mut [f32]| {
+        let row = FillRow {
+            src: &plane[(r - outer.top) * outer.width..][..outer.width],
+            offset: outer.left,
+            r,
+            w,
+            blacks,
+        };
+        sites.fill(row, cs, out)
     };
     let mut out = RgbImage::try_new(crop.width, crop.height)?;
     const BAND: usize = 32;
@@ -118,6 +112,8 @@ fn stored_plan(
                 bayer,
                 kernel,
             };
+            let mut blacks = Vec::new();
+            let fill = |r: usize, cs: &[usize], out: &mut [f32]| fill(&mut blacks, r, cs, out);
             demosaic_rect(cfa, rows, crop.cols(), fill, &post, |i, rgb| {
                 band[3 * crop.width * i..][..3 * crop.width].copy_from_slice(rgb)
             });

@@ -16,8 +16,8 @@ use super::color::normalize_neutral;
 use super::opcodes::pipeline::{apply_list3, finish_geometry, stage1_planes, Stage3};
 use super::opcodes::{self, apply_region, OpcodeMode, Prepared, Region, StageRect};
 use super::render_parts::{Bands, BAND};
-use super::stages::{Plan, Stage};
-use super::RgbImage;
+use super::rgb::RgbImage;
+use super::stages::{Plan, Samples, Stage};
 use crate::dng::opcodes::ListId;
 use crate::error::{Error, Result};
 use crate::raw::meta::LinearRaw;
@@ -35,7 +35,11 @@ fn linear_raw(img: &RawImage) -> Result<&LinearRaw> {
 /// Normalized camera RGB of the active area with the opcodes `p` applied (none: `None`),
 /// each sample in [0, 1], and its extent in active-area coordinates (smaller than the
 /// active area after an OpcodeList3 TrimBounds; `rgb` covers exactly the extent).
-fn stage_rgb(img: &RawImage, p: Option<&Prepared>) -> Result<(RgbImage, StageRect)> {
+fn stage_rgb(
+    img: &RawImage,
+    p: Option<&Prepared>,
+    samples: &Samples,
+) -> Result<(RgbImage, StageRect)> {
     img.validate()?;
     let lr = linear_raw(img)?;
     let spp = usize::from(lr.samples_per_pixel);
@@ -101,6 +105,7 @@ fn stage_rgb(img: &RawImage, p: Option<&Prepared>) -> Result<(RgbImage, StageRec
                 for s in 0..3 {
                     let b = lr.black_at(levels, s, r, c);
                     let y = (lin(x[s]) - b) * inv_scale[s];
+                    let y = samples.between(Stage::Normalize, Stage::Opcodes2, y, s);
                     o[s] = if y.is_nan() {
                         0.0
                     } else {
@@ -140,14 +145,14 @@ fn stage_rgb(img: &RawImage, p: Option<&Prepared>) -> Result<(RgbImage, StageRec
     Ok((s3.rgb, s3.extent))
 }
 
-/// White balance by the normalized neutral `n`, clipped to [0, 1].
-fn white_balance(rgb: &mut RgbImage, n: [f64; 3]) {
-    let invf = [1.0 / n[0], 1.0, 1.0 / n[2]].map(|v| v as f32);
+/// The sample stages after OpcodeList2 (white balance by the neutral, clipped to [0, 1]),
+/// on every sample: here after OpcodeList3, as the DNG SDK runs a LinearRaw image.
+fn white_balance(rgb: &mut RgbImage, samples: &Samples) {
     let w = rgb.width.max(1);
     rgb.data.par_chunks_mut(3 * w).for_each(|row| {
         for px in row.chunks_exact_mut(3) {
-            for (v, k) in px.iter_mut().zip(invf) {
-                *v = (*v * k).clamp(0.0, 1.0);
+            for (k, v) in px.iter_mut().enumerate() {
+                *v = samples.between(Stage::Opcodes2, Stage::Demosaic, *v, k);
             }
         }
     });
@@ -155,10 +160,10 @@ fn white_balance(rgb: &mut RgbImage, n: [f64; 3]) {
 
 /// White-balanced camera RGB before geometry.
 fn balanced(img: &RawImage, neutral: [f64; 3], mode: OpcodeMode) -> Result<RgbImage> {
-    let n = normalize_neutral(neutral)?;
+    let samples = Samples::new(normalize_neutral(neutral)?);
     let p = opcodes::active_image(img, mode)?;
-    let (mut rgb, _) = stage_rgb(img, p.as_ref())?;
-    white_balance(&mut rgb, n);
+    let (mut rgb, _) = stage_rgb(img, p.as_ref(), &samples)?;
+    white_balance(&mut rgb, &samples);
     Ok(rgb)
 }
 
@@ -178,18 +183,15 @@ pub fn camera_rgb_with(img: &RawImage, neutral: [f64; 3], mode: OpcodeMode) -> R
 /// execution, for every [`super::render::Execution`] that makes one.
 pub(crate) fn render(plan: &Plan) -> Result<RgbImage> {
     let img = plan.img;
-    let colour = plan.colour();
-    let n = plan.neutral()?;
+    let rows = plan.rows();
     // The samples are normalized per plane by `stage_rgb` (LinearRaw levels, not the CFA
     // normalizer), and they are already demosaiced: the demosaic stage is the identity.
-    plan.run(Stage::Normalize);
-    plan.run(Stage::Demosaic);
-    let (mut rgb, b) = stage_rgb(img, plan.opcodes())?;
-    white_balance(&mut rgb, n);
+    let samples = plan.samples()?;
+    plan.demosaic();
+    let (mut rgb, b) = stage_rgb(img, plan.opcodes(), &samples)?;
+    white_balance(&mut rgb, &samples);
     let w = rgb.width.max(1);
-    rgb.data
-        .par_chunks_mut(3 * w)
-        .for_each(|row| colour.row(row));
+    rgb.data.par_chunks_mut(3 * w).for_each(|row| rows.run(row));
     let a = img.active_area();
     let (crop, orient) = plan.geometry();
     finish_geometry(rgb, b, &img.meta, (a.width(), a.height()), crop, orient)

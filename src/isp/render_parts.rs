@@ -8,7 +8,7 @@
 use super::color::{normalize_neutral, CameraColor};
 use super::demosaic::Demosaic;
 use super::opcodes::OpcodeMode;
-use super::RgbImage;
+use super::rgb::RgbImage;
 use crate::color::matrix3::Mat3;
 use crate::error::{Error, Result};
 use crate::raw::meta::RawMeta;

@@ -1,83 +1,211 @@
-//! The render pipeline as one ordered list of named stages ([`STAGES`]), and the `Plan`
-//! every execution of a render ([`super::render::Execution`]: whole frame, bands, a crop,
-//! the LinearRaw form) takes its stages from (docs/isp.md, "The pipeline").
+//! The render pipeline as one ordered list of named stages ([`STAGES`]) and the driver that
+//! runs it: the `Plan` every execution of a render ([`super::render::Execution`]: whole
+//! frame, bands, a crop, the LinearRaw form) takes its stages from (docs/isp.md, "The
+//! pipeline").
 //!
-//! A `Plan` is made once per render from the image and the [`RenderOptions`]: the
-//! neutral, the prepared opcode lists, the normalizer, the demosaicer, the colour stage,
-//! DefaultCrop and orientation. An execution asks the plan for each stage it runs (one
-//! accessor per stage, which records the asking); the render checks, when the execution
-//! returns, that it asked for every stage of [`STAGES`] (`Plan::missing`), and
-//! [`super::render::render_with`] reports the stages it ran, so a test sees a stage that one
-//! execution runs and another does not. A stage the options turn off (`crop: false`, the
-//! opcodes ignored or absent) is asked for and runs as the identity.
+//! Each stage has a [`Kind`] that says where it runs. The sample stages (normalize, white
+//! balance) and the row stages (colour) are functions of one value or one output row:
+//! the driver runs them, in the order of [`STAGES`], wherever an execution asks for a
+//! sample before the demosaic ([`Samples::between`], [`super::pre_demosaic::CfaSites`]) or
+//! hands an output row on ([`Rows`]), so an execution never names them. The opcode lists,
+//! the demosaic and the geometry are how an execution walks the image (which rows or
+//! region, with what context): it asks the plan for them (one accessor each, which records
+//! the asking). The render checks, when the execution returns, that every stage of
+//! [`STAGES`] ran (`Plan::missing`), and [`super::render::render_with`] reports the stages
+//! run. A stage the options turn off (`crop: false`, the opcodes ignored or absent) runs as
+//! the identity.
+//!
+//! Adding a stage that works on a sample or a row is one entry in the `stages!` list below
+//! and one function: every execution then runs it.
 
 use super::color::normalize_neutral;
 use super::demosaic::Demosaic;
 use super::opcodes::{self, Prepared};
+use super::pre_demosaic::CfaSites;
 use super::render_parts::RenderOptions;
 use super::render_parts::{clip_row, color_matrix, matrix_row, resolve_neutral, Output};
 use crate::error::Result;
 use crate::normalize::Normalizer;
 use crate::raw::RawImage;
-use std::sync::atomic::{AtomicU16, Ordering};
+use std::sync::atomic::{AtomicU32, Ordering};
 
-/// A stage of the render pipeline, in the order of [`STAGES`].
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-pub enum Stage {
-    /// OpcodeList1 on the stored values.
-    Opcodes1,
-    /// LinearizationTable, black level, scale to [0, 1] (DNG chapter 5).
+/// Where a stage runs (see the module docs).
+#[derive(Clone, Copy)]
+pub enum Kind {
+    /// An opcode list, on the stage image or the rectangle an execution walks.
+    Opcodes,
+    /// The normalization of a stored sample: the first sample stage.
     Normalize,
-    /// OpcodeList2 on the normalized values.
-    Opcodes2,
-    /// White balance by the neutral, clipped to [0, 1].
-    WhiteBalance,
-    /// Demosaic (bilinear, MHC or Menon; the identity for a LinearRaw image).
+    /// A function of one sample (its colour index given) before the demosaic, in `f64`
+    /// (fused with the normalization) or `f32` (after OpcodeList2's `f32` stage image).
+    Sample(SampleFn<f64>, SampleFn<f32>),
+    /// The demosaic (the identity for a LinearRaw image).
     Demosaic,
-    /// OpcodeList3 on the demosaiced camera RGB.
-    Opcodes3,
-    /// Camera RGB -> linear sRGB by the colour matrix (or the [0, 1] clip of the network
-    /// input's camera RGB), per row.
-    Colour,
-    /// DefaultCropOrigin/DefaultCropSize.
-    DefaultCrop,
-    /// The EXIF/TIFF Orientation.
-    Orientation,
+    /// A function of one output row of interleaved RGB, after OpcodeList3.
+    Row(fn(&Rows, &mut [f32])),
+    /// How the output is cut from the active area (DefaultCrop, orientation).
+    Geometry,
 }
 
-/// The render pipeline, in order: what every execution runs.
-pub const STAGES: [Stage; 9] = [
-    Stage::Opcodes1,
-    Stage::Normalize,
-    Stage::Opcodes2,
-    Stage::WhiteBalance,
-    Stage::Demosaic,
-    Stage::Opcodes3,
-    Stage::Colour,
-    Stage::DefaultCrop,
-    Stage::Orientation,
-];
+/// A sample stage's function: the value `v` of colour `k` (0 red, 1 green, 2 blue).
+pub type SampleFn<T> = fn(&Samples, T, usize) -> T;
+
+/// The list of stages: `Variant => "name", Kind(functions);` in pipeline order (a stage
+/// marked `@cfg(...)` exists only under that configuration).
+macro_rules! stages {
+    (@kind Sample $f:ident) => { Kind::Sample($f::<f64>, $f::<f32>) };
+    (@kind Row $f:ident) => { Kind::Row($f) };
+    (@kind $kind:ident) => { Kind::$kind };
+    ($($(#[doc = $doc:expr])* $(@cfg($cfg:meta))? $v:ident => $name:literal, $kind:ident $(($f:ident))?;)*) => {
+        /// A stage of the render pipeline, in the order of [`STAGES`].
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        pub enum Stage {
+            $($(#[doc = $doc])* $(#[cfg($cfg)])? $v,)*
+        }
+
+        /// The render pipeline, in order: what every execution runs.
+        pub const STAGES: &[Stage] = &[$($(#[cfg($cfg)])? Stage::$v,)*];
+
+        impl Stage {
+            /// The stage's name (docs/isp.md, "The pipeline").
+            pub fn name(self) -> &'static str {
+                match self {
+                    $($(#[cfg($cfg)])? Stage::$v => $name,)*
+                }
+            }
+
+            /// Where the stage runs.
+            pub fn kind(self) -> Kind {
+                match self {
+                    $($(#[cfg($cfg)])? Stage::$v => stages!(@kind $kind $($f)?),)*
+                }
+            }
+        }
+    };
+}
+
+stages! {
+    /// OpcodeList1 on the stored values.
+    Opcodes1 => "opcodes1", Opcodes;
+    /// LinearizationTable, black level, scale to [0, 1] (DNG chapter 5).
+    Normalize => "normalize", Normalize;
+    /// OpcodeList2 on the normalized values.
+    Opcodes2 => "opcodes2", Opcodes;
+    /// White balance by the neutral, clipped to [0, 1].
+    WhiteBalance => "white-balance", Sample(white_balance);
+    /// A test's stage: the sample scaled by 1 (`isp::stages::tests`: every execution runs it).
+    @cfg(test) Probe => "probe", Sample(probe);
+    /// Demosaic (bilinear, MHC or Menon; the identity for a LinearRaw image).
+    Demosaic => "demosaic", Demosaic;
+    /// OpcodeList3 on the demosaiced camera RGB.
+    Opcodes3 => "opcodes3", Opcodes;
+    /// Camera RGB -> linear sRGB by the colour matrix (or the [0, 1] clip of the network
+    /// input's camera RGB), per row.
+    Colour => "colour", Row(colour);
+    /// DefaultCropOrigin/DefaultCropSize.
+    DefaultCrop => "default-crop", Geometry;
+    /// The EXIF/TIFF Orientation.
+    Orientation => "orientation", Geometry;
+}
 
 impl Stage {
-    /// The stage's name (docs/isp.md, "The pipeline").
-    pub fn name(self) -> &'static str {
-        match self {
-            Stage::Opcodes1 => "opcodes1",
-            Stage::Normalize => "normalize",
-            Stage::Opcodes2 => "opcodes2",
-            Stage::WhiteBalance => "white-balance",
-            Stage::Demosaic => "demosaic",
-            Stage::Opcodes3 => "opcodes3",
-            Stage::Colour => "colour",
-            Stage::DefaultCrop => "default-crop",
-            Stage::Orientation => "orientation",
-        }
-    }
-
-    fn bit(self) -> u16 {
+    fn bit(self) -> u32 {
         let i = STAGES.iter().position(|&s| s == self).unwrap_or(0);
         1 << i
     }
+}
+
+/// A sample value of a sample stage: `f64` (fused with the normalization) or `f32`.
+pub trait Sample: Copy + std::ops::Mul<Output = Self> {
+    /// `v` in this type.
+    fn of(v: f64) -> Self;
+    /// Clipped to [0, 1].
+    fn clip(self) -> Self;
+    /// The stage function `f` for this type applied to `v` of colour `k`.
+    fn apply(kind: Kind, s: &Samples, v: Self, k: usize) -> Self;
+}
+
+impl Sample for f64 {
+    #[inline]
+    fn of(v: f64) -> f64 {
+        v
+    }
+    #[inline]
+    fn clip(self) -> f64 {
+        self.clamp(0.0, 1.0)
+    }
+    #[inline]
+    fn apply(kind: Kind, s: &Samples, v: f64, k: usize) -> f64 {
+        match kind {
+            Kind::Sample(f, _) => f(s, v, k),
+            _ => v,
+        }
+    }
+}
+
+impl Sample for f32 {
+    #[inline]
+    fn of(v: f64) -> f32 {
+        v as f32
+    }
+    #[inline]
+    fn clip(self) -> f32 {
+        self.clamp(0.0, 1.0)
+    }
+    #[inline]
+    fn apply(kind: Kind, s: &Samples, v: f32, k: usize) -> f32 {
+        match kind {
+            Kind::Sample(_, f) => f(s, v, k),
+            _ => v,
+        }
+    }
+}
+
+/// What the sample stages of one render read: the white balance's inverse neutral.
+#[derive(Debug, Clone, Copy)]
+pub struct Samples {
+    /// `1 / neutral`, the neutral normalized to green = 1.
+    inv: [f64; 3],
+}
+
+impl Samples {
+    /// The sample stages of a render white-balanced by the normalized neutral `n`.
+    pub(crate) fn new(n: [f64; 3]) -> Samples {
+        Samples {
+            inv: [1.0 / n[0], 1.0, 1.0 / n[2]],
+        }
+    }
+
+    /// The sample stages of [`STAGES`] strictly between `from` and `to`, in order, on the
+    /// value `v` of colour `k`: every execution's one way to run them.
+    #[inline]
+    pub fn between<T: Sample>(&self, from: Stage, to: Stage, v: T, k: usize) -> T {
+        let mut v = v;
+        let mut on = false;
+        for &s in STAGES {
+            if s == to {
+                break;
+            }
+            if on {
+                v = T::apply(s.kind(), self, v, k);
+            }
+            on |= s == from;
+        }
+        v
+    }
+}
+
+/// [`Stage::WhiteBalance`]: divided by the neutral, clipped to [0, 1].
+#[inline]
+fn white_balance<T: Sample>(s: &Samples, v: T, k: usize) -> T {
+    (v * T::of(s.inv[k])).clip()
+}
+
+/// [`Stage::Probe`]: scaled by 1 (a test-only stage that every execution must run).
+#[cfg(test)]
+#[inline]
+fn probe<T: Sample>(_: &Samples, v: T, _: usize) -> T {
+    v * T::of(1.0)
 }
 
 /// The colour stage of a render: the colour matrix (linear sRGB output) or the clip of the
@@ -90,14 +218,30 @@ pub(crate) enum Colour {
     Clip,
 }
 
-impl Colour {
-    /// The stage on one interleaved row.
+/// What the row stages of one render read; [`Rows::run`] runs them on an output row.
+#[derive(Debug, Clone, Copy)]
+pub struct Rows {
+    colour: Colour,
+}
+
+impl Rows {
+    /// The row stages of [`STAGES`], in order, on one interleaved output row.
     #[inline]
-    pub(crate) fn row(&self, row: &mut [f32]) {
-        match self {
-            Colour::Matrix(m) => matrix_row(row, m),
-            Colour::Clip => clip_row(row),
+    pub fn run(&self, row: &mut [f32]) {
+        for &s in STAGES {
+            if let Kind::Row(f) = s.kind() {
+                f(self, row);
+            }
         }
+    }
+}
+
+/// [`Stage::Colour`] on one interleaved row.
+#[inline]
+fn colour(r: &Rows, row: &mut [f32]) {
+    match &r.colour {
+        Colour::Matrix(m) => matrix_row(row, m),
+        Colour::Clip => clip_row(row),
     }
 }
 
@@ -109,7 +253,7 @@ pub(crate) struct Plan<'a> {
     neutral: [f64; 3],
     opcodes: Option<Prepared>,
     colour: Colour,
-    asked: AtomicU16,
+    asked: AtomicU32,
 }
 
 impl<'a> Plan<'a> {
@@ -131,35 +275,52 @@ impl<'a> Plan<'a> {
             neutral,
             opcodes,
             colour,
-            asked: AtomicU16::new(0),
+            asked: AtomicU32::new(0),
         })
     }
 
-    /// Record that the execution runs `stage` (for the stages an execution computes with
-    /// code of its own, such as the LinearRaw normalization).
-    pub(crate) fn run(&self, stage: Stage) {
+    fn run(&self, stage: Stage) {
         self.asked.fetch_or(stage.bit(), Ordering::Relaxed);
     }
 
-    /// The opcode lists that apply (stages [`Stage::Opcodes1`], [`Stage::Opcodes2`] and
-    /// [`Stage::Opcodes3`]); `None`: no list applies and the three stages are the identity.
-    pub(crate) fn opcodes(&self) -> Option<&Prepared> {
-        for s in [Stage::Opcodes1, Stage::Opcodes2, Stage::Opcodes3] {
-            self.run(s);
+    /// Record that every stage of `kind` runs.
+    fn run_kind(&self, kind: fn(Kind) -> bool) {
+        for &s in STAGES {
+            if kind(s.kind()) {
+                self.run(s);
+            }
         }
+    }
+
+    /// The opcode lists that apply (the [`Kind::Opcodes`] stages); `None`: no list applies
+    /// and the three stages are the identity.
+    pub(crate) fn opcodes(&self) -> Option<&Prepared> {
+        self.run_kind(|k| matches!(k, Kind::Opcodes));
         self.opcodes.as_ref()
     }
 
-    /// The normalizer of the CFA samples ([`Stage::Normalize`]).
-    pub(crate) fn normalizer(&self) -> Result<Normalizer> {
-        self.run(Stage::Normalize);
-        Normalizer::new(self.img)
+    /// The sample stages ([`Kind::Sample`]) of a render whose normalization an execution
+    /// computes itself (a LinearRaw image's, per plane).
+    pub(crate) fn samples(&self) -> Result<Samples> {
+        self.run_kind(|k| matches!(k, Kind::Normalize | Kind::Sample(..)));
+        Ok(Samples::new(normalize_neutral(self.neutral)?))
     }
 
-    /// The neutral the white balance divides by, normalized to green = 1
-    /// ([`Stage::WhiteBalance`]).
+    /// The normalization and the sample stages of the CFA samples (the
+    /// [`Kind::Normalize`] and [`Kind::Sample`] stages); `linearize: false` drops the
+    /// LinearizationTable (a crop's samples are linear).
+    pub(crate) fn cfa(&self, linearize: bool) -> Result<CfaSites> {
+        let norm = Normalizer::new(self.img)?;
+        let norm = if linearize {
+            norm
+        } else {
+            norm.without_linearization()
+        };
+        CfaSites::new(self.img.bayer()?, norm, self.samples()?)
+    }
+
+    /// The neutral, normalized to green = 1 (what OpcodeList3 takes out and puts back).
     pub(crate) fn neutral(&self) -> Result<[f64; 3]> {
-        self.run(Stage::WhiteBalance);
         normalize_neutral(self.neutral)
     }
 
@@ -174,17 +335,17 @@ impl<'a> Plan<'a> {
         self.opts.demosaic
     }
 
-    /// The colour stage ([`Stage::Colour`]).
-    pub(crate) fn colour(&self) -> Colour {
-        self.run(Stage::Colour);
-        self.colour
+    /// The row stages ([`Kind::Row`]), run on every output row.
+    pub(crate) fn rows(&self) -> Rows {
+        self.run_kind(|k| matches!(k, Kind::Row(_)));
+        Rows {
+            colour: self.colour,
+        }
     }
 
-    /// Whether DefaultCrop and orientation apply ([`Stage::DefaultCrop`],
-    /// [`Stage::Orientation`]).
+    /// Whether DefaultCrop and orientation apply ([`Kind::Geometry`]).
     pub(crate) fn geometry(&self) -> (bool, bool) {
-        self.run(Stage::DefaultCrop);
-        self.run(Stage::Orientation);
+        self.run_kind(|k| matches!(k, Kind::Geometry));
         (self.opts.crop, self.opts.orient)
     }
 
@@ -192,7 +353,8 @@ impl<'a> Plan<'a> {
     pub(crate) fn ran(&self) -> Vec<Stage> {
         let asked = self.asked.load(Ordering::Relaxed);
         STAGES
-            .into_iter()
+            .iter()
+            .copied()
             .filter(|s| asked & s.bit() != 0)
             .collect()
     }
@@ -200,7 +362,11 @@ impl<'a> Plan<'a> {
     /// The stages of [`STAGES`] the execution did not run.
     pub(crate) fn missing(&self) -> Vec<Stage> {
         let ran = self.ran();
-        STAGES.into_iter().filter(|s| !ran.contains(s)).collect()
+        STAGES
+            .iter()
+            .copied()
+            .filter(|s| !ran.contains(s))
+            .collect()
     }
 
     /// Checked when an execution returns: it ran every stage (a debug assertion naming
@@ -215,32 +381,5 @@ impl<'a> Plan<'a> {
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::raw::{Bayer, RawMeta};
-
-    #[test]
-    fn a_plan_names_the_stages_an_execution_left_out() {
-        let img = RawImage {
-            width: 4,
-            height: 4,
-            data: vec![100; 16],
-            meta: RawMeta::new_bayer(Bayer::RGGB, 12, 0.0, 4095.0),
-        };
-        let opts = RenderOptions::default();
-        let plan = Plan::new(&img, &opts).unwrap();
-        assert_eq!(plan.missing(), STAGES.to_vec());
-        plan.neutral().unwrap();
-        plan.colour();
-        assert_eq!(plan.ran(), vec![Stage::WhiteBalance, Stage::Colour]);
-        assert!(plan.missing().contains(&Stage::Demosaic));
-        plan.opcodes();
-        plan.normalizer().unwrap();
-        plan.demosaic();
-        plan.geometry();
-        assert!(plan.missing().is_empty());
-        assert_eq!(plan.ran(), STAGES.to_vec());
-        let names: std::collections::HashSet<&str> = STAGES.iter().map(|s| s.name()).collect();
-        assert_eq!(names.len(), STAGES.len());
-    }
-}
+#[path = "stages_tests.rs"]
+mod tests;

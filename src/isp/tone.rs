@@ -34,6 +34,12 @@ impl FromStr for DisplayTone {
     }
 }
 
+impl std::fmt::Display for DisplayTone {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
 /// The smoothstep tone curve of the release, on [0, 1].
 #[inline]
 pub fn smoothstep(x: f32) -> f32 {
@@ -41,6 +47,15 @@ pub fn smoothstep(x: f32) -> f32 {
 }
 
 impl DisplayTone {
+    /// The name `--tone` takes (`srgb`, `gamma22`, `release`).
+    pub fn name(self) -> &'static str {
+        match self {
+            DisplayTone::Srgb => "srgb",
+            DisplayTone::Gamma22 => "gamma22",
+            DisplayTone::Release => "release",
+        }
+    }
+
     /// Display value in [0, 1] of a linear value (clamped to [0, 1] first; NaN -> 0).
     #[inline]
     pub fn encode(self, x: f32) -> f32 {

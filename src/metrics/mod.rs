@@ -17,6 +17,45 @@ pub use ssim::{ssim, SsimOptions, SsimWindow};
 use crate::error::{Error, Result};
 use crate::isp::RgbImage;
 
+/// What `eval` does with NaN/Inf samples in either image.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum NonFinite {
+    /// Refuse, naming the file and the count.
+    #[default]
+    Error,
+    /// Replace them by 0, with a warning.
+    Zero,
+}
+
+impl NonFinite {
+    /// Both policies.
+    pub const ALL: [NonFinite; 2] = [NonFinite::Error, NonFinite::Zero];
+    /// The name `eval --nonfinite` takes.
+    pub fn name(self) -> &'static str {
+        match self {
+            NonFinite::Error => "error",
+            NonFinite::Zero => "zero",
+        }
+    }
+}
+
+impl std::fmt::Display for NonFinite {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl std::str::FromStr for NonFinite {
+    type Err = Error;
+    fn from_str(s: &str) -> Result<NonFinite> {
+        let l = s.to_ascii_lowercase();
+        NonFinite::ALL
+            .into_iter()
+            .find(|m| m.name() == l)
+            .ok_or_else(|| Error::invalid(format!("nonfinite {s:?}: use error or zero")))
+    }
+}
+
 /// Error unless `a` and `b` are valid images of the same size.
 pub fn check_same_size(a: &RgbImage, b: &RgbImage) -> Result<()> {
     a.validate()?;

@@ -23,6 +23,37 @@ pub enum SsimWindow {
     Gaussian,
 }
 
+impl SsimWindow {
+    /// Both windows.
+    pub const ALL: [SsimWindow; 2] = [SsimWindow::Uniform7, SsimWindow::Gaussian];
+    /// The name `eval --ssim-window` and Python's `ssim(window=...)` take.
+    pub fn name(self) -> &'static str {
+        match self {
+            SsimWindow::Uniform7 => "uniform",
+            SsimWindow::Gaussian => "gaussian",
+        }
+    }
+}
+
+impl std::fmt::Display for SsimWindow {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl std::str::FromStr for SsimWindow {
+    type Err = crate::Error;
+    fn from_str(s: &str) -> crate::Result<SsimWindow> {
+        let l = s.to_ascii_lowercase();
+        SsimWindow::ALL
+            .into_iter()
+            .find(|w| w.name() == l)
+            .ok_or_else(|| {
+                crate::Error::invalid(format!("SSIM window {s:?}: use uniform or gaussian"))
+            })
+    }
+}
+
 /// SSIM parameters.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SsimOptions {

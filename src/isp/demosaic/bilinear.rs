@@ -2,7 +2,7 @@
 //! neighbours (2 or 4).
 
 use super::{per_row, Padded, Post, PAD};
-use crate::isp::RgbImage;
+use crate::isp::rgb::RgbImage;
 use crate::raw::Bayer;
 
 pub(super) fn run(p: &Padded, bayer: Bayer, post: &Post) -> RgbImage {

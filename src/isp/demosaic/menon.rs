@@ -10,7 +10,7 @@
 //! Each stage is one parallel pass over rows producing a mirror-padded plane.
 
 use super::{interleave, Padded, Post, PAD};
-use crate::isp::RgbImage;
+use crate::isp::rgb::RgbImage;
 use crate::raw::Bayer;
 
 pub(super) fn run(c: &Padded, bayer: Bayer, post: &Post) -> RgbImage {

@@ -3,7 +3,7 @@
 //! Laplacian of the known channel, as four 5x5 kernels (their Figure 2).
 
 use super::{per_row, Padded, Post, PAD};
-use crate::isp::RgbImage;
+use crate::isp::rgb::RgbImage;
 use crate::raw::Bayer;
 
 pub(super) fn run(p: &Padded, bayer: Bayer, post: &Post) -> RgbImage {

@@ -11,7 +11,7 @@ mod bilinear;
 mod menon;
 mod mhc;
 
-use super::RgbImage;
+use super::rgb::RgbImage;
 use crate::error::{Error, Result};
 use crate::raw::Bayer;
 use rayon::prelude::*;

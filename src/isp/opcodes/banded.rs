@@ -26,7 +26,7 @@
 //! unless a list runs whole or a warp takes the whole-image path.
 
 use super::bad_pixels::REACH;
-use super::pipeline::{checked_active, inverse_wb, moves_pixels, stage1};
+use super::pipeline::{checked_active, moves_pixels, stage1};
 use super::warp::Warp;
 use super::warp_window::{Axis, Chain, Strips, WindowStats};
 use super::{apply_region, apply_region_seq, pin, Prepared, Region, StageRect};
@@ -35,8 +35,8 @@ use crate::error::{Error, Result};
 use crate::isp::color::normalize_neutral;
 use crate::isp::demosaic::{demosaic_rect, Post, RowDemosaic, RowKernel, PAD};
 use crate::isp::place::{place, BandBody, Placement, RectFn};
+use crate::isp::pre_demosaic::CfaSites;
 use crate::limits::try_filled;
-use crate::normalize::Normalizer;
 use crate::raw::{Bayer, RawImage};
 use rayon::prelude::*;
 use std::borrow::Cow;
@@ -87,7 +87,7 @@ fn grown(range: &Range<usize>, by: usize, n: usize) -> Range<usize> {
 struct Frame<'a> {
     img: &'a RawImage,
     p: &'a Prepared,
-    norm: Normalizer,
+    sites: &'a CfaSites,
     bayer: Bayer,
     kernel: RowKernel,
     /// Active area size and origin in the stored image.
@@ -101,8 +101,6 @@ struct Frame<'a> {
     s1_whole: Option<Vec<u16>>,
     /// Stage 2 of the whole active area, when OpcodeList2 runs whole.
     s2_whole: Option<Grid<f32>>,
-    /// White balance of the demosaicer's input.
-    inv_wb: [f32; 3],
     /// The neutral (multiplied in for OpcodeList3) and its inverse (divided out after).
     nf: [f32; 3],
     inv_n: [f32; 3],
@@ -112,7 +110,7 @@ impl<'a> Frame<'a> {
     fn new(
         img: &'a RawImage,
         p: &'a Prepared,
-        norm: Normalizer,
+        sites: &'a CfaSites,
         n: [f64; 3],
         kernel: RowKernel,
     ) -> Result<Self> {
@@ -128,7 +126,7 @@ impl<'a> Frame<'a> {
         let mut f = Frame {
             img,
             p,
-            norm,
+            sites,
             bayer,
             kernel,
             aw,
@@ -139,7 +137,6 @@ impl<'a> Frame<'a> {
             reach2,
             s1_whole,
             s2_whole: None,
-            inv_wb: inverse_wb(n),
             nf: n.map(|v| v as f32),
             inv_n: n.map(|v| (1.0 / v) as f32),
         };
@@ -205,12 +202,12 @@ impl<'a> Frame<'a> {
                 }
             };
         let mut data = try_filled(0.0f32, gw * gh, "a normalized CFA window")?;
-        let norm = &self.norm;
+        let sites = self.sites;
         let fill = |i: usize, row: &mut [f32]| {
             let r = gr.start + i;
             let src = &s1[(r + top - s1_top) * s1_w + (gc.start + left - s1_left)..][..gw];
             for (k, (o, &x)) in row.iter_mut().zip(src).enumerate() {
-                *o = pin(norm.normalize(x, r, gc.start + k) as f32, 1.0);
+                *o = sites.stage2(x, r, gc.start + k);
             }
         };
         if par {
@@ -261,10 +258,8 @@ impl<'a> Frame<'a> {
             )?),
         };
         let mut out = try_filled(0.0f32, 3 * rw * rh, "a band of the render")?;
-        let (bayer, inv) = (self.bayer, self.inv_wb);
-        let site = |r: usize, c: usize| -> f32 {
-            (s2.get(r, c) * inv[bayer.color_at(r, c) as usize]).clamp(0.0, 1.0)
-        };
+        let (bayer, sites) = (self.bayer, self.sites);
+        let site = |r: usize, c: usize| -> f32 { sites.balanced(s2.get(r, c), r, c) };
         let cfa = RowDemosaic {
             width: self.aw,
             height: self.ah,
@@ -339,12 +334,13 @@ impl<'a> Frame<'a> {
     }
 }
 
-/// How [`render`] makes a row: normalization by `norm`, white balance by `neutral`, the row
-/// demosaicer `kernel`, and `post` on every output row.
+/// How [`render`] makes a row: the pre-demosaic step `sites` (normalization, the sample
+/// stages), the neutral OpcodeList3 takes out and puts back, the row demosaicer `kernel`,
+/// and `post` on every output row.
 pub(crate) struct RowRender<'a> {
-    /// The normalizer of the stage-1 samples.
-    pub(crate) norm: Normalizer,
-    /// The neutral the white balance divides by.
+    /// The normalization and sample stages of the stage-1 samples.
+    pub(crate) sites: &'a CfaSites,
+    /// The neutral (normalized to green = 1).
     pub(crate) neutral: [f64; 3],
     /// The row demosaicer.
     pub(crate) kernel: RowKernel,
@@ -398,13 +394,13 @@ pub(crate) fn render<R>(
         .filter(|&i| moves_pixels(&l3[i].kind))
         .collect();
     let RowRender {
-        norm,
+        sites,
         neutral,
         kernel,
         post,
     } = rows;
     let n = normalize_neutral(neutral)?;
-    let f = Frame::new(img, p, norm, n, kernel)?;
+    let f = Frame::new(img, p, sites, n, kernel)?;
     let dims = (f.aw, f.ah);
     let band = tune.band.max(1);
     let Some(&first) = at.first() else {

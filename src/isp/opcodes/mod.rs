@@ -47,8 +47,10 @@ pub enum OpcodeMode {
 }
 
 impl OpcodeMode {
-    /// `apply` or `ignore`.
-    pub fn name(self) -> &'static str {
+    /// Both modes.
+    pub const ALL: [OpcodeMode; 2] = [OpcodeMode::Apply, OpcodeMode::Ignore];
+    /// `apply` or `ignore` (the one spelling: the options table reads it).
+    pub const fn name(self) -> &'static str {
         match self {
             OpcodeMode::Apply => "apply",
             OpcodeMode::Ignore => "ignore",

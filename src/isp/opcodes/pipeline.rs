@@ -1,7 +1,7 @@
 //! The render stages with opcodes, in the Adobe DNG SDK's order (DNG 1.6 ch. 6):
 //! 1. OpcodeList1 on a copy of the stored values (stored-image coordinates, stored units),
 //!    rounded back to 16 bits;
-//! 2. normalization (the shared [`Normalizer`]: linearization, black, scale) pinned into
+//! 2. normalization (the shared [`Normalizer`](crate::normalize::Normalizer): linearization, black, scale) pinned into
 //!    [0, 1] like the SDK's 16-bit stage-2 image, then OpcodeList2 (active-area coordinates);
 //! 3. white balance by the neutral and clip (as the plain render), demosaic;
 //! 4. OpcodeList3 on the demosaiced camera RGB of the active area: the white balance is
@@ -22,8 +22,8 @@ use crate::error::{Error, Result};
 use crate::isp::color::normalize_neutral;
 use crate::isp::demosaic::{demosaic_rect, demosaic_rows, row_kernel, Demosaic, Post, RowDemosaic};
 use crate::isp::geometry::{apply_geometry, orient_image};
-use crate::isp::RgbImage;
-use crate::normalize::Normalizer;
+use crate::isp::pre_demosaic::CfaSites;
+use crate::isp::rgb::RgbImage;
 use crate::raw::crop::Crop;
 use crate::raw::{Bayer, RawImage};
 use rayon::prelude::*;
@@ -85,7 +85,7 @@ impl Stage2 {
 /// Normalize the stored samples `at(r, c)` (active-area coordinates) of `rect` and apply
 /// `ops` (OpcodeList2) over an active area of `aw x ah`.
 fn stage2(
-    norm: &Normalizer,
+    sites: &CfaSites,
     at: &(dyn Fn(usize, usize) -> u16 + Sync),
     rect: &Crop,
     ops: &[Opcode],
@@ -99,7 +99,7 @@ fn stage2(
             let r = rect.top + i;
             for (k, o) in row.iter_mut().enumerate() {
                 let c = rect.left + k;
-                *o = pin(norm.normalize(at(r, c), r, c) as f32, 1.0);
+                *o = sites.stage2(at(r, c), r, c);
             }
         });
     let mut reg = Region {
@@ -125,15 +125,12 @@ fn stage2(
 /// hold `out` and the demosaicer's neighbourhood, or the whole active area for Menon).
 fn demosaic_stage(
     s2: &Stage2,
-    bayer: Bayer,
-    inv: [f32; 3],
+    (bayer, sites): (Bayer, &CfaSites),
     method: Demosaic,
     out: &Crop,
     (aw, ah): (usize, usize),
 ) -> Result<RgbImage> {
-    let site = |r: usize, c: usize| -> f32 {
-        (s2.get(r, c) * inv[bayer.color_at(r, c) as usize]).clamp(0.0, 1.0)
-    };
+    let site = |r: usize, c: usize| -> f32 { sites.balanced(s2.get(r, c), r, c) };
     let Some(kernel) = row_kernel(method) else {
         if (out.width, out.height) != (aw, ah) {
             return Err(Error::unsupported(format!(
@@ -300,10 +297,6 @@ pub(crate) fn moves_pixels(kind: &OpcodeKind) -> bool {
     )
 }
 
-pub(crate) fn inverse_wb(n: [f64; 3]) -> [f32; 3] {
-    [(1.0 / n[0]) as f32, 1.0, (1.0 / n[2]) as f32]
-}
-
 /// The active area of `img` as (width, height, top, left), checked to be non-empty and
 /// inside the pixel buffer (the opcode paths index the buffer directly).
 pub(crate) fn checked_active(img: &RawImage) -> Result<(usize, usize, usize, usize)> {
@@ -323,7 +316,7 @@ pub(crate) fn checked_active(img: &RawImage) -> Result<(usize, usize, usize, usi
 fn frame_stage3(
     img: &RawImage,
     p: &Prepared,
-    norm: Normalizer,
+    sites: &CfaSites,
     n: [f64; 3],
     method: Demosaic,
 ) -> Result<Stage3> {
@@ -343,8 +336,8 @@ fn frame_stage3(
     let sw = img.width;
     let at = |r: usize, c: usize| stored[(r + top) * sw + left + c];
     let whole = Crop::whole(aw, ah);
-    let s2 = stage2(&norm, &at, &whole, p.list(ListId::List2), (aw, ah))?;
-    let rgb = demosaic_stage(&s2, bayer, inverse_wb(n), method, &whole, (aw, ah))?;
+    let s2 = stage2(sites, &at, &whole, p.list(ListId::List2), (aw, ah))?;
+    let rgb = demosaic_stage(&s2, (bayer, sites), method, &whole, (aw, ah))?;
     drop(s2);
     let mut s3 = Stage3 {
         rgb,
@@ -362,14 +355,14 @@ fn frame_stage3(
 pub(crate) fn render_frame_region(
     img: &RawImage,
     p: &Prepared,
-    norm: Normalizer,
+    sites: &CfaSites,
     neutral: [f64; 3],
     method: Demosaic,
     post: &Post,
     region: &Crop,
 ) -> Result<RgbImage> {
     let n = normalize_neutral(neutral)?;
-    let s3 = frame_stage3(img, p, norm, n, method)?;
+    let s3 = frame_stage3(img, p, sites, n, method)?;
     let b = s3.extent;
     let inside = region.top as i64 >= b.t
         && region.left as i64 >= b.l
@@ -390,13 +383,14 @@ pub(crate) fn render_frame_region(
     Ok(out)
 }
 
-/// The whole-frame render of `img` with the opcodes `p`: normalization by `norm`, white
-/// balance by `neutral`, `method`, `post` on every row of the stage-3 image, then
+/// The whole-frame render of `img` with the opcodes `p`: the pre-demosaic step `sites`
+/// around OpcodeList2, `method`, OpcodeList3 (the white balance by `neutral` taken out
+/// and put back), `post` on every row of the stage-3 image, then
 /// DefaultCrop (if `crop`) and orientation (if `orient`).
 pub(crate) fn render_frame(
     img: &RawImage,
     p: &Prepared,
-    norm: Normalizer,
+    sites: &CfaSites,
     neutral: [f64; 3],
     method: Demosaic,
     post: &Post,
@@ -405,7 +399,7 @@ pub(crate) fn render_frame(
     let n = normalize_neutral(neutral)?;
     let a = img.active_area();
     let (aw, ah) = (a.width(), a.height());
-    let mut s3 = frame_stage3(img, p, norm, n, method)?;
+    let mut s3 = frame_stage3(img, p, sites, n, method)?;
     let w = s3.rgb.width.max(1);
     s3.rgb.data.par_chunks_mut(3 * w).for_each(post);
     finish_geometry(s3.rgb, s3.extent, &img.meta, (aw, ah), crop, orient)
@@ -460,7 +454,7 @@ pub struct StoredCrop<'a> {
 }
 
 /// The render of the active-area rectangle `crop` of a frame (levels and colour from
-/// `frame`, normalized by `norm`: LinearizationTable ignored as in
+/// `frame`, normalized by `sites`: LinearizationTable ignored as in
 /// [`crate::isp::render_crop`]) from the stored
 /// samples `stored` (whose rectangle holds the crop and the demosaicer's margin), with the
 /// pointwise opcodes `p`: the same expressions as [`render_frame`], so the result equals
@@ -468,7 +462,7 @@ pub struct StoredCrop<'a> {
 pub(crate) fn render_crop(
     frame: &RawImage,
     p: &Prepared,
-    (norm, neutral): (Normalizer, [f64; 3]),
+    (sites, neutral): (&CfaSites, [f64; 3]),
     method: Demosaic,
     stored: StoredCrop,
     crop: &Crop,
@@ -501,8 +495,8 @@ pub(crate) fn render_crop(
         ))
     };
     let at = |r: usize, c: usize| values[(r - outer.top) * outer.width + (c - outer.left)];
-    let s2 = stage2(&norm, &at, outer, p.list(ListId::List2), (aw, ah))?;
-    let rgb = demosaic_stage(&s2, bayer, inverse_wb(n), method, crop, (aw, ah))?;
+    let s2 = stage2(sites, &at, outer, p.list(ListId::List2), (aw, ah))?;
+    let rgb = demosaic_stage(&s2, (bayer, sites), method, crop, (aw, ah))?;
     let mut s3 = Stage3 {
         rgb,
         top: crop.top,

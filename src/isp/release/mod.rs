@@ -22,18 +22,20 @@
 //! them); nothing here touches the project's own ISP.
 
 pub mod colour;
+pub mod conflicts;
 pub mod finish;
 pub mod menon;
 pub mod meta;
 pub mod mosaic;
 
+pub use conflicts::{conflicts, Conflict};
 pub use finish::{Rgb, Rgb64};
 pub use meta::ReleaseMeta;
 
 use crate::diagnostics::Warning;
 use crate::error::Result;
 use crate::isp::flat::FlatCheck;
-use crate::isp::RgbImage;
+use crate::isp::rgb::RgbImage;
 use crate::raw::RawImage;
 use rayon::prelude::*;
 

@@ -20,12 +20,21 @@ impl Interp {
     /// All interpolants.
     pub const ALL: [Interp; 3] = [Interp::Bilinear, Interp::CatmullRom, Interp::Lanczos3];
 
-    /// Command-line name.
-    pub fn name(self) -> &'static str {
+    /// Command-line name (the one spelling: the options table and the sidecar read it).
+    pub const fn name(self) -> &'static str {
         match self {
             Interp::Bilinear => "bilinear",
             Interp::CatmullRom => "catmull-rom",
             Interp::Lanczos3 => "lanczos3",
+        }
+    }
+
+    /// Other spellings accepted for the same interpolant.
+    pub const fn aliases(self) -> &'static [&'static str] {
+        match self {
+            Interp::Bilinear => &[],
+            Interp::CatmullRom => &["cubic"],
+            Interp::Lanczos3 => &["lanczos"],
         }
     }
 
@@ -81,14 +90,14 @@ impl std::fmt::Display for Interp {
 impl std::str::FromStr for Interp {
     type Err = crate::error::Error;
     fn from_str(s: &str) -> crate::error::Result<Interp> {
-        match s {
-            "bilinear" => Ok(Interp::Bilinear),
-            "catmull-rom" | "cubic" => Ok(Interp::CatmullRom),
-            "lanczos3" | "lanczos" => Ok(Interp::Lanczos3),
-            _ => Err(crate::error::Error::invalid(format!(
-                "interpolant {s:?} (use bilinear, catmull-rom or lanczos3)"
-            ))),
-        }
+        Interp::ALL
+            .into_iter()
+            .find(|k| k.name() == s || k.aliases().contains(&s))
+            .ok_or_else(|| {
+                crate::error::Error::invalid(format!(
+                    "interpolant {s:?} (use bilinear, catmull-rom or lanczos3)"
+                ))
+            })
     }
 }
 
@@ -135,5 +144,14 @@ mod tests {
         }
         assert_eq!("catmull-rom".parse::<Interp>().unwrap(), Interp::CatmullRom);
         assert!("nearest".parse::<Interp>().is_err());
+    }
+
+    #[test]
+    fn every_name_and_alias_parses_back() {
+        for k in Interp::ALL {
+            for s in std::iter::once(k.name()).chain(k.aliases().iter().copied()) {
+                assert_eq!(s.parse::<Interp>().unwrap(), k, "{s}");
+            }
+        }
     }
 }

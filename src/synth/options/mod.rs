@@ -255,6 +255,20 @@ impl Choice {
         }
     }
 
+    /// A name with its aliases (an enum's spellings), no parameter.
+    pub const fn of(
+        name: &'static str,
+        aliases: &'static [&'static str],
+        help: &'static str,
+    ) -> Choice {
+        Choice {
+            name,
+            help,
+            aliases,
+            param: None,
+        }
+    }
+
     /// The value as a list of choices shows it (`truncated:K`).
     pub fn shown(&self) -> &'static str {
         self.param.unwrap_or(self.name)

@@ -6,6 +6,7 @@ use super::{Choice, Constant, Kind, OptDefault, OptionDef, Python, Range, Value,
 use crate::bounds::{EXR_ZIP_LEVEL_RANGE, MAX_LIGHTS, SEED_RANGE};
 use crate::encode::exr::ExrCompression;
 use crate::error::{Error, Result};
+use crate::isp::opcodes::OpcodeMode;
 use crate::synth::burst::{Interp, Motion};
 use crate::synth::config::{parse_isos, parse_neutral};
 use crate::synth::{Covariance, MaskEval, Mode, RelightFormula};
@@ -418,8 +419,11 @@ at 18x and 50x the compression time). Lossless at every level. See docs/benchmar
         name: "opcodes",
         value_name: "MODE",
         kind: Kind::Choice(&[
-            Choice::new("apply", "Apply them"),
-            Choice::new("ignore", "Ignore them (the authors' data preparation)"),
+            Choice::new(OpcodeMode::Apply.name(), "Apply them"),
+            Choice::new(
+                OpcodeMode::Ignore.name(),
+                "Ignore them (the authors' data preparation)",
+            ),
         ]),
         default: OptDefault::Derived("apply; ignore under --compat release"),
         help: "DNG opcode lists of the input in the rendered targets and inputs. The night DNGs \
@@ -522,20 +526,23 @@ pixels",
         name: "warp-interp",
         value_name: "KIND",
         kind: Kind::Choice(&[
-            Choice {
-                aliases: &["cubic"],
-                ..Choice::new(
-                    "catmull-rom",
-                    "Catmull-Rom cubic (4 taps per axis): interpolating, sharp",
-                )
-            },
-            Choice {
-                aliases: &["lanczos"],
-                ..Choice::new("lanczos3", "Lanczos, 3 lobes (6 taps per axis)")
-            },
-            Choice::new("bilinear", "Bilinear (2 taps per axis): blurs"),
+            Choice::of(
+                Interp::CatmullRom.name(),
+                Interp::CatmullRom.aliases(),
+                "Catmull-Rom cubic (4 taps per axis): interpolating, sharp",
+            ),
+            Choice::of(
+                Interp::Lanczos3.name(),
+                Interp::Lanczos3.aliases(),
+                "Lanczos, 3 lobes (6 taps per axis)",
+            ),
+            Choice::of(
+                Interp::Bilinear.name(),
+                Interp::Bilinear.aliases(),
+                "Bilinear (2 taps per axis): blurs",
+            ),
         ]),
-        default: OptDefault::Value("catmull-rom"),
+        default: OptDefault::Value(Interp::CatmullRom.name()),
         help: "Interpolant of the burst warp",
         python: Python::Keyword,
         python_alias: None,

@@ -567,3 +567,46 @@ fn a_serialized_single_frame_reads_back_with_the_burst_defaults() {
         serde_json::from_str(r#"{"frames": 3}"#).unwrap();
     assert_eq!(partial.shake, burst_defaults().shake);
 }
+
+#[test]
+fn choices_read_from_their_enums_spell_every_value_once() {
+    use crate::isp::opcodes::OpcodeMode;
+    use crate::synth::burst::Interp;
+    // (option, the enum's spellings: name and aliases, in the enum's order)
+    let spellings = |all: Vec<(&'static str, &'static [&'static str])>| {
+        let mut v: Vec<_> = all
+            .into_iter()
+            .map(|(n, a)| (n, a.to_vec()))
+            .collect::<Vec<_>>();
+        v.sort();
+        v
+    };
+    let enums = [
+        (
+            "warp-interp",
+            spellings(
+                Interp::ALL
+                    .iter()
+                    .map(|k| (k.name(), k.aliases()))
+                    .collect(),
+            ),
+        ),
+        (
+            "opcodes",
+            spellings(
+                OpcodeMode::ALL
+                    .iter()
+                    .map(|m| (m.name(), &[][..]))
+                    .collect(),
+            ),
+        ),
+    ];
+    for (option, want) in enums {
+        let def = find(option).unwrap();
+        let Kind::Choice(choices) = def.kind else {
+            panic!("{option}: not a choice");
+        };
+        let got = spellings(choices.iter().map(|c| (c.name, c.aliases)).collect());
+        assert_eq!(got, want, "{option}");
+    }
+}

@@ -10,7 +10,9 @@ No torch here.
 
 import numpy as np
 
-from .._native import encode_u8, release_window, render, render_release_u8  # noqa: F401
+from .._native import (  # noqa: F401
+    encode_u8, release_conflicts, release_window, render, render_release_u8,
+)
 
 
 def srgb8(linear, tone="srgb"):
@@ -39,11 +41,11 @@ def render_target(raw, neutral=None, demosaic="mhc", tone="srgb", isp="day2night
 
     ``neutral`` defaults to the raw's AsShotNeutral."""
     if isp == "release":
-        for name, value, default, own in (("demosaic", demosaic, "mhc", "menon"),
-                                          ("tone", tone, "srgb", "release")):
-            if value not in (default, own):
-                raise ValueError(f"{name}={value!r}: isp='release' uses {name}={own!r} "
-                                 "(leave it out)")
+        conflict = release_conflicts([("demosaic", demosaic), ("tone", tone)])
+        if conflict is not None:
+            name, value, own = conflict
+            raise ValueError(f"{name}={value!r}: isp='release' uses {name}={own!r} "
+                             "(leave it out)")
         return render_release_u8(raw, neutral=neutral, orient=orient)
     if isp != "day2night":
         raise ValueError(f"isp={isp!r}: use 'day2night' or 'release'")
