@@ -11,6 +11,7 @@ No torch here.
 import numpy as np
 
 from .._native import encode_u8, release_window, render, render_release_u8  # noqa: F401
+from ..variants import Isp
 
 
 def srgb8(linear, tone="srgb"):
@@ -24,7 +25,7 @@ def srgb8(linear, tone="srgb"):
     return encode_u8(np.ascontiguousarray(a), tone)
 
 
-def render_target(raw, neutral=None, demosaic="mhc", tone="srgb", isp="day2night", orient=True):
+def render_target(raw, neutral=None, demosaic="mhc", tone="srgb", isp=Isp.DAY2NIGHT, orient=True):
     """The 8-bit sRGB target of a raw.
 
     ``isp="day2night"`` (default): aligned pixel for pixel with
@@ -45,7 +46,7 @@ def render_target(raw, neutral=None, demosaic="mhc", tone="srgb", isp="day2night
                 raise ValueError(f"{name}={value!r}: isp='release' uses {name}={own!r} "
                                  "(leave it out)")
         return render_release_u8(raw, neutral=neutral, orient=orient)
-    if isp != "day2night":
+    if isp != Isp.DAY2NIGHT:
         raise ValueError(f"isp={isp!r}: use 'day2night' or 'release'")
     return srgb8(render(raw, neutral=neutral, demosaic=demosaic, crop=False, orient=False), tone)
 
