@@ -95,3 +95,27 @@ def test_members_behave_as_their_names():
 def test_signatures_read_as_before(fn, text):
     assert str(inspect.signature(fn)) == text
 
+
+def test_help_texts_read_the_presets():
+    """The training options' help texts are made from presets.py's values: changed there,
+    the help follows (a fresh interpreter imports config.py after the change)."""
+    import subprocess
+    import sys
+
+    code = ("from day2night.experiment import presets\n"
+            "presets.PAPER.update(epochs=501, width=33, patch=80, batch=129, lr=2e-3)\n"
+            "presets.PRESETS['mini'].update(epochs=41, width=9, patch=48, batch=7, lr=3e-2)\n"
+            "presets.PAPER_FOLDS = 4\n"
+            "import dataclasses\n"
+            "from day2night.experiment import config\n"
+            "for f in dataclasses.fields(config.ExperimentConfig):\n"
+            "    print(f.name, '|', f.metadata['help'], '|', f.metadata['default_from'])\n")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         check=True).stdout
+    lines = {ln.split(" | ")[0]: ln for ln in out.splitlines()}
+    assert "paper and default: 501; --preset mini: 41" in lines["epochs"]
+    assert "paper and default: 33;" in lines["width"] and "mini: 9)" in lines["width"]
+    assert "default and paper: 4;" in lines["folds"] and "'fold file', 4)" in lines["folds"]
+    assert "width 9, 48 x 48 patches, batch 7, lr 3e-2, 41 epochs" in lines["preset"]
+    assert "(paper: 80;" in lines["patch"] and "(paper: 129)" in lines["batch"]
+    assert "(paper: 2e-3)" in lines["lr"]
