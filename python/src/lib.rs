@@ -9,7 +9,8 @@
 //! `synthesize` (`synthesize`, `write_outputs`), `render`, `metrics`, `pairs`
 //! (`NightPairs` items), `patches` (`fresh_pair`: `FreshPatches` items), `dataset_units`,
 //! `network_input` (`release_codes`, `demosaic_bilinear`: the release's network input),
-//! `png` (`png_bytes`), `pool` (`set_threads`, `threads`), `merge` (a burst's mean).
+//! `png` (`png_bytes`), `png_decode` (`png_decode`), `pool` (`set_threads`, `threads`), `merge` (a
+//! burst's mean).
 #![forbid(unsafe_code)]
 
 mod args;
@@ -25,6 +26,7 @@ mod option_default;
 mod pairs;
 mod patches;
 mod png;
+mod png_decode;
 mod pool;
 mod raw;
 mod raw_from;
@@ -54,6 +56,7 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(network_input::release_codes, m)?)?;
     m.add_function(wrap_pyfunction!(network_input::demosaic_bilinear, m)?)?;
     m.add_function(wrap_pyfunction!(png::png_bytes, m)?)?;
+    m.add_function(wrap_pyfunction!(png_decode::png_decode, m)?)?;
     m.add_function(wrap_pyfunction!(metrics::psnr, m)?)?;
     m.add_function(wrap_pyfunction!(metrics::ssim, m)?)?;
     m.add_function(wrap_pyfunction!(metrics::delta_e2000, m)?)?;
