@@ -29,8 +29,8 @@ pub(crate) fn release_noise<'py>(
     let key: PyReadonlyArray1<'py, u32> = key
         .extract()
         .map_err(|_| value_err("release noise: the state's key must be a uint32 array"))?;
-    let mut rng = LegacyState::new(key.as_array().to_vec(), pos, has_gauss != 0, gauss)
-        .map_err(py_err)?;
+    let mut rng =
+        LegacyState::new(key.as_array().to_vec(), pos, has_gauss != 0, gauss).map_err(py_err)?;
     let v = plane.as_array();
     let (h, w) = v.dim();
     let samples: Vec<f32> = v.iter().copied().collect();

@@ -145,7 +145,8 @@ mod tests {
     }
 
     /// `r = RandomState(0); r.random_sample(); r.standard_normal(3)`.
-    const NUMPY_SEED0_NORMALS_AFTER_ONE_DOUBLE: [f64; 3] = [0.7415917408091613, 1.5529137219128164, -2.268328201180374];
+    const NUMPY_SEED0_NORMALS_AFTER_ONE_DOUBLE: [f64; 3] =
+        [0.7415917408091613, 1.5529137219128164, -2.268328201180374];
 
     #[test]
     fn a_short_key_is_refused() {

@@ -101,7 +101,10 @@ mod tests {
         assert_eq!(t.isos(), [100, 200, 400, 800, 1600, 3200]);
         assert_eq!((t.black, t.white), (64.0, 1023.0));
         let e = t.betas(6400).unwrap_err().to_string();
-        assert!(e.contains("ISO 6400: the release's S20 FE table has 100, 200"), "{e}");
+        assert!(
+            e.contains("ISO 6400: the release's S20 FE table has 100, 200"),
+            "{e}"
+        );
     }
 
     #[test]
