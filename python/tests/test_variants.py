@@ -8,6 +8,8 @@ import ast
 import inspect
 import json
 import pathlib
+import subprocess
+import sys
 
 import pytest
 
@@ -99,9 +101,6 @@ def test_signatures_read_as_before(fn, text):
 def test_help_texts_read_the_presets():
     """The training options' help texts are made from presets.py's values: changed there,
     the help follows (a fresh interpreter imports config.py after the change)."""
-    import subprocess
-    import sys
-
     code = ("from day2night.experiment import presets\n"
             "presets.PAPER.update(epochs=501, width=33, patch=80, batch=129, lr=2e-3)\n"
             "presets.PRESETS['mini'].update(epochs=41, width=9, patch=48, batch=7, lr=3e-2)\n"
