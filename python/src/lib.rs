@@ -9,7 +9,9 @@
 //! `synthesize` (`synthesize`, `write_outputs`), `render`, `metrics`, `pairs`
 //! (`NightPairs` items), `patches` (`fresh_pair`: `FreshPatches` items), `dataset_units`,
 //! `network_input` (`release_codes`, `demosaic_bilinear`: the release's network input),
-//! `png` (`png_bytes`), `pool` (`set_threads`, `threads`), `merge` (a burst's mean).
+//! `png` (`png_bytes`), `png_decode` (`png_decode`), `release_noise` (`release_noise`,
+//! `RELEASE_NOISE_TABLE`: the release's noise), `pool` (`set_threads`, `threads`), `merge` (a
+//! burst's mean).
 #![forbid(unsafe_code)]
 
 mod args;
@@ -25,9 +27,11 @@ mod option_default;
 mod pairs;
 mod patches;
 mod png;
+mod png_decode;
 mod pool;
 mod raw;
 mod raw_from;
+mod release_noise;
 mod render;
 mod synth_options;
 mod synthesize;
@@ -55,6 +59,9 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(network_input::release_codes, m)?)?;
     m.add_function(wrap_pyfunction!(network_input::demosaic_bilinear, m)?)?;
     m.add_function(wrap_pyfunction!(png::png_bytes, m)?)?;
+    m.add_function(wrap_pyfunction!(png_decode::png_decode, m)?)?;
+    m.add_function(wrap_pyfunction!(release_noise::release_noise, m)?)?;
+    m.add("RELEASE_NOISE_TABLE", release_noise::table_dict(m.py())?)?;
     m.add_function(wrap_pyfunction!(metrics::psnr, m)?)?;
     m.add_function(wrap_pyfunction!(metrics::ssim, m)?)?;
     m.add_function(wrap_pyfunction!(metrics::delta_e2000, m)?)?;

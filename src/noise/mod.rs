@@ -10,11 +10,13 @@ pub mod apply;
 pub mod estimate;
 pub mod estimate_fit;
 pub mod model;
+pub mod numpy_legacy;
 pub mod params;
 pub mod physics;
 pub mod physics_apply;
 pub mod poisson_table;
 pub mod provenance;
+pub mod release;
 pub mod tukey;
 pub mod tukey_table;
 

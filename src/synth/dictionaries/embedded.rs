@@ -19,6 +19,7 @@
 use super::xy::parse_illuminant_file;
 use super::{IlluminantDict, IlluminantSource};
 use crate::error::{Error, Result};
+use crate::noise::release::DnTable;
 use crate::noise::NoiseModel;
 use crate::raw::camera::CameraId;
 use std::sync::OnceLock;
@@ -122,6 +123,38 @@ pub fn illuminants() -> IlluminantDict {
 /// The paper phone's noise model, in the portable normalized form.
 pub fn noise_model() -> NoiseModel {
     paper().noise.clone()
+}
+
+/// The paper phone's noise table in DN as the release holds it (the noise file's
+/// `dn_table`): the figures of the release's noise ([`crate::noise::release`]).
+pub fn paper_dn_table() -> &'static DnTable {
+    static TABLE: OnceLock<DnTable> = OnceLock::new();
+    TABLE.get_or_init(|| match parse_dn_table(PAPER_PHONE.noise_json) {
+        Ok(t) => t,
+        // Data compiled into the binary, decoded by a unit test on every build.
+        Err(err) => unreachable!("embedded calibration samsung-s20fe/noise.json: {err}"),
+    })
+}
+
+/// A noise file's `dn_table` (`black`, `white`, `rows` of [ISO, position, beta1, beta2]).
+fn parse_dn_table(json: &str) -> Result<DnTable> {
+    #[derive(serde::Deserialize)]
+    struct File {
+        dn_table: Table,
+    }
+    #[derive(serde::Deserialize)]
+    struct Table {
+        black: f64,
+        white: f64,
+        rows: Vec<(u32, usize, f64, f64)>,
+    }
+    let f: File = serde_json::from_str(json)
+        .map_err(|e| Error::malformed(format!("noise file dn_table: {e}")))?;
+    Ok(DnTable {
+        black: f.dn_table.black,
+        white: f.dn_table.white,
+        rows: f.dn_table.rows,
+    })
 }
 
 #[cfg(test)]

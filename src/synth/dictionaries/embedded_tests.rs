@@ -15,6 +15,8 @@ fn the_noise_file_isos_are_its_dn_table_converted() {
     assert_eq!(rows.len(), 24);
     let (black, white) = (t["black"].as_f64().unwrap(), t["white"].as_f64().unwrap());
     assert_eq!((black, white), (64.0, 1023.0));
+    let dn = paper_dn_table();
+    assert_eq!((dn.black, dn.white, &dn.rows), (black, white, &rows));
     let c = paper();
     let mut from_dn =
         NoiseModel::from_dn_table(c.noise.source.clone(), &rows, black, white).unwrap();

@@ -29,6 +29,7 @@ from ..train.targets import render_target
 from .realset import sha256_file
 from .unit import _num, _report_images
 from .config import ExperimentError
+from ..variants import Isp, Layout
 
 ROW = "burst"
 TASK = "noisy"
@@ -118,7 +119,7 @@ def _is_dng(p):
 
 def _iso_of(path, layout):
     """A frame's ISO as real-pairs reads it: from the release's name, else the DNG's Exif."""
-    if layout == "release":
+    if layout == Layout.RELEASE:
         name = path.name
         if not name.startswith("RAW_0_00"):
             return None
@@ -142,7 +143,7 @@ def scene_bursts(captures, scene, counts):
     rpath, rec = scene_record(scene)
     layout, rel = rec.get("layout"), rec.get("input")
     folder = pathlib.Path(captures) / str(rel)
-    if layout not in ("release", "simple") or not isinstance(rel, str) or not folder.is_dir():
+    if layout not in tuple(Layout) or not isinstance(rel, str) or not folder.is_dir():
         raise ExperimentError(
             f"--captures {captures}: no folder {rel!r} of scene {scene.id} (its record {rpath} "
             f"names layout {layout!r}): give the folder real-pairs made the real set from")
@@ -180,7 +181,7 @@ def _release_grid(merged):
     area = merged.meta.get("active_area") or [0, 0, *merged.data.shape[:2]]
     shape = (int(area[2]) - int(area[0]), int(area[3]) - int(area[1]))
     t, l, h, w = pairs.release_window(merged.meta, *shape)
-    stored = np.asarray(render_target(merged, isp="release", orient=False), np.uint8)
+    stored = np.asarray(render_target(merged, isp=Isp.RELEASE, orient=False), np.uint8)
     if stored.shape[:2] != (h, w):
         raise ExperimentError(f"{merged.file_name}: the release render is "
                               f"{stored.shape[1]}x{stored.shape[0]}, its window {w}x{h}")
@@ -194,7 +195,7 @@ def prediction(merged, y, geometry, targets):
     AsShotNeutral, DNG opcode lists ignored (as every target), then cut and turned onto the
     pixel grid of the test target ``y`` (``geometry``: pairs.real_target's) exactly as the
     pairing cuts and turns a network input (pairs.align): ``(pred, y)``."""
-    if targets == "release":
+    if targets == Isp.RELEASE:
         grid, window = _release_grid(merged)
     else:
         grid, _ = pairs.render_target_as(targets, merged, None, display=False)

@@ -51,9 +51,21 @@ def opt(default=None, help=None, flags=None, group=None, record=None, paper=None
 
 
 def _paper(name, help, **kw):
-    """A training option recorded only when it is not the paper's, from the preset."""
-    return opt(help=help, group=TRAINING, record="paper", paper=presets.PAPER[name],
-               default_from=(FROM_PRESET,), **kw)
+    """A training option recorded only when it is not the paper's, from the preset (``{}``
+    in ``help``: the paper's value)."""
+    return opt(help=help.format(_num(presets.PAPER[name])), group=TRAINING, record="paper",
+               paper=presets.PAPER[name], default_from=(FROM_PRESET,), **kw)
+
+
+def _num(v):
+    """A preset value as the help spells it: 500, 1e-3."""
+    if isinstance(v, float) and v < 0.1:
+        mantissa, exp = f"{v:e}".split("e")
+        return f"{float(mantissa):g}e{int(exp)}"
+    return f"{v:g}"
+
+
+PAPER, MINI = presets.PAPER, presets.PRESETS["mini"]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -71,7 +83,8 @@ class ExperimentConfig:
                         metavar="SCENES")
     # (the recorded fields in the order a resume names the first that differs: CONFIG_KEYS)
     task: str = opt("both", record="always", choices=["clean", "noisy", "both"])
-    epochs: int = opt(help="training epochs (paper and default: 500; --preset mini: 40)",
+    epochs: int = opt(help=f"training epochs (paper and default: {PAPER['epochs']}; --preset "
+                      f"mini: {MINI['epochs']})",
                       record="always", default_from=(FROM_PRESET,))
     seed: int = opt(0, help="seed of the folds, the synthetic data and the first training "
                     "seed", record="always")
@@ -82,10 +95,12 @@ class ExperimentConfig:
     compare_to: str = opt(help="reference row of the table's paired comparisons (default: "
                           "day, the row the paper's claims are made against; untrained when "
                           "day is not run)", metavar="ROW")
-    folds: int = opt(help="cross-validation folds (default and paper: 3; with --folds-file: "
-                     "the file's)", record="always", default_from=(FROM_FOLD_FILE, 3))
-    width: int = opt(help="UNet init_features (paper and default: 32; smaller for tests, smoke "
-                     "runs and --preset mini: 8)", record="always",
+    folds: int = opt(help=f"cross-validation folds (default and paper: {presets.PAPER_FOLDS}; "
+                     "with --folds-file: the file's)", record="always",
+                     default_from=(FROM_FOLD_FILE, presets.PAPER_FOLDS))
+    width: int = opt(help=f"UNet init_features (paper and default: {PAPER['width']}; smaller "
+                     f"for tests, smoke runs and --preset mini: {MINI['width']})",
+                     record="always",
                      default_from=(FROM_PRESET,))
     device: str = opt("cpu", record="always", choices=["cpu", "cuda"])
     rows: tuple = opt(help="rows to run (default: all)", record="always", nargs="+",
@@ -115,11 +130,13 @@ class ExperimentConfig:
     #: The fold file's SHA-256 (set by :func:`resolve`; no flag).
     folds_sha256: str = opt(record="always", flags=())
     preset: str = opt(help="named settings: paper (the default) or mini (learns on a 2-core "
-                      "CPU in minutes: width 8, 32 x 32 patches, batch 8, lr 1e-2, 40 epochs)",
+                      f"CPU in minutes: width {MINI['width']}, {MINI['patch']} x "
+                      f"{MINI['patch']} patches, batch {MINI['batch']}, lr {_num(MINI['lr'])}, "
+                      f"{MINI['epochs']} epochs)",
                       group=TRAINING, record="set", choices=sorted(presets.PRESETS))
-    patch: int = _paper("patch", "training patch side (paper: 64; a multiple of 16)")
-    batch: int = _paper("batch", "patches per training step (paper: 128)")
-    lr: float = _paper("lr", "Adam's learning rate (paper: 1e-3)")
+    patch: int = _paper("patch", "training patch side (paper: {}; a multiple of 16)")
+    batch: int = _paper("batch", "patches per training step (paper: {})")
+    lr: float = _paper("lr", "Adam's learning rate (paper: {})")
     workers: int = opt(0, help="DataLoader worker processes (the same batches with any "
                        "number)", group=TRAINING)
     amp: str = opt(help="bfloat16 mixed precision (for GPUs)", group=TRAINING, record="paper",
@@ -193,7 +210,7 @@ class ExperimentConfig:
     @property
     def smoke(self):
         """A network narrower than the paper's: for tests and smoke runs."""
-        return self.width < 32
+        return self.width < PAPER["width"]
 
     def record(self):
         """``RUN/config.json``: the recorded options (the module's docstring), as written

@@ -29,6 +29,7 @@ from ..png import read_png
 from ..train.preprocess import network_input
 from ..train.targets import render_target, srgb8
 from .release_noise import noise_key, release_noisy_plane
+from ..variants import Geometry, Isp, Noise
 
 
 
@@ -166,9 +167,9 @@ def real_pair(scene, task_iso, targets=None, source=None):
 
 
 GEOMETRY_TEXT = {
-    "raw": "the active area itself",
-    "render": "neither its DefaultCrop + Orientation nor a quarter turn",
-    "release": "neither the release's crop + orientation nor a quarter turn",
+    Geometry.RAW: "the active area itself",
+    Geometry.RENDER: "neither its DefaultCrop + Orientation nor a quarter turn",
+    Geometry.RELEASE: "neither the release's crop + orientation nor a quarter turn",
 }
 
 
@@ -182,11 +183,11 @@ def real_target(scene, targets, source):
     :func:`real_pair`)."""
     if targets is None:
         return read_png(scene.target), None
-    if source == targets == "release":
-        return read_png(scene.target), "release"
+    if source == targets == Isp.RELEASE:
+        return read_png(scene.target), Geometry.RELEASE
     clean = _read_dng(scene.clean_raw, f"scene {scene.id}")
-    if source == targets == "day2night" and not has_opcodes(clean.meta):
-        return read_png(scene.target), "render"
+    if source == targets == Isp.DAY2NIGHT and not has_opcodes(clean.meta):
+        return read_png(scene.target), Geometry.RENDER
     # neutral None: the clean raw's own AsShotNeutral, read as each ISP reads it (the
     # release's as stored)
     return render_target_as(targets, clean, None, display=True)
@@ -198,19 +199,19 @@ def render_target_as(isp, raw, neutral, display):
     release ignores them too). ``display``: day2night's target in the geometry real-pairs
     writes (DefaultCrop, Orientation: geometry "render"), else the active area as stored
     (geometry "raw"). The release's ISP has one geometry, its own ("release")."""
-    if isp == "release":
-        return release_render(raw, neutral), "release"
-    if isp != "day2night":
+    if isp == Isp.RELEASE:
+        return release_render(raw, neutral), Geometry.RELEASE
+    if isp != Isp.DAY2NIGHT:
         raise PairError(f"targets {isp!r}: use release or day2night")
     rgb = day2night.render(raw, neutral=neutral, demosaic="mhc", crop=display, orient=display,
                            opcodes="ignore")
-    return srgb8(rgb), ("render" if display else "raw")
+    return srgb8(rgb), (Geometry.RENDER if display else Geometry.RAW)
 
 
 def release_render(raw, neutral):
     """The release ISP's 8-bit target of ``raw`` (``render --isp release``: its crop and its
     orientation, opcode lists ignored)."""
-    return np.asarray(render_target(raw, neutral=neutral, isp="release"), np.uint8)
+    return np.asarray(render_target(raw, neutral=neutral, isp=Isp.RELEASE), np.uint8)
 
 
 def orient(img, orientation):
@@ -264,15 +265,15 @@ def _candidates(x, y, meta, geometry):
     """The ways ``x`` (active area, stored orientation) may sit on ``y``'s pixel grid, most
     likely first: each an (x', y') pair."""
     o = meta.get("orientation")
-    if geometry == "raw":
+    if geometry == Geometry.RAW:
         return [(x, y)]
     out = []
-    if geometry in (None, "render"):
+    if geometry in (None, Geometry.RENDER):
         xc = _default_crop(x, meta)
         if xc is not None:
             out.append((orient(xc, o), y))
         out.append((orient(x, o), y))  # a render without the DefaultCrop
-    if geometry in (None, "release"):
+    if geometry in (None, Geometry.RELEASE):
         t, l, h, w = release_window(meta, *x.shape[:2])
         out.append((release_orient(x[t : t + h, l : l + w], o), y))
     # a target that is the active area turned a quarter (the release's portrait PNGs, which
@@ -301,14 +302,15 @@ def align(x, y, meta, geometry=None):
     return None
 
 
-def synth_pairs(day_path, mode, seed, isos=NOISY_ISOS, targets="day2night", noise="day2night"):
+def synth_pairs(day_path, mode, seed, isos=NOISY_ISOS, targets=Isp.DAY2NIGHT,
+                noise=Noise.DAY2NIGHT):
     """{key: (x, y)} of one day image synthesized in ``mode``: key ``"clean"`` and each ISO.
 
     ``targets``: the ISP of the target (day2night's, with opcodes ignored like the input,
     or the release's); ``noise``: the noisy inputs' noise (``"day2night"``: the synthesis'
     own model; ``"release"``: release_noise.py on the clean night raw)."""
     day = _read_dng(day_path, "day image")
-    own_isos = tuple(isos) if noise == "day2night" else ()
+    own_isos = tuple(isos) if noise == Noise.DAY2NIGHT else ()
     try:
         out = day2night.synthesize(day, seed=seed, mode=mode, isos=own_isos, target=None)
     except ValueError as e:
@@ -320,7 +322,7 @@ def synth_pairs(day_path, mode, seed, isos=NOISY_ISOS, targets="day2night", nois
     y, geometry = render_target_as(targets, clean, neutral, display=False)
     planes = {"clean": out["clean"]}
     for iso in isos:
-        if noise == "release":
+        if noise == Noise.RELEASE:
             planes[iso] = release_noisy_plane(out["clean"], day.meta["active_area"], iso,
                                               noise_key(seed, day.name, iso))
         else:

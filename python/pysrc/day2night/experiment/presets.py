@@ -17,6 +17,9 @@ before."""
 #: The source name of these values in a config field's ``default_from`` (config.py).
 FROM_PRESET = "preset"
 PAPER = {"epochs": 500, "width": 32, "patch": 64, "batch": 128, "lr": 1e-3}
+#: The paper's cross-validation folds (``--folds``' default without a fold file; not a preset
+#: value: a fold file's count wins).
+PAPER_FOLDS = 3
 PRESETS = {
     "paper": dict(PAPER),
     "mini": {"epochs": 40, "width": 8, "patch": 32, "batch": 8, "lr": 1e-2},

@@ -26,14 +26,15 @@ import numpy as np
 import day2night
 
 from ..isos import NOISY_ISOS  # noqa: F401  (re-exported)
+from ..variants import Isp, Noise, Protocol, SynthIso
 from . import mix as mix_mod
 from . import release_folds
 from .folds import FoldError
 
-TARGETS = ("release", "day2night")
-NOISE = ("day2night", "release")
-SYNTH_ISO = ("alternate", "release")
-PROTOCOLS = ("day2night", "release")
+TARGETS = tuple(Isp)
+NOISE = tuple(Noise)
+SYNTH_ISO = tuple(SynthIso)
+PROTOCOLS = tuple(Protocol)
 
 
 class ProtocolError(ValueError):
@@ -46,8 +47,9 @@ class ProtocolError(ValueError):
 FROM_PROTOCOL, FROM_REAL_SET, FROM_FOLD_FILE = "protocol", "real set", "fold file"
 #: The values each ``--protocol`` gives (the table above); under day2night's, ``--targets``
 #: comes from the real set (:func:`real_target_isp`).
-PRESETS = {"day2night": {"noise": "day2night", "synth_iso": "alternate"},
-           "release": {"targets": "release", "noise": "release", "synth_iso": "release"}}
+PRESETS = {Protocol.DAY2NIGHT: {"noise": Noise.DAY2NIGHT, "synth_iso": SynthIso.ALTERNATE},
+           Protocol.RELEASE: {"targets": Isp.RELEASE, "noise": Noise.RELEASE,
+                              "synth_iso": SynthIso.RELEASE}}
 
 
 def _choice(value, choices, flag):
@@ -63,7 +65,7 @@ def check_flags(protocol=None, targets=None, noise=None, synth_iso=None, folds_f
     _choice(targets, TARGETS, "--targets")
     _choice(noise, NOISE, "--noise")
     _choice(synth_iso, SYNTH_ISO, "--synth-iso")
-    if protocol == "release" and folds_file is None:
+    if protocol == Protocol.RELEASE and folds_file is None:
         raise ProtocolError(
             "--protocol release needs --folds-file PATH: the release's "
             "utils/k_fold_indices_saved.p (or its JSON export; docs/experiment.md)"
@@ -105,17 +107,17 @@ def scene_target_isp(root, rec):
     """``"release"`` or ``"day2night"``: the ISP of one real-pairs record's target PNG."""
     stages = [str(st) for st in rec.get("stages") or []]
     if "copy_target_png" in stages:
-        return "release"  # the processed night_real tree's clean/NNN.png, copied
-    if any(st.startswith("render_png") and "release" in st for st in stages):
-        return "release"  # real-pairs --isp release, if its stage says so
+        return Isp.RELEASE  # the processed night_real tree's clean/NNN.png, copied
+    if any(st.startswith("render_png") and Isp.RELEASE in st for st in stages):
+        return Isp.RELEASE  # real-pairs --isp release, if its stage says so
     meta = pathlib.Path(root) / "real" / "meta" / f"{rec.get('scene')}.json"
     try:
         target = json.loads(meta.read_text(encoding="utf-8")).get("target") or {}
     except (OSError, ValueError, AttributeError):
         target = {}
-    if target.get("png") == "copied" or target.get("isp") == "release":
-        return "release"
-    return "day2night"
+    if target.get("png") == "copied" or target.get("isp") == Isp.RELEASE:
+        return Isp.RELEASE
+    return Isp.DAY2NIGHT
 
 
 def real_target_isps(real_dir):
@@ -135,7 +137,7 @@ def real_target_isp(real_dir):
     """The default of ``--targets``: ``release`` when every real target came from the release's
     ISP, else ``day2night``."""
     isps = set(real_target_isps(real_dir).values())
-    return "release" if isps == {"release"} else "day2night"
+    return Isp.RELEASE if isps == {Isp.RELEASE} else Isp.DAY2NIGHT
 
 
 def release_isos(names, seed, isos=NOISY_ISOS):
@@ -165,8 +167,9 @@ def with_isos(slots, isos):
 
 # What a config.json written before these options ran with (resume reads a missing key as
 # this): day2night's protocol, targets, noise and alternating ISOs, no fold file.
-LEGACY_CONFIG = {"protocol": "day2night", "targets": "day2night", "noise": "day2night",
-                 "synth_iso": "alternate", "folds_file": None, "folds_sha256": None}
+LEGACY_CONFIG = {"protocol": Protocol.DAY2NIGHT, "targets": Isp.DAY2NIGHT,
+                 "noise": Noise.DAY2NIGHT, "synth_iso": SynthIso.ALTERNATE, "folds_file": None,
+                 "folds_sha256": None}
 
 
 def for_run(config):
@@ -176,7 +179,7 @@ def for_run(config):
     target ISP, the fold file's number of folds). A ``--folds`` that differs from the fold
     file's is an error."""
     isps = real_target_isps(config.real)
-    real = "release" if isps and set(isps.values()) == {"release"} else "day2night"
+    real = Isp.RELEASE if isps and set(isps.values()) == {Isp.RELEASE} else Isp.DAY2NIGHT
     path, sha, count = fold_file(config.folds_file)
     counted = {}
     if path is not None:
@@ -192,7 +195,7 @@ def for_run(config):
 def run_isos(synth_iso, days, seed):
     """{day image: ISO} of the run's synthetic noisy inputs under ``synth_iso = release``
     (``days``: the day images' names), else None (mix.py's alternation by slot)."""
-    if synth_iso != "release":
+    if synth_iso != SynthIso.RELEASE:
         return None
     return release_isos(days, seed)
 
@@ -215,7 +218,7 @@ def fresh_rows(selected, targets, noise, named):
     synthesizes with day2night's ISP and noise (``FreshPatches`` has no release option), so
     under ``--targets release`` or ``--noise release`` it would put a second ISP into the
     table: it is left out of the default rows then, and refused when named."""
-    if targets == "day2night" and noise == "day2night":
+    if targets == Isp.DAY2NIGHT and noise == Noise.DAY2NIGHT:
         return selected
     if named and any(r.source == "fresh" for r in selected):
         raise ProtocolError(
@@ -229,17 +232,17 @@ def notes(config, days, scenes, target_isps):
     """Lines for the run's log about what the protocol does not reach (``days``: {name:
     day DNG}; ``scenes``: the real scenes' ids)."""
     out = []
-    if config.targets != "day2night" or config.noise != "day2night":
+    if config.targets != Isp.DAY2NIGHT or config.noise != Noise.DAY2NIGHT:
         out.append("the fresh row is left out: it synthesizes with day2night's ISP and noise "
                    "(FreshPatches), and this run's targets or noise are the release's")
-    if config.noise == "release" and days:
+    if config.noise == Noise.RELEASE and days:
         first = sorted(days)[0]
         white = day2night.read_dng(str(days[first])).meta.get("white_level")
         if white is not None and float(white) != 1023:
             out.append(f"--noise release clips the noisy raws at 1023, as the release does for "
                        f"its 10-bit phone; {first} has white level {white:g}: its highlights "
                        "saturate")
-    isps = [target_isps.get(s, "day2night") for s in scenes]
+    isps = [target_isps.get(s, Isp.DAY2NIGHT) for s in scenes]
     mixed = set(isps) - {config.targets}
     if mixed:
         n = sum(i != config.targets for i in isps)

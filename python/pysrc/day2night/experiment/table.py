@@ -26,6 +26,7 @@ from .rows import UNTRAINED, select, tasks_of, test_keys, with_untrained
 from .rows import units as row_units
 from .runfolder import read_scores, unit_dir, unit_id
 from .stats import bootstrap_seed
+from ..variants import Isp, Noise
 
 METRICS = ("psnr", "ssim", "delta_e")
 PAPER = {
@@ -240,7 +241,8 @@ def _burst_done(out, task, row):
 
 def _left_out(config):
     """The rows the protocol dropped (protocol.fresh_rows), with the reason."""
-    if "fresh" in config.rows or (config.targets == "day2night" and config.noise == "day2night"):
+    if "fresh" in config.rows or (config.targets == Isp.DAY2NIGHT
+                                  and config.noise == Noise.DAY2NIGHT):
         return []
     return [{"task": t, "row": "fresh", "why": FRESH_WHY} for t in tasks_of(config.task)]
 

@@ -10,6 +10,7 @@ import day2night
 from ..isos import NOISY_ISOS
 from .. import delta_e2000_map
 from . import demap, names, pairs
+from ..variants import Isp
 from ..png import write_png
 from ..train.config import TrainConfig
 from ..train.data import FixedPatches, FreshPatches, fresh_budget
@@ -51,7 +52,7 @@ def _fixed_shape(targets, raw):
     if area:
         h, w = int(area[2]) - int(area[0]), int(area[3]) - int(area[1])
     shape = (h, w)
-    if targets == "release":
+    if targets == Isp.RELEASE:
         shape = tuple(pairs.release_window(raw.meta, h, w)[2:])
     side = min(int(crop[2]), int(crop[3])) if crop else min(h, w)
     return shape, side

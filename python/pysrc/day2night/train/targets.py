@@ -13,6 +13,7 @@ import numpy as np
 from .._native import (  # noqa: F401
     encode_u8, release_conflicts, release_window, render, render_release_u8,
 )
+from ..variants import Isp
 
 
 def srgb8(linear, tone="srgb"):
@@ -26,7 +27,7 @@ def srgb8(linear, tone="srgb"):
     return encode_u8(np.ascontiguousarray(a), tone)
 
 
-def render_target(raw, neutral=None, demosaic="mhc", tone="srgb", isp="day2night", orient=True):
+def render_target(raw, neutral=None, demosaic="mhc", tone="srgb", isp=Isp.DAY2NIGHT, orient=True):
     """The 8-bit sRGB target of a raw.
 
     ``isp="day2night"`` (default): aligned pixel for pixel with
@@ -40,14 +41,14 @@ def render_target(raw, neutral=None, demosaic="mhc", tone="srgb", isp="day2night
     only name what it does (``"menon"``, ``"release"``) or be left out.
 
     ``neutral`` defaults to the raw's AsShotNeutral."""
-    if isp == "release":
+    if isp == Isp.RELEASE:
         conflict = release_conflicts([("demosaic", demosaic), ("tone", tone)])
         if conflict is not None:
             name, value, own = conflict
             raise ValueError(f"{name}={value!r}: isp='release' uses {name}={own!r} "
                              "(leave it out)")
         return render_release_u8(raw, neutral=neutral, orient=orient)
-    if isp != "day2night":
+    if isp != Isp.DAY2NIGHT:
         raise ValueError(f"isp={isp!r}: use 'day2night' or 'release'")
     return srgb8(render(raw, neutral=neutral, demosaic=demosaic, crop=False, orient=False), tone)
 
