@@ -12,7 +12,7 @@ import pathlib
 import day2night
 
 from ..isos import NOISY_ISOS
-from . import pairs
+from . import names, pairs
 from .source import PairSource
 from .runfolder import RunFolderError, npy_header
 
@@ -108,9 +108,10 @@ class _Patches:
         kind, name = marker
         out, inputs = pathlib.Path(self.exp.out), self.exp.inputs
         if kind == "real":
-            cached, dng = out / "data" / "real" / f"{name}.y.npy", inputs.scenes[name].clean_raw
+            cached = out / "data" / "real" / f"{names.scene_stem(name)}.y.npy"
+            dng = inputs.scenes[name].clean_raw
         else:
-            stem = name.replace("/", "__").rsplit(".", 1)[0]
+            stem = names.day_stem(name)
             cached = [*sorted((out / "data").glob(f"synth-*/{stem}.y.npy")), None][0]
             dng = inputs.days[name]
         if cached is not None and cached.is_file():

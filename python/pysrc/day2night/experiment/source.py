@@ -44,11 +44,11 @@ class PairSource:
         """(x_path, y_path) of day image ``name`` synthesized in ``mode`` for input ``key``."""
         folder = self.out / "data" / f"synth-{mode}"
         stem = names.day_stem(name)  # within the file system's name limit
-        names = {}
+        files = {}
         if "clean" in self.tasks:
-            names["clean"] = stem
+            files["clean"] = stem
         if "noisy" in self.tasks:
-            names.update({iso: f"{stem}_{iso}" for iso in NOISY_ISOS})
+            files.update({iso: f"{stem}_{iso}" for iso in NOISY_ISOS})
         c = self.config
 
         def make():
@@ -58,7 +58,7 @@ class PairSource:
             except (pairs.PairError, ValueError) as e:
                 raise ExperimentError(str(e)) from None
 
-        return pairs.cached(folder, names, make)[key]
+        return pairs.cached(folder, files, make)[key]
 
     def slot_pair(self, slot, task, mode):
         """The pair of a training or validation slot (mix.py's dicts)."""
