@@ -9,6 +9,7 @@
 #   DATASET=0 benches/compare.sh             # skip the dataset rows
 #   BIG=1 benches/compare.sh                 # also the 109 MP default synth (peak RSS)
 #   WORK=DIR benches/compare.sh              # scratch directory (default: mktemp -d)
+#   NO_BUILD=1 benches/compare.sh            # build nothing, take the binaries as they are
 #
 # Binaries: NEW_BIN defaults to this tree's release build (built here, CARGO_TARGET_DIR or
 # target/); BASE_BIN to $BASE_SRC's release build when BASE_SRC is set (built with
@@ -37,14 +38,17 @@ if [ ! -x /usr/bin/time ]; then
 fi
 
 cd "$ROOT"
-cargo build --release --quiet --bin day2night --example make_bench_input --example make_tiled_input
+# NO_BUILD=1: take the binaries and examples already built
+[ "${NO_BUILD:-0}" = 1 ] ||
+    cargo build --release --quiet --bin day2night --example make_bench_input --example make_tiled_input
 NEW_BIN=${NEW_BIN:-$CARGO_TARGET_DIR/release/day2night}
 GEN=$CARGO_TARGET_DIR/release/examples/make_bench_input
 TILE=$CARGO_TARGET_DIR/release/examples/make_tiled_input
 if [ -z "${BASE_BIN:-}" ]; then
     if [ -n "${BASE_SRC:-}" ]; then
         BASE_TARGET=${BASE_TARGET:-/work/tgt/base}
-        (cd "$BASE_SRC" && CARGO_TARGET_DIR=$BASE_TARGET cargo build --release --quiet --bin day2night)
+        [ "${NO_BUILD:-0}" = 1 ] ||
+            (cd "$BASE_SRC" && CARGO_TARGET_DIR=$BASE_TARGET cargo build --release --quiet --bin day2night)
         BASE_BIN=$BASE_TARGET/release/day2night
     else
         BASE_BIN=/work/tgt/base/release/day2night
@@ -91,7 +95,7 @@ pair() {
 }
 
 load0=$(cut -d' ' -f1-3 /proc/loadavg)
-pair synth "$RUNS" synth "$IN" -o "$WORK/out" --target both --jobs 2 --seed 1
+pair synth "$RUNS" synth "$IN" -o "$WORK/out" --target both --jobs 2 --seed 1 -q
 if [ "$DATASET" = 1 ]; then
     mkdir -p "$WORK/days"
     for i in $(seq -w 1 20); do
@@ -103,7 +107,7 @@ fi
 if [ "$BIG" = 1 ]; then
     BIG_IN=$WORK/day109.dng
     [ -f "$BIG_IN" ] || "$TILE" "$IN" "$BIG_IN"
-    pair big "$BIG_RUNS" synth "$BIG_IN" -o "$WORK/out"
+    pair big "$BIG_RUNS" synth "$BIG_IN" -o "$WORK/out" -q
 fi
 load1=$(cut -d' ' -f1-3 /proc/loadavg)
 

@@ -479,6 +479,7 @@ fn parity(k: [f32; 2], c0: usize) -> [f32; 2] {
 /// Apply `f(num, den, ye, mask, k)` element-wise, two columns at a time so that the CFA
 /// factor is a constant per lane (no per-sample parity index; same arithmetic per element).
 #[inline]
+#[allow(clippy::needless_range_loop)] // one index into five fixed-size arrays: the lanes
 fn pairwise<F: Fn(&mut f32, &mut f32, f32, f32, f32)>(
     num: &mut [f32],
     den: &mut [f32],

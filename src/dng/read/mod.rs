@@ -89,9 +89,12 @@ pub fn read_dng_with<T: Send>(
     Ok((img, t))
 }
 
+/// What [`structure`] finds: byte order, metadata, geometry and block ranges.
+type Structure = (ByteOrder, RawMeta, Geometry, Vec<pixels::BlockAt>);
+
 /// The byte order, metadata, geometry and block ranges of a DNG whose blocks can be
 /// decoded one at a time (None for the others).
-fn structure(bytes: &[u8]) -> Result<Option<(ByteOrder, RawMeta, Geometry, Vec<pixels::BlockAt>)>> {
+fn structure(bytes: &[u8]) -> Result<Option<Structure>> {
     let tiff = parse(bytes)?;
     let dng = locate(&tiff)?;
     let raw = dng.raw;
