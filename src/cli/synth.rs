@@ -163,6 +163,13 @@ pub fn run(args: SynthArgs) -> CmdResult {
 }
 
 /// Everything decided once per run.
+/// The day input of a variant: shared with the input's other variants, or handed over (the
+/// last variant: its clean raw is made in the day's plane).
+enum Day<'a> {
+    Shared(&'a DayInput),
+    Owned(DayInput),
+}
+
 struct Run<'a> {
     job: &'a SynthJob,
     seed: u64,
@@ -227,16 +234,24 @@ impl Run<'_> {
                         day.sha256, sc.input.sha256
                     )));
                 }
-                self.variant(input, &day, &stem, &sc.planned())?;
+                self.variant(input, Day::Owned(day), &stem, &sc.planned())?;
             }
             None => {
-                for v in 0..self.job.variants {
+                // The last variant takes the day raw: its clean raw is made in the day's
+                // plane (one plane of samples in memory instead of two).
+                let last = self.job.variants.saturating_sub(1);
+                for v in 0..last {
                     if stop_requested().is_some() {
                         return Err(Error::Interrupted);
                     }
                     let planned = self.job.plan(&day, &name, self.seed, v)?;
-                    self.variant(input, &day, &stem, &planned)?;
+                    self.variant(input, Day::Shared(&day), &stem, &planned)?;
                 }
+                if stop_requested().is_some() {
+                    return Err(Error::Interrupted);
+                }
+                let planned = self.job.plan(&day, &name, self.seed, last)?;
+                self.variant(input, Day::Owned(day), &stem, &planned)?;
             }
         }
         Ok(())
@@ -247,7 +262,7 @@ impl Run<'_> {
     fn variant(
         &self,
         input: &Path,
-        day: &DayInput,
+        day: Day<'_>,
         stem: &str,
         planned: &Planned,
     ) -> day2night::Result<()> {
@@ -256,7 +271,10 @@ impl Run<'_> {
         let base = self.job.base_name(stem, &planned.plan);
         let _set = OutputSetLock::acquire(self.out, &base, self.wait)?;
         let sink = DirSink::new(self.out, base, self.policy);
-        let run = self.job.run_variant(day, planned, &sink);
+        let run = match day {
+            Day::Shared(day) => self.job.run_variant(day, planned, &sink),
+            Day::Owned(day) => self.job.run_variant_owned(day, planned, &sink),
+        };
         // The plan's warnings are said whether or not the run succeeded; the run's after it.
         let name = input.display().to_string();
         let written = match run {

@@ -50,7 +50,7 @@
 #[cfg(doc)]
 use super::night::synthesize;
 use super::night::Night;
-use super::night::{synthesize_into, NightSink, Request};
+use super::night::{synthesize_into, synthesize_owned, NightSink, Request};
 use super::relight::RunReport;
 use super::sidecar::{CalibrationInfo, InputInfo, OutputInfo, Provenance, Sidecar, SIDECAR_FORMAT};
 use super::SynthOptions;
@@ -195,6 +195,26 @@ impl SynthJob {
     ) -> Result<VariantOutputs> {
         self.write_with(day, planned, sink, |files| {
             synthesize_into(&day.raw, &planned.plan, &self.request(), files).map(|s| s.report)
+        })
+    }
+
+    /// [`SynthJob::run_variant`] that takes `day` and computes the clean raw in the day
+    /// raw's own plane ([`super::night::synthesize_owned`]): the same files, byte for byte,
+    /// with one plane of samples in memory instead of two (for an input's last variant).
+    pub fn run_variant_owned(
+        &self,
+        mut day: DayInput,
+        planned: &Planned,
+        sink: &dyn OutputSink,
+    ) -> Result<VariantOutputs> {
+        let raw = crate::raw::RawImage {
+            width: day.raw.width,
+            height: day.raw.height,
+            data: std::mem::take(&mut day.raw.data),
+            meta: day.raw.meta.clone(),
+        };
+        self.write_with(&day, planned, sink, |files| {
+            synthesize_owned(raw, &planned.plan, &self.request(), files).map(|s| s.report)
         })
     }
 

@@ -38,7 +38,7 @@
 //! ```
 
 use super::burst::frames::{clean_crops, frame_noisy_crop, with_frame_rows};
-use super::relight::{run_clean, run_clean_crop, RunReport};
+use super::relight::{run_clean, run_clean_crop, run_clean_in_place, RunReport};
 use super::{night_meta, run_noise, with_noisy_rows, Plan};
 use crate::error::{Error, Result};
 use crate::isp::flat::{self, FlatCheck};
@@ -143,7 +143,6 @@ pub fn synthesize_into<S: NightSink>(
     req: &Request,
     sink: &S,
 ) -> Result<Synthesized> {
-    let mut stages = Vec::new();
     let (clean, report) = match &req.crop {
         None => whole_frame(day, plan, req, sink)?,
         Some(crop) => {
@@ -155,6 +154,38 @@ pub fn synthesize_into<S: NightSink>(
             cropped(day, plan, req.target, crop, sink)?
         }
     };
+    Ok(Synthesized {
+        clean,
+        report,
+        stages: stage_names(req),
+    })
+}
+
+/// [`synthesize_into`] that takes the day raw and, for a whole frame, computes the clean
+/// raw in the day's own plane ([`super::relight::run_clean_in_place`]): the same products
+/// with one plane of samples in memory instead of two.
+pub fn synthesize_owned<S: NightSink>(
+    day: RawImage,
+    plan: &Plan,
+    req: &Request,
+    sink: &S,
+) -> Result<Synthesized> {
+    if req.crop.is_some() {
+        return synthesize_into(&day, plan, req, sink);
+    }
+    let meta = day.meta.clone();
+    let (clean, report) = run_clean_in_place(day, plan)?;
+    let (clean, report) = whole_frame_of(&meta, clean, report, plan, req, sink)?;
+    Ok(Synthesized {
+        clean,
+        report,
+        stages: stage_names(req),
+    })
+}
+
+/// The products [`Synthesized::stages`] lists for `req`.
+fn stage_names(req: &Request) -> Vec<String> {
+    let mut stages = Vec::new();
     if req.target {
         stages.push("render_target".into());
     }
@@ -164,11 +195,7 @@ pub fn synthesize_into<S: NightSink>(
     if req.crop.is_some() {
         stages.push("crop".into());
     }
-    Ok(Synthesized {
-        clean,
-        report,
-        stages,
-    })
+    stages
 }
 
 /// What the warnings about a constant render call the target and the network input.
@@ -181,8 +208,20 @@ fn whole_frame<S: NightSink>(
     req: &Request,
     sink: &S,
 ) -> Result<(RawImage, RunReport)> {
-    let (mut clean, mut report) = run_clean(day, plan)?;
-    clean.meta = night_meta(&day.meta, plan, plan.clean_iso, &plan.clean_noise);
+    let (clean, report) = run_clean(day, plan)?;
+    whole_frame_of(&day.meta, clean, report, plan, req, sink)
+}
+
+/// The products of a whole frame from its clean raw (`day_meta`: the day raw's metadata).
+fn whole_frame_of<S: NightSink>(
+    day_meta: &RawMeta,
+    mut clean: RawImage,
+    mut report: RunReport,
+    plan: &Plan,
+    req: &Request,
+    sink: &S,
+) -> Result<(RawImage, RunReport)> {
+    clean.meta = night_meta(day_meta, plan, plan.clean_iso, &plan.clean_noise);
     let clean = clean;
     // Watches the target's bands as they are made: a constant render is said (sidecar).
     let target_flat = FlatCheck::new();

@@ -87,7 +87,10 @@ pub fn run_clean(img: &RawImage, plan: &Plan) -> Result<(RawImage, RunReport)> {
         .take(ah)
         .map_init(
             || Scratch::new(aw),
-            |scr, (srow, row)| pass.row(srow - top, &mut row[left..left + aw], scr),
+            |scr, (srow, row)| {
+                let src = &img.data[srow * width..][..width];
+                pass.row(srow - top, src, &mut row[left..left + aw], scr)
+            },
         )
         .sum();
     let mut meta = img.meta.clone();
@@ -103,6 +106,48 @@ pub fn run_clean(img: &RawImage, plan: &Plan) -> Result<(RawImage, RunReport)> {
     ))
 }
 
+/// [`run_clean`] computed in the day raw's own plane: each stored row is copied aside and
+/// relit in place, so the clean raw takes the day plane's memory instead of a second plane
+/// (the day samples are gone afterwards). The same image and report as [`run_clean`].
+pub fn run_clean_in_place(mut img: RawImage, plan: &Plan) -> Result<(RawImage, RunReport)> {
+    let a = img.active_area();
+    let pass = CleanPass::new(&img, plan, Crop::whole(a.width(), a.height()))?;
+    let (top, left, aw, ah) = (a.top as usize, a.left as usize, a.width(), a.height());
+    let width = img.width;
+    let norm = &pass.norm;
+    let identity = norm.is_identity();
+    let mut data = std::mem::take(&mut img.data);
+    let saturated: u64 = data
+        .par_chunks_mut(width.max(1))
+        .enumerate()
+        .map_init(
+            || (Scratch::new(aw), Vec::with_capacity(width)),
+            |(scr, src), (srow, row)| {
+                let active = (top..top + ah).contains(&srow);
+                if active {
+                    src.clear();
+                    src.extend_from_slice(row);
+                }
+                // outside the active area the linearized input is kept (as run_clean)
+                if !identity {
+                    for x in row.iter_mut() {
+                        *x = norm.linearize(*x).clamp(0.0, u16::MAX as f64) as u16;
+                    }
+                }
+                if active {
+                    pass.row(srow - top, src, &mut row[left..left + aw], scr)
+                } else {
+                    0
+                }
+            },
+        )
+        .sum();
+    img.data = data;
+    img.meta.linearization_table = None;
+    let report = pass.report(saturated);
+    Ok((img, report))
+}
+
 /// [`run_clean`] on the active-area rectangle `crop` only: its clean night samples
 /// (`crop.height` rows of `crop.width`, row-major), each equal to the same site of
 /// [`run_clean`]'s image, computed without touching the rest of the frame (except the
@@ -113,12 +158,16 @@ pub fn run_clean_crop(img: &RawImage, plan: &Plan, crop: Crop) -> Result<(Vec<u1
     crop.check(a.width(), a.height())?;
     let pass = CleanPass::new(img, plan, crop)?;
     let mut data = crate::limits::try_filled(0u16, crop.width * crop.height, "the clean crop")?;
+    let (top, width) = (a.top as usize, img.width);
     let saturated: u64 = data
         .par_chunks_mut(crop.width.max(1))
         .enumerate()
         .map_init(
             || Scratch::new(crop.width),
-            |scr, (i, row)| pass.row(crop.top + i, row, scr),
+            |scr, (i, row)| {
+                let src = &img.data[(crop.top + i + top) * width..][..width];
+                pass.row(crop.top + i, src, row, scr)
+            },
         )
         .sum();
     Ok((data, pass.report(saturated)))
@@ -128,11 +177,9 @@ pub fn run_clean_crop(img: &RawImage, plan: &Plan, crop: Crop) -> Result<(Vec<u1
 /// `crop.width` (the whole active area for [`run_clean`]); [`CleanPass::row`] computes one
 /// row segment.
 struct CleanPass<'a> {
-    img: &'a RawImage,
     plan: &'a Plan,
     norm: Normalizer,
-    /// Active-area origin in the stored image and active-area width.
-    top: usize,
+    /// Active-area left edge in the stored image and active-area width.
     left: usize,
     aw: usize,
     /// First column and width of the computed segment of every row.
@@ -151,7 +198,7 @@ struct CleanPass<'a> {
 }
 
 impl<'a> CleanPass<'a> {
-    fn new(img: &'a RawImage, plan: &'a Plan, crop: Crop) -> Result<CleanPass<'a>> {
+    fn new(img: &RawImage, plan: &'a Plan, crop: Crop) -> Result<CleanPass<'a>> {
         plan.check_against(img)?;
         let norm = Normalizer::new(img)?;
         let norm = if plan.range_per_site {
@@ -174,10 +221,8 @@ impl<'a> CleanPass<'a> {
             1.0
         };
         let mut pass = CleanPass {
-            img,
             plan,
             norm,
-            top,
             left,
             aw,
             x0: crop.left,
@@ -288,13 +333,14 @@ impl<'a> CleanPass<'a> {
         }
     }
 
-    /// The clean night samples of active-area row `r`, columns `x0..x0 + sw`, into `seg`;
-    /// returns the number of saturated input sites among them.
-    fn row(&self, r: usize, seg: &mut [u16], scr: &mut Scratch) -> u64 {
+    /// The clean night samples of active-area row `r`, columns `x0..x0 + sw`, into `seg`,
+    /// from `stored`, the input's whole stored row `r + top`; returns the number of
+    /// saturated input sites among them.
+    fn row(&self, r: usize, stored: &[u16], seg: &mut [u16], scr: &mut Scratch) -> u64 {
         let (norm, plan, x0, sw) = (&self.norm, self.plan, self.x0, self.sw);
         let s32 = self.s as f32;
         let white = norm.white;
-        let src = &self.img.data[(r + self.top) * self.img.width + self.left + x0..][..sw];
+        let src = &stored[self.left + x0..][..sw];
         let mut sat = 0u64;
         let k = self.inv_row(r);
         // Per-site black levels of the whole row (only without the table), taken out of the
@@ -433,6 +479,7 @@ fn parity(k: [f32; 2], c0: usize) -> [f32; 2] {
 /// Apply `f(num, den, ye, mask, k)` element-wise, two columns at a time so that the CFA
 /// factor is a constant per lane (no per-sample parity index; same arithmetic per element).
 #[inline]
+#[allow(clippy::needless_range_loop)] // one index into five fixed-size arrays: the lanes
 fn pairwise<F: Fn(&mut f32, &mut f32, f32, f32, f32)>(
     num: &mut [f32],
     den: &mut [f32],
@@ -443,6 +490,28 @@ fn pairwise<F: Fn(&mut f32, &mut f32, f32, f32, f32)>(
 ) {
     let n = m.len().min(num.len()).min(den.len()).min(ye.len());
     let (num, den, ye, m) = (&mut num[..n], &mut den[..n], &ye[..n], &m[..n]);
+    // Eight columns at a time through fixed-size arrays: the compiler unrolls the lanes
+    // into SIMD operations (the same operations per element, so the same bits); the
+    // pairs below take the rest (an even number of columns in, so the same parity).
+    let k8 = [k[0], k[1], k[0], k[1], k[0], k[1], k[0], k[1]];
+    let wide = n / 8 * 8;
+    let (num8, num) = num.split_at_mut(wide);
+    let (den8, den) = den.split_at_mut(wide);
+    let (ye8, ye) = ye.split_at(wide);
+    let (m8, m) = m.split_at(wide);
+    for (((nn, dd), yy), mm) in num8
+        .as_chunks_mut::<8>()
+        .0
+        .iter_mut()
+        .zip(den8.as_chunks_mut::<8>().0.iter_mut())
+        .zip(ye8.as_chunks::<8>().0)
+        .zip(m8.as_chunks::<8>().0)
+    {
+        for j in 0..8 {
+            f(&mut nn[j], &mut dd[j], yy[j], mm[j], k8[j]);
+        }
+    }
+    let n = n - wide;
     for (((nn, dd), yy), mm) in num
         .chunks_exact_mut(2)
         .zip(den.chunks_exact_mut(2))
@@ -740,5 +809,48 @@ mod tests {
         p.range_per_site = false;
         let (off, _) = run_clean(&img, &p).unwrap();
         assert_eq!(on.data, off.data);
+    }
+
+    #[test]
+    fn in_place_gives_run_clean_s_image_and_report() {
+        use crate::raw::Rect;
+        for mode in [Mode::Day, Mode::Dimmed, Mode::Global, Mode::Local] {
+            for (table, delta, area) in [
+                (false, false, false),
+                (true, false, true),
+                (false, true, false),
+            ] {
+                let mut img = frame(Bayer::GRBG, table, delta);
+                if area {
+                    img.meta.active_area = Some(Rect {
+                        top: 2,
+                        left: 4,
+                        bottom: 25,
+                        right: 38,
+                    });
+                }
+                let opts = SynthOptions {
+                    mode,
+                    isos: vec![],
+                    bulbs: Some(2),
+                    ..SynthOptions::default()
+                };
+                let cal = Calibration::embedded(&opts).unwrap();
+                let p = Planner::new(&img, &opts)
+                    .calibration(&cal)
+                    .name("i.dng")
+                    .seed(3)
+                    .plan()
+                    .map(|p| p.plan)
+                    .unwrap();
+                let (a, ra) = run_clean(&img, &p).unwrap();
+                let (b, rb) = run_clean_in_place(img.clone(), &p).unwrap();
+                assert_eq!(a.data, b.data, "{mode:?} {table} {delta} {area}");
+                assert_eq!((a.width, a.height, &a.meta), (b.width, b.height, &b.meta));
+                assert_eq!(ra, rb);
+                // the pass changed something (not a copy of the input)
+                assert_ne!(a.data, img.data, "{mode:?}");
+            }
+        }
     }
 }

@@ -21,7 +21,7 @@ mod tags;
 
 pub use inspect::{inspect, inspect_bytes, DngInfo, IfdSummary, MetaSummary, RawSummary};
 pub use pixels::unpack_row;
-use pixels::{decode_pixels, geometry, Geometry};
+use pixels::{block_ranges, decode_pixels, decode_pixels_from, geometry, streamable, Geometry};
 use tags::build_meta;
 pub use tags::{MODELLED_EXIF_TAGS, MODELLED_TAGS, STORED_TAGS, STRUCTURAL_TAGS};
 
@@ -46,6 +46,66 @@ const PHOTOMETRIC_LINEAR_RAW: u16 = 34892;
 pub fn read_dng(path: &Path) -> Result<RawImage> {
     let bytes = std::fs::read(path).map_err(|e| Error::Io(e).in_file(path))?;
     read_dng_bytes(&bytes).in_file(path)
+}
+
+/// [`read_dng`] that also hands the file's bytes to `whole` (e.g. to hash them), run in
+/// parallel with the parsing. A file of at least `stream_from` bytes whose raw blocks are
+/// uncompressed or lossless JPEG has its bytes dropped once its structure is parsed and
+/// its blocks read again from the file one at a time: the same image, without the file's
+/// bytes and the decoded samples in memory at once (docs/benchmarks.md, 109 MP peak).
+pub fn read_dng_with<T: Send>(
+    path: &Path,
+    stream_from: u64,
+    whole: impl FnOnce(&[u8]) -> T + Send,
+) -> Result<(RawImage, T)> {
+    use std::io::{Read, Seek, SeekFrom};
+    let io = |e: std::io::Error| Error::Io(e).in_file(path);
+    let mut file = std::fs::File::open(path).map_err(io)?;
+    let mut bytes = Vec::new();
+    file.read_to_end(&mut bytes).map_err(io)?;
+    if (bytes.len() as u64) < stream_from {
+        let (t, raw) = rayon::join(|| whole(&bytes), || read_dng_bytes(&bytes));
+        return Ok((raw.in_file(path)?, t));
+    }
+    let (t, head) = rayon::join(|| whole(&bytes), || structure(&bytes));
+    let Some((order, meta, geom, ranges)) = head.in_file(path)? else {
+        return Ok((read_dng_bytes(&bytes).in_file(path)?, t));
+    };
+    drop(bytes);
+    // The same open file: a file renamed over `path` meanwhile is not read.
+    let data = decode_pixels_from(&ranges, order, &geom, |off, buf| {
+        file.seek(SeekFrom::Start(off as u64)).map_err(Error::Io)?;
+        file.read_exact(buf).map_err(Error::Io)
+    })
+    .in_file(path)?;
+    let mut img = RawImage {
+        width: geom.width as usize,
+        height: geom.height as usize,
+        data,
+        meta,
+    };
+    img.validate().in_file(path)?;
+    crate::dng::check::check_meta(&mut img.meta).in_file(path)?;
+    Ok((img, t))
+}
+
+/// What [`structure`] finds: byte order, metadata, geometry and block ranges.
+type Structure = (ByteOrder, RawMeta, Geometry, Vec<pixels::BlockAt>);
+
+/// The byte order, metadata, geometry and block ranges of a DNG whose blocks can be
+/// decoded one at a time (None for the others).
+fn structure(bytes: &[u8]) -> Result<Option<Structure>> {
+    let tiff = parse(bytes)?;
+    let dng = locate(&tiff)?;
+    let raw = dng.raw;
+    check_photometric(raw.u32(PHOTOMETRIC_INTERPRETATION).unwrap_or(0) as u16)?;
+    let geom = geometry(raw)?;
+    if !streamable(&geom) {
+        return Ok(None);
+    }
+    let meta = build_meta(&tiff, &dng, &geom)?;
+    let ranges = block_ranges(bytes.len(), raw, &geom)?;
+    Ok(Some((tiff.byte_order, meta, geom, ranges)))
 }
 
 /// Read the raw CFA image and metadata of a DNG held in memory. The metadata passed
@@ -190,6 +250,43 @@ fn locate(tiff: &Tiff) -> Result<Located<'_>> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn streamed_read_gives_the_same_image_for_every_fixture() {
+        let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures");
+        let mut n = 0;
+        for e in std::fs::read_dir(&dir).unwrap() {
+            let path = e.unwrap().path();
+            if path.extension().is_none_or(|x| x != "dng") {
+                continue;
+            }
+            let Ok(want) = read_dng(&path) else { continue };
+            let len = std::fs::metadata(&path).unwrap().len() as usize;
+            for from in [0, u64::MAX] {
+                let (got, seen) = read_dng_with(&path, from, |b| b.len()).unwrap();
+                assert_eq!(seen, len, "{}", path.display());
+                assert_eq!(got.data, want.data, "{} from {from}", path.display());
+                assert_eq!(got.meta, want.meta, "{}", path.display());
+                assert_eq!((got.width, got.height), (want.width, want.height));
+            }
+            n += 1;
+        }
+        assert!(n >= 8, "{n} fixtures read");
+    }
+
+    #[test]
+    fn streamed_read_reports_a_truncated_strip() {
+        let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/rggb_16bit_le_strips.dng");
+        let bytes = std::fs::read(&src).unwrap();
+        let dir = tempfile::tempdir().unwrap();
+        let cut = dir.path().join("cut.dng");
+        // a cut tail: both reads refuse the file with the same message
+        std::fs::write(&cut, &bytes[..bytes.len() - 100]).unwrap();
+        let whole = read_dng(&cut).unwrap_err().to_string();
+        let streamed = read_dng_with(&cut, 0, |_| ()).unwrap_err().to_string();
+        assert_eq!(streamed, whole);
+        assert!(whole.contains("cut.dng"), "{whole}");
+    }
 
     #[test]
     fn unpack_packed_depths() {

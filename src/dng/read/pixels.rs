@@ -97,7 +97,39 @@ pub(super) struct Block<'a> {
     data: &'a [u8],
 }
 
+/// One strip or tile: its place in the image and where its bytes lie in the file.
+pub(super) struct BlockAt {
+    x: usize,
+    y: usize,
+    w: usize,
+    h: usize,
+    off: usize,
+    len: usize,
+}
+
+impl BlockAt {
+    fn with<'a>(&self, data: &'a [u8]) -> Block<'a> {
+        Block {
+            x: self.x,
+            y: self.y,
+            w: self.w,
+            h: self.h,
+            data,
+        }
+    }
+}
+
 pub(super) fn blocks<'a>(bytes: &'a [u8], raw: &Ifd, g: &Geometry) -> Result<Vec<Block<'a>>> {
+    Ok(block_ranges(bytes.len(), raw, g)?
+        .iter()
+        // block_ranges checked every range against the file's length
+        .map(|b| b.with(bytes.get(b.off..b.off + b.len).unwrap_or_default()))
+        .collect())
+}
+
+/// The strips or tiles of the raw IFD in a file of `file_len` bytes, each range checked to
+/// lie inside the file and to share no byte with another.
+pub(super) fn block_ranges(file_len: usize, raw: &Ifd, g: &Geometry) -> Result<Vec<BlockAt>> {
     let (w, h) = (g.width as usize, g.height as usize);
     let (off_tag, cnt_tag, bw, bh, across) = match g.layout {
         Layout::Strips { rows_per_strip } => (
@@ -147,22 +179,19 @@ pub(super) fn blocks<'a>(bytes: &'a [u8], raw: &Ifd, g: &Geometry) -> Result<Vec
         let (bx, by) = (i % across, i / across);
         let off = offs[i] as usize;
         let len = counts[i] as usize;
-        let data = off
-            .checked_add(len)
-            .and_then(|end| bytes.get(off..end))
-            .ok_or_else(|| {
-                Error::malformed(format!(
-                    "{} {i}: {len} bytes at offset {off} run past the end of the {}-byte file (truncated?)",
-                    if matches!(g.layout, Layout::Strips { .. }) { "strip" } else { "tile" },
-                    bytes.len()
-                ))
-            })?;
-        out.push(Block {
+        if off.checked_add(len).is_none_or(|end| end > file_len) {
+            return Err(Error::malformed(format!(
+                "{} {i}: {len} bytes at offset {off} run past the end of the {file_len}-byte file (truncated?)",
+                if matches!(g.layout, Layout::Strips { .. }) { "strip" } else { "tile" },
+            )));
+        }
+        out.push(BlockAt {
             x: bx * bw,
             y: by * bh,
             w: bw,
             h: bh,
-            data,
+            off,
+            len,
         });
     }
     let kind = if matches!(g.layout, Layout::Strips { .. }) {
@@ -206,29 +235,72 @@ pub(super) fn decode_pixels(
     if matches!(g.compression, COMPRESSION_JPEG_XL | COMPRESSION_LOSSY_JPEG) {
         return decode_codec_blocks(&blocks, g);
     }
+    let lens: Vec<_> = blocks
+        .iter()
+        .map(|b| (b.y, b.h, b.w, b.data.len()))
+        .collect();
+    let mut out = alloc_checked(&lens, g)?;
+    let mut rowbuf = Vec::new();
+    for b in &blocks {
+        decode_block(b, order, g, &mut out, &mut rowbuf)?;
+    }
+    Ok(out)
+}
+
+/// True when [`decode_pixels_from`] can decode the blocks of `g` one at a time (the
+/// uncompressed and lossless JPEG ones; JPEG XL and lossy JPEG blocks are decoded in
+/// parallel from the whole file's bytes).
+pub(super) fn streamable(g: &Geometry) -> bool {
+    !matches!(g.compression, COMPRESSION_JPEG_XL | COMPRESSION_LOSSY_JPEG)
+}
+
+/// [`decode_pixels`] of the blocks `ranges` (from [`block_ranges`]) whose bytes `read`
+/// fetches one block at a time (from the file, after its whole bytes were dropped): the
+/// same samples, holding one block's bytes beside the plane. Only for [`streamable`]
+/// geometries.
+pub(super) fn decode_pixels_from(
+    ranges: &[BlockAt],
+    order: ByteOrder,
+    g: &Geometry,
+    mut read: impl FnMut(usize, &mut Vec<u8>) -> Result<()>,
+) -> Result<Vec<u16>> {
+    let lens: Vec<_> = ranges.iter().map(|b| (b.y, b.h, b.w, b.len)).collect();
+    let mut out = alloc_checked(&lens, g)?;
+    let (mut rowbuf, mut buf) = (Vec::new(), Vec::new());
+    for r in ranges {
+        buf.clear();
+        buf.resize(r.len, 0);
+        read(r.off, &mut buf)?;
+        decode_block(&r.with(&buf), order, g, &mut out, &mut rowbuf)?;
+    }
+    Ok(out)
+}
+
+/// Check that the blocks (row, height, width, byte count) can hold the image, then
+/// allocate it.
+fn alloc_checked(blocks: &[(usize, usize, usize, usize)], g: &Geometry) -> Result<Vec<u16>> {
     // Samples per row of the image and of a block: pixels x samples per pixel (1 for CFA).
     let spp = g.samples_per_pixel as usize;
     let (w, h) = (g.width as usize * spp, g.height as usize);
     let bits = g.bits as usize;
     if g.compression == 1 {
         // Check that the data covers the image before allocating it.
-        for (i, b) in blocks.iter().enumerate() {
-            let rows = b.h.min(h - b.y.min(h));
-            let need = row_bytes(b.w * spp, bits).saturating_mul(rows);
-            if b.data.len() < need {
+        for (i, &(by, bh, bw, len)) in blocks.iter().enumerate() {
+            let rows = bh.min(h - by.min(h));
+            let need = row_bytes(bw * spp, bits).saturating_mul(rows);
+            if len < need {
                 return Err(Error::malformed(format!(
-                    "{} {i} holds {} bytes, {need} needed (truncated?)",
+                    "{} {i} holds {len} bytes, {need} needed (truncated?)",
                     if matches!(g.layout, Layout::Strips { .. }) {
                         "strip"
                     } else {
                         "tile"
                     },
-                    b.data.len()
                 )));
             }
         }
     } else {
-        let total: usize = blocks.iter().map(|b| b.data.len()).sum();
+        let total: usize = blocks.iter().map(|b| b.3).sum();
         if w.saturating_mul(h) > total.saturating_mul(8) {
             return Err(Error::malformed(format!(
                 "{total} bytes of lossless JPEG data cannot hold a {}x{h} image (truncated?)",
@@ -236,43 +308,53 @@ pub(super) fn decode_pixels(
             )));
         }
     }
-    let mut out = crate::limits::try_filled(0u16, w * h, "the raw pixels")?;
-    let mut rowbuf = Vec::new();
-    for b in &blocks {
-        let (bx, bw) = (b.x * spp, b.w * spp);
-        let vis_w = bw.min(w.saturating_sub(bx));
-        let vis_h = b.h.min(h.saturating_sub(b.y));
-        if vis_w == 0 || vis_h == 0 {
-            continue;
+    crate::limits::try_filled(0u16, w * h, "the raw pixels")
+}
+
+/// Decode one uncompressed or lossless JPEG block into its place in `out`.
+fn decode_block(
+    b: &Block<'_>,
+    order: ByteOrder,
+    g: &Geometry,
+    out: &mut [u16],
+    rowbuf: &mut Vec<u16>,
+) -> Result<()> {
+    let spp = g.samples_per_pixel as usize;
+    let (w, h) = (g.width as usize * spp, g.height as usize);
+    let bits = g.bits as usize;
+    let (bx, bw) = (b.x * spp, b.w * spp);
+    let vis_w = bw.min(w.saturating_sub(bx));
+    let vis_h = b.h.min(h.saturating_sub(b.y));
+    if vis_w == 0 || vis_h == 0 {
+        return Ok(());
+    }
+    if g.compression == 1 {
+        let rb = row_bytes(bw, bits);
+        rowbuf.resize(bw, 0);
+        for (r, src) in b.data.chunks_exact(rb.max(1)).take(vis_h).enumerate() {
+            let dst_start = (b.y + r) * w + bx;
+            let dst = &mut out[dst_start..dst_start + vis_w];
+            if vis_w == bw {
+                unpack_row(src, dst, bits, order);
+            } else {
+                unpack_row(src, rowbuf, bits, order);
+                dst.copy_from_slice(&rowbuf[..vis_w]);
+            }
         }
-        if g.compression == 1 {
-            let rb = row_bytes(bw, bits);
-            rowbuf.resize(bw, 0);
-            for (r, src) in b.data.chunks_exact(rb.max(1)).take(vis_h).enumerate() {
-                let dst_start = (b.y + r) * w + bx;
-                let dst = &mut out[dst_start..dst_start + vis_w];
-                if vis_w == bw {
-                    unpack_row(src, dst, bits, order);
-                } else {
-                    unpack_row(src, &mut rowbuf, bits, order);
-                    dst.copy_from_slice(&rowbuf[..vis_w]);
-                }
-            }
-        } else {
-            let d = ljpeg::decode(b.data)?;
-            if d.data.len() < bw * vis_h.min(b.h) {
-                return Err(Error::malformed(format!(
-                    "lossless JPEG {}x{}x{} frame too small for a {}x{} block",
-                    d.width, d.height, d.components, b.w, b.h
-                )));
-            }
-            for (r, src) in d.data.chunks_exact(bw).take(vis_h).enumerate() {
-                let dst_start = (b.y + r) * w + bx;
-                out[dst_start..dst_start + vis_w].copy_from_slice(&src[..vis_w]);
-            }
+    } else {
+        let d = ljpeg::decode(b.data)?;
+        if d.data.len() < bw * vis_h.min(b.h) {
+            return Err(Error::malformed(format!(
+                "lossless JPEG {}x{}x{} frame too small for a {}x{} block",
+                d.width, d.height, d.components, b.w, b.h
+            )));
+        }
+        for (r, src) in d.data.chunks_exact(bw).take(vis_h).enumerate() {
+            let dst_start = (b.y + r) * w + bx;
+            out[dst_start..dst_start + vis_w].copy_from_slice(&src[..vis_w]);
         }
     }
-    Ok(out)
+    Ok(())
 }
 
 /// JPEG XL or lossy JPEG blocks: each decoded on its own (rows of blocks in parallel, so
