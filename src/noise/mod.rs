@@ -15,6 +15,7 @@ pub mod physics;
 pub mod physics_apply;
 pub mod poisson_table;
 pub mod provenance;
+pub mod stream;
 pub mod tukey;
 pub mod tukey_table;
 
@@ -26,3 +27,4 @@ pub use physics_apply::{
     apply_physics_noise, apply_physics_noise_crop, apply_physics_noise_image, with_physics_rows,
 };
 pub use provenance::{NoiseProvenance, NoiseSource};
+pub use stream::NoiseStream;
