@@ -192,10 +192,10 @@ fn noisy_samples_follow_the_model_per_iso_and_channel() {
                 let out = apply_noise_stream(&clean, &params, 5, false, stream).unwrap();
                 for pos in 0..4 {
                     let d: Vec<f64> = (0..h)
-                        .filter(|r| r & 1 == pos >> 1)
+                        .filter(|r| (r & 1) == (pos >> 1))
                         .flat_map(|r| {
                             (0..w)
-                                .filter(move |c| c & 1 == pos & 1)
+                                .filter(move |c| (c & 1) == (pos & 1))
                                 .map(move |c| (r, c))
                         })
                         .map(|(r, c)| out.data[r * w + c] as f64 - value as f64)
