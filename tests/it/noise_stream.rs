@@ -181,7 +181,7 @@ fn flat(w: usize, h: usize, value: u16) -> RawImage {
 fn noisy_samples_follow_the_model_per_iso_and_channel() {
     let model = day2night::synth::dictionaries::embedded::noise_model();
     let (w, h) = (512usize, 512usize);
-    let scale = 1023.0 - 64.0;
+    let scale: f64 = 1023.0 - 64.0;
     for iso in [800u32, 1600, 3200] {
         let params = model.at(iso).unwrap().params;
         for y in [0.05, 0.25, 0.6] {
@@ -241,7 +241,7 @@ fn crop_noise_follows_the_model() {
         height: 256,
         width: 256,
     };
-    let scale = 1023.0 - 64.0;
+    let scale: f64 = 1023.0 - 64.0;
     for stream in STREAMS {
         let mut plane = vec![300u16; 256 * 256];
         apply_noise_crop_stream(&frame, &crop, &mut plane, &params, (9, false), stream).unwrap();
