@@ -1,16 +1,22 @@
 //! DNG read/write throughput on a 12 MP raw (4032x3024, 10-bit, RGGB), uncompressed (packed
 //! 10-bit strips) and lossless JPEG, against a plain copy of a file of the same size.
 //!
-//! `cargo bench --bench dng_io` (figures in docs/benchmarks.md, "DNG I/O").
+//! `cargo bench --bench dng_io` (figures in docs/benchmarks.md, "DNG I/O"); the group
+//! `unique_id` (`cargo bench --bench dng_io -- unique_id`) times RawDataUniqueID's chunk
+//! hash, XXH3-128 against the SHA-256 it replaced, over the 12 MP DNG's bytes in strips of
+//! 1 MiB (single-threaded, as one worker hashes its strip), and the uncompressed encode
+//! with each.
 
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 use day2night::dng::read::read_dng;
-use day2night::dng::write::{encode_dng, write_dng, Compression, WriteOptions};
+use day2night::dng::write::{encode_dng, write_dng, Compression, UniqueIdHash, WriteOptions};
 use day2night::output::{write_bytes_atomic, OutputPolicy};
 use day2night::raw::meta::RawMeta;
 use day2night::raw::{Bayer, RawImage};
+use sha2::{Digest, Sha256};
 use std::hint::black_box;
 use std::time::Duration;
+use twox_hash::XxHash3_128;
 
 fn image() -> RawImage {
     let (w, h) = (4032usize, 3024usize);
@@ -76,6 +82,41 @@ fn bench(c: &mut Criterion) {
         });
         g.bench_function(format!("encode_{name}"), |b| {
             b.iter(|| black_box(encode_dng(&img, &opts).unwrap()))
+        });
+    }
+    g.finish();
+    unique_id(c, &img);
+}
+
+/// RawDataUniqueID's hash: XXH3-128 against SHA-256 over the 12 MP DNG's bytes.
+fn unique_id(c: &mut Criterion, img: &RawImage) {
+    let bytes = encode_dng(img, &WriteOptions::default()).unwrap();
+    let mut g = c.benchmark_group("unique_id");
+    g.sample_size(10)
+        .measurement_time(Duration::from_secs(3))
+        .warm_up_time(Duration::from_millis(500))
+        .throughput(Throughput::Bytes(bytes.len() as u64));
+    g.bench_function("sha256_1MiB_chunks", |b| {
+        b.iter(|| {
+            for c in bytes.chunks(1 << 20) {
+                black_box(Sha256::digest(c));
+            }
+        })
+    });
+    g.bench_function("xxh3_128_1MiB_chunks", |b| {
+        b.iter(|| {
+            for c in bytes.chunks(1 << 20) {
+                black_box(XxHash3_128::oneshot(c));
+            }
+        })
+    });
+    for hash in [UniqueIdHash::Sha256, UniqueIdHash::Xxh3_128] {
+        let opts = WriteOptions {
+            unique_id: hash,
+            ..Default::default()
+        };
+        g.bench_function(format!("encode_uncompressed_{}", hash.name()), |b| {
+            b.iter(|| black_box(encode_dng(img, &opts).unwrap()))
         });
     }
     g.finish();

@@ -10,7 +10,7 @@
 #[path = "common/scene.rs"]
 mod scene;
 
-use day2night::dng::write::{encode_dng, Compression, RawIfd, WriteOptions};
+use day2night::dng::write::{encode_dng, Compression, RawIfd, UniqueIdHash, WriteOptions};
 use day2night::raw::meta::RawMeta;
 use day2night::raw::{Bayer, RawImage, Rect};
 use scene::{day_meta, hash01, mat_vec, synthetic_scene, CM1, SRGB_TO_XYZ};
@@ -184,7 +184,12 @@ fn make_day(source: &Path) -> Result<RawImage, Box<dyn std::error::Error>> {
 }
 
 fn write(dir: &Path, name: &str, img: &RawImage, opts: &WriteOptions) -> std::io::Result<()> {
-    let bytes = encode_dng(img, opts).map_err(std::io::Error::other)?;
+    // The fixtures keep their SHA-256 RawDataUniqueID (their bytes are the test inputs).
+    let opts = WriteOptions {
+        unique_id: UniqueIdHash::Sha256,
+        ..opts.clone()
+    };
+    let bytes = encode_dng(img, &opts).map_err(std::io::Error::other)?;
     let path = dir.join(name);
     std::fs::write(&path, &bytes)?;
     println!("{} ({} bytes)", path.display(), bytes.len());

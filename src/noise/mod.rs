@@ -17,6 +17,7 @@ pub mod physics_apply;
 pub mod poisson_table;
 pub mod provenance;
 pub mod release;
+pub mod stream;
 pub mod tukey;
 pub mod tukey_table;
 
@@ -28,3 +29,4 @@ pub use physics_apply::{
     apply_physics_noise, apply_physics_noise_crop, apply_physics_noise_image, with_physics_rows,
 };
 pub use provenance::{NoiseProvenance, NoiseSource};
+pub use stream::NoiseStream;

@@ -96,6 +96,7 @@ impl JobConfig {
             input_exr: self.input_exr,
             compression: self.compression,
             exr: self.exr,
+            unique_id: Default::default(),
         })
     }
 }

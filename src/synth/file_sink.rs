@@ -6,7 +6,7 @@
 use super::night::{NightSink, TargetOut};
 use super::outputs::{OutputKind, OutputSink, Target};
 use super::Plan;
-use crate::dng::write::{write_dng, write_dng_rows, Compression, WriteOptions};
+use crate::dng::write::{write_dng, write_dng_rows, Compression, UniqueIdHash, WriteOptions};
 use crate::encode::exr::{encodes_rows, standard_attributes, write_exr, ExrOptions};
 use crate::encode::png::{write_png, PngOptions};
 use crate::encode::target_files::TargetFiles;
@@ -41,7 +41,7 @@ impl<'a> FileSink<'a> {
     pub(crate) fn new(
         target: Target,
         exr: &'a ExrOptions,
-        compression: Compression,
+        (compression, unique_id): (Compression, UniqueIdHash),
         (sink, policy): (&'a dyn OutputSink, &'a OutputPolicy),
         source: &Path,
         plan: &Plan,
@@ -53,6 +53,7 @@ impl<'a> FileSink<'a> {
             policy,
             wopts: WriteOptions {
                 compression,
+                unique_id,
                 ..WriteOptions::default()
             },
             attrs: exr_attributes(source, plan),

@@ -55,7 +55,7 @@ use super::relight::RunReport;
 use super::sidecar::{CalibrationInfo, InputInfo, OutputInfo, Provenance, Sidecar, SIDECAR_FORMAT};
 use super::SynthOptions;
 use super::{Calibration, IlluminantChoice, Plan, Planned, Planner, ResolvedIlluminants};
-use crate::dng::write::Compression;
+use crate::dng::write::{Compression, UniqueIdHash};
 use crate::encode::exr::ExrOptions;
 use crate::error::{Error, Result};
 use crate::output::{write_bytes_atomic, DeferredSyncs};
@@ -86,6 +86,9 @@ pub struct SynthJob {
     pub compression: Compression,
     /// EXR options of the target and input renders.
     pub exr: ExrOptions,
+    /// The hash of the DNGs' RawDataUniqueID (XXH3-128; SHA-256 when replaying a sidecar
+    /// written before it, which records none).
+    pub unique_id: UniqueIdHash,
 }
 
 impl SynthJob {
@@ -102,6 +105,7 @@ impl SynthJob {
             input_exr: false,
             compression: Compression::None,
             exr: ExrOptions::default(),
+            unique_id: UniqueIdHash::default(),
         })
     }
 
@@ -136,6 +140,7 @@ impl SynthJob {
                 Compression::None
             },
             exr,
+            unique_id: sc.outputs.raw_data_unique_id.parse()?,
         })
     }
 
@@ -298,7 +303,7 @@ impl SynthJob {
         let files = FileSink::new(
             self.target,
             &self.exr,
-            self.compression,
+            (self.compression, self.unique_id),
             (sink, &policy),
             &day.source,
             plan,
@@ -383,6 +388,7 @@ impl SynthJob {
                 files: files.clone(),
                 exr_compression: self.exr.compression.name().into(),
                 exr_zip_level: self.exr.zip_level,
+                raw_data_unique_id: self.unique_id.name().into(),
             },
         };
         let kind = OutputKind::Sidecar;

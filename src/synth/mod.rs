@@ -441,6 +441,7 @@ pub fn with_noisy_rows<T>(
                 &np.params,
                 np.seed,
                 plan.truncate_noise,
+                plan.noise_stream,
             )?;
             f(np.iso, &meta, &rows)
         }

@@ -89,6 +89,11 @@ pub struct Plan {
     pub clean_noise: NoiseParams,
     /// One entry per noisy output.
     pub noise: Vec<NoisePlan>,
+    /// The random stream of the Gaussian noise rows ([`crate::noise::NoiseStream`]): 2, or
+    /// 1 under `--compat release` and in plans written before the field existed (absent:
+    /// 1, so that their sidecars replay byte for byte).
+    #[serde(default = "crate::noise::NoiseStream::v1")]
+    pub noise_stream: crate::noise::NoiseStream,
     /// What the renders (target, network input) do with the input's DNG opcode lists:
     /// `ignore` when the input has none (the report's `opcodes` lists them).
     pub opcodes: OpcodeMode,
@@ -325,6 +330,12 @@ impl<'a> Planner<'a> {
             clean_iso: noise.clean_iso,
             clean_noise: noise.clean,
             noise: noise.entries,
+            // the release preset keeps the stream it had (its noise path is untouched)
+            noise_stream: if opts.compat == super::Compat::RELEASE {
+                crate::noise::NoiseStream::V1
+            } else {
+                crate::noise::NoiseStream::V2
+            },
             opcodes: opcodes.as_ref().map_or(OpcodeMode::Ignore, |r| r.mode),
             burst,
         };

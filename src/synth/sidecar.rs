@@ -74,6 +74,15 @@ pub struct OutputInfo {
     pub exr_compression: String,
     /// zlib level of zip/zips EXR outputs (`--exr-zip-level`).
     pub exr_zip_level: u8,
+    /// The hash of the DNGs' RawDataUniqueID: "xxh3-128", or "sha256" in sidecars written
+    /// before it (absent there).
+    #[serde(default = "sha256_name")]
+    pub raw_data_unique_id: String,
+}
+
+/// `outputs.raw_data_unique_id` of sidecars that record none.
+fn sha256_name() -> String {
+    crate::dng::write::UniqueIdHash::Sha256.name().into()
 }
 
 /// The sidecar document.

@@ -177,6 +177,8 @@ pub fn migrate(v1: SidecarV1) -> Result<Sidecar> {
         clean_iso: p.clean_iso,
         clean_noise: p.clean_noise,
         noise: p.noise.into_iter().map(noise_entry).collect(),
+        // version-1 plans drew from the first noise stream
+        noise_stream: crate::noise::NoiseStream::V1,
         opcodes: p.opcodes.as_ref().map_or(OpcodeMode::Ignore, |r| r.mode),
         burst: p.burst,
     };
@@ -225,6 +227,8 @@ pub fn migrate(v1: SidecarV1) -> Result<Sidecar> {
             exr_zip_level: o
                 .exr_zip_level
                 .unwrap_or(crate::encode::exr::ExrOptions::DEFAULT_ZIP_LEVEL),
+            // version-1 DNGs' IDs were SHA-256
+            raw_data_unique_id: crate::dng::write::UniqueIdHash::Sha256.name().into(),
         },
     })
 }

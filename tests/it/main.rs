@@ -59,6 +59,8 @@ mod msrv;
 mod noise_chain;
 mod noise_estimate;
 mod noise_physics;
+mod noise_stream;
+mod noise_stream_replay;
 mod png_rows;
 mod real_pairs;
 mod real_pairs_bad;

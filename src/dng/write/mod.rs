@@ -23,16 +23,18 @@ use crate::tiff::tags as t;
 use crate::tiff::value::{Entry, Value};
 use crate::tiff::write::{encode_tiff, write_tiff, write_tiff_head, Chunks, Ifd};
 use rayon::prelude::*;
-use sha2::{Digest, Sha256};
 use std::path::Path;
 
 mod pixels;
 mod stream;
 mod tags;
+mod unique_id;
 
 use pixels::*;
 pub use tags::neutral_value;
 use tags::*;
+pub use unique_id::UniqueIdHash;
+use unique_id::*;
 
 /// Tile edge of lossless-JPEG tiles (as Adobe's converter writes).
 const LJPEG_TILE: usize = 256;
@@ -78,6 +80,8 @@ pub struct WriteOptions {
     pub uncompressed_tiles: Option<(u32, u32)>,
     /// Fixture option: rows per uncompressed strip (default: about 1 MiB per strip).
     pub rows_per_strip: Option<u32>,
+    /// The hash of RawDataUniqueID (XXH3-128; SHA-256 replays sidecars written before it).
+    pub unique_id: UniqueIdHash,
 }
 
 /// Encode a DNG into memory.
@@ -162,7 +166,13 @@ fn build(img: &RawImage, opts: &WriteOptions) -> Result<(ByteOrder, Ifd)> {
     let order = byte_order(opts);
     let (raw_chunks, digests, bits, compression, layout_tags) = encode_pixels(img, opts, order)?;
     let tiled = matches!(raw_chunks, Chunks::Tiles(_));
-    let unique_id = raw_data_unique_id(&img.meta, img.width, img.height, tiled, &digests);
+    let unique_id = raw_data_unique_id(
+        &img.meta,
+        (img.width, img.height),
+        tiled,
+        &digests,
+        opts.unique_id,
+    );
     let thumb = match opts.raw_ifd {
         RawIfd::Main => None,
         RawIfd::Sub => Some(thumbnail::render(img, 256)?),
@@ -422,51 +432,7 @@ fn check_meta(m: &RawMeta, width: usize, height: usize) -> Result<()> {
     Ok(())
 }
 
-type Pixels = (Chunks, Vec<Digest32>, u16, u16, Vec<(u16, Value)>);
-type Digest32 = Vec<u8>;
-
-/// RawDataUniqueID: the first 16 bytes of SHA-256 over the dimensions, the SHA-256 of every
-/// encoded strip/tile (computed in parallel right after encoding each, combined in order:
-/// independent of the thread count) and the metadata as written (JSON; no storage description, no regenerated or
-/// dropped entries). Deterministic: the same image written the same way always gets the
-/// same ID, a change of pixels or meaning a new one. Hashing the encoded (packed or
-/// compressed) data rather than the `u16` samples keeps it cheap.
-fn raw_data_unique_id(
-    m: &RawMeta,
-    width: usize,
-    height: usize,
-    tiled: bool,
-    digests: &[Digest32],
-) -> Vec<u8> {
-    let mut h = Sha256::new();
-    h.update(b"day2night RawDataUniqueID v2\0");
-    h.update((width as u64).to_le_bytes());
-    h.update((height as u64).to_le_bytes());
-    h.update([tiled as u8]);
-    for d in digests {
-        h.update(d);
-    }
-    // Canonical metadata: what this writer actually writes, so that re-writing a file it
-    // wrote reproduces the same ID (a fixed point) while any change of meaning changes it.
-    let mut meta = m.clone();
-    meta.storage = None;
-    meta.dng_version = [1, 4, 0, 0];
-    meta.dng_backward_version = None;
-    let keep = |e: &Entry| {
-        !is_dropped(e.tag)
-            && !matches!(
-                e.tag,
-                t::X_RESOLUTION | t::Y_RESOLUTION | t::RESOLUTION_UNIT
-            )
-    };
-    meta.ifd0_extra.retain(keep);
-    meta.raw_extra.retain(keep);
-    meta.exif_extra.retain(keep);
-    if let Ok(json) = serde_json::to_vec(&meta) {
-        h.update(&json);
-    }
-    h.finalize()[..UNIQUE_ID_LEN].to_vec()
-}
+type Pixels = (Chunks, Vec<ChunkDigest>, u16, u16, Vec<(u16, Value)>);
 
 /// Entries of an IFD that the writer will carry (a helper for the docs and the tests).
 pub fn carried(entries: &[Entry]) -> Vec<&Entry> {

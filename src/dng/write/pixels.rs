@@ -3,13 +3,7 @@
 
 use super::*;
 
-/// A chunk with its SHA-256 (hashed while it is still in cache).
-pub(super) fn hashed(bytes: Vec<u8>) -> (Vec<u8>, Digest32) {
-    let d = Sha256::digest(&bytes).to_vec();
-    (bytes, d)
-}
-
-/// Encode the samples: (chunks, their SHA-256s, BitsPerSample, Compression, layout tags).
+/// Encode the samples: (chunks, their digests for RawDataUniqueID, BitsPerSample, Compression, layout tags).
 pub(super) fn encode_pixels(
     img: &RawImage,
     opts: &WriteOptions,
@@ -38,11 +32,12 @@ pub(super) fn encode_pixels(
                 h.div_ceil(16) * 16
             };
             let (nx, ny) = (w.div_ceil(tw), h.div_ceil(th));
-            let tiles: Vec<(Vec<u8>, Digest32)> = (0..nx * ny)
+            let tiles: Vec<(Vec<u8>, ChunkDigest)> = (0..nx * ny)
                 .into_par_iter()
                 .map(|i| {
                     let tile = extract_tile(img, (i % nx) * tw, (i / nx) * th, tw, th);
-                    ljpeg_encode::encode(&tile, tw / 2, th, 2, precision as u8).map(hashed)
+                    ljpeg_encode::encode(&tile, tw / 2, th, 2, precision as u8)
+                        .map(|b| hashed(b, opts.unique_id))
                 })
                 .collect::<Result<_>>()?;
             let (tiles, digests) = tiles.into_iter().unzip();
@@ -77,7 +72,7 @@ pub(super) fn encode_pixels(
                 let (tiles, digests) = (0..nx * ny)
                     .map(|i| {
                         let tile = extract_tile(img, (i % nx) * tw, (i / nx) * th, tw, th);
-                        hashed(pack_rows(&tile, tw, bits, big))
+                        hashed(pack_rows(&tile, tw, bits, big), opts.unique_id)
                     })
                     .unzip();
                 return Ok((
@@ -92,10 +87,10 @@ pub(super) fn encode_pixels(
                 ));
             }
             let rps = super::stream::rows_per_strip(w, h, bits, opts)?;
-            let strips: Vec<(Vec<u8>, Digest32)> = img
+            let strips: Vec<(Vec<u8>, ChunkDigest)> = img
                 .data
                 .par_chunks(rps * w)
-                .map(|rows| hashed(pack_rows(rows, w, bits, big)))
+                .map(|rows| hashed(pack_rows(rows, w, bits, big), opts.unique_id))
                 .collect();
             let (strips, digests) = strips.into_iter().unzip();
             Ok((

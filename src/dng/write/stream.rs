@@ -90,10 +90,10 @@ pub(super) fn write_streamed(
     // RawDataUniqueID hashes every strip: a placeholder of its length for now.
     let ifd0 = assemble(m, part, vec![0; UNIQUE_ID_LEN], None);
     let per_batch = (BATCH_BYTES / (rps * row_bytes).max(1)).max(1);
-    let make = |first: usize| -> Result<Vec<(Vec<u8>, Digest32)>> {
+    let make = |first: usize| -> Result<Vec<(Vec<u8>, ChunkDigest)>> {
         (first..(first + per_batch).min(nstrips))
             .into_par_iter()
-            .map(|s| make_strip(src, s, rps, bits, big, bound))
+            .map(|s| make_strip(src, s, (rps, bits, big, bound), opts.unique_id))
             .collect()
     };
     crate::output::write_atomic(path, policy, |f| {
@@ -101,7 +101,7 @@ pub(super) fn write_streamed(
         if tail.strips.len() != nstrips {
             return Err(Error::invalid("the streamed strips were not laid out"));
         }
-        let mut digests: Vec<Digest32> = Vec::with_capacity(nstrips);
+        let mut digests: Vec<ChunkDigest> = Vec::with_capacity(nstrips);
         let mut pos = tail.written;
         // Batch k is written while batch k + 1 is made.
         let mut batch = make(0)?;
@@ -139,7 +139,7 @@ pub(super) fn write_streamed(
         let at = tail
             .ifd0_value_offset(t::RAW_DATA_UNIQUE_ID)
             .ok_or_else(|| Error::invalid("RawDataUniqueID was not written out of line"))?;
-        let id = raw_data_unique_id(m, w, h, false, &digests);
+        let id = raw_data_unique_id(m, (w, h), false, &digests, opts.unique_id);
         f.seek(SeekFrom::Start(at))?;
         f.write_all(&id)?;
         f.seek(SeekFrom::Start(tail.end))?;
@@ -147,15 +147,13 @@ pub(super) fn write_streamed(
     })
 }
 
-/// Strip `s` (rows from `s * rps`) of `src`, packed at `bits` bits, with its SHA-256.
+/// Strip `s` (rows from `s * rps`) of `src`, packed at `bits` bits, with its digest.
 fn make_strip(
     src: &dyn RowSource,
     s: usize,
-    rps: usize,
-    bits: u16,
-    big: bool,
-    bound: u16,
-) -> Result<(Vec<u8>, Digest32)> {
+    (rps, bits, big, bound): (usize, u16, bool, u16),
+    hash: UniqueIdHash,
+) -> Result<(Vec<u8>, ChunkDigest)> {
     let (w, h) = (src.width(), src.height());
     let y0 = s * rps;
     let rows = rps.min(h - y0);
@@ -174,7 +172,7 @@ fn make_strip(
             pack_rows(&buf, w, bits, big)
         }
     };
-    Ok(hashed(packed))
+    Ok(hashed(packed, hash))
 }
 
 /// Bytes of `rows` packed rows of `w` samples (as [`pack_rows`] makes them).

@@ -7,7 +7,7 @@
 use super::motion::{frame_noise_seed, FrameTransform};
 use super::warp::{CleanSource, WarpLevels, Warper, TILE};
 use crate::error::{Error, Result};
-use crate::noise::apply::{apply_noise_crop_with, gaussian_map};
+use crate::noise::apply::{apply_noise_crop_stream, gaussian_map};
 use crate::noise::apply_physics_noise_crop;
 use crate::noise::physics_apply::with_physics_map;
 use crate::normalize::Normalizer;
@@ -88,7 +88,13 @@ pub fn with_frame_rows<T>(
     };
     match &np.physics {
         Some(p) => with_physics_map(clean, p, seed, run),
-        None => run(&gaussian_map(clean, &np.params, seed, plan.truncate_noise)?),
+        None => run(&gaussian_map(
+            clean,
+            &np.params,
+            seed,
+            plan.truncate_noise,
+            plan.noise_stream,
+        )?),
     }
 }
 
@@ -223,7 +229,14 @@ pub fn frame_noisy_crop(
         Some(p) => apply_physics_noise_crop(day, crop, clean, p, seed),
         None => {
             let mut data = clean.to_vec();
-            apply_noise_crop_with(day, crop, &mut data, &np.params, seed, plan.truncate_noise)?;
+            apply_noise_crop_stream(
+                day,
+                crop,
+                &mut data,
+                &np.params,
+                (seed, plan.truncate_noise),
+                plan.noise_stream,
+            )?;
             Ok(data)
         }
     }
