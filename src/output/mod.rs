@@ -23,8 +23,10 @@
 //! that an exit on an interrupt leaves them whole.
 
 mod atomic;
+mod deferred;
 
 pub use atomic::{write_atomic, write_bytes_atomic, AtomicFile};
+pub use deferred::DeferredSyncs;
 
 use crate::error::{Error, Result, ResultExt};
 use std::fs::{self, File};
@@ -334,85 +336,6 @@ pub struct OutputPolicy {
     /// When set, [`write_atomic`] leaves the sync and the rename to this queue (see the
     /// module documentation); `None` (the default) syncs and renames at once.
     pub defer: Option<Arc<DeferredSyncs>>,
-}
-
-/// A file written and flushed whose sync runs on a background thread; renamed into place by
-/// [`DeferredSyncs::finish`].
-#[derive(Debug)]
-struct PendingSync {
-    tmp: PathBuf,
-    path: PathBuf,
-    sync: JoinHandle<std::io::Result<()>>,
-}
-
-/// The outputs of a deferring policy waiting for their sync and rename. Dropping it with
-/// files still pending (e.g. after an error elsewhere) waits for their syncs and removes
-/// the temporary files: nothing is renamed into place.
-#[derive(Debug, Default)]
-pub struct DeferredSyncs {
-    pending: Mutex<Vec<PendingSync>>,
-    /// The renames of [`finish`](Self::finish) began: the set stays open in the registry
-    /// until this queue is dropped.
-    set_open: std::sync::atomic::AtomicBool,
-}
-
-impl DeferredSyncs {
-    fn push(&self, p: PendingSync) {
-        self.pending
-            .lock()
-            .unwrap_or_else(PoisonError::into_inner)
-            .push(p);
-    }
-    fn take(&self) -> Vec<PendingSync> {
-        std::mem::take(&mut *self.pending.lock().unwrap_or_else(PoisonError::into_inner))
-    }
-    /// Wait for every pending sync; if all succeeded, rename the files into place (in the
-    /// order they were written, re-checking `policy` just before each rename). On an error
-    /// the files not yet renamed are removed and the first error is returned, naming its
-    /// file.
-    pub fn finish(&self, policy: &OutputPolicy) -> Result<()> {
-        let pending = self.take();
-        let mut first_err: Option<Error> = None;
-        let mut synced = Vec::with_capacity(pending.len());
-        for p in pending {
-            let r = match p.sync.join() {
-                Ok(r) => r.map_err(Error::from),
-                Err(_) => Err(Error::Io(std::io::Error::other("the sync thread panicked"))),
-            };
-            if let Err(e) = r {
-                first_err.get_or_insert(e.in_file(&p.path));
-            }
-            synced.push((p.tmp, p.path));
-        }
-        if first_err.is_none() && stop_requested().is_some() {
-            first_err = synced.first().map(|(_, p)| Error::Interrupted.in_file(p));
-        }
-        if first_err.is_none() && !self.set_open.load(Ordering::SeqCst) {
-            match TEMPS.open_set() {
-                Ok(()) => self.set_open.store(true, Ordering::SeqCst),
-                Err(e) => first_err = synced.first().map(|(_, p)| e.in_file(p)),
-            }
-        }
-        if let Some(e) = first_err {
-            for (tmp, _) in &synced {
-                TEMPS.discard(tmp);
-            }
-            return Err(e);
-        }
-        TEMPS.commit_all(synced, |path| policy.check(path))
-    }
-}
-
-impl Drop for DeferredSyncs {
-    fn drop(&mut self) {
-        for p in self.take() {
-            let _ = p.sync.join();
-            TEMPS.discard(&p.tmp);
-        }
-        if self.set_open.load(Ordering::SeqCst) {
-            TEMPS.close_set();
-        }
-    }
 }
 
 impl OutputPolicy {
