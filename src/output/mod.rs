@@ -24,9 +24,11 @@
 
 mod atomic;
 mod deferred;
+mod policy;
 
 pub use atomic::{write_atomic, write_bytes_atomic, AtomicFile};
 pub use deferred::DeferredSyncs;
+pub use policy::OutputPolicy;
 
 use crate::error::{Error, Result, ResultExt};
 use std::fs::{self, File};
@@ -324,53 +326,6 @@ fn same_file(file: &File, path: &Path) -> bool {
 #[cfg(not(unix))]
 fn same_file(_file: &File, _path: &Path) -> bool {
     true
-}
-
-/// How an output may treat an existing file at its path.
-#[derive(Debug, Clone, Default)]
-pub struct OutputPolicy {
-    /// Replace an existing output (never an input).
-    pub overwrite: bool,
-    /// Inputs of this run: an output resolving to one of them is always refused.
-    pub inputs: Vec<PathBuf>,
-    /// When set, [`write_atomic`] leaves the sync and the rename to this queue (see the
-    /// module documentation); `None` (the default) syncs and renames at once.
-    pub defer: Option<Arc<DeferredSyncs>>,
-}
-
-impl OutputPolicy {
-    /// This policy with its syncs and renames deferred to `queue` (see the module
-    /// documentation).
-    pub fn deferring(&self, queue: &Arc<DeferredSyncs>) -> OutputPolicy {
-        OutputPolicy {
-            defer: Some(Arc::clone(queue)),
-            ..self.clone()
-        }
-    }
-
-    /// Error if `path` may not be written under this policy.
-    pub fn check(&self, path: &Path) -> Result<()> {
-        let canon_out = canonical_or_self(path);
-        for input in &self.inputs {
-            if canonical_or_self(input) == canon_out {
-                return Err(Error::WouldOverwrite {
-                    path: path.to_path_buf(),
-                    reason: "it is an input of this run".into(),
-                });
-            }
-        }
-        if !self.overwrite && path.exists() {
-            return Err(Error::WouldOverwrite {
-                path: path.to_path_buf(),
-                reason: "it exists (pass --overwrite to replace it)".into(),
-            });
-        }
-        Ok(())
-    }
-}
-
-fn canonical_or_self(p: &Path) -> PathBuf {
-    fs::canonicalize(p).unwrap_or_else(|_| p.to_path_buf())
 }
 
 #[cfg(test)]
