@@ -2,7 +2,8 @@
 //! [`AtomicFile`] (a temporary file beside the output, synced and renamed into place).
 
 use super::deferred::PendingSync;
-use super::{stop_requested, OutputPolicy, TEMPS};
+use super::registry::TEMPS;
+use super::{stop_requested, OutputPolicy};
 use crate::error::{Error, Result, ResultExt};
 use std::fs::File;
 use std::io::{BufWriter, Write};

@@ -2,7 +2,8 @@
 //! synced on background threads and renamed into place together by
 //! [`DeferredSyncs::finish`], or removed when the queue is dropped first.
 
-use super::{stop_requested, OutputPolicy, TEMPS};
+use super::registry::TEMPS;
+use super::{stop_requested, OutputPolicy};
 use crate::error::{Error, Result, ResultExt};
 use std::path::PathBuf;
 use std::sync::atomic::Ordering;

@@ -1,6 +1,13 @@
 //! Tests of the safe output files (policy, deferred syncs, set locks, interrupt registry).
 
 use super::*;
+use crate::error::Error;
+use std::fs;
+use std::io::Write;
+use std::path::Path;
+use std::sync::atomic::Ordering;
+use std::sync::Arc;
+use std::time::Duration;
 
 #[test]
 fn refuses_existing_and_inputs_and_cleans_up() {
