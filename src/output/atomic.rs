@@ -1,9 +1,8 @@
 //! One output file written atomically: [`write_atomic`], [`write_bytes_atomic`] and
 //! [`AtomicFile`] (a temporary file beside the output, synced and renamed into place).
 
-use super::deferred::PendingSync;
-use super::registry::TEMPS;
-use super::{stop_requested, OutputPolicy};
+use super::policy::{OutputPolicy, PendingSync};
+use super::registry::{stop_requested, TEMPS};
 use crate::error::{Error, Result, ResultExt};
 use std::fs::File;
 use std::io::{BufWriter, Write};

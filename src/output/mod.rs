@@ -23,15 +23,13 @@
 //! that an exit on an interrupt leaves them whole.
 
 mod atomic;
-mod deferred;
 mod lock;
 mod policy;
 mod registry;
 
 pub use atomic::{write_atomic, write_bytes_atomic, AtomicFile};
-pub use deferred::DeferredSyncs;
 pub use lock::OutputSetLock;
-pub use policy::OutputPolicy;
+pub use policy::{DeferredSyncs, OutputPolicy};
 pub use registry::{
     remove_temp_files_and_close, request_stop, stop_requested, TempRegistry, SET_GRACE,
 };
