@@ -4,9 +4,9 @@
 //! lamp has) shows at a glance.
 
 use super::plot::{empty, report_frame};
-use crate::plot::{perr, svg};
 use crate::color::planck::{planck_uv, uv_to_xy, CCT_RANGE};
 use crate::error::Result;
+use crate::plot::{perr, svg};
 use plotters::prelude::*;
 
 /// Temperatures of the iso-CCT ticks, kelvin.

@@ -7,14 +7,7 @@ use rand::{RngExt, SeedableRng};
 use rand_distr::{Distribution, Normal};
 
 /// A ramp scene with heteroscedastic noise `var(y) = s y + o` per frame.
-pub(crate) fn burst(
-    s: f64,
-    o: f64,
-    frames: usize,
-    w: usize,
-    h: usize,
-    seed: u64,
-) -> Vec<RawImage> {
+pub(crate) fn burst(s: f64, o: f64, frames: usize, w: usize, h: usize, seed: u64) -> Vec<RawImage> {
     let (black, white) = (64.0, 1023.0);
     let scale = white - black;
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);

@@ -77,9 +77,7 @@ fn writes_and_reads_back_sanitized() {
                 .largest_resolution_level()
                 .rgba_channels(
                     |r, _| vec![[0f32; 3]; r.area()],
-                    |v: &mut Vec<[f32; 3]>,
-                     p: Vec2<usize>,
-                     (r, g, b, _a): (f32, f32, f32, f32)| {
+                    |v: &mut Vec<[f32; 3]>, p: Vec2<usize>, (r, g, b, _a): (f32, f32, f32, f32)| {
                         v[p.1 * 5 + p.0] = [r, g, b]
                     },
                 )
@@ -155,9 +153,7 @@ fn read_back(bytes: &[u8]) -> (usize, usize, Vec<[f32; 3]>) {
             |r, _| (r.0, vec![[0f32; 3]; r.area()]),
             |v: &mut (usize, Vec<[f32; 3]>),
              p: Vec2<usize>,
-             (r, g, b, _a): (f32, f32, f32, f32)| {
-                v.1[p.1 * v.0 + p.0] = [r, g, b]
-            },
+             (r, g, b, _a): (f32, f32, f32, f32)| { v.1[p.1 * v.0 + p.0] = [r, g, b] },
         )
         .first_valid_layer()
         .all_attributes()
@@ -188,8 +184,7 @@ fn chunks(bytes: &[u8]) -> Vec<(i32, usize)> {
         let mut pos = 8;
         while bytes[pos] != 0 {
             let name_end = pos + bytes[pos..].iter().position(|&b| b == 0).unwrap();
-            let ty_end =
-                name_end + 1 + bytes[name_end + 1..].iter().position(|&b| b == 0).unwrap();
+            let ty_end = name_end + 1 + bytes[name_end + 1..].iter().position(|&b| b == 0).unwrap();
             let size = i32::from_le_bytes(bytes[ty_end + 1..ty_end + 5].try_into().unwrap());
             pos = ty_end + 5 + size as usize;
         }
@@ -197,9 +192,8 @@ fn chunks(bytes: &[u8]) -> Vec<(i32, usize)> {
     };
     (0..n)
         .map(|i| {
-            let o =
-                u64::from_le_bytes(bytes[first + 8 * i..first + 8 * i + 8].try_into().unwrap())
-                    as usize;
+            let o = u64::from_le_bytes(bytes[first + 8 * i..first + 8 * i + 8].try_into().unwrap())
+                as usize;
             let y = i32::from_le_bytes(bytes[o..o + 4].try_into().unwrap());
             let len = i32::from_le_bytes(bytes[o + 4..o + 8].try_into().unwrap());
             assert!(o + 8 + len as usize <= bytes.len());
@@ -243,8 +237,7 @@ fn own_encoder_round_trips_odd_sizes() {
                         assert_eq!(*y as usize, b * lpb);
                     }
                     let meta =
-                        exr::meta::MetaData::read_from_buffered(Cursor::new(&bytes), true)
-                            .unwrap();
+                        exr::meta::MetaData::read_from_buffered(Cursor::new(&bytes), true).unwrap();
                     assert_eq!(meta.headers[0].compression, c.to_exr());
                 }
             }
