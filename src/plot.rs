@@ -35,14 +35,16 @@ pub(crate) struct Frame<'a> {
     pub x_formatter: Option<&'a dyn Fn(&f64) -> String>,
     /// Draw the vertical mesh lines.
     pub x_mesh: bool,
+    /// Where the legend of the labelled series goes (`None`: no legend).
+    pub legend: Option<SeriesLabelPosition>,
 }
 
 /// A chart on an SVG string with `f64` axes, as [`svg`] hands it to its caller.
 pub(crate) type Chart<'a, 'b> =
     ChartContext<'a, SVGBackend<'b>, Cartesian2d<RangedCoordf64, RangedCoordf64>>;
 
-/// One SVG plot: a white background, `frame`'s caption, axes and mesh, then what `draw`
-/// puts on the chart.
+/// One SVG plot: a white background, `frame`'s caption, axes and mesh, what `draw` puts on
+/// the chart, then the legend of the series `draw` labelled.
 pub(crate) fn svg(
     frame: Frame<'_>,
     draw: impl FnOnce(&mut Chart<'_, '_>) -> Result<()>,
@@ -74,6 +76,15 @@ pub(crate) fn svg(
         }
         mesh.draw().map_err(perr)?;
         draw(&mut chart)?;
+        if let Some(position) = frame.legend {
+            chart
+                .configure_series_labels()
+                .position(position)
+                .background_style(WHITE.mix(0.8))
+                .border_style(BLACK)
+                .draw()
+                .map_err(perr)?;
+        }
         root.present().map_err(perr)?;
     }
     Ok(svg)

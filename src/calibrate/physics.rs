@@ -458,6 +458,7 @@ pub fn plot_svg(cal: &PhysicsCalibration) -> Result<String> {
         labels: (None, None),
         x_formatter: None,
         x_mesh: true,
+        legend: Some(SeriesLabelPosition::UpperLeft),
     };
     svg(frame, |chart| {
         for (i, (f, p)) in cal.fits.iter().zip(&cal.model.isos).enumerate() {
@@ -482,13 +483,6 @@ pub fn plot_svg(cal: &PhysicsCalibration) -> Result<String> {
                 .draw_series(pts.map(|c| Circle::new(c, 4, colour.filled())))
                 .map_err(|e| perr(&e))?;
         }
-        chart
-            .configure_series_labels()
-            .position(SeriesLabelPosition::UpperLeft)
-            .background_style(WHITE.mix(0.8))
-            .border_style(BLACK)
-            .draw()
-            .map_err(|e| perr(&e))?;
         Ok(())
     })
 }

@@ -5,7 +5,7 @@
 //! policy names its queue, the queue re-checks the policy.)
 
 use super::registry::{stop_requested, TEMPS};
-use crate::error::{Error, Result, ResultExt};
+use crate::error::{Error, Result};
 use std::fs;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::Ordering;

@@ -2,7 +2,7 @@
 //! being written ([`TempRegistry`]), which [`remove_temp_files_and_close`] empties on an
 //! exit (see the [module documentation](super)).
 
-use crate::error::{Error, Result, ResultExt};
+use crate::error::{Error, Result};
 use std::fs::{self, File};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicI32, Ordering};

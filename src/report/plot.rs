@@ -35,6 +35,7 @@ pub(super) fn report_frame<'a>(
         labels: (Some(6), Some(6)),
         x_formatter: None,
         x_mesh: true,
+        legend: None,
     }
 }
 
@@ -174,7 +175,11 @@ pub fn chromaticity(
         let pad = ((hi - lo) * 0.08).max(1e-3);
         (lo - pad)..(hi + pad)
     };
-    let frame = report_frame(title, (range(&xs), range(&ys)), axes, 48);
+    let frame = Frame {
+        // plotters' default position, written out
+        legend: (!points.is_empty()).then_some(SeriesLabelPosition::MiddleRight),
+        ..report_frame(title, (range(&xs), range(&ys)), axes, 48)
+    };
     svg(frame, |chart| {
         if let Some(e) = ellipse {
             for (k, shade) in [(1.0, 120u8), (2.0, 170), (3.0, 210)] {
@@ -208,14 +213,6 @@ pub fn chromaticity(
                 .map_err(perr)?
                 .label(*name)
                 .legend(move |(x, y)| Circle::new((x + 6, y), 4, color.filled()));
-        }
-        if !points.is_empty() {
-            chart
-                .configure_series_labels()
-                .background_style(WHITE.mix(0.8))
-                .border_style(BLACK)
-                .draw()
-                .map_err(perr)?;
         }
         Ok(())
     })

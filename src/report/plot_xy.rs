@@ -6,7 +6,7 @@
 use super::plot::{empty, report_frame};
 use crate::color::planck::{planck_uv, uv_to_xy, CCT_RANGE};
 use crate::error::Result;
-use crate::plot::{perr, svg};
+use crate::plot::{perr, svg, Frame};
 use plotters::prelude::*;
 
 /// Temperatures of the iso-CCT ticks, kelvin.
@@ -77,7 +77,10 @@ pub fn planckian(title: &str, points: &[(f64, f64, usize)], kinds: &[&str]) -> R
             })
             .collect()
     };
-    let frame = report_frame(title, (xr.clone(), yr.clone()), ("CIE x", "CIE y"), 48);
+    let frame = Frame {
+        legend: Some(SeriesLabelPosition::LowerRight),
+        ..report_frame(title, (xr.clone(), yr.clone()), ("CIE x", "CIE y"), 48)
+    };
     svg(frame, |chart| {
         // The locus and the guides, piecewise: only the parts inside the window.
         let guide = RGBColor(170, 170, 170);
@@ -139,13 +142,6 @@ pub fn planckian(title: &str, points: &[(f64, f64, usize)], kinds: &[&str]) -> R
                 .label(*name)
                 .legend(move |(x, y)| Circle::new((x + 6, y), 4, color.filled()));
         }
-        chart
-            .configure_series_labels()
-            .position(SeriesLabelPosition::LowerRight)
-            .background_style(WHITE.mix(0.8))
-            .border_style(BLACK)
-            .draw()
-            .map_err(perr)?;
         Ok(())
     })
 }

@@ -2,6 +2,8 @@
 //! across runs and thread counts, attributes, compression names.
 
 use super::*;
+use crate::error::Error;
+use exr::prelude::*;
 
 #[test]
 fn rows_and_blocks_give_the_whole_image_bytes() {
