@@ -25,6 +25,9 @@ pub mod metrics;
 pub mod noise;
 pub mod normalize;
 pub mod output;
+/// The plots' common frame (needs the `cli` feature: drawn with plotters).
+#[cfg(feature = "cli")]
+pub(crate) mod plot;
 pub mod raw;
 pub mod realpairs;
 /// The HTML report of a dataset (needs the `cli` feature: its plots are drawn with plotters).

@@ -75,7 +75,7 @@ def test_ray_killed_then_rerun_completes_the_tree(cli, days, tmp_path):  # noqa:
     cli("dataset", days, "-o", a, "--quiet", *ARGS)
     journal = b / ".day2night-units"
     # The last unit of an input is locked as another process writing it would (the lock
-    # file of src/output.rs's OutputSetLock, flock'ed): the run (--wait) completes the
+    # file of src/output/lock.rs's OutputSetLock, flock'ed): the run (--wait) completes the
     # units before it in its task, and maybe other tasks, then waits for it, so it cannot
     # finish before the kill, and no clock decides anything. --overwrite: the lock file
     # makes the new OUT non-empty.

@@ -432,6 +432,7 @@ pub fn fit_physics(darks: &[Named], flats: &[Named], source: &str) -> Result<Phy
 /// (`K mu + v0`), and the dark points at `mu = 0`. Needs the `cli` feature (plotters).
 #[cfg(feature = "cli")]
 pub fn plot_svg(cal: &PhysicsCalibration) -> Result<String> {
+    use crate::plot::{svg, Frame};
     use plotters::prelude::*;
     let perr = |e: &dyn std::fmt::Display| Error::invalid(format!("plot: {e}"));
     let xmax = cal
@@ -446,26 +447,20 @@ pub fn plot_svg(cal: &PhysicsCalibration) -> Result<String> {
         .flat_map(|f| f.flats.iter().map(|p| p.var).chain([f.dark.v0]))
         .fold(1.0f64, f64::max)
         * 1.1;
-    let mut svg = String::new();
-    {
-        let root = SVGBackend::with_string(&mut svg, (640, 420)).into_drawing_area();
-        root.fill(&WHITE).map_err(|e| perr(&e))?;
-        let mut chart = ChartBuilder::on(&root)
-            .caption(
-                "physics noise fit: var(A-B)/2 vs mean above black",
-                ("sans-serif", 16),
-            )
-            .margin(10)
-            .x_label_area_size(40)
-            .y_label_area_size(60)
-            .build_cartesian_2d(0.0..xmax, 0.0..ymax)
-            .map_err(|e| perr(&e))?;
-        chart
-            .configure_mesh()
-            .x_desc("mean signal above black (DN)")
-            .y_desc("variance (DN^2)")
-            .draw()
-            .map_err(|e| perr(&e))?;
+    let frame = Frame {
+        size: (640, 420),
+        title: "physics noise fit: var(A-B)/2 vs mean above black",
+        margin: 10,
+        label_areas: (40, 60),
+        x: 0.0..xmax,
+        y: 0.0..ymax,
+        desc: ("mean signal above black (DN)", "variance (DN^2)"),
+        labels: (None, None),
+        x_formatter: None,
+        x_mesh: true,
+        legend: Some(SeriesLabelPosition::UpperLeft),
+    };
+    svg(frame, |chart| {
         for (i, (f, p)) in cal.fits.iter().zip(&cal.model.isos).enumerate() {
             let colour = Palette99::pick(i).to_rgba();
             let line = [(0.0, f.dark.v0), (xmax, f.dark.v0 + p.k * xmax)];
@@ -488,14 +483,6 @@ pub fn plot_svg(cal: &PhysicsCalibration) -> Result<String> {
                 .draw_series(pts.map(|c| Circle::new(c, 4, colour.filled())))
                 .map_err(|e| perr(&e))?;
         }
-        chart
-            .configure_series_labels()
-            .position(SeriesLabelPosition::UpperLeft)
-            .background_style(WHITE.mix(0.8))
-            .border_style(BLACK)
-            .draw()
-            .map_err(|e| perr(&e))?;
-        root.present().map_err(|e| perr(&e))?;
-    }
-    Ok(svg)
+        Ok(())
+    })
 }

@@ -30,7 +30,7 @@ fn opcode_verdict(info: &mut DngInfo, file: &Decoded) {
     let has_lists = info
         .raw
         .as_ref()
-        .is_some_and(|r| !r.meta.opcode_lists.is_empty());
+        .is_some_and(|r| !r.meta.opcode_lists().is_empty());
     if !info.synth_ready || !has_lists {
         return;
     }
@@ -97,7 +97,7 @@ fn illuminant_verdict(info: &DngInfo) -> Option<Result<IlluminantProvenance, Str
         info.model.clone(),
         info.unique_camera_model.clone(),
     );
-    let r = IlluminantChoice::Auto.resolve(&camera, &raw.meta.color, Covariance::Unbiased);
+    let r = IlluminantChoice::Auto.resolve(&camera, &raw.meta.meta.color, Covariance::Unbiased);
     Some(r.map(|r| r.provenance).map_err(|e| e.root().to_string()))
 }
 
@@ -279,7 +279,8 @@ fn describe_opcodes(out: &mut String, lists: &[day2night::dng::opcodes::describe
 
 /// The raw image's lines of [`describe`].
 fn describe_raw(out: &mut String, r: &day2night::dng::read::RawSummary) {
-    let m = &r.meta;
+    let summary = &r.meta;
+    let m = &summary.meta;
     let _ = writeln!(
         out,
         "  raw size:      {}x{}, {}-bit",
@@ -322,7 +323,7 @@ fn describe_raw(out: &mut String, r: &day2night::dng::read::RawSummary) {
             day2night::dng::read::compression_name(st.compression)
         );
     }
-    describe_levels(out, m);
+    describe_levels(out, summary);
     let e = &m.exif;
     let _ = writeln!(
         out,
@@ -342,27 +343,33 @@ fn describe_raw(out: &mut String, r: &day2night::dng::read::RawSummary) {
             .join("; "))
     );
     let _ = writeln!(out, "  orientation:   {}", m.orientation);
-    if m.gps_entries > 0 {
-        let _ = writeln!(out, "  GPS:           {} entries (carried)", m.gps_entries);
+    if summary.gps_entries() > 0 {
+        let _ = writeln!(
+            out,
+            "  GPS:           {} entries (carried)",
+            summary.gps_entries()
+        );
     }
     let _ = writeln!(
         out,
         "  opcode lists:  {}",
-        if m.opcode_lists.is_empty() {
+        if summary.opcode_lists().is_empty() {
             "none".to_string()
         } else {
-            m.opcode_lists
+            summary
+                .opcode_lists()
                 .iter()
                 .map(|i| format!("OpcodeList{i}"))
                 .collect::<Vec<_>>()
                 .join(", ")
         }
     );
-    describe_opcodes(out, &m.opcodes);
+    describe_opcodes(out, &summary.opcodes);
 }
 
 /// Levels, neutral and colour tags of [`describe_raw`].
-fn describe_levels(out: &mut String, m: &day2night::dng::read::MetaSummary) {
+fn describe_levels(out: &mut String, summary: &day2night::dng::read::MetaSummary) {
+    let m = &summary.meta;
     let l = &m.levels;
     let _ = writeln!(
         out,
@@ -391,7 +398,7 @@ fn describe_levels(out: &mut String, m: &day2night::dng::read::MetaSummary) {
             lr.samples_per_pixel
         );
     }
-    if let Some(n) = m.linearization_table_len {
+    if let Some(n) = summary.linearization_table_len() {
         let _ = writeln!(out, "  linearization: table of {n} entries");
     }
     let _ = writeln!(

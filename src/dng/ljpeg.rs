@@ -526,25 +526,7 @@ fn scan(data: &[u8], pos: usize, sp: ScanParams, hts: &[&Huffman]) -> Result<Dec
                         _ => 0,
                     }
                 };
-                let s = bits.decode(ht)?;
-                let diff: i32 = match s {
-                    0 => 0,
-                    16 => 32768,
-                    1..=15 => {
-                        let v = bits.get(s as u32) as i32;
-                        if v < (1 << (s - 1)) {
-                            v - (1 << s) + 1
-                        } else {
-                            v
-                        }
-                    }
-                    _ => {
-                        return Err(Error::malformed(format!(
-                            "lossless JPEG: difference category {s} > 16"
-                        )))
-                    }
-                };
-                cur[i] = ((pred + diff) & mask) as u16;
+                cur[i] = ((pred + read_diff(&mut bits, ht)?) & mask) as u16;
             }
             if bits.too_far() {
                 return Err(Error::malformed(

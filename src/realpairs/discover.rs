@@ -444,7 +444,7 @@ fn dng_iso(path: &Path) -> Result<u32> {
     if let Some(e) = refused {
         return Err(Error::invalid(format!("not a usable raw DNG: {e}")).in_file(path));
     }
-    info.raw.and_then(|r| r.meta.exif.iso).ok_or_else(|| {
+    info.raw.and_then(|r| r.meta.meta.exif.iso).ok_or_else(|| {
         Error::invalid(
             "no ISO in the DNG (Exif ISOSpeedRatings): the simple layout groups frames by it",
         )

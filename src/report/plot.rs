@@ -1,21 +1,42 @@
 //! Plots of the report, drawn with `plotters` into inline SVG (no fonts needed: the
 //! browser renders the text; no network, no files).
 
-use crate::error::{Error, Result};
+use crate::error::Result;
+use crate::plot::{perr, svg, Frame};
 use plotters::prelude::*;
+use std::ops::Range;
 
 pub(super) const W: u32 = 420;
 pub(super) const H: u32 = 300;
-
-pub(super) fn perr<E: std::fmt::Display>(e: E) -> Error {
-    Error::invalid(format!("plot: {e}"))
-}
 
 pub(super) fn empty(title: &str) -> String {
     format!(
         "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{W}\" height=\"{H}\"><text x=\"20\" y=\"40\" font-size=\"16\">{}: no data</text></svg>",
         super::html::escape(title)
     )
+}
+
+/// The report's frame ([`W`] x [`H`]): `title`, the axes' ranges and descriptions, six
+/// labels on each axis, a y label area of `y_area` pixels.
+pub(super) fn report_frame<'a>(
+    title: &'a str,
+    (x, y): (Range<f64>, Range<f64>),
+    desc: (&'a str, &'a str),
+    y_area: u32,
+) -> Frame<'a> {
+    Frame {
+        size: (W, H),
+        title,
+        margin: 8,
+        label_areas: (36, y_area),
+        x,
+        y,
+        desc,
+        labels: (Some(6), Some(6)),
+        x_formatter: None,
+        x_mesh: true,
+        legend: None,
+    }
 }
 
 /// Histogram of `values` in `bins` equal bins.
@@ -40,25 +61,11 @@ pub fn histogram(title: &str, x_label: &str, values: &[f64], bins: usize) -> Res
         }
     }
     let top = counts.iter().copied().max().unwrap_or(1).max(1) as f64 * 1.1;
-    let mut svg = String::new();
-    {
-        let root = SVGBackend::with_string(&mut svg, (W, H)).into_drawing_area();
-        root.fill(&WHITE).map_err(perr)?;
-        let mut chart = ChartBuilder::on(&root)
-            .caption(title, ("sans-serif", 16))
-            .margin(8)
-            .x_label_area_size(36)
-            .y_label_area_size(44)
-            .build_cartesian_2d(lo..hi, 0.0..top)
-            .map_err(perr)?;
-        chart
-            .configure_mesh()
-            .x_desc(x_label)
-            .y_desc("count")
-            .x_labels(6)
-            .y_labels(5)
-            .draw()
-            .map_err(perr)?;
+    let frame = Frame {
+        labels: (Some(6), Some(5)),
+        ..report_frame(title, (lo..hi, 0.0..top), (x_label, "count"), 44)
+    };
+    svg(frame, |chart| {
         chart
             .draw_series(counts.iter().enumerate().map(|(i, &c)| {
                 let x0 = lo + i as f64 * width;
@@ -68,9 +75,8 @@ pub fn histogram(title: &str, x_label: &str, values: &[f64], bins: usize) -> Res
                 )
             }))
             .map_err(perr)?;
-        root.present().map_err(perr)?;
-    }
-    Ok(svg)
+        Ok(())
+    })
 }
 
 /// Bar chart of counts per label (e.g. per ISO).
@@ -81,33 +87,22 @@ pub fn bars(title: &str, x_label: &str, labelled: &[(String, usize)]) -> Result<
     let n = labelled.len();
     let top = labelled.iter().map(|x| x.1).max().unwrap_or(1).max(1) as f64 * 1.1;
     let labels: Vec<String> = labelled.iter().map(|x| x.0.clone()).collect();
-    let mut svg = String::new();
-    {
-        let root = SVGBackend::with_string(&mut svg, (W, H)).into_drawing_area();
-        root.fill(&WHITE).map_err(perr)?;
-        let mut chart = ChartBuilder::on(&root)
-            .caption(title, ("sans-serif", 16))
-            .margin(8)
-            .x_label_area_size(36)
-            .y_label_area_size(44)
-            .build_cartesian_2d(-0.5..(n as f64 - 0.5), 0.0..top)
-            .map_err(perr)?;
-        chart
-            .configure_mesh()
-            .x_desc(x_label)
-            .y_desc("count")
-            .x_labels(n.min(12))
-            .x_label_formatter(&|x| {
-                let i = x.round();
-                if (x - i).abs() < 1e-6 && i >= 0.0 {
-                    labels.get(i as usize).cloned().unwrap_or_default()
-                } else {
-                    String::new()
-                }
-            })
-            .disable_x_mesh()
-            .draw()
-            .map_err(perr)?;
+    let label_of = |x: &f64| {
+        let i = x.round();
+        if (x - i).abs() < 1e-6 && i >= 0.0 {
+            labels.get(i as usize).cloned().unwrap_or_default()
+        } else {
+            String::new()
+        }
+    };
+    let range = (-0.5..(n as f64 - 0.5), 0.0..top);
+    let frame = Frame {
+        labels: (Some(n.min(12)), None),
+        x_formatter: Some(&label_of),
+        x_mesh: false,
+        ..report_frame(title, range, (x_label, "count"), 44)
+    };
+    svg(frame, |chart| {
         chart
             .draw_series(labelled.iter().enumerate().map(|(i, (_, c))| {
                 let x = i as f64;
@@ -117,9 +112,8 @@ pub fn bars(title: &str, x_label: &str, labelled: &[(String, usize)]) -> Result<
                 )
             }))
             .map_err(perr)?;
-        root.present().map_err(perr)?;
-    }
-    Ok(svg)
+        Ok(())
+    })
 }
 
 /// A 2-D Gaussian drawn as its 1, 2 and 3 sigma ellipses.
@@ -181,25 +175,12 @@ pub fn chromaticity(
         let pad = ((hi - lo) * 0.08).max(1e-3);
         (lo - pad)..(hi + pad)
     };
-    let mut svg = String::new();
-    {
-        let root = SVGBackend::with_string(&mut svg, (W, H)).into_drawing_area();
-        root.fill(&WHITE).map_err(perr)?;
-        let mut chart = ChartBuilder::on(&root)
-            .caption(title, ("sans-serif", 16))
-            .margin(8)
-            .x_label_area_size(36)
-            .y_label_area_size(48)
-            .build_cartesian_2d(range(&xs), range(&ys))
-            .map_err(perr)?;
-        chart
-            .configure_mesh()
-            .x_desc(axes.0)
-            .y_desc(axes.1)
-            .x_labels(6)
-            .y_labels(6)
-            .draw()
-            .map_err(perr)?;
+    let frame = Frame {
+        // plotters' default position, written out
+        legend: (!points.is_empty()).then_some(SeriesLabelPosition::MiddleRight),
+        ..report_frame(title, (range(&xs), range(&ys)), axes, 48)
+    };
+    svg(frame, |chart| {
         if let Some(e) = ellipse {
             for (k, shade) in [(1.0, 120u8), (2.0, 170), (3.0, 210)] {
                 chart
@@ -233,17 +214,8 @@ pub fn chromaticity(
                 .label(*name)
                 .legend(move |(x, y)| Circle::new((x + 6, y), 4, color.filled()));
         }
-        if !points.is_empty() {
-            chart
-                .configure_series_labels()
-                .background_style(WHITE.mix(0.8))
-                .border_style(BLACK)
-                .draw()
-                .map_err(perr)?;
-        }
-        root.present().map_err(perr)?;
-    }
-    Ok(svg)
+        Ok(())
+    })
 }
 
 #[cfg(test)]

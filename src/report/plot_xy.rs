@@ -3,9 +3,10 @@
 //! locus with iso-CCT ticks, so that a light off the locus (a green or magenta cast no real
 //! lamp has) shows at a glance.
 
-use super::plot::{empty, perr, H, W};
+use super::plot::{empty, report_frame};
 use crate::color::planck::{planck_uv, uv_to_xy, CCT_RANGE};
 use crate::error::Result;
+use crate::plot::{perr, svg, Frame};
 use plotters::prelude::*;
 
 /// Temperatures of the iso-CCT ticks, kelvin.
@@ -76,25 +77,11 @@ pub fn planckian(title: &str, points: &[(f64, f64, usize)], kinds: &[&str]) -> R
             })
             .collect()
     };
-    let mut svg = String::new();
-    {
-        let root = SVGBackend::with_string(&mut svg, (W, H)).into_drawing_area();
-        root.fill(&WHITE).map_err(perr)?;
-        let mut chart = ChartBuilder::on(&root)
-            .caption(title, ("sans-serif", 16))
-            .margin(8)
-            .x_label_area_size(36)
-            .y_label_area_size(48)
-            .build_cartesian_2d(xr.clone(), yr.clone())
-            .map_err(perr)?;
-        chart
-            .configure_mesh()
-            .x_desc("CIE x")
-            .y_desc("CIE y")
-            .x_labels(6)
-            .y_labels(6)
-            .draw()
-            .map_err(perr)?;
+    let frame = Frame {
+        legend: Some(SeriesLabelPosition::LowerRight),
+        ..report_frame(title, (xr.clone(), yr.clone()), ("CIE x", "CIE y"), 48)
+    };
+    svg(frame, |chart| {
         // The locus and the guides, piecewise: only the parts inside the window.
         let guide = RGBColor(170, 170, 170);
         for (duv, color, label) in [
@@ -155,16 +142,8 @@ pub fn planckian(title: &str, points: &[(f64, f64, usize)], kinds: &[&str]) -> R
                 .label(*name)
                 .legend(move |(x, y)| Circle::new((x + 6, y), 4, color.filled()));
         }
-        chart
-            .configure_series_labels()
-            .position(SeriesLabelPosition::LowerRight)
-            .background_style(WHITE.mix(0.8))
-            .border_style(BLACK)
-            .draw()
-            .map_err(perr)?;
-        root.present().map_err(perr)?;
-    }
-    Ok(svg)
+        Ok(())
+    })
 }
 
 #[cfg(test)]

@@ -4,7 +4,8 @@
 
 use super::{list_results, AreaSpec, ListId, Opcode, OpcodeKind, WarpPlane};
 use crate::raw::meta::RawMeta;
-use serde::Serialize;
+use serde::ser::SerializeStruct;
+use serde::{Serialize, Serializer};
 
 /// One opcode list of a file, as `info` reports it.
 #[derive(Debug, Clone, Serialize)]
@@ -42,102 +43,109 @@ pub struct OpcodeInfo {
     pub params: OpcodeParams,
 }
 
-/// The parameters of one opcode in summary (gains and tables by size and range).
-#[derive(Debug, Clone, Serialize)]
-#[serde(tag = "kind", rename_all = "snake_case")]
-pub enum OpcodeParams {
-    /// WarpRectilinear / WarpFisheye: coefficients per plane and the optical centre.
-    Warp {
-        /// Per plane: kr0..kr3 then (rectilinear only) kt0, kt1.
-        coefficients: Vec<Vec<f64>>,
-        /// Optical centre (x, y), relative.
-        center: [f64; 2],
-    },
-    /// WarpRectilinear2: per plane kr0..kr14 then kt0, kt1, the valid radius range, the
-    /// optical centre and whether the radial ratio is the polynomial's reciprocal.
-    Warp2 {
-        /// Per plane: kr0..kr14, kt0, kt1.
-        coefficients: Vec<Vec<f64>>,
-        /// Per plane: minimum and maximum valid radius.
-        valid: Vec<[f64; 2]>,
-        /// Optical centre (x, y), relative.
-        center: [f64; 2],
-        /// The ratio is `1 / sum kr_i r^i`.
-        reciprocal: bool,
-    },
-    /// FixVignetteRadial.
-    Vignette {
-        /// k0..k4.
-        coefficients: [f64; 5],
-        /// Optical centre (x, y), relative.
-        center: [f64; 2],
-    },
-    /// FixBadPixelsConstant.
-    BadPixelsConstant {
-        /// The marker value.
-        constant: u32,
-        /// Bayer phase.
-        bayer_phase: u32,
-    },
-    /// FixBadPixelsList.
-    BadPixelsList {
-        /// Bayer phase.
-        bayer_phase: u32,
-        /// Bad points.
-        points: usize,
-        /// Bad rectangles.
-        rects: usize,
-    },
-    /// TrimBounds.
-    Trim {
-        /// Top, left, bottom, right.
-        bounds: [u32; 4],
-    },
-    /// MapTable.
-    Table {
-        /// Entries.
-        len: usize,
-        /// Smallest and largest entry.
-        min: u16,
-        /// Largest entry.
-        max: u16,
-    },
-    /// MapPolynomial.
-    Polynomial {
-        /// c0..cN.
-        coefficients: Vec<f64>,
-    },
-    /// GainMap.
-    GainMap {
-        /// Map rows.
-        points_v: u32,
-        /// Map columns.
-        points_h: u32,
-        /// Map planes.
-        map_planes: u32,
-        /// Spacing (v, h), relative to the image.
-        spacing: [f64; 2],
-        /// Origin (v, h), relative to the image.
-        origin: [f64; 2],
-        /// Smallest gain.
-        gain_min: f32,
-        /// Largest gain.
-        gain_max: f32,
-    },
-    /// Delta/Scale per row/column.
-    PerLine {
-        /// Entries (one per row or column step).
-        count: usize,
-        /// Smallest entry.
-        min: f32,
-        /// Largest entry.
-        max: f32,
-    },
-    /// An opcode this reader does not model.
-    Unknown {
-        /// Parameter bytes.
-        bytes: usize,
-    },
+/// The parameters of one opcode in summary (gains and tables by size and range): a view of
+/// its [`OpcodeKind`], not a copy of its fields. `info --json` writes it as
+/// `{"kind": ..., ...}` (see its `Serialize`), [`OpcodeInfo::text`] as one line; a kind
+/// added to [`OpcodeKind`] is summarized by one arm in each.
+#[derive(Debug, Clone, PartialEq)]
+pub struct OpcodeParams(pub OpcodeKind);
+
+impl OpcodeParams {
+    /// The warps' coefficients per plane: kr then kt (WarpFisheye: kr0..kr3).
+    fn warp_coefficients(&self) -> Vec<Vec<f64>> {
+        match &self.0 {
+            OpcodeKind::WarpRectilinear { planes, .. } => {
+                planes.iter().map(warp_coefficients).collect()
+            }
+            OpcodeKind::WarpFisheye { planes, .. } => planes.iter().map(|k| k.to_vec()).collect(),
+            OpcodeKind::WarpRectilinear2 { planes, .. } => planes
+                .iter()
+                .map(|p| p.kr.iter().chain(p.kt.iter()).copied().collect())
+                .collect(),
+            _ => Vec::new(),
+        }
+    }
+}
+
+impl Serialize for OpcodeParams {
+    /// The form serde gives an internally tagged enum: `{"kind": "gain_map", "points_v": 2,
+    /// ...}`, each kind's summary fields in order.
+    fn serialize<S: Serializer>(&self, ser: S) -> std::result::Result<S::Ok, S::Error> {
+        macro_rules! summary {
+            ($kind:literal $(, $name:literal => $value:expr)+ $(,)?) => {{
+                let mut st = ser.serialize_struct("OpcodeParams", 1 + [$($name),+].len())?;
+                st.serialize_field("kind", $kind)?;
+                $(st.serialize_field($name, &$value)?;)+
+                st.end()
+            }};
+        }
+        match &self.0 {
+            OpcodeKind::WarpRectilinear { center, .. } | OpcodeKind::WarpFisheye { center, .. } => {
+                summary!("warp", "coefficients" => self.warp_coefficients(), "center" => center)
+            }
+            OpcodeKind::WarpRectilinear2 {
+                planes,
+                center,
+                reciprocal,
+            } => summary!(
+                "warp2",
+                "coefficients" => self.warp_coefficients(),
+                "valid" => planes.iter().map(|p| p.valid).collect::<Vec<_>>(),
+                "center" => center,
+                "reciprocal" => reciprocal,
+            ),
+            OpcodeKind::FixVignetteRadial { k, center } => {
+                summary!("vignette", "coefficients" => k, "center" => center)
+            }
+            OpcodeKind::FixBadPixelsConstant {
+                constant,
+                bayer_phase,
+            } => summary!(
+                "bad_pixels_constant",
+                "constant" => constant,
+                "bayer_phase" => bayer_phase,
+            ),
+            OpcodeKind::FixBadPixelsList {
+                bayer_phase,
+                points,
+                rects,
+            } => summary!(
+                "bad_pixels_list",
+                "bayer_phase" => bayer_phase,
+                "points" => points.len(),
+                "rects" => rects.len(),
+            ),
+            OpcodeKind::TrimBounds { bounds } => summary!("trim", "bounds" => bounds),
+            OpcodeKind::MapTable { table, .. } => {
+                let (min, max) = range_u16(table);
+                summary!("table", "len" => table.len(), "min" => min, "max" => max)
+            }
+            OpcodeKind::MapPolynomial { coefficients, .. } => {
+                summary!("polynomial", "coefficients" => coefficients)
+            }
+            OpcodeKind::GainMap(g) => {
+                let (gain_min, gain_max) = range_f32(&g.gains);
+                summary!(
+                    "gain_map",
+                    "points_v" => g.points_v,
+                    "points_h" => g.points_h,
+                    "map_planes" => g.map_planes,
+                    "spacing" => [g.spacing_v, g.spacing_h],
+                    "origin" => [g.origin_v, g.origin_h],
+                    "gain_min" => gain_min,
+                    "gain_max" => gain_max,
+                )
+            }
+            OpcodeKind::DeltaPerRow { deltas: v, .. }
+            | OpcodeKind::DeltaPerColumn { deltas: v, .. }
+            | OpcodeKind::ScalePerRow { scales: v, .. }
+            | OpcodeKind::ScalePerColumn { scales: v, .. } => {
+                let (min, max) = range_f32(v);
+                summary!("per_line", "count" => v.len(), "min" => min, "max" => max)
+            }
+            OpcodeKind::Unknown { params, .. } => summary!("unknown", "bytes" => params.len()),
+        }
+    }
 }
 
 /// The opcode lists present in `meta`, in pipeline order.
@@ -169,6 +177,11 @@ fn range_f32(v: &[f32]) -> (f32, f32) {
     it.fold((first, first), |(a, b), x| (a.min(x), b.max(x)))
 }
 
+fn range_u16(v: &[u16]) -> (u16, u16) {
+    let min = v.iter().copied().min().unwrap_or(0);
+    (min, v.iter().copied().max().unwrap_or(0))
+}
+
 fn warp_coefficients(p: &WarpPlane) -> Vec<f64> {
     p.kr.iter().chain(p.kt.iter()).copied().collect()
 }
@@ -176,84 +189,6 @@ fn warp_coefficients(p: &WarpPlane) -> Vec<f64> {
 /// Summarize one opcode.
 pub fn describe(op: &Opcode) -> OpcodeInfo {
     let area: Option<&AreaSpec> = op.kind.area();
-    let params = match &op.kind {
-        OpcodeKind::WarpRectilinear { planes, center } => OpcodeParams::Warp {
-            coefficients: planes.iter().map(warp_coefficients).collect(),
-            center: *center,
-        },
-        OpcodeKind::WarpFisheye { planes, center } => OpcodeParams::Warp {
-            coefficients: planes.iter().map(|k| k.to_vec()).collect(),
-            center: *center,
-        },
-        OpcodeKind::WarpRectilinear2 {
-            planes,
-            center,
-            reciprocal,
-        } => OpcodeParams::Warp2 {
-            coefficients: planes
-                .iter()
-                .map(|p| p.kr.iter().chain(p.kt.iter()).copied().collect())
-                .collect(),
-            valid: planes.iter().map(|p| p.valid).collect(),
-            center: *center,
-            reciprocal: *reciprocal,
-        },
-        OpcodeKind::FixVignetteRadial { k, center } => OpcodeParams::Vignette {
-            coefficients: *k,
-            center: *center,
-        },
-        OpcodeKind::FixBadPixelsConstant {
-            constant,
-            bayer_phase,
-        } => OpcodeParams::BadPixelsConstant {
-            constant: *constant,
-            bayer_phase: *bayer_phase,
-        },
-        OpcodeKind::FixBadPixelsList {
-            bayer_phase,
-            points,
-            rects,
-        } => OpcodeParams::BadPixelsList {
-            bayer_phase: *bayer_phase,
-            points: points.len(),
-            rects: rects.len(),
-        },
-        OpcodeKind::TrimBounds { bounds } => OpcodeParams::Trim { bounds: *bounds },
-        OpcodeKind::MapTable { table, .. } => OpcodeParams::Table {
-            len: table.len(),
-            min: table.iter().copied().min().unwrap_or(0),
-            max: table.iter().copied().max().unwrap_or(0),
-        },
-        OpcodeKind::MapPolynomial { coefficients, .. } => OpcodeParams::Polynomial {
-            coefficients: coefficients.clone(),
-        },
-        OpcodeKind::GainMap(g) => {
-            let (gain_min, gain_max) = range_f32(&g.gains);
-            OpcodeParams::GainMap {
-                points_v: g.points_v,
-                points_h: g.points_h,
-                map_planes: g.map_planes,
-                spacing: [g.spacing_v, g.spacing_h],
-                origin: [g.origin_v, g.origin_h],
-                gain_min,
-                gain_max,
-            }
-        }
-        OpcodeKind::DeltaPerRow { deltas: v, .. }
-        | OpcodeKind::DeltaPerColumn { deltas: v, .. }
-        | OpcodeKind::ScalePerRow { scales: v, .. }
-        | OpcodeKind::ScalePerColumn { scales: v, .. } => {
-            let (min, max) = range_f32(v);
-            OpcodeParams::PerLine {
-                count: v.len(),
-                min,
-                max,
-            }
-        }
-        OpcodeKind::Unknown { params, .. } => OpcodeParams::Unknown {
-            bytes: params.len(),
-        },
-    };
     let v = op.dng_version;
     OpcodeInfo {
         name: op.name(),
@@ -264,7 +199,7 @@ pub fn describe(op: &Opcode) -> OpcodeInfo {
         planes: area.map(|a| [a.plane, a.plane.saturating_add(a.planes)]),
         area: area.map(|a| [a.top, a.left, a.bottom, a.right]),
         pitch: area.map(|a| [a.row_pitch, a.col_pitch]),
-        params,
+        params: OpcodeParams(op.kind.clone()),
     }
 }
 
@@ -308,98 +243,104 @@ impl OpcodeInfo {
         if let Some([rp, cp]) = self.pitch {
             parts.push(format!("pitch {rp}x{cp}"));
         }
-        parts.push(match &self.params {
-            OpcodeParams::Warp {
-                coefficients,
-                center,
-            } => {
-                let per: Vec<String> = coefficients
+        parts.push(self.params.text());
+        format!("{} ({}): {}", self.name, flags.join(", "), parts.join(", "))
+    }
+}
+
+impl OpcodeParams {
+    /// The summary as text: "map 17x13x1, spacing 0.0625x0.08333, origin 0,0, gain 1..2.61".
+    pub fn text(&self) -> String {
+        let centre = |c: &[f64; 2]| format!("centre {},{}", g(c[0]), g(c[1]));
+        match &self.0 {
+            OpcodeKind::WarpRectilinear { center, .. } | OpcodeKind::WarpFisheye { center, .. } => {
+                let per: Vec<String> = self
+                    .warp_coefficients()
                     .iter()
                     .map(|c| format!("[{}]", gs(c)))
                     .collect();
-                format!(
-                    "coefficients {} centre {},{}",
-                    per.join(" "),
-                    g(center[0]),
-                    g(center[1])
-                )
+                format!("coefficients {} {}", per.join(" "), centre(center))
             }
-            OpcodeParams::Warp2 {
-                coefficients,
-                valid,
+            OpcodeKind::WarpRectilinear2 {
+                planes,
                 center,
                 reciprocal,
             } => {
-                let per: Vec<String> = coefficients
+                let per: Vec<String> = self
+                    .warp_coefficients()
                     .iter()
-                    .zip(valid)
-                    .map(|(c, v)| format!("[{}] valid r {}..{}", gs(c), g(v[0]), g(v[1])))
+                    .zip(planes)
+                    .map(|(c, p)| {
+                        format!("[{}] valid r {}..{}", gs(c), g(p.valid[0]), g(p.valid[1]))
+                    })
                     .collect();
                 format!(
-                    "coefficients {} centre {},{}{}",
+                    "coefficients {} {}{}",
                     per.join(" "),
-                    g(center[0]),
-                    g(center[1]),
+                    centre(center),
                     if *reciprocal { " reciprocal" } else { "" }
                 )
             }
-            OpcodeParams::Vignette {
-                coefficients,
-                center,
-            } => format!(
-                "k [{}] centre {},{}",
-                gs(coefficients),
-                g(center[0]),
-                g(center[1])
-            ),
-            OpcodeParams::BadPixelsConstant {
+            OpcodeKind::FixVignetteRadial { k, center } => {
+                format!("k [{}] {}", gs(k), centre(center))
+            }
+            OpcodeKind::FixBadPixelsConstant {
                 constant,
                 bayer_phase,
             } => format!("constant {constant}, bayer phase {bayer_phase}"),
-            OpcodeParams::BadPixelsList {
+            OpcodeKind::FixBadPixelsList {
                 bayer_phase,
                 points,
                 rects,
-            } => format!("{points} points, {rects} rectangles, bayer phase {bayer_phase}"),
-            OpcodeParams::Trim { bounds } => format!(
+            } => format!(
+                "{} points, {} rectangles, bayer phase {bayer_phase}",
+                points.len(),
+                rects.len()
+            ),
+            OpcodeKind::TrimBounds { bounds } => format!(
                 "bounds {},{}-{},{}",
                 bounds[0], bounds[1], bounds[2], bounds[3]
             ),
-            OpcodeParams::Table { len, min, max } => {
-                format!("table of {len} entries ({min}..{max})")
+            OpcodeKind::MapTable { table, .. } => {
+                let (min, max) = range_u16(table);
+                format!("table of {} entries ({min}..{max})", table.len())
             }
-            OpcodeParams::Polynomial { coefficients } => {
+            OpcodeKind::MapPolynomial { coefficients, .. } => format!(
+                "degree {} coefficients [{}]",
+                coefficients.len().saturating_sub(1),
+                gs(coefficients)
+            ),
+            OpcodeKind::GainMap(gm) => {
+                let (gain_min, gain_max) = range_f32(&gm.gains);
                 format!(
-                    "degree {} coefficients [{}]",
-                    coefficients.len().saturating_sub(1),
-                    gs(coefficients)
+                    "map {}x{}x{}, spacing {}x{}, origin {},{}, gain {}..{}",
+                    gm.points_v,
+                    gm.points_h,
+                    gm.map_planes,
+                    g(gm.spacing_v),
+                    g(gm.spacing_h),
+                    g(gm.origin_v),
+                    g(gm.origin_h),
+                    g(f64::from(gain_min)),
+                    g(f64::from(gain_max))
                 )
             }
-            OpcodeParams::GainMap {
-                points_v,
-                points_h,
-                map_planes,
-                spacing,
-                origin,
-                gain_min,
-                gain_max,
-            } => format!(
-                "map {points_v}x{points_h}x{map_planes}, spacing {}x{}, origin {},{}, gain {}..{}",
-                g(spacing[0]),
-                g(spacing[1]),
-                g(origin[0]),
-                g(origin[1]),
-                g(f64::from(*gain_min)),
-                g(f64::from(*gain_max))
-            ),
-            OpcodeParams::PerLine { count, min, max } => format!(
-                "{count} entries ({}..{})",
-                g(f64::from(*min)),
-                g(f64::from(*max))
-            ),
-            OpcodeParams::Unknown { bytes } => format!("{bytes} parameter bytes (not modelled)"),
-        });
-        format!("{} ({}): {}", self.name, flags.join(", "), parts.join(", "))
+            OpcodeKind::DeltaPerRow { deltas: v, .. }
+            | OpcodeKind::DeltaPerColumn { deltas: v, .. }
+            | OpcodeKind::ScalePerRow { scales: v, .. }
+            | OpcodeKind::ScalePerColumn { scales: v, .. } => {
+                let (min, max) = range_f32(v);
+                format!(
+                    "{} entries ({}..{})",
+                    v.len(),
+                    g(f64::from(min)),
+                    g(f64::from(max))
+                )
+            }
+            OpcodeKind::Unknown { params, .. } => {
+                format!("{} parameter bytes (not modelled)", params.len())
+            }
+        }
     }
 }
 
@@ -453,8 +394,142 @@ mod tests {
         assert_eq!(j["opcodes"][0]["params"]["kind"], "gain_map");
         assert_eq!(j["opcodes"][0]["params"]["gain_max"], 2.5);
         assert_eq!(
+            serde_json::to_string(&d[0].opcodes[0].params).unwrap(),
+            r#"{"kind":"gain_map","points_v":2,"points_h":2,"map_planes":1,"spacing":[1.0,1.0],"origin":[0.0,0.0],"gain_min":1.0,"gain_max":2.5}"#
+        );
+        assert_eq!(
             j["opcodes"][0]["area"],
             serde_json::json!([0, 0, 3024, 4032])
         );
+    }
+
+    /// Every kind's summary in `info --json`'s form (serde's internally tagged enum, as the
+    /// summary type it replaced wrote it) and as text.
+    #[test]
+    fn every_kind_summarized_as_info_writes_it() {
+        use crate::dng::opcodes::{WarpPlane, WarpPlane2};
+        let area = AreaSpec {
+            top: 0,
+            left: 0,
+            bottom: 4,
+            right: 6,
+            plane: 0,
+            planes: 1,
+            row_pitch: 1,
+            col_pitch: 1,
+        };
+        let mut kr = [0.0; 15];
+        kr[0] = 1.0;
+        let cases = [
+            (
+                OpcodeKind::WarpRectilinear {
+                    planes: vec![WarpPlane {
+                        kr: [1.0, 0.5, 0.0, 0.0],
+                        kt: [0.0, 0.25],
+                    }],
+                    center: [0.5, 0.5],
+                },
+                r#"{"kind":"warp","coefficients":[[1.0,0.5,0.0,0.0,0.0,0.25]],"center":[0.5,0.5]}"#,
+                "coefficients [1 0.5 0 0 0 0.25] centre 0.5,0.5",
+            ),
+            (
+                OpcodeKind::WarpFisheye {
+                    planes: vec![[1.0, 0.0, 0.0, 0.125]],
+                    center: [0.5, 0.25],
+                },
+                r#"{"kind":"warp","coefficients":[[1.0,0.0,0.0,0.125]],"center":[0.5,0.25]}"#,
+                "coefficients [1 0 0 0.125] centre 0.5,0.25",
+            ),
+            (
+                OpcodeKind::WarpRectilinear2 {
+                    planes: vec![WarpPlane2 {
+                        kr,
+                        kt: [0.0, 0.5],
+                        valid: [0.0, 0.75],
+                    }],
+                    center: [0.5, 0.5],
+                    reciprocal: true,
+                },
+                r#"{"kind":"warp2","coefficients":[[1.0,0.0,0.0,0.0,0.0,0.0,0.0,0.0,0.0,0.0,0.0,0.0,0.0,0.0,0.0,0.0,0.5]],"valid":[[0.0,0.75]],"center":[0.5,0.5],"reciprocal":true}"#,
+                "coefficients [1 0 0 0 0 0 0 0 0 0 0 0 0 0 0 0 0.5] valid r 0..0.75 centre 0.5,0.5 reciprocal",
+            ),
+            (
+                OpcodeKind::FixVignetteRadial {
+                    k: [0.5, 0.0, 0.0, 0.0, 0.0],
+                    center: [0.5, 0.5],
+                },
+                r#"{"kind":"vignette","coefficients":[0.5,0.0,0.0,0.0,0.0],"center":[0.5,0.5]}"#,
+                "k [0.5 0 0 0 0] centre 0.5,0.5",
+            ),
+            (
+                OpcodeKind::FixBadPixelsConstant {
+                    constant: 0,
+                    bayer_phase: 1,
+                },
+                r#"{"kind":"bad_pixels_constant","constant":0,"bayer_phase":1}"#,
+                "constant 0, bayer phase 1",
+            ),
+            (
+                OpcodeKind::FixBadPixelsList {
+                    bayer_phase: 2,
+                    points: vec![[1, 2]],
+                    rects: vec![],
+                },
+                r#"{"kind":"bad_pixels_list","bayer_phase":2,"points":1,"rects":0}"#,
+                "1 points, 0 rectangles, bayer phase 2",
+            ),
+            (
+                OpcodeKind::TrimBounds {
+                    bounds: [1, 2, 3, 4],
+                },
+                r#"{"kind":"trim","bounds":[1,2,3,4]}"#,
+                "bounds 1,2-3,4",
+            ),
+            (
+                OpcodeKind::MapTable {
+                    area,
+                    table: vec![3, 1, 2],
+                },
+                r#"{"kind":"table","len":3,"min":1,"max":3}"#,
+                "table of 3 entries (1..3)",
+            ),
+            (
+                OpcodeKind::MapPolynomial {
+                    area,
+                    coefficients: vec![0.0, 1.0],
+                },
+                r#"{"kind":"polynomial","coefficients":[0.0,1.0]}"#,
+                "degree 1 coefficients [0 1]",
+            ),
+            (
+                OpcodeKind::DeltaPerRow {
+                    area,
+                    deltas: vec![-0.5, 0.25],
+                },
+                r#"{"kind":"per_line","count":2,"min":-0.5,"max":0.25}"#,
+                "2 entries (-0.5..0.25)",
+            ),
+            (
+                OpcodeKind::ScalePerColumn {
+                    area,
+                    scales: vec![],
+                },
+                r#"{"kind":"per_line","count":0,"min":0.0,"max":0.0}"#,
+                "0 entries (0..0)",
+            ),
+            (
+                OpcodeKind::Unknown {
+                    params: vec![1, 2, 3],
+                    len: 3,
+                },
+                r#"{"kind":"unknown","bytes":3}"#,
+                "3 parameter bytes (not modelled)",
+            ),
+        ];
+        for (kind, json, text) in cases {
+            let info = describe(&Opcode::new(kind, 0));
+            assert_eq!(serde_json::to_string(&info.params).unwrap(), json);
+            assert_eq!(info.params.text(), text);
+        }
     }
 }

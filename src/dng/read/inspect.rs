@@ -3,6 +3,7 @@
 
 use super::tags::version4;
 use super::*;
+use crate::dng::opcodes::describe::{describe_lists, OpcodeListInfo};
 
 /// Summary of one image IFD (IFD0, a SubIFD, a chained IFD).
 #[derive(Debug, Clone, Serialize)]
@@ -46,49 +47,79 @@ pub struct RawSummary {
     pub meta: MetaSummary,
 }
 
-/// The modelled metadata (RawMeta without the carried entries).
-#[derive(Debug, Clone, Serialize)]
+/// The modelled metadata, as `info` reports it: the reader's own [`RawMeta`] (a view of it,
+/// not a copy of its fields), without the entries carried verbatim (counted instead), the
+/// LinearizationTable by its length and the opcode lists by number and description.
+#[derive(Debug, Clone)]
 pub struct MetaSummary {
-    /// Bits per sample.
-    pub bits_per_sample: u16,
-    /// ActiveArea.
-    pub active_area: Option<Rect>,
-    /// DefaultCropOrigin.
-    pub default_crop_origin: Option<[f64; 2]>,
-    /// DefaultCropSize.
-    pub default_crop_size: Option<[f64; 2]>,
-    /// CFA description.
-    pub cfa_pattern: CfaPattern,
-    /// LinearizationTable length.
-    pub linearization_table_len: Option<usize>,
-    /// Levels.
-    pub levels: Levels,
-    /// AsShotNeutral (green = 1).
-    pub as_shot_neutral: Option<[f64; 3]>,
-    /// AsShotWhiteXY.
-    pub as_shot_white_xy: Option<[f64; 2]>,
-    /// Colour tags.
-    pub color: ColorInfo,
-    /// NoiseProfile pairs.
-    pub noise_profile: Option<Vec<(f64, f64)>>,
-    /// Orientation.
-    pub orientation: u16,
-    /// Exif fields.
-    pub exif: ExifInfo,
-    /// Which OpcodeLists are present (1, 2, 3).
-    pub opcode_lists: Vec<u8>,
+    /// The metadata read (pixel-free).
+    pub meta: RawMeta,
     /// Each present list's opcodes (or why it is malformed).
-    pub opcodes: Vec<crate::dng::opcodes::describe::OpcodeListInfo>,
-    /// Storage of the raw.
-    pub storage: Option<Storage>,
+    pub opcodes: Vec<OpcodeListInfo>,
+}
+
+impl MetaSummary {
+    /// The summary of `meta` (its opcode lists described).
+    pub fn new(meta: RawMeta) -> MetaSummary {
+        let opcodes = describe_lists(&meta);
+        MetaSummary { meta, opcodes }
+    }
+
+    /// Which OpcodeLists are present (1, 2, 3).
+    pub fn opcode_lists(&self) -> Vec<u8> {
+        (1..=3u8)
+            .filter(|&i| self.meta.opcode_lists[i as usize - 1].is_some())
+            .collect()
+    }
+
+    /// LinearizationTable length.
+    pub fn linearization_table_len(&self) -> Option<usize> {
+        self.meta.linearization_table.as_ref().map(|t| t.len())
+    }
+
     /// Counts of carried entries (IFD0, raw IFD, Exif).
-    pub carried_entries: [usize; 3],
+    pub fn carried_entries(&self) -> [usize; 3] {
+        let m = &self.meta;
+        [m.ifd0_extra.len(), m.raw_extra.len(), m.exif_extra.len()]
+    }
+
     /// Entries of the GPS IFD (0: none), carried into written DNGs.
-    pub gps_entries: usize,
-    /// LinearRaw (demosaiced) images: samples per pixel and per-sample levels (absent for
-    /// CFA images).
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub linear_raw: Option<crate::raw::meta::LinearRaw>,
+    pub fn gps_entries(&self) -> usize {
+        self.meta.gps.len()
+    }
+}
+
+impl Serialize for MetaSummary {
+    /// The fields `info --json` reports, in its order; `linear_raw` only for LinearRaw
+    /// images.
+    fn serialize<S: serde::Serializer>(&self, ser: S) -> std::result::Result<S::Ok, S::Error> {
+        use serde::ser::SerializeStruct;
+        let m = &self.meta;
+        let mut st = ser.serialize_struct("MetaSummary", 19)?;
+        st.serialize_field("bits_per_sample", &m.bits_per_sample)?;
+        st.serialize_field("active_area", &m.active_area)?;
+        st.serialize_field("default_crop_origin", &m.default_crop_origin)?;
+        st.serialize_field("default_crop_size", &m.default_crop_size)?;
+        st.serialize_field("cfa_pattern", &m.cfa)?;
+        st.serialize_field("linearization_table_len", &self.linearization_table_len())?;
+        st.serialize_field("levels", &m.levels)?;
+        st.serialize_field("as_shot_neutral", &m.as_shot_neutral)?;
+        st.serialize_field("as_shot_white_xy", &m.as_shot_white_xy)?;
+        st.serialize_field("color", &m.color)?;
+        st.serialize_field("noise_profile", &m.noise_profile)?;
+        st.serialize_field("orientation", &m.orientation)?;
+        st.serialize_field("exif", &m.exif)?;
+        st.serialize_field("opcode_lists", &self.opcode_lists())?;
+        st.serialize_field("opcodes", &self.opcodes)?;
+        st.serialize_field("storage", &m.storage)?;
+        st.serialize_field("carried_entries", &self.carried_entries())?;
+        st.serialize_field("gps_entries", &self.gps_entries())?;
+        match &m.linear_raw {
+            Some(l) => st.serialize_field("linear_raw", l)?,
+            None => st.skip_field("linear_raw")?,
+        }
+        st.end()
+    }
 }
 
 /// What `day2night info` reports about a file.
@@ -223,29 +254,7 @@ pub fn inspect_bytes(bytes: &[u8]) -> Result<DngInfo> {
                         m.cfa.rows, m.cfa.cols, m.cfa.pattern, m.cfa.plane_color
                     ),
                 },
-                meta: MetaSummary {
-                    bits_per_sample: m.bits_per_sample,
-                    active_area: m.active_area,
-                    default_crop_origin: m.default_crop_origin,
-                    default_crop_size: m.default_crop_size,
-                    cfa_pattern: m.cfa.clone(),
-                    linearization_table_len: m.linearization_table.as_ref().map(|t| t.len()),
-                    levels: m.levels.clone(),
-                    as_shot_neutral: m.as_shot_neutral,
-                    as_shot_white_xy: m.as_shot_white_xy,
-                    color: m.color.clone(),
-                    noise_profile: m.noise_profile.clone(),
-                    orientation: m.orientation,
-                    exif: m.exif.clone(),
-                    opcode_lists: (1..=3u8)
-                        .filter(|&i| m.opcode_lists[i as usize - 1].is_some())
-                        .collect(),
-                    opcodes: crate::dng::opcodes::describe::describe_lists(m),
-                    storage: m.storage.clone(),
-                    carried_entries: [m.ifd0_extra.len(), m.raw_extra.len(), m.exif_extra.len()],
-                    gps_entries: m.gps.len(),
-                    linear_raw: m.linear_raw.clone(),
-                },
+                meta: MetaSummary::new(m.clone()),
             });
             let mut meta = img.meta.clone();
             match (bayer, crate::dng::check::check_meta(&mut meta)) {
