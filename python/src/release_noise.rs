@@ -35,7 +35,7 @@ pub(crate) fn release_noise<'py>(
     let (h, w) = v.dim();
     let samples: Vec<f32> = v.iter().copied().collect();
     let (out, rng) = py
-        .detach(move || noise(&samples, w, iso, &mut rng).map(|o| (o, rng)))
+        .detach(move || noise(&samples, w, iso, paper_dn_table(), &mut rng).map(|o| (o, rng)))
         .map_err(py_err)?;
     let out = Array2::from_shape_vec((h, w), out).map_err(|e| value_err(e.to_string()))?;
     let key = rng.key.into_pyarray(py).into_any();

@@ -5,13 +5,28 @@
 //! whole frame, the bands, a crop's samples, and the opcode paths around OpcodeList2.
 
 use super::opcodes::pin;
-use super::stages::{Samples, Stage};
+use super::stages::{Plan, Samples, Stage};
 use crate::error::Result;
 use crate::normalize::{Normalizer, SiteTable};
 use crate::raw::Bayer;
 
-/// The normalization and sample stages of one render's CFA samples (from
-/// [`Plan::cfa`](super::stages::Plan::cfa)).
+impl Plan<'_> {
+    /// The normalization and the sample stages of the CFA samples (the `Normalize` and
+    /// `Sample` stages of the list); `linearize: false` drops the LinearizationTable (a
+    /// crop's samples are linear). Here, not in stages.rs: the list does not know how an
+    /// execution fills the demosaicer's input.
+    pub(crate) fn cfa(&self, linearize: bool) -> Result<CfaSites> {
+        let norm = Normalizer::new(self.img)?;
+        let norm = if linearize {
+            norm
+        } else {
+            norm.without_linearization()
+        };
+        CfaSites::new(self.img.bayer()?, norm, self.samples()?)
+    }
+}
+
+/// The normalization and sample stages of one render's CFA samples (from [`Plan::cfa`]).
 pub(crate) struct CfaSites {
     bayer: Bayer,
     norm: Normalizer,

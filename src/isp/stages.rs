@@ -21,11 +21,9 @@
 use super::color::normalize_neutral;
 use super::demosaic::Demosaic;
 use super::opcodes::{self, Prepared};
-use super::pre_demosaic::CfaSites;
 use super::render_parts::RenderOptions;
 use super::render_parts::{clip_row, color_matrix, matrix_row, resolve_neutral, Output};
 use crate::error::Result;
-use crate::normalize::Normalizer;
 use crate::raw::RawImage;
 use std::sync::atomic::{AtomicU32, Ordering};
 
@@ -304,19 +302,6 @@ impl<'a> Plan<'a> {
     pub(crate) fn samples(&self) -> Result<Samples> {
         self.run_kind(|k| matches!(k, Kind::Normalize | Kind::Sample(..)));
         Ok(Samples::new(normalize_neutral(self.neutral)?))
-    }
-
-    /// The normalization and the sample stages of the CFA samples (the
-    /// [`Kind::Normalize`] and [`Kind::Sample`] stages); `linearize: false` drops the
-    /// LinearizationTable (a crop's samples are linear).
-    pub(crate) fn cfa(&self, linearize: bool) -> Result<CfaSites> {
-        let norm = Normalizer::new(self.img)?;
-        let norm = if linearize {
-            norm
-        } else {
-            norm.without_linearization()
-        };
-        CfaSites::new(self.img.bayer()?, norm, self.samples()?)
     }
 
     /// The neutral, normalized to green = 1 (what OpcodeList3 takes out and puts back).

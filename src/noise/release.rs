@@ -10,11 +10,11 @@
 //!
 //! The draws `z` are `numpy.random.RandomState.normal`'s, row-major over the plane
 //! ([`LegacyState`]): the numbers are NumPy's own, bit for bit. The table is the embedded
-//! paper phone's `dn_table` ([`paper_dn_table`]), the one copy of its figures.
+//! paper phone's `dn_table` (`synth::dictionaries::embedded::paper_dn_table`, the one copy
+//! of its figures), passed in by the caller (noise sits below synth).
 
 use super::numpy_legacy::LegacyState;
 use crate::error::{Error, Result};
-use crate::synth::dictionaries::embedded::paper_dn_table;
 
 /// The release clips every noisy raw at 1023 (its phone's 10-bit white level), whatever
 /// the camera.
@@ -62,15 +62,16 @@ impl DnTable {
 }
 
 /// The release's noisy raw of the clean `plane` (`width` x `height`, row-major, DN as
-/// float32; its 2x2 positions are the table's) at `iso`, drawing from `rng` (which
+/// float32; its 2x2 positions are `table`'s) at `iso`, drawing from `rng` (which
 /// advances as `RandomState.normal(size=plane.shape)` advances it).
 pub fn release_noise(
     plane: &[f32],
     width: usize,
     iso: u32,
+    table: &DnTable,
     rng: &mut LegacyState,
 ) -> Result<Vec<u16>> {
-    let betas = paper_dn_table().betas(iso)?;
+    let betas = table.betas(iso)?;
     if width == 0 && !plane.is_empty() || width > 0 && plane.len() % width != 0 {
         return Err(Error::invalid(format!(
             "release noise: {} samples are not rows of {width}",
@@ -94,6 +95,7 @@ pub fn release_noise(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::synth::dictionaries::embedded::paper_dn_table;
 
     #[test]
     fn the_table_has_the_releases_isos() {
@@ -110,21 +112,56 @@ mod tests {
     #[test]
     fn clipped_truncated_and_deterministic() {
         let plane = vec![4000.0f32; 16];
-        let out = release_noise(&plane, 4, 3200, &mut LegacyState::from_seed(1)).unwrap();
+        let out = release_noise(
+            &plane,
+            4,
+            3200,
+            paper_dn_table(),
+            &mut LegacyState::from_seed(1),
+        )
+        .unwrap();
         assert!(out.iter().all(|&v| v == 1023));
         let plane: Vec<f32> = (0..64).map(|i| 300.0 + i as f32).collect();
-        let a = release_noise(&plane, 8, 1600, &mut LegacyState::from_seed(7)).unwrap();
-        let b = release_noise(&plane, 8, 1600, &mut LegacyState::from_seed(7)).unwrap();
+        let a = release_noise(
+            &plane,
+            8,
+            1600,
+            paper_dn_table(),
+            &mut LegacyState::from_seed(7),
+        )
+        .unwrap();
+        let b = release_noise(
+            &plane,
+            8,
+            1600,
+            paper_dn_table(),
+            &mut LegacyState::from_seed(7),
+        )
+        .unwrap();
         assert_eq!(a, b);
         assert!(a.iter().zip(&plane).any(|(&n, &x)| f32::from(n) != x));
-        assert!(release_noise(&plane, 7, 1600, &mut LegacyState::from_seed(7)).is_err());
+        assert!(release_noise(
+            &plane,
+            7,
+            1600,
+            paper_dn_table(),
+            &mut LegacyState::from_seed(7)
+        )
+        .is_err());
     }
 
     /// A negative variance (dark samples: beta2 < 0) is 0: the sample stays, truncated.
     #[test]
     fn negative_variance_is_zero() {
         let plane = vec![10.5f32; 4];
-        let out = release_noise(&plane, 2, 100, &mut LegacyState::from_seed(3)).unwrap();
+        let out = release_noise(
+            &plane,
+            2,
+            100,
+            paper_dn_table(),
+            &mut LegacyState::from_seed(3),
+        )
+        .unwrap();
         assert_eq!(out, [10; 4]);
     }
 }
