@@ -164,26 +164,9 @@ class ExperimentConfig:
         return self.with_defaults({FROM_PRESET: presets.PRESETS[self.preset or "paper"]})
 
     def with_defaults(self, sources):
-        """This config with each option left out (None) given by its field's
-        ``default_from``: the first source there that has a value for it. ``sources`` maps
-        a source to {option: value}; a source it does not map is not known yet and leaves
-        the option out (to be filled once it is known); an entry that is no source is the
-        value itself."""
-        values = {}
-        for f in dataclasses.fields(self):
-            if getattr(self, f.name) is not None:
-                continue
-            for src in f.metadata["default_from"]:
-                if src not in SOURCES:
-                    values[f.name] = src
-                elif src not in sources:
-                    break
-                elif f.name in sources[src]:
-                    values[f.name] = sources[src][f.name]
-                else:
-                    continue
-                break
-        return dataclasses.replace(self, **values)
+        """This config with each option left out given by its field's ``default_from``
+        (:func:`fill_defaults`)."""
+        return fill_defaults(self, sources)
 
     def check(self):
         """Validate the options (preset applied): an ExperimentError naming the flag."""
@@ -222,6 +205,28 @@ class ExperimentConfig:
                     or (how == "set" and value):
                 out[f.name] = list(value or ()) if f.name == "rows" else value
         return out
+
+
+def fill_defaults(config, sources):
+    """``config`` with each option left out (None) given by its field's ``default_from``: the
+    first source there that has a value for it. ``sources`` maps a source to {option:
+    value}; a source it does not map is not known yet and leaves the option out (to be
+    filled once it is known); an entry that is no source is the value itself."""
+    values = {}
+    for f in dataclasses.fields(config):
+        if getattr(config, f.name) is not None:
+            continue
+        for src in f.metadata["default_from"]:
+            if src not in SOURCES:
+                values[f.name] = src
+            elif src not in sources:
+                break
+            elif f.name in sources[src]:
+                values[f.name] = sources[src][f.name]
+            else:
+                continue
+            break
+    return dataclasses.replace(config, **values)
 
 
 #: The options a resume compares with the earlier run's config.json, in the order it names

@@ -180,15 +180,20 @@ class Experiment:
             for i, (seed, task, row, fold, split) in enumerate(work, 1):
                 self.run_unit(seed, task, row, fold, split, i, len(work))
         self.current_unit = None
-        t = table.build(self.config, self.out, self.plan.splits, len(self.inputs.scenes),
-                        len(self.inputs.days), left_out=self.left_out)
-        # everything built before anything is written: table.* and index.html of one run
-        md = table.markdown(t)
-        page = report.build(self.out, t, self.tasks, self.report_scenes, self.config.show)
-        table.write(self.out, t, md)
-        report.write_built(self.out, t, page)
-        log(f"wrote {self.out / 'table.md'}, table.json and index.html")
-        return t
+        return write_results(self)
+
+
+def write_results(exp):
+    """table.json, table.md and index.html of the run ``exp`` (its units done): everything
+    built before anything is written, so the three always come from one run."""
+    t = table.build(exp.config, exp.out, exp.plan.splits, len(exp.inputs.scenes),
+                    len(exp.inputs.days), left_out=exp.left_out)
+    md = table.markdown(t)
+    page = report.build(exp.out, t, exp.tasks, exp.report_scenes, exp.config.show)
+    table.write(exp.out, t, md)
+    report.write_built(exp.out, t, page)
+    log(f"wrote {exp.out / 'table.md'}, table.json and index.html")
+    return t
 
 
 def log_setup(c, i, tasks, target_isps):
