@@ -162,14 +162,15 @@ pub fn run(args: SynthArgs) -> CmdResult {
     Ok(())
 }
 
-/// Everything decided once per run.
 /// The day input of a variant: shared with the input's other variants, or handed over (the
-/// last variant: its clean raw is made in the day's plane).
+/// last variant: its clean raw is made in the day's plane). Boxed: the input's record is
+/// large beside a reference, and the plane it holds is on the heap either way.
 enum Day<'a> {
     Shared(&'a DayInput),
-    Owned(DayInput),
+    Owned(Box<DayInput>),
 }
 
+/// Everything decided once per run.
 struct Run<'a> {
     job: &'a SynthJob,
     seed: u64,
@@ -234,7 +235,7 @@ impl Run<'_> {
                         day.sha256, sc.input.sha256
                     )));
                 }
-                self.variant(input, Day::Owned(day), &stem, &sc.planned())?;
+                self.variant(input, Day::Owned(Box::new(day)), &stem, &sc.planned())?;
             }
             None => {
                 // The last variant takes the day raw: its clean raw is made in the day's
@@ -251,7 +252,7 @@ impl Run<'_> {
                     return Err(Error::Interrupted);
                 }
                 let planned = self.job.plan(&day, &name, self.seed, last)?;
-                self.variant(input, Day::Owned(day), &stem, &planned)?;
+                self.variant(input, Day::Owned(Box::new(day)), &stem, &planned)?;
             }
         }
         Ok(())
@@ -273,7 +274,7 @@ impl Run<'_> {
         let sink = DirSink::new(self.out, base, self.policy);
         let run = match day {
             Day::Shared(day) => self.job.run_variant(day, planned, &sink),
-            Day::Owned(day) => self.job.run_variant_owned(day, planned, &sink),
+            Day::Owned(day) => self.job.run_variant_owned(*day, planned, &sink),
         };
         // The plan's warnings are said whether or not the run succeeded; the run's after it.
         let name = input.display().to_string();

@@ -72,7 +72,7 @@ pub fn release_noise(
     rng: &mut LegacyState,
 ) -> Result<Vec<u16>> {
     let betas = table.betas(iso)?;
-    if width == 0 && !plane.is_empty() || width > 0 && plane.len() % width != 0 {
+    if width == 0 && !plane.is_empty() || width > 0 && !plane.len().is_multiple_of(width) {
         return Err(Error::invalid(format!(
             "release noise: {} samples are not rows of {width}",
             plane.len()
