@@ -67,9 +67,9 @@ def test_a_planted_comparison_is_found():
     found = literal_comparisons(planted, "experiment/planted.py")
     assert [n for _, n, _ in found] == [2, 4, 5]
     assert found[0][2] == 'noise == "release"'
-    # the allowance is for one file and one text only
+    # no file is exempt
     assert literal_comparisons('isp == "release"\n', "experiment/x.py")
-    assert not literal_comparisons('isp == "release"\n', "train/targets.py")
+    assert literal_comparisons('isp == "release"\n', "train/targets.py")
 
 
 def test_members_behave_as_their_names():

@@ -12,6 +12,7 @@ import pathlib
 import day2night
 
 from ..isos import NOISY_ISOS
+from ..variants import Isp
 from . import names, pairs
 from .source import PairSource
 from .runfolder import RunFolderError, npy_header
@@ -129,6 +130,6 @@ def dng_shape(path, targets):
     area = raw.meta.get("active_area")
     if area:
         h, w = int(area[2]) - int(area[0]), int(area[3]) - int(area[1])
-    if targets == "release":
+    if targets == Isp.RELEASE:
         h, w = pairs.release_window(raw.meta, h, w)[2:]
     return int(h), int(w)

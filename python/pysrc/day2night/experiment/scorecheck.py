@@ -73,7 +73,9 @@ def history_problem(history, epochs=None):
         if not isinstance(h, dict):
             return f"a history entry that is not an object: {str(h)[:60]}"
         e = h.get("epoch")
-        if isinstance(e, bool) or not isinstance(e, int) or not 0 <= e < top:
+        # a whole number: scores.json stores it as a float (unit._num), 0.0, 1.0, ...
+        whole = isinstance(e, int) or isinstance(e, float) and e.is_integer()
+        if isinstance(e, bool) or not whole or not 0 <= e < top:
             return (f"a history entry whose epoch is {str(e)[:40]}, not a whole number from 0 "
                     f"to {top - 1}")
         if e <= last:
