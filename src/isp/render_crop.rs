@@ -5,7 +5,7 @@
 //!
 //! Every pixel is computed by the same expressions as the banded whole-frame render: the
 //! CFA samples go through the same pre-demosaic step
-//! ([`CfaSites`](super::pre_demosaic::CfaSites)), demosaiced by `demosaic_rect` over the frame's geometry
+//! (`CfaSites`, pre_demosaic.rs), demosaiced by `demosaic_rect` over the frame's geometry
 //! (mirrored at the frame's edges, never at the crop's) and passed through the colour
 //! matrix. The result equals the frame render's region bit for bit.
 

@@ -6,7 +6,7 @@
 //! Each stage has a [`Kind`] that says where it runs. The sample stages (normalize, white
 //! balance) and the row stages (colour) are functions of one value or one output row:
 //! the driver runs them, in the order of [`STAGES`], wherever an execution asks for a
-//! sample before the demosaic ([`Samples::between`], [`super::pre_demosaic::CfaSites`]) or
+//! sample before the demosaic ([`Samples::between`], `CfaSites` (pre_demosaic.rs)) or
 //! hands an output row on ([`Rows`]), so an execution never names them. The opcode lists,
 //! the demosaic and the geometry are how an execution walks the image (which rows or
 //! region, with what context): it asks the plan for them (one accessor each, which records

@@ -98,7 +98,7 @@ fn mix64(mut z: u64) -> u64 {
 }
 
 /// The 64-bit seed of row `row` under a version-2 key: each step is a bijection of the
-/// previous value (odd multiply, xor with a key word, [`mix64`]), so distinct rows always
+/// previous value (odd multiply, xor with a key word, `mix64`), so distinct rows always
 /// get distinct seeds, and every key word changes all of them.
 pub fn row_seed_v2(key: &[u8; 32], row: usize) -> u64 {
     let k = |i: usize| {
