@@ -10,6 +10,9 @@
 #   BIG=1 benches/compare.sh                 # also the 109 MP default synth (peak RSS)
 #   WORK=DIR benches/compare.sh              # scratch directory (default: mktemp -d)
 #   NO_BUILD=1 benches/compare.sh            # build nothing, take the binaries as they are
+#   FRESH=1 BASE_FRESH=... NEW_FRESH=...     # also fresh training items (benches/fresh.rs
+#                                            # built in each tree: cargo bench --bench fresh
+#                                            # --no-run prints its path), FRESH_RUNS rounds
 #
 # Binaries: NEW_BIN defaults to this tree's release build (built here, CARGO_TARGET_DIR or
 # target/); BASE_BIN to $BASE_SRC's release build when BASE_SRC is set (built with
@@ -109,6 +112,19 @@ if [ "$BIG" = 1 ]; then
     [ -f "$BIG_IN" ] || "$TILE" "$IN" "$BIG_IN"
     pair big "$BIG_RUNS" synth "$BIG_IN" -o "$WORK/out" -q
 fi
+if [ "${FRESH:-0}" = 1 ]; then
+    # one bench run prints "plan + item ... = N patches of 64x64 per second" (one thread)
+    : >"$WORK/fresh.base.rates"
+    : >"$WORK/fresh.new.rates"
+    for i in $(seq "${FRESH_RUNS:-5}"); do
+        for b in base new; do
+            bin=$BASE_FRESH
+            [ "$b" = new ] && bin=$NEW_FRESH
+            D2N_FRESH_DNG=$IN D2N_FRESH_ITEMS=${FRESH_ITEMS:-100} "$bin" |
+                sed -n 's/.*= \([0-9]*\) patches.*/\1/p' >>"$WORK/fresh.$b.rates"
+        done
+    done
+fi
 load1=$(cut -d' ' -f1-3 /proc/loadavg)
 
 # med FILE COLUMN-EXPR: median of an awk expression over the runs
@@ -158,6 +174,12 @@ if [ "$BIG" = 1 ]; then
     row "synth 109 MP (defaults)" big base bpp
     row "" big new bpp
     ratio big '$2' "peak RSS"
+fi
+if [ "${FRESH:-0}" = 1 ]; then
+    fb=$(med "$WORK/fresh.base.rates" '$1')
+    fn=$(med "$WORK/fresh.new.rates" '$1')
+    printf "%-40s base %s, new %s patches/s (one core); new/base %.3f\n" \
+        "fresh 64x64 patches (benches/fresh.rs)" "$fb" "$fn" "$(echo "$fn / $fb" | bc -l)"
 fi
 echo "medians of interleaved runs; cpu_s = user + system; raw times (wall_s rss_kb user_s" \
     "sys_s per run): $WORK/*.times"

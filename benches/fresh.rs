@@ -99,6 +99,9 @@ fn main() {
                 clock = now;
             };
             let plan = job.plan(&day, &name, 0, k as u32).expect("a plan").plan;
+            // the whole-frame mean of the dimming, from the input's memo (as the Python
+            // `Raw` keeps it)
+            let plan = day.with_frame_mean(plan).expect("the frame mean");
             lap(0, &mut t);
             let pair = crop_pair(
                 &day.raw,

@@ -135,7 +135,7 @@ pub fn night_pair<'py>(
         .detach(move || {
             on_pool(move || {
                 let job = job_for(&cfg)?;
-                let plan = job.plan(&day, &file_name, seed, variant)?.plan;
+                let plan = day.with_frame_mean(job.plan(&day, &file_name, seed, variant)?.plan)?;
                 let req = Request {
                     target: true,
                     input: false,

@@ -129,7 +129,9 @@ pub(crate) fn fresh_pair<'py>(
         .detach(move || {
             on_pool(move || {
                 let job = job_for(&cfg)?;
-                let planned = job.plan(&day, &file_name, seed.0, variant.0)?;
+                let mut planned = job.plan(&day, &file_name, seed.0, variant.0)?;
+                // the whole-frame mean of the dimming, worked out once per input
+                planned.plan = day.with_frame_mean(planned.plan)?;
                 let pair = crop_pair(&day.raw, &planned.plan, crop, input, tone)?;
                 let (w, h) = (pair.width, pair.height);
                 let look = |c: u16| table[(c as usize).min(table.len() - 1)];

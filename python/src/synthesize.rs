@@ -153,7 +153,11 @@ pub(crate) fn synthesize<'py>(
         .detach(move || {
             on_pool(move || {
                 let job = job_for(&cfg)?;
-                let planned = job.plan(&day, &file_name, seed, variant)?;
+                let mut planned = job.plan(&day, &file_name, seed, variant)?;
+                if crop.is_some() {
+                    // a crop reads the whole-frame mean of the dimming from the input's memo
+                    planned.plan = day.with_frame_mean(planned.plan)?;
+                }
                 // The dictionary as the sidecar records it (its provenance and camera).
                 let ill = job.illuminants(&day)?;
                 let req = Request {

@@ -245,13 +245,18 @@ impl Run<'_> {
                     if stop_requested().is_some() {
                         return Err(Error::Interrupted);
                     }
-                    let planned = self.job.plan(&day, &name, self.seed, v)?;
+                    let mut planned = self.job.plan(&day, &name, self.seed, v)?;
+                    // the variants share the whole-frame mean of a brightness dimming
+                    planned.plan = day.with_frame_mean(planned.plan)?;
                     self.variant(input, Day::Shared(&day), &stem, &planned)?;
                 }
                 if stop_requested().is_some() {
                     return Err(Error::Interrupted);
                 }
-                let planned = self.job.plan(&day, &name, self.seed, last)?;
+                let mut planned = self.job.plan(&day, &name, self.seed, last)?;
+                if last > 0 {
+                    planned.plan = day.with_frame_mean(planned.plan)?;
+                }
                 self.variant(input, Day::Owned(Box::new(day)), &stem, &planned)?;
             }
         }

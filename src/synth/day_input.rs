@@ -5,8 +5,15 @@ use super::sidecar::sha256_hex;
 use crate::error::{Error, Result, ResultExt};
 use crate::noise::NoiseEstimate;
 use crate::raw::RawImage;
+use crate::synth::dim::{DimPlan, FrameMean, MeanKey};
+use crate::synth::plan::Plan;
 use std::path::{Path, PathBuf};
-use std::sync::OnceLock;
+use std::sync::{Arc, Mutex, MutexGuard, OnceLock};
+
+/// A poisoned lock only means another thread panicked; the memo is still valid.
+fn lock<T>(m: &Mutex<T>) -> MutexGuard<'_, T> {
+    m.lock().unwrap_or_else(|e| e.into_inner())
+}
 
 /// The file size from which [`DayInput::read`] drops a file's bytes before it decodes the
 /// samples (64 MiB: a 12 MP file is read once, a 109 MP one twice, its blocks from the
@@ -24,6 +31,9 @@ pub struct DayInput {
     pub source: PathBuf,
     /// The image's noise estimate, made on first use ([`DayInput::noise_estimate`]).
     estimate: OnceLock<std::result::Result<NoiseEstimate, String>>,
+    /// The whole-frame means `mean(y_w)` worked out so far, per clean-pass key
+    /// ([`DayInput::frame_mean`]; shared by clones, which hold the same raw).
+    frame_means: Arc<Mutex<Vec<(MeanKey, f64)>>>,
 }
 
 impl DayInput {
@@ -48,6 +58,7 @@ impl DayInput {
             sha256,
             source,
             estimate: OnceLock::new(),
+            frame_means: Arc::default(),
         }
     }
 
@@ -60,6 +71,34 @@ impl DayInput {
             })
             .clone()
             .map_err(Error::invalid)
+    }
+
+    /// The whole-frame mean white-balanced intensity of the raw under `plan`'s clean pass
+    /// ([`crate::synth::relight::frame_mean_y_w`]), computed once per key: every variant
+    /// and crop planned from this input reuses it (a fresh training crop would otherwise
+    /// read the whole frame for it).
+    pub fn frame_mean(&self, plan: &Plan) -> Result<f64> {
+        let key = MeanKey::of(plan);
+        let known = |v: &Vec<(MeanKey, f64)>| v.iter().find(|(k, _)| *k == key).map(|e| e.1);
+        if let Some(m) = known(&lock(&self.frame_means)) {
+            return Ok(m);
+        }
+        // computed outside the lock: two threads may both compute it, with the same result
+        let m = crate::synth::relight::frame_mean_y_w(&self.raw, plan)?;
+        let mut v = lock(&self.frame_means);
+        if known(&v).is_none() {
+            v.push((key, m));
+        }
+        Ok(m)
+    }
+
+    /// `plan` with its [`Plan::frame_mean`] memo filled in when its dimming needs the
+    /// whole-frame mean (a brightness dictionary's target mean).
+    pub fn with_frame_mean(&self, mut plan: Plan) -> Result<Plan> {
+        if matches!(plan.dim, DimPlan::TargetMean { .. }) {
+            plan.frame_mean = FrameMean::new(&plan, self.frame_mean(&plan)?);
+        }
+        Ok(plan)
     }
 
     /// Read and decode the DNG at `path`. A file of [`STREAM_FROM`] bytes or more is

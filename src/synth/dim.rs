@@ -71,6 +71,55 @@ pub fn sample_dim(
     }
 }
 
+/// What the whole-frame mean `mean(y_w)` of a clean pass depends on besides the image:
+/// the plan's day neutral and its range settings (`day_neutral`, `keep_negative`,
+/// `keep_highlights`, `range_per_site`; the neutral as bit patterns).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct MeanKey {
+    day_neutral: [u64; 3],
+    keep_negative: bool,
+    keep_highlights: bool,
+    range_per_site: bool,
+}
+
+impl MeanKey {
+    /// The key of `plan`'s clean pass.
+    pub fn of(plan: &super::plan::Plan) -> MeanKey {
+        MeanKey {
+            day_neutral: plan.day_neutral.map(f64::to_bits),
+            keep_negative: plan.keep_negative,
+            keep_highlights: plan.keep_highlights,
+            range_per_site: plan.range_per_site,
+        }
+    }
+}
+
+/// A plan's memo of its image's `mean(y_w)` ([`super::plan::Plan::frame_mean`]), with the
+/// key it was computed under: used only while the plan's key is still the same. It takes
+/// no part in comparing plans (two plans that differ only here are equal).
+#[derive(Debug, Clone, Copy, Default)]
+pub struct FrameMean(Option<(MeanKey, f64)>);
+
+impl FrameMean {
+    /// The memo of `mean` computed for `plan`.
+    pub fn new(plan: &super::plan::Plan, mean: f64) -> FrameMean {
+        FrameMean(Some((MeanKey::of(plan), mean)))
+    }
+
+    /// The memo, if it was computed under `plan`'s key.
+    pub fn get(&self, plan: &super::plan::Plan) -> Option<f64> {
+        self.0
+            .filter(|(k, _)| *k == MeanKey::of(plan))
+            .map(|(_, m)| m)
+    }
+}
+
+impl PartialEq for FrameMean {
+    fn eq(&self, _: &FrameMean) -> bool {
+        true
+    }
+}
+
 /// The factor `s` of a plan given the mean white-balanced intensity of the image.
 pub fn dim_factor(dim: &DimPlan, mean_y_w: impl FnOnce() -> f64) -> f64 {
     match dim {

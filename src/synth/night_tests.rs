@@ -451,3 +451,78 @@ fn bad_crops_are_errors() {
     };
     assert!(synthesize(&day, &p, &req).is_err());
 }
+
+/// A brightness-dictionary plan that carries its input's whole-frame mean
+/// (`DayInput::with_frame_mean`) gives every crop the bytes of the plan without it, and a
+/// memo made under another clean-pass key is not used.
+#[test]
+fn the_frame_mean_memo_changes_no_byte() {
+    use crate::synth::day_input::DayInput;
+    use crate::synth::dim::{DimPlan, FrameMean};
+    let day = DayInput::new(day(), String::new(), "day.dng".into());
+    let opts = SynthOptions {
+        isos: vec![1600],
+        ..SynthOptions::default()
+    };
+    let mut cal = Calibration::embedded(&opts).unwrap();
+    cal.brightness = Some(crate::synth::dictionaries::BrightnessDict {
+        name: "test".into(),
+        mean: 0.05,
+        std: 0.01,
+        count: 3,
+    });
+    let p = Planner::new(&day.raw, &opts)
+        .calibration(&cal)
+        .name("day.dng")
+        .seed(3)
+        .plan()
+        .unwrap()
+        .plan;
+    assert!(matches!(p.dim, DimPlan::TargetMean { .. }), "{:?}", p.dim);
+    let memo = day.with_frame_mean(p.clone()).unwrap();
+    let m = memo.frame_mean.get(&memo).unwrap();
+    assert!(m > 0.0 && m.is_finite());
+    // the memo takes no part in comparing plans, and the second call reads the memo
+    assert_eq!(memo, p);
+    assert_eq!(day.frame_mean(&p).unwrap().to_bits(), m.to_bits());
+    let crop = Crop {
+        top: 4,
+        left: 6,
+        height: 9,
+        width: 11,
+    };
+    let req = Request {
+        target: true,
+        crop: Some(crop),
+        ..Request::default()
+    };
+    let plain = synthesize(&day.raw, &p, &req).unwrap();
+    let fast = synthesize(&day.raw, &memo, &req).unwrap();
+    assert_eq!(plain.clean.data, fast.clean.data);
+    assert_eq!(plain.noisy[0].1.data, fast.noisy[0].1.data);
+    assert_eq!(
+        plain.report.dim_scale.to_bits(),
+        fast.report.dim_scale.to_bits()
+    );
+    assert_eq!(
+        plain.target.as_ref().unwrap().data,
+        fast.target.as_ref().unwrap().data
+    );
+    // a wrong mean under the plan's key is used (the memo is trusted) ...
+    let mut wrong = p.clone();
+    wrong.frame_mean = FrameMean::new(&p, m * 2.0);
+    let w = synthesize(&day.raw, &wrong, &req).unwrap();
+    assert_ne!(
+        w.report.dim_scale.to_bits(),
+        plain.report.dim_scale.to_bits()
+    );
+    // ... but not once the plan's day neutral is changed after the memo was made
+    let mut stale = wrong.clone();
+    stale.day_neutral[0] *= 1.5;
+    let mut fresh = p.clone();
+    fresh.day_neutral[0] *= 1.5;
+    let s = synthesize(&day.raw, &stale, &req).unwrap();
+    let f = synthesize(&day.raw, &fresh, &req).unwrap();
+    assert_eq!(s.clean.data, f.clean.data);
+    assert_eq!(s.report.dim_scale.to_bits(), f.report.dim_scale.to_bits());
+}

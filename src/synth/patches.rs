@@ -172,15 +172,15 @@ pub fn cut_patches<T: Copy, U: Copy + Default>(
         )));
     }
     let (gw, gh) = (width / patch, height / patch);
-    let mut out = vec![U::default(); gw * gh * 3 * patch * patch];
-    for (k, tile) in out.chunks_exact_mut(3 * patch * patch).enumerate() {
+    // filled in order by `extend` (no zeroed buffer written twice: the zeroing of a fresh
+    // allocation was a tenth of a fresh item's time)
+    let mut out = Vec::with_capacity(gw * gh * 3 * patch * patch);
+    for k in 0..gw * gh {
         let (gy, gx) = (k / gw, k % gw);
-        for (c, plane) in tile.chunks_exact_mut(patch * patch).enumerate() {
-            for (i, dst) in plane.chunks_exact_mut(patch).enumerate() {
+        for c in 0..3 {
+            for i in 0..patch {
                 let src = &img[3 * ((gy * patch + i) * width + gx * patch)..][..3 * patch];
-                for (d, px) in dst.iter_mut().zip(src.chunks_exact(3)) {
-                    *d = f(px[c]);
-                }
+                out.extend(src.chunks_exact(3).map(|px| f(px[c])));
             }
         }
     }

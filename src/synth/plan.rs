@@ -100,6 +100,12 @@ pub struct Plan {
     /// The burst (`--burst N`, N > 1): frames, motion model and every frame's transform,
     /// drawn from the burst's own stream; null for a single frame.
     pub burst: Option<super::burst::BurstPlan>,
+    /// The mean white-balanced intensity of the image this plan was made from, when a
+    /// caller that keeps the image ([`super::day_input::DayInput::frame_mean`]) worked it out
+    /// for a brightness-dictionary dimming: a crop's clean pass then reads it instead of
+    /// reading the whole frame again. Not serialized (a replayed plan computes it).
+    #[serde(skip)]
+    pub frame_mean: super::dim::FrameMean,
 }
 
 fn window_len(rng: &mut SynthRng, n: usize) -> f64 {
@@ -338,6 +344,7 @@ impl<'a> Planner<'a> {
             },
             opcodes: opcodes.as_ref().map_or(OpcodeMode::Ignore, |r| r.mode),
             burst,
+            frame_mean: Default::default(),
         };
         let report = PlanReport {
             day_neutral_source,

@@ -173,6 +173,29 @@ pub fn run_clean_crop(img: &RawImage, plan: &Plan, crop: Crop) -> Result<(Vec<u1
     Ok((data, pass.report(saturated)))
 }
 
+/// The whole-frame mean white-balanced intensity `mean(y_w)` that a brightness-dictionary
+/// plan's dimming divides by ([`super::dim::dim_factor`]), exactly as the clean pass computes
+/// it (so a plan that carries it, [`Plan::frame_mean`], gives the same bytes). It reads
+/// every active-area sample once.
+pub fn frame_mean_y_w(img: &RawImage, plan: &Plan) -> Result<f64> {
+    let mut plan = plan.clone();
+    plan.frame_mean = Default::default();
+    plan.dim = super::dim::DimPlan::None;
+    plan.lights.clear();
+    let a = img.active_area();
+    let row = Crop {
+        top: 0,
+        left: 0,
+        height: 1.min(a.height()),
+        width: a.width(),
+    };
+    let pass = CleanPass::new(img, &plan, row)?;
+    let yw_table = SiteTable::new(&pass.norm, |r, c, x| {
+        pass.y_w(x, pass.norm.black_at(r, c), pass.inv_row(r)[c])
+    });
+    Ok(pass.mean_y_w(img, yw_table.as_ref()))
+}
+
 /// Everything one clean pass needs, prepared once for the columns `crop.left..` of
 /// `crop.width` (the whole active area for [`run_clean`]); [`CleanPass::row`] computes one
 /// row segment.
@@ -207,8 +230,7 @@ impl<'a> CleanPass<'a> {
             norm
         };
         let a = img.active_area();
-        let (top, left, aw, ah) = (a.top as usize, a.left as usize, a.width(), a.height());
-        let width = img.width;
+        let (left, aw, ah) = (a.left as usize, a.width(), a.height());
         let inv_n = plan.day_neutral.map(|v| 1.0 / v);
         let lo = if plan.keep_negative {
             f64::NEG_INFINITY
@@ -246,39 +268,10 @@ impl<'a> CleanPass<'a> {
         });
         let mut mean_wb = None;
         let s = dim_factor(&plan.dim, || {
-            let pass = &pass;
-            let norm = &pass.norm;
-            let sums: Vec<f64> = (0..ah)
-                .into_par_iter()
-                .map_init(
-                    || vec![0.0f64; aw],
-                    |blk, r| {
-                        let row = &img.data[(r + top) * width + left..][..aw];
-                        if let Some(t) = &yw_table {
-                            let (t0, t1) = t.row(r);
-                            let mut sum = 0.0f64;
-                            for (c, &x) in row.iter().enumerate() {
-                                let tab = if c & 1 == 0 { t0 } else { t1 };
-                                sum += match tab.get(x as usize) {
-                                    Some(&v) => v,
-                                    None => {
-                                        pass.y_w(x, norm.black_at(r, c), pass.inv_row(r)[c & 1])
-                                    }
-                                };
-                            }
-                            return sum;
-                        }
-                        norm.black_row(r, blk);
-                        let k = pass.inv_row(r);
-                        row.iter()
-                            .zip(blk.iter())
-                            .enumerate()
-                            .map(|(c, (&x, &b))| pass.y_w(x, b, k[c & 1]))
-                            .sum::<f64>()
-                    },
-                )
-                .collect();
-            let m = sums.iter().sum::<f64>() / (aw * ah) as f64;
+            let m = plan
+                .frame_mean
+                .get(plan)
+                .unwrap_or_else(|| pass.mean_y_w(img, yw_table.as_ref()));
             mean_wb = Some(m);
             m
         });
@@ -313,6 +306,45 @@ impl<'a> CleanPass<'a> {
             y = 0.0;
         }
         (y * inv).clamp(self.lo, self.hi)
+    }
+
+    /// `mean(y_w)` over the whole active area of `img` (rows summed in parallel, then the
+    /// row sums in order: the same bits for any thread count); `yw_table` is the pass's
+    /// table of `y_w` per stored value, when the black level allows one.
+    fn mean_y_w(&self, img: &RawImage, yw_table: Option<&SiteTable<f64>>) -> f64 {
+        let norm = &self.norm;
+        let a = img.active_area();
+        let (top, left, aw, ah) = (a.top as usize, a.left as usize, a.width(), a.height());
+        let width = img.width;
+        let sums: Vec<f64> = (0..ah)
+            .into_par_iter()
+            .map_init(
+                || vec![0.0f64; aw],
+                |blk, r| {
+                    let row = &img.data[(r + top) * width + left..][..aw];
+                    if let Some(t) = yw_table {
+                        let (t0, t1) = t.row(r);
+                        let mut sum = 0.0f64;
+                        for (c, &x) in row.iter().enumerate() {
+                            let tab = if c & 1 == 0 { t0 } else { t1 };
+                            sum += match tab.get(x as usize) {
+                                Some(&v) => v,
+                                None => self.y_w(x, norm.black_at(r, c), self.inv_row(r)[c & 1]),
+                            };
+                        }
+                        return sum;
+                    }
+                    norm.black_row(r, blk);
+                    let k = self.inv_row(r);
+                    row.iter()
+                        .zip(blk.iter())
+                        .enumerate()
+                        .map(|(c, (&x, &b))| self.y_w(x, b, k[c & 1]))
+                        .sum::<f64>()
+                },
+            )
+            .collect();
+        sums.iter().sum::<f64>() / (aw * ah) as f64
     }
 
     #[inline]

@@ -181,6 +181,7 @@ pub fn migrate(v1: SidecarV1) -> Result<Sidecar> {
         noise_stream: crate::noise::NoiseStream::V1,
         opcodes: p.opcodes.as_ref().map_or(OpcodeMode::Ignore, |r| r.mode),
         burst: p.burst,
+        frame_mean: Default::default(),
     };
     let report = PlanReport {
         day_neutral_source: p.day_neutral_source,
