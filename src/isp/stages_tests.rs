@@ -4,7 +4,7 @@
 //! with no other edit; every public render goes through the driver (`drive`), whose log shows the
 //! walk and the stages it ran; the driver refuses a list its walks cannot run in order.
 use super::*;
-use crate::dng::opcodes::{encode_list, AreaSpec, Opcode, OpcodeKind, OpcodeList};
+use crate::dng::opcodes::{encode_list, AreaSpec, Opcode, OpcodeKind, OpcodeList, WarpPlane};
 use crate::isp::demosaic::Demosaic;
 use crate::isp::drive::{check_order, DRIVEN};
 use crate::isp::render::{
@@ -194,25 +194,48 @@ fn a_stage_added_to_the_list_runs_in_every_execution() {
         area: a,
         coefficients: vec![0.01, 0.9, 0.1],
     };
+    let warp = OpcodeKind::WarpRectilinear {
+        planes: vec![WarpPlane {
+            kr: [1.0, -0.08, 0.02, 0.0],
+            kt: [0.003, -0.002],
+        }],
+        center: [0.45, 0.6],
+    };
+    let bad_pixels = OpcodeKind::FixBadPixelsList {
+        bayer_phase: 0,
+        points: vec![[5, 5], [20, 31]],
+        rects: vec![[10, 10, 12, 14]],
+    };
+    // (name, image, whether a crop renders from its own samples: pointwise opcodes only)
     let images = [
-        ("plain", frame(w, h)),
+        ("plain", frame(w, h), true),
         // OpcodeList1 and OpcodeList2: the opcode paths around the stage-2 image
         (
             "list 1",
             with_list(frame(w, h), 0, vec![scale(area(h as u32, w as u32, 1))]),
+            true,
         ),
         (
             "list 2",
             with_list(frame(w, h), 1, vec![scale(area(ah, aw, 1))]),
+            true,
         ),
-        // OpcodeList3: the list-3 path (white balance taken out and put back)
+        (
+            "bad pixels",
+            with_list(frame(w, h), 1, vec![bad_pixels]),
+            false,
+        ),
+        // OpcodeList3: the list-3 path (white balance taken out and put back), and a warp
+        // (its rolling window in bands)
         (
             "list 3",
             with_list(frame(w, h), 2, vec![scale(area(ah, aw, 3))]),
+            true,
         ),
-        ("LinearRaw", linear_raw(w, h)),
+        ("warp", with_list(frame(w, h), 2, vec![warp]), false),
+        ("LinearRaw", linear_raw(w, h), false),
     ];
-    for (name, img) in &images {
+    for (name, img, stored) in &images {
         for demosaic in [Demosaic::Mhc, Demosaic::Menon] {
             let opts = RenderOptions {
                 demosaic,
@@ -226,15 +249,22 @@ fn a_stage_added_to_the_list_runs_in_every_execution() {
             let plain = whole();
             for factors in [[0.5, 1.0], [1.0, 0.5]] {
                 let _f = Factor::set(factors);
-                every_execution(name, img, &opts, &plain.image);
+                every_execution(name, img, &opts, &plain.image, *stored);
             }
         }
     }
 }
 
-/// `img` rendered through every execution with the factors set: each drove every stage
-/// and made the whole frame's pixels, which the probes changed from `plain`.
-fn every_execution(name: &str, img: &RawImage, opts: &RenderOptions, plain: &RgbImage) {
+/// `img` rendered through every execution with the factors set (a crop from its samples if
+/// `stored`): each drove every stage and made the whole frame's pixels, which the probes
+/// changed from `plain`.
+fn every_execution(
+    name: &str,
+    img: &RawImage,
+    opts: &RenderOptions,
+    plain: &RgbImage,
+    stored: bool,
+) {
     let (w, h) = (img.width, img.height);
     let (aw, ah) = (w - 4, h - 2);
     let bands = Execution::Bands {
@@ -292,7 +322,7 @@ fn every_execution(name: &str, img: &RawImage, opts: &RenderOptions, plain: &Rgb
         region.extend_from_slice(&whole_flat.data[i..][..3 * c.width]);
     }
     assert!(frame_crop.data == region, "{name}: frame crop");
-    if demosaic == Demosaic::Mhc && img.meta.linear_raw.is_none() {
+    if demosaic == Demosaic::Mhc && stored {
         let outer = c.grown(CROP_MARGIN, aw, ah);
         let a = img.active_area();
         let mut plane = Vec::new();
