@@ -18,11 +18,11 @@
 //! A walk is one execution: the whole frame, bands (with or without opcodes), a crop from
 //! its samples or from the frame, a LinearRaw image. It decides which rows or region it
 //! computes and with what context (bands and where they go, a crop's margin, a warp's
-//! window), and takes every stage from the pipe; it cannot make a stage itself (the pipe's
-//! parts are the driver's), so no execution skips the driver. The stages that need a
-//! neighbourhood or a region (opcodes, normalization, demosaic, geometry) keep the DNG
-//! SDK's order in every walk; [`check_order`] refuses a list whose stages stand where no
-//! walk could run them in order.
+//! window), and takes every stage from the pipe, whose parts only the driver makes; every
+//! public render starts with [`drive`]. The stages that need a neighbourhood or a region
+//! (opcodes, normalization, demosaic, geometry) keep the DNG SDK's order in every walk;
+//! [`check_order`] refuses a list whose stages stand where no walk could run them in
+//! order.
 
 use super::color::normalize_neutral;
 use super::demosaic::Demosaic;
