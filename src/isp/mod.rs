@@ -13,6 +13,7 @@
 pub(crate) mod bands;
 pub mod color;
 pub mod demosaic;
+pub(crate) mod drive;
 pub mod flat;
 pub mod geometry;
 pub mod opcodes;

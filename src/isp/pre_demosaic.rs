@@ -1,19 +1,21 @@
-//! The fused pre-demosaic step of a CFA image, written once: a stored sample normalized
+//! The fused pre-demosaic step of a CFA image, written once (the `Normalize` stage and the
+//! sample stages up to the demosaic, as the driver made them: [`Pipe::cfa`]): a stored sample normalized
 //! ([`Normalizer`], DNG chapter 5) and passed through the sample stages of
 //! [`STAGES`](super::stages::STAGES) (white balance and clip), in the order of the list
 //! ([`Samples::between`]). Every execution fills the demosaicer's input from here: the
 //! whole frame, the bands, a crop's samples, and the opcode paths around OpcodeList2.
 
+use super::drive::Pipe;
 use super::opcodes::pin;
-use super::stages::{Plan, Samples, Stage};
+use super::stages::{Samples, Stage};
 use crate::error::Result;
 use crate::normalize::{Normalizer, SiteTable};
 use crate::raw::Bayer;
 
-impl Plan<'_> {
+impl Pipe<'_> {
     /// The normalization and the sample stages of the CFA samples (the `Normalize` and
     /// `Sample` stages of the list); `linearize: false` drops the LinearizationTable (a
-    /// crop's samples are linear). Here, not in stages.rs: the list does not know how an
+    /// crop's samples are linear). Here, not in drive.rs: the driver does not know how an
     /// execution fills the demosaicer's input.
     pub(crate) fn cfa(&self, linearize: bool) -> Result<CfaSites> {
         let norm = Normalizer::new(self.img)?;
@@ -22,11 +24,11 @@ impl Plan<'_> {
         } else {
             norm.without_linearization()
         };
-        CfaSites::new(self.img.bayer()?, norm, self.samples()?)
+        CfaSites::new(self.img.bayer()?, norm, self.samples())
     }
 }
 
-/// The normalization and sample stages of one render's CFA samples (from [`Plan::cfa`]).
+/// The normalization and sample stages of one render's CFA samples (from [`Pipe::cfa`]).
 pub(crate) struct CfaSites {
     bayer: Bayer,
     norm: Normalizer,

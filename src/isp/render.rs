@@ -1,7 +1,8 @@
 //! The render pipeline's public API: one [`RenderOptions`] record (what to make) and one
 //! [`Execution`] (how to run it): [`render`], [`render_with`], [`render_bands`] and
-//! [`render_crop`]. Every execution runs the stages of [`STAGES`] in that order, taken from
-//! one `Plan` (see [`super::stages`] and docs/isp.md, "The pipeline"):
+//! [`render_crop`]. One driver (`drive`, drive.rs) runs the stages of [`STAGES`] in order
+//! for every execution, and each execution (a `Walk`) supplies only how it walks the image
+//! (see [`super::stages`] and docs/isp.md, "The pipeline"):
 //!
 //! * the whole frame ([`Execution::WholeFrame`]): every stage on whole images, the
 //!   reference the others equal bit for bit;
@@ -25,16 +26,16 @@ use crate::error::{Error, Result};
 use crate::raw::crop::Crop;
 use crate::raw::RawImage;
 
+use super::drive::{drive, Pipe, Walk};
 pub use super::geometry::{
     apply_geometry, default_crop, orient_image, oriented_source, DisplayGeometry,
 };
 use super::place::{collect_bands, collect_bands_of};
 use super::pre_demosaic::{CfaSites, FillRow};
-use super::render_bands::{banded_any, bands_with};
+use super::render_bands::{banded_any, Consumer};
 pub use super::render_parts::{
     apply_matrix, color_matrix, resolve_neutral, Bands, Output, RenderOptions, BAND,
 };
-use super::stages::Plan;
 pub use super::stages::{Stage, STAGES};
 
 /// How a render runs its stages (the pixels are the same, bit for bit).
@@ -102,10 +103,7 @@ pub enum CropSamples<'a> {
 
 /// The render of `img` as `opts` asks ([`Execution::Auto`]).
 pub fn render(img: &RawImage, opts: &RenderOptions) -> Result<RgbImage> {
-    let plan = Plan::new(img, opts)?;
-    let rgb = auto(&plan)?;
-    plan.finish("automatic");
-    Ok(rgb)
+    Ok(drive(img, opts, Auto)?.out)
 }
 
 /// The render of `img` as `opts` asks, run as `how` says, with what it ran; `None` when the
@@ -116,20 +114,23 @@ pub fn render_with(
     opts: &RenderOptions,
     how: Execution,
 ) -> Result<Option<Rendered>> {
-    let plan = Plan::new(img, opts)?;
     let mut window = WindowStats::default();
-    let image = match how {
-        Execution::Auto => Some(auto(&plan)?),
-        Execution::WholeFrame => Some(whole_frame(&plan)?),
-        Execution::Bands { rows, limit } => bands(&plan, rows, limit, &mut window)?,
-    };
-    Ok(image.map(|image| {
-        plan.finish("chosen");
-        Rendered {
-            image,
-            window,
-            stages: plan.ran(),
+    let driven = match how {
+        Execution::Auto => drive(img, opts, Auto)?.map(Some),
+        Execution::WholeFrame => drive(img, opts, WholeFrame)?.map(Some),
+        Execution::Bands { rows, limit } => {
+            let walk = BandsOf {
+                rows,
+                limit,
+                stats: &mut window,
+            };
+            drive(img, opts, walk)?
         }
+    };
+    Ok(driven.out.map(|image| Rendered {
+        image,
+        window,
+        stages: driven.stages,
     }))
 }
 
@@ -166,16 +167,7 @@ where
     if !linear_raw && row_kernel(opts.demosaic).is_none() {
         return Ok(None);
     }
-    let plan = Plan::new(img, opts)?;
-    let got = if linear_raw {
-        Some(super::render_linear_raw::bands(&plan, start, f)?)
-    } else {
-        bands_with(&plan, start, f)?
-    };
-    if got.is_some() {
-        plan.finish("band-wise");
-    }
-    Ok(got)
+    Ok(drive(img, opts, Consumer { start, f })?.out)
 }
 
 /// The render of the active-area rectangle `crop` of the frame `frame` (levels, colour and
@@ -197,29 +189,32 @@ pub fn render_crop(
         CropSamples::Stored { outer, plane } => {
             super::render_crop::stored(frame, opts, outer, plane, crop)?
         }
-        CropSamples::Frame => {
-            let plan = Plan::new(frame, opts)?;
-            let rgb = frame_region(&plan, crop)?;
-            plan.finish("crop");
-            rgb
-        }
+        CropSamples::Frame => drive(frame, opts, FrameRegion { crop })?.out,
     };
     Ok(rgb)
 }
 
-/// The region `crop` of the whole frame's render (no DefaultCrop, no orientation).
-fn frame_region(plan: &Plan, crop: &Crop) -> Result<RgbImage> {
-    let p = match plan.opcodes() {
-        Some(p) if plan.img.meta.linear_raw.is_none() => p,
-        _ => return cut(&whole_frame(plan)?, crop),
-    };
-    let rows = plan.rows();
-    let post = move |row: &mut [f32]| rows.run(row);
-    plan.geometry();
-    let sites = plan.cfa(true)?;
-    let n = plan.neutral()?;
-    let method = plan.demosaic();
-    pipeline::render_frame_region(plan.img, p, &sites, n, method, &post, crop)
+/// [`CropSamples::Frame`]: the region `crop` of the whole frame's render (no DefaultCrop,
+/// no orientation).
+struct FrameRegion<'c> {
+    crop: &'c Crop,
+}
+
+impl Walk for FrameRegion<'_> {
+    type Out = RgbImage;
+    const NAME: &'static str = "frame crop";
+
+    fn walk(self, pipe: &Pipe) -> Result<RgbImage> {
+        let p = match pipe.opcodes() {
+            Some(p) if pipe.img.meta.linear_raw.is_none() => p,
+            _ => return cut(&WholeFrame.walk(pipe)?, self.crop),
+        };
+        let rows = pipe.rows();
+        let post = move |row: &mut [f32]| rows.run(row);
+        let sites = pipe.cfa(true)?;
+        let (n, method) = (pipe.neutral(), pipe.method());
+        pipeline::render_frame_region(pipe.img, p, &sites, n, method, &post, self.crop)
+    }
 }
 
 /// The rectangle `crop` of `img`.
@@ -243,59 +238,79 @@ fn cut(img: &RgbImage, crop: &Crop) -> Result<RgbImage> {
 }
 
 /// [`Execution::Auto`]: bands when possible, else the whole frame.
-fn auto(plan: &Plan) -> Result<RgbImage> {
-    if plan.img.meta.linear_raw.is_some() {
-        return super::render_linear_raw::render(plan);
-    }
-    if let Some(kernel) = row_kernel(plan.method()) {
-        if let Some(rgb) = banded_any(plan, kernel, Tune::default(), collect_bands)? {
-            return Ok(rgb);
+struct Auto;
+
+impl Walk for Auto {
+    type Out = RgbImage;
+    const NAME: &'static str = "automatic";
+
+    fn walk(self, pipe: &Pipe) -> Result<RgbImage> {
+        if pipe.img.meta.linear_raw.is_some() {
+            return super::render_linear_raw::render(pipe);
         }
+        if let Some(kernel) = row_kernel(pipe.method()) {
+            if let Some(rgb) = banded_any(pipe, kernel, Tune::default(), collect_bands)? {
+                return Ok(rgb);
+            }
+        }
+        WholeFrame.walk(pipe)
     }
-    whole_frame(plan)
 }
 
-/// [`Execution::Bands`] of `rows` output rows.
-fn bands(
-    plan: &Plan,
+/// [`Execution::Bands`] of `rows` output rows (`None` when not possible).
+struct BandsOf<'s> {
     rows: usize,
     limit: Option<usize>,
-    stats: &mut WindowStats,
-) -> Result<Option<RgbImage>> {
-    if plan.img.meta.linear_raw.is_some() {
-        return Ok(None);
+    stats: &'s mut WindowStats,
+}
+
+impl Walk for BandsOf<'_> {
+    type Out = Option<RgbImage>;
+    const NAME: &'static str = "bands";
+
+    fn walk(self, pipe: &Pipe) -> Result<Option<RgbImage>> {
+        if pipe.img.meta.linear_raw.is_some() {
+            return Ok(None);
+        }
+        let Some(kernel) = row_kernel(pipe.method()) else {
+            return Ok(None);
+        };
+        let rows = self.rows.max(1);
+        let tune = Tune {
+            band: rows,
+            limit: self.limit,
+            stats: Some(self.stats),
+        };
+        banded_any(pipe, kernel, tune, collect_bands_of(rows))
     }
-    let Some(kernel) = row_kernel(plan.method()) else {
-        return Ok(None);
-    };
-    let rows = rows.max(1);
-    let tune = Tune {
-        band: rows,
-        limit,
-        stats: Some(stats),
-    };
-    banded_any(plan, kernel, tune, collect_bands_of(rows))
 }
 
 /// [`Execution::WholeFrame`]: every stage on whole images.
-fn whole_frame(plan: &Plan) -> Result<RgbImage> {
-    let img = plan.img;
-    if img.meta.linear_raw.is_some() {
-        return super::render_linear_raw::render(plan);
-    }
-    let rows = plan.rows();
-    let post = move |row: &mut [f32]| rows.run(row);
-    let (crop, orient) = plan.geometry();
-    let sites = plan.cfa(true)?;
-    let method = plan.demosaic();
-    match plan.opcodes() {
-        Some(p) => {
-            let n = plan.neutral()?;
-            pipeline::render_frame(img, p, &sites, n, method, &post, (crop, orient))
+struct WholeFrame;
+
+impl Walk for WholeFrame {
+    type Out = RgbImage;
+    const NAME: &'static str = "whole frame";
+
+    fn walk(self, pipe: &Pipe) -> Result<RgbImage> {
+        let img = pipe.img;
+        if img.meta.linear_raw.is_some() {
+            return super::render_linear_raw::render(pipe);
         }
-        None => {
-            let rgb = demosaic_whole(img, &sites, method, &post)?;
-            Ok(apply_geometry(rgb, &img.meta, crop, orient))
+        let rows = pipe.rows();
+        let post = move |row: &mut [f32]| rows.run(row);
+        let (crop, orient) = pipe.geometry();
+        let sites = pipe.cfa(true)?;
+        let method = pipe.method();
+        match pipe.opcodes() {
+            Some(p) => {
+                let n = pipe.neutral();
+                pipeline::render_frame(img, p, &sites, n, method, &post, (crop, orient))
+            }
+            None => {
+                let rgb = demosaic_whole(img, &sites, method, &post)?;
+                Ok(apply_geometry(rgb, &img.meta, crop, orient))
+            }
         }
     }
 }

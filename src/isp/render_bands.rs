@@ -1,17 +1,17 @@
 //! The banded render: the output geometry cut into bands (`place`: DefaultCrop and
 //! orientation, each band asking for the active-area rectangle it shows), the plain path's
 //! rectangle renderer (`banded`: the pre-demosaic step, demosaic, `post`), and the
-//! band-wise consumer of the render (`bands_with`, behind
+//! band-wise consumer of the render (the walk `Consumer`, behind
 //! [`render_bands`](super::render::render_bands)) that `synth` and `render` write their
 //! targets from: the bands executions of the pipeline. Files with opcodes take
 //! `super::opcodes::banded`'s rectangle renderer through the same `place`.
 
 use super::demosaic::{demosaic_rect, row_kernel, Post, RowDemosaic, RowKernel};
+use super::drive::{Pipe, Walk};
 use super::opcodes::{self, banded::Tune};
 use super::place::{place, BandBody};
 use super::pre_demosaic::{CfaSites, FillRow};
 use super::render_parts::{Bands, BAND};
-use super::stages::Plan;
 use crate::error::{Error, Result};
 use crate::raw::RawImage;
 
@@ -74,60 +74,75 @@ pub(crate) fn banded<R>(
     place(&img.meta, (w, h), crop, orient, band, &rect, run)
 }
 
-/// [`render_bands`](super::render::render_bands) of a CFA image: `None` when the
-/// demosaicer is not banded (Menon) or OpcodeList3 has a TrimBounds.
-pub(crate) fn bands_with<T, S, F>(plan: &Plan, start: S, f: F) -> Result<Option<Bands<T>>>
+/// [`render_bands`](super::render::render_bands): `start(width, height)`, then `f` on
+/// each band of [`BAND`] rows, in band order; `None` when the demosaicer is not banded
+/// (Menon) or OpcodeList3 has a TrimBounds. A LinearRaw image is rendered whole and handed
+/// out in bands.
+pub(crate) struct Consumer<S, F> {
+    pub(crate) start: S,
+    pub(crate) f: F,
+}
+
+impl<T, S, F> Walk for Consumer<S, F>
 where
     T: Send,
     S: FnOnce(usize, usize) -> Result<()>,
     F: Fn(usize, usize, &[f32]) -> Result<T> + Sync,
 {
-    let Some(kernel) = row_kernel(plan.method()) else {
-        return Ok(None);
-    };
-    let run = |ow: usize, oh: usize, body: &BandBody| {
-        start(ow, oh)?;
-        let nb = oh.div_ceil(BAND);
-        let bands = super::bands::in_order(nb, |bi, scratch: &mut Vec<f32>| {
-            let rows = BAND.min(oh - bi * BAND);
-            scratch.clear();
-            scratch.resize(3 * ow * rows, 0.0);
-            body(bi, scratch)?;
-            f(bi * BAND, ow, scratch)
-        })?;
-        Ok(Bands {
-            width: ow,
-            height: oh,
-            bands,
-        })
-    };
-    banded_any(plan, kernel, Tune::default(), run)
+    type Out = Option<Bands<T>>;
+    const NAME: &'static str = "band-wise";
+
+    fn walk(self, pipe: &Pipe) -> Result<Option<Bands<T>>> {
+        let Consumer { start, f } = self;
+        if pipe.img.meta.linear_raw.is_some() {
+            return super::render_linear_raw::bands(pipe, start, f).map(Some);
+        }
+        let Some(kernel) = row_kernel(pipe.method()) else {
+            return Ok(None);
+        };
+        let run = |ow: usize, oh: usize, body: &BandBody| {
+            start(ow, oh)?;
+            let nb = oh.div_ceil(BAND);
+            let bands = super::bands::in_order(nb, |bi, scratch: &mut Vec<f32>| {
+                let rows = BAND.min(oh - bi * BAND);
+                scratch.clear();
+                scratch.resize(3 * ow * rows, 0.0);
+                body(bi, scratch)?;
+                f(bi * BAND, ow, scratch)
+            })?;
+            Ok(Bands {
+                width: ow,
+                height: oh,
+                bands,
+            })
+        };
+        banded_any(pipe, kernel, Tune::default(), run)
+    }
 }
 
-/// The banded render of `plan` with the row demosaicer `kernel` (the plan's), bands of
+/// The banded render of `pipe` with the row demosaicer `kernel` (the pipe's), bands of
 /// `tune.band` rows handed to `run` as [`place`] does: the opcode path
 /// ([`opcodes::banded`]) when opcode lists apply (`None` when they cannot be banded: a
 /// TrimBounds), else the plain one ([`banded`]).
 pub(crate) fn banded_any<R>(
-    plan: &Plan,
+    pipe: &Pipe,
     kernel: RowKernel,
     tune: Tune,
     run: impl FnOnce(usize, usize, &BandBody) -> Result<R>,
 ) -> Result<Option<R>> {
-    plan.demosaic();
-    let r = plan.rows();
+    let r = pipe.rows();
     let post = move |row: &mut [f32]| r.run(row);
-    let ends = plan.geometry();
-    let sites = plan.cfa(true)?;
-    match plan.opcodes() {
+    let ends = pipe.geometry();
+    let sites = pipe.cfa(true)?;
+    match pipe.opcodes() {
         Some(p) => {
             let rows = opcodes::banded::RowRender {
                 sites: &sites,
-                neutral: plan.neutral()?,
+                neutral: pipe.neutral(),
                 kernel,
                 post: &post,
             };
-            opcodes::banded::render(plan.img, p, rows, ends, tune, run)
+            opcodes::banded::render(pipe.img, p, rows, ends, tune, run)
         }
         None => {
             let rows = PlainRows {
@@ -135,7 +150,7 @@ pub(crate) fn banded_any<R>(
                 kernel,
                 post: &post,
             };
-            banded(plan.img, rows, ends, tune.band, run).map(Some)
+            banded(pipe.img, rows, ends, tune.band, run).map(Some)
         }
     }
 }

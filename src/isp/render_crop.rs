@@ -10,11 +10,11 @@
 //! matrix. The result equals the frame render's region bit for bit.
 
 use super::demosaic::{demosaic_rect, row_kernel, RowDemosaic, RowKernel, PAD};
+use super::drive::{drive, Pipe, Walk};
 use super::opcodes::pipeline;
 use super::pre_demosaic::FillRow;
 use super::render_parts::RenderOptions;
 use super::rgb::RgbImage;
-use super::stages::Plan;
 use crate::error::{Error, Result};
 use crate::raw::crop::Crop;
 use crate::raw::{RawImage, RawMeta};
@@ -60,32 +60,51 @@ pub(crate) fn stored(
             "the crop's sample plane does not cover the crop and its margin",
         ));
     }
-    let plan = Plan::new(frame, opts)?;
-    let rgb = stored_plan(&plan, kernel, outer, plane, crop)?;
-    plan.finish("crop");
-    Ok(rgb)
+    let walk = Stored {
+        kernel,
+        outer,
+        plane,
+        crop,
+    };
+    Ok(drive(frame, opts, walk)?.out)
 }
 
-fn stored_plan(
-    plan: &Plan,
+/// The walk of [`stored`]: the crop's rows, from its samples and their margin.
+struct Stored<'a> {
     kernel: RowKernel,
-    outer: &Crop,
-    plane: &[u16],
-    crop: &Crop,
-) -> Result<RgbImage> {
-    let frame = plan.img;
+    outer: &'a Crop,
+    plane: &'a [u16],
+    crop: &'a Crop,
+}
+
+impl Walk for Stored<'_> {
+    type Out = RgbImage;
+    const NAME: &'static str = "stored crop";
+
+    fn walk(self, pipe: &Pipe) -> Result<RgbImage> {
+        stored_walk(pipe, self)
+    }
+}
+
+fn stored_walk(pipe: &Pipe, walk: Stored) -> Result<RgbImage> {
+    let Stored {
+        kernel,
+        outer,
+        plane,
+        crop,
+    } = walk;
+    let frame = pipe.img;
     let a = frame.active_area();
     let (w, h) = (a.width(), a.height());
     let bayer = frame.bayer()?;
-    let r = plan.rows();
+    let r = pipe.rows();
     let post = move |row: &mut [f32]| r.run(row);
     // Before DefaultCrop and orientation: `render_crop` checked that both are off.
-    plan.geometry();
-    let method = plan.demosaic();
-    let sites = plan.cfa(false)?;
-    if let Some(p) = plan.opcodes() {
+    let method = pipe.method();
+    let sites = pipe.cfa(false)?;
+    if let Some(p) = pipe.opcodes() {
         let stored = pipeline::StoredCrop { outer, plane };
-        let n = plan.neutral()?;
+        let n = pipe.neutral();
         return pipeline::render_crop(frame, p, (&sites, n), method, stored, crop, &post);
     }
     let fill = |blacks: &mut Vec<f64>, r: usize, cs: &[usize], out: &mut [f32]| {

@@ -13,11 +13,12 @@
 //! when [`RawMeta::linear_raw`](crate::raw::meta::RawMeta::linear_raw) is set.
 
 use super::color::normalize_neutral;
+use super::drive::Pipe;
 use super::opcodes::pipeline::{apply_list3, finish_geometry, stage1_planes, Stage3};
 use super::opcodes::{self, apply_region, OpcodeMode, Prepared, Region, StageRect};
 use super::render_parts::{Bands, BAND};
 use super::rgb::RgbImage;
-use super::stages::{Plan, Samples, Stage};
+use super::stages::{Samples, Stage};
 use crate::dng::opcodes::ListId;
 use crate::error::{Error, Result};
 use crate::raw::meta::LinearRaw;
@@ -179,33 +180,32 @@ pub fn camera_rgb_with(img: &RawImage, neutral: [f64; 3], mode: OpcodeMode) -> R
     balanced(img, neutral, mode)
 }
 
-/// The render of the plan's LinearRaw image (see the module docs): its whole-frame
-/// execution, for every [`super::render::Execution`] that makes one.
-pub(crate) fn render(plan: &Plan) -> Result<RgbImage> {
-    let img = plan.img;
-    let rows = plan.rows();
+/// The render of the pipe's LinearRaw image (see the module docs): its whole-frame walk,
+/// for every [`super::render::Execution`] that makes one.
+pub(crate) fn render(pipe: &Pipe) -> Result<RgbImage> {
+    let img = pipe.img;
+    let rows = pipe.rows();
     // The samples are normalized per plane by `stage_rgb` (LinearRaw levels, not the CFA
     // normalizer), and they are already demosaiced: the demosaic stage is the identity.
-    let samples = plan.samples()?;
-    plan.demosaic();
-    let (mut rgb, b) = stage_rgb(img, plan.opcodes(), &samples)?;
+    let samples = pipe.samples();
+    let (mut rgb, b) = stage_rgb(img, pipe.opcodes(), &samples)?;
     white_balance(&mut rgb, &samples);
     let w = rgb.width.max(1);
     rgb.data.par_chunks_mut(3 * w).for_each(|row| rows.run(row));
     let a = img.active_area();
-    let (crop, orient) = plan.geometry();
+    let (crop, orient) = pipe.geometry();
     finish_geometry(rgb, b, &img.meta, (a.width(), a.height()), crop, orient)
 }
 
 /// [`render`] handed to `f` band by band ([`BAND`] rows) after `start(width, height)`, as
 /// [`super::render::render_bands`] does.
-pub(crate) fn bands<T, S, F>(plan: &Plan, start: S, f: F) -> Result<Bands<T>>
+pub(crate) fn bands<T, S, F>(pipe: &Pipe, start: S, f: F) -> Result<Bands<T>>
 where
     T: Send,
     S: FnOnce(usize, usize) -> Result<()>,
     F: Fn(usize, usize, &[f32]) -> Result<T> + Sync,
 {
-    let rgb = render(plan)?;
+    let rgb = render(pipe)?;
     let (ow, oh) = (rgb.width, rgb.height);
     start(ow, oh)?;
     let band = 3 * ow * BAND;
