@@ -12,6 +12,7 @@
 
 pub mod bounds;
 pub mod calibrate;
+pub mod choice;
 pub mod color;
 pub mod dataset;
 pub mod deflate;

@@ -5,13 +5,12 @@ use crate::convert::json_obj;
 use crate::errors::{py_err, value_err};
 use crate::pool::on_pool;
 use crate::raw::Raw;
-use day2night::calibrate::merge::{MergeReport, Merger};
+use day2night::calibrate::merge::{repeated_frame, MergeReport, Merger};
 use day2night::dng::read_dng;
 use day2night::error::ResultExt;
 use day2night::raw::RawImage;
 use day2night::synth::job::DayInput;
 use pyo3::prelude::*;
-use std::collections::HashMap;
 use std::path::PathBuf;
 use std::sync::{Arc, OnceLock};
 
@@ -19,26 +18,14 @@ use std::sync::{Arc, OnceLock};
 /// ``os.PathLike``; anything else is its ``TypeError``), refused when one file comes twice.
 fn frame_paths(py: Python<'_>, items: &[Bound<'_, PyAny>]) -> PyResult<Vec<PathBuf>> {
     let fsdecode = py.import("os")?.getattr("fsdecode")?;
-    let mut paths: Vec<PathBuf> = Vec::with_capacity(items.len());
-    let mut seen: HashMap<PathBuf, usize> = HashMap::with_capacity(items.len());
-    for (i, item) in items.iter().enumerate() {
-        let path: PathBuf = fsdecode.call1((item,))?.extract()?;
-        // the file itself where it can be resolved (./a.dng, a link to a.dng); a path that
-        // cannot be (missing) is compared as given and fails when read
-        let key = std::fs::canonicalize(&path).unwrap_or_else(|_| path.clone());
-        if let Some(j) = seen.insert(key, i) {
-            return Err(value_err(format!(
-                "{}: merge got this frame twice (paths {} and {} of {}): a burst's frames \
-                 are distinct files, and a frame given twice would count double",
-                path.display(),
-                j,
-                i,
-                items.len()
-            )));
-        }
-        paths.push(path);
+    let paths = items
+        .iter()
+        .map(|item| fsdecode.call1((item,))?.extract::<PathBuf>())
+        .collect::<PyResult<Vec<PathBuf>>>()?;
+    match repeated_frame(&paths) {
+        Some(why) => Err(value_err(why)),
+        None => Ok(paths),
     }
-    Ok(paths)
 }
 
 /// Read the frames one at a time and merge them (the command line's `merge`).

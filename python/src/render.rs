@@ -117,13 +117,12 @@ pub(crate) fn encode_u8<'py>(
 
 /// Whether `isp` names the release's ISP (`"release"`) rather than day2night's.
 fn release_isp(isp: &str) -> PyResult<bool> {
-    match isp {
-        "release" => Ok(true),
-        "day2night" => Ok(false),
-        other => Err(value_err(format!(
-            "isp={other:?}: use \"day2night\" or \"release\""
-        ))),
-    }
+    use day2night::choice::Choice;
+    use day2night::isp::release::Isp;
+    isp.parse::<Isp>().map(|i| i == Isp::Release).map_err(|_| {
+        let names: Vec<String> = Isp::NAMES.iter().map(|n| format!("{:?}", n.name)).collect();
+        value_err(format!("isp={isp:?}: use {}", names.join(" or ")))
+    })
 }
 
 /// The first of `given` (keyword, value) that ``isp="release"`` refuses, as (keyword,

@@ -40,6 +40,26 @@ pub struct MergeReport {
     pub saturated_sites: u64,
 }
 
+/// Why `paths` cannot be a burst when one file comes twice, naming it: the same file given
+/// twice (the same path after resolving `.`, `..` and links; a path that cannot be resolved,
+/// a missing one, is compared as given and fails when read) would count double in the mean.
+/// `day2night merge` and Python's `merge` refuse it so; None when the files are distinct.
+pub fn repeated_frame(paths: &[std::path::PathBuf]) -> Option<String> {
+    let mut seen = std::collections::HashMap::with_capacity(paths.len());
+    for (i, path) in paths.iter().enumerate() {
+        let key = std::fs::canonicalize(path).unwrap_or_else(|_| path.clone());
+        if let Some(j) = seen.insert(key, i) {
+            return Some(format!(
+                "{}: merge got this frame twice (paths {j} and {i} of {}): a burst's frames \
+                 are distinct files, and a frame given twice would count double",
+                path.display(),
+                paths.len()
+            ));
+        }
+    }
+    None
+}
+
 /// Streaming merger: frames are added one at a time.
 #[derive(Debug)]
 pub struct Merger {

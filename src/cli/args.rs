@@ -2,27 +2,93 @@
 //! subcommand borrows another's).
 
 use super::{usage, Failure};
+use clap::builder::{PossibleValue, TypedValueParser};
+use clap::{Arg, Command};
+use day2night::choice::Choice;
 use day2night::encode::exr::ExrOptions;
+use std::ffi::OsStr;
+use std::marker::PhantomData;
+use std::str::FromStr;
 
-/// `--isp` (render, real-pairs): the ISP of a rendered target. Its values have no doc
-/// comments: they would be clap's help of each value, which turns `--help` into the long
-/// layout.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
-pub enum IspArg {
-    // day2night's ISP (docs/isp.md).
-    #[value(name = "day2night")]
-    Day2night,
-    // The authors' release's target render reproduced (docs/isp.md).
-    Release,
+/// A choice as typed on the command line: its value and its spelling. `--isp release`
+/// compares spellings, as Python's keyword arguments are compared (`--demosaic malvar` names
+/// a demosaicer, not the default: docs/isp.md).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Typed<T> {
+    /// The value.
+    pub value: T,
+    /// The text given (or the default's name).
+    pub text: String,
 }
 
-/// The value parser of an option whose values are an enum's names: its `FromStr` (names,
-/// aliases, case) and its error message; clap shows the default from its `Display`.
-pub fn choice<T: std::str::FromStr>(s: &str) -> Result<T, String>
+impl<T: Choice + Default> Default for Typed<T> {
+    fn default() -> Self {
+        let value = T::default();
+        Typed {
+            value,
+            text: T::name_of(value).to_string(),
+        }
+    }
+}
+
+impl<T> std::fmt::Display for Typed<T> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.text)
+    }
+}
+
+/// The value parser of an option whose values are a [`Choice`]'s: `--help` lists its names
+/// (`[possible values: ...]`; aliases accepted, not listed; no help per value, which would
+/// turn `--help` into the long layout), and a value is parsed by its `FromStr` (its aliases,
+/// case rule and error message, which names the values). clap shows the default from
+/// [`Typed`]'s `Display`.
+pub struct ChoiceParser<T>(PhantomData<fn() -> T>);
+
+impl<T> Clone for ChoiceParser<T> {
+    fn clone(&self) -> Self {
+        ChoiceParser(PhantomData)
+    }
+}
+
+/// The [`ChoiceParser`] of `T`.
+pub fn choice<T: Choice>() -> ChoiceParser<T> {
+    ChoiceParser(PhantomData)
+}
+
+impl<T> TypedValueParser for ChoiceParser<T>
 where
-    T::Err: std::fmt::Display,
+    T: Choice + FromStr<Err = day2night::Error> + Send + Sync,
 {
-    s.parse().map_err(|e: T::Err| e.to_string())
+    type Value = Typed<T>;
+
+    fn parse_ref(
+        &self,
+        cmd: &Command,
+        arg: Option<&Arg>,
+        value: &OsStr,
+    ) -> Result<Typed<T>, clap::Error> {
+        // clap's own message for a function parser: "invalid value 'x' for '--opt <V>': ..."
+        let parse = |s: &str| -> Result<Typed<T>, String> {
+            s.parse::<T>()
+                .map(|value| Typed {
+                    value,
+                    text: s.to_string(),
+                })
+                .map_err(|e| match e {
+                    // the message alone: clap says it is an invalid value
+                    day2night::Error::InvalidParam(m) => m,
+                    e => e.to_string(),
+                })
+        };
+        parse.parse_ref(cmd, arg, value)
+    }
+
+    fn possible_values(&self) -> Option<Box<dyn Iterator<Item = PossibleValue> + '_>> {
+        let names = T::NAMES
+            .iter()
+            .map(|n| PossibleValue::new(n.name).aliases(n.aliases.iter().copied()));
+        Some(Box::new(names))
+    }
 }
 
 /// `--max-pixels N` (global): a pixel count with an optional K/M/G suffix.

@@ -1,5 +1,5 @@
 //! `day2night eval PRED TARGET [--json]`: PSNR, SSIM and mean Delta E 2000.
-use super::args::{choice, lib};
+use super::args::{choice, lib, Typed};
 use super::{usage, CmdResult};
 use day2night::encode::read::open_bands;
 use day2night::metrics::banded::{evaluate, DEFAULT_BAND_ROWS};
@@ -32,19 +32,19 @@ pub struct EvalArgs {
     /// Data range for PSNR and SSIM.
     #[arg(long, default_value_t = 1.0, value_name = "R")]
     pub data_range: f64,
-    /// SSIM window: uniform (scikit-image) or gaussian.
-    #[arg(long, default_value_t = SsimWindow::default(), value_parser = choice::<SsimWindow>, value_name = "W")]
-    pub ssim_window: SsimWindow,
-    /// NaN/Inf samples: error (refuse, naming the file and the count) or zero (replace them
-    /// by 0, with a warning; the JSON says so).
-    #[arg(long, default_value_t = NonFinite::default(), value_parser = choice::<NonFinite>, value_name = "MODE")]
-    pub nonfinite: NonFinite,
+    /// SSIM window (uniform: scikit-image's; gaussian: Wang et al. 2004's).
+    #[arg(long, default_value_t = Typed::<SsimWindow>::default(), value_parser = choice::<SsimWindow>(), value_name = "W")]
+    pub ssim_window: Typed<SsimWindow>,
+    /// NaN/Inf samples: refused, naming the file and the count, or replaced by 0 with a
+    /// warning (the JSON says so).
+    #[arg(long, default_value_t = Typed::<NonFinite>::default(), value_parser = choice::<NonFinite>(), value_name = "MODE")]
+    pub nonfinite: Typed<NonFinite>,
 }
 
 /// Run `day2night eval`.
 pub fn run(args: EvalArgs) -> CmdResult {
-    let window = args.ssim_window;
-    let zero = args.nonfinite == NonFinite::Zero;
+    let window = args.ssim_window.value;
+    let zero = args.nonfinite.value == NonFinite::Zero;
     if !(args.data_range.is_finite() && args.data_range > 0.0) {
         return Err(usage(format!(
             "--data-range {}: must be positive",
@@ -114,7 +114,7 @@ pub fn run(args: EvalArgs) -> CmdResult {
             "height": a.height,
             "data_range": args.data_range,
             "ssim_window": window.name(),
-            "nonfinite": args.nonfinite.name(),
+            "nonfinite": args.nonfinite.value.name(),
             "nonfinite_replaced": r.non_finite,
         });
         // The warnings with their codes, when there are any.

@@ -1,6 +1,6 @@
 //! `day2night merge`: average an aligned burst into one low-noise DNG.
 use super::CmdResult;
-use day2night::calibrate::merge::Merger;
+use day2night::calibrate::merge::{repeated_frame, Merger};
 use day2night::dng::read_dng;
 use day2night::dng::write::{write_dng, Compression, WriteOptions};
 use day2night::error::ResultExt;
@@ -47,6 +47,9 @@ pub enum CompressionArg {
 
 /// Run `day2night merge`.
 pub fn run(args: MergeArgs) -> CmdResult {
+    if let Some(why) = repeated_frame(&args.frames) {
+        return Err(super::usage(why));
+    }
     let mut it = args.frames.iter();
     let Some(first) = it.next() else {
         return Err(super::usage("merge needs at least 2 frames"));

@@ -1,7 +1,8 @@
 //! `day2night real-pairs`: real night test/training pairs from captures (docs/real-pairs.md).
-use super::args::IspArg;
+use super::args::{choice, Typed};
 use super::dataset::{OutFolder, RunFlags};
 use super::{usage, CmdResult, Failure};
+use day2night::isp::release::Isp;
 use day2night::realpairs::{self, Layout, LayoutChoice, PairOptions, RunOptions, TargetKind};
 use std::path::PathBuf;
 
@@ -98,8 +99,8 @@ pub struct RealPairsArgs {
     /// ISP of the rendered targets: release is the authors' release ISP as `render --isp
     /// release` does it (its own crop and orientation; docs/isp.md). A target copied from
     /// the release's processed tree is copied either way.
-    #[arg(long, value_enum, default_value_t = IspArg::Day2night, value_name = "ISP")]
-    pub isp: IspArg,
+    #[arg(long, default_value_t = Typed::<Isp>::default(), value_parser = choice::<Isp>(), value_name = "ISP")]
+    pub isp: Typed<Isp>,
     /// --jobs, --overwrite, --json, --quiet (shared with `dataset`).
     #[command(flatten)]
     pub run: RunFlags,
@@ -138,7 +139,7 @@ pub fn run(args: RealPairsArgs) -> CmdResult {
         release_isos: parse_isos(&args.iso)?,
         max_motion_px: args.max_motion,
         target: args.target.into(),
-        release_isp: args.isp == IspArg::Release,
+        release_isp: args.isp.value == Isp::Release,
     };
     let opts = RunOptions {
         scenes_dir: args.scenes.clone(),

@@ -1,5 +1,5 @@
 //! `day2night render IN.dng -o OUT.exr|png|tif`: the software ISP on one DNG.
-use super::args::{choice, lib, parse_neutral, parse_zip_level, IspArg};
+use super::args::{choice, lib, parse_neutral, parse_zip_level, Typed};
 use super::{usage, CmdResult};
 use day2night::encode::exr::{
     encodes_rows, standard_attributes, write_exr, ExrCompression, ExrOptions,
@@ -7,6 +7,7 @@ use day2night::encode::exr::{
 use day2night::encode::png::{write_png, write_tiff, PngOptions};
 use day2night::encode::target_files::TargetFiles;
 use day2night::isp::opcodes::OpcodeMode;
+use day2night::isp::release::Isp;
 use day2night::isp::render::{render, render_bands, resolve_neutral, Output, RenderOptions};
 use day2night::isp::tone::DisplayTone;
 use day2night::isp::Demosaic;
@@ -29,9 +30,9 @@ pub struct RenderArgs {
     /// Output file (.exr, .png, .tif or .tiff).
     #[arg(short, long, visible_alias = "out", value_name = "OUT")]
     pub output: PathBuf,
-    /// Demosaicing method: bilinear, mhc or menon.
-    #[arg(long, default_value_t = Demosaic::default(), value_parser = choice::<Demosaic>, value_name = "METHOD")]
-    pub demosaic: Demosaic,
+    /// Demosaicing method.
+    #[arg(long, default_value_t = Typed::<Demosaic>::default(), value_parser = choice::<Demosaic>(), value_name = "METHOD")]
+    pub demosaic: Typed<Demosaic>,
     /// White balance by this camera neutral instead of the file's AsShotNeutral.
     #[arg(long, value_name = "R,G,B")]
     pub neutral: Option<String>,
@@ -41,16 +42,16 @@ pub struct RenderArgs {
     /// EXR: 32-bit float samples.
     #[arg(long)]
     pub float: bool,
-    /// EXR compression: none, rle, zips, zip, piz, pxr24, b44, b44a.
-    #[arg(long, default_value_t = ExrCompression::default(), value_parser = choice::<ExrCompression>, value_name = "C")]
-    pub exr_compression: ExrCompression,
+    /// EXR compression.
+    #[arg(long, default_value_t = Typed::<ExrCompression>::default(), value_parser = choice::<ExrCompression>(), value_name = "C")]
+    pub exr_compression: Typed<ExrCompression>,
     /// Compression effort of zip/zips EXRs: 1 (default, fastest, own encoder) to 9
     /// (miniz_oxide level 9: about 2 % smaller, much slower).
     #[arg(long = "exr-zip-level", default_value_t = 1, value_name = "N")]
     pub exr_zip_level: u8,
-    /// PNG/TIFF display encoding: srgb, gamma22, release (gamma 2.2 + smoothstep).
-    #[arg(long, default_value_t = DisplayTone::default(), value_parser = choice::<DisplayTone>, value_name = "TONE")]
-    pub tone: DisplayTone,
+    /// PNG/TIFF display encoding (release: gamma 2.2 + smoothstep).
+    #[arg(long, default_value_t = Typed::<DisplayTone>::default(), value_parser = choice::<DisplayTone>(), value_name = "TONE")]
+    pub tone: Typed<DisplayTone>,
     /// PNG/TIFF bits per sample: 8 or 16 (default: 8 for PNG, 16 for TIFF).
     #[arg(long, value_name = "N")]
     pub bits: Option<u8>,
@@ -63,10 +64,10 @@ pub struct RenderArgs {
     /// Do not apply the Orientation tag.
     #[arg(long)]
     pub no_orient: bool,
-    /// DNG opcode lists (lens shading GainMap, distortion WarpRectilinear, ...): apply (as
-    /// the Adobe DNG SDK) or ignore (as LibRaw and the authors' renders).
-    #[arg(long, default_value_t = OpcodeMode::default(), value_parser = choice::<OpcodeMode>, value_name = "MODE")]
-    pub opcodes: OpcodeMode,
+    /// DNG opcode lists (lens shading GainMap, distortion WarpRectilinear, ...): applied as
+    /// the Adobe DNG SDK does, or ignored as LibRaw and the authors' renders do.
+    #[arg(long, default_value_t = Typed::<OpcodeMode>::default(), value_parser = choice::<OpcodeMode>(), value_name = "MODE")]
+    pub opcodes: Typed<OpcodeMode>,
     /// Replace an existing output.
     #[arg(long)]
     pub overwrite: bool,
@@ -75,8 +76,8 @@ pub struct RenderArgs {
     /// opcodes and DefaultCrop ignored. With release, --demosaic, --tone and --opcodes may
     /// only name what it does (menon, release, ignore); --camera-rgb, --no-crop, --bits 16
     /// and TIFF are refused; .exr gets its linear sRGB.
-    #[arg(long, value_enum, default_value_t = IspArg::Day2night, value_name = "ISP")]
-    pub isp: IspArg,
+    #[arg(long, default_value_t = Typed::<Isp>::default(), value_parser = choice::<Isp>(), value_name = "ISP")]
+    pub isp: Typed<Isp>,
 }
 
 enum Format {
@@ -115,7 +116,7 @@ fn neutral_and_exr(
         .map(parse_neutral)
         .transpose()
         .map_err(usage)?;
-    let compression = args.exr_compression;
+    let compression = args.exr_compression.value;
     let zip_level = parse_zip_level(args.exr_zip_level)?;
     Ok((neutral, compression, zip_level))
 }
@@ -149,10 +150,10 @@ fn output_format(args: &RenderArgs) -> Result<(Format, bool), super::Failure> {
 
 /// Run `day2night render`.
 pub fn run(args: RenderArgs) -> CmdResult {
-    if args.isp == IspArg::Release {
+    if args.isp.value == Isp::Release {
         return run_release(&args);
     }
-    let (demosaic, tone, opcodes) = (args.demosaic, args.tone, args.opcodes);
+    let (demosaic, tone, opcodes) = (args.demosaic.value, args.tone.value, args.opcodes.value);
     let (neutral, compression, zip_level) = neutral_and_exr(&args)?;
     let (format, sixteen) = output_format(&args)?;
     let (policy, img) = policy_and_input(&args)?;
@@ -256,10 +257,11 @@ pub fn run(args: RenderArgs) -> CmdResult {
 /// The flags `--isp release` fixes, with the one value each may name: a contradiction is a
 /// usage error naming the flag.
 fn release_conflicts(args: &RenderArgs) -> Option<String> {
+    // as typed: `--demosaic malvar` is not the default's spelling
     let given = [
-        ("demosaic", args.demosaic.name()),
-        ("tone", args.tone.name()),
-        ("opcodes", args.opcodes.name()),
+        ("demosaic", args.demosaic.text.as_str()),
+        ("tone", args.tone.text.as_str()),
+        ("opcodes", args.opcodes.text.as_str()),
     ];
     if let Some(c) = day2night::isp::release::conflicts(given) {
         let (flag, value, own) = (c.option, c.value, c.own);

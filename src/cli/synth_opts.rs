@@ -9,7 +9,7 @@ use clap::error::ErrorKind;
 use clap::{value_parser, Arg, ArgAction, ArgMatches, Command};
 use day2night::synth::config::JobConfig;
 use day2night::synth::job::SynthJob;
-use day2night::synth::options::{Choice, Draft, Kind, OptionDef, Spelling, Value, Width, OPTIONS};
+use day2night::synth::options::{Draft, Kind, Name, OptionDef, Spelling, Value, Width, OPTIONS};
 use std::ffi::OsStr;
 use std::path::{Path, PathBuf};
 
@@ -51,12 +51,12 @@ fn arg(d: &'static OptionDef) -> Arg {
 /// parameter (`truncated:K`) followed by one, which the option's setter parses.
 #[derive(Clone)]
 struct ChoiceParser {
-    choices: &'static [Choice],
+    choices: &'static [Name],
     names: PossibleValuesParser,
 }
 
 impl ChoiceParser {
-    fn new(choices: &'static [Choice]) -> ChoiceParser {
+    fn new(choices: &'static [Name]) -> ChoiceParser {
         let names = choices.iter().map(|c| {
             PossibleValue::new(c.shown())
                 .help(c.help)

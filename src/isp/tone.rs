@@ -4,8 +4,7 @@
 //! the release uses).
 
 use crate::color::srgb;
-use crate::error::{Error, Result};
-use std::str::FromStr;
+use crate::error::Error;
 
 /// How linear values become display values.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize)]
@@ -20,24 +19,15 @@ pub enum DisplayTone {
     Release,
 }
 
-impl FromStr for DisplayTone {
-    type Err = Error;
-    fn from_str(s: &str) -> Result<DisplayTone> {
-        match s.to_ascii_lowercase().as_str() {
-            "srgb" => Ok(DisplayTone::Srgb),
-            "gamma22" | "gamma2.2" | "gamma" => Ok(DisplayTone::Gamma22),
-            "release" => Ok(DisplayTone::Release),
-            _ => Err(Error::invalid(format!(
-                "unknown tone {s:?} (srgb, gamma22, release)"
-            ))),
-        }
-    }
-}
-
-impl std::fmt::Display for DisplayTone {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(self.name())
-    }
+crate::choices! {
+    DisplayTone, ignore_case: true,
+    unknown: |s| Error::invalid(format!(
+        "unknown tone {s:?} ({})",
+        crate::choice::listed::<DisplayTone>(", ", ", ")
+    )),
+    Srgb => "srgb": "The sRGB OETF",
+    Gamma22 => "gamma22" | "gamma2.2" | "gamma": "x^(1/2.2)",
+    Release => "release": "The release's targets: gamma 2.2, then smoothstep",
 }
 
 /// The smoothstep tone curve of the release, on [0, 1].
@@ -47,15 +37,6 @@ pub fn smoothstep(x: f32) -> f32 {
 }
 
 impl DisplayTone {
-    /// The name `--tone` takes (`srgb`, `gamma22`, `release`).
-    pub fn name(self) -> &'static str {
-        match self {
-            DisplayTone::Srgb => "srgb",
-            DisplayTone::Gamma22 => "gamma22",
-            DisplayTone::Release => "release",
-        }
-    }
-
     /// Display value in [0, 1] of a linear value (clamped to [0, 1] first; NaN -> 0).
     #[inline]
     pub fn encode(self, x: f32) -> f32 {

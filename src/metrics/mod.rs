@@ -30,30 +30,16 @@ pub enum NonFinite {
 impl NonFinite {
     /// Both policies.
     pub const ALL: [NonFinite; 2] = [NonFinite::Error, NonFinite::Zero];
-    /// The name `eval --nonfinite` takes.
-    pub fn name(self) -> &'static str {
-        match self {
-            NonFinite::Error => "error",
-            NonFinite::Zero => "zero",
-        }
-    }
 }
 
-impl std::fmt::Display for NonFinite {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(self.name())
-    }
-}
-
-impl std::str::FromStr for NonFinite {
-    type Err = Error;
-    fn from_str(s: &str) -> Result<NonFinite> {
-        let l = s.to_ascii_lowercase();
-        NonFinite::ALL
-            .into_iter()
-            .find(|m| m.name() == l)
-            .ok_or_else(|| Error::invalid(format!("nonfinite {s:?}: use error or zero")))
-    }
+crate::choices! {
+    NonFinite, ignore_case: true,
+    unknown: |s| Error::invalid(format!(
+        "nonfinite {s:?}: use {}",
+        crate::choice::listed::<NonFinite>(", ", " or ")
+    )),
+    Error => "error": "Refuse, naming the file and the count",
+    Zero => "zero": "Replace them by 0, with a warning",
 }
 
 /// Error unless `a` and `b` are valid images of the same size.

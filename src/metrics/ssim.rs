@@ -26,32 +26,16 @@ pub enum SsimWindow {
 impl SsimWindow {
     /// Both windows.
     pub const ALL: [SsimWindow; 2] = [SsimWindow::Uniform7, SsimWindow::Gaussian];
-    /// The name `eval --ssim-window` and Python's `ssim(window=...)` take.
-    pub fn name(self) -> &'static str {
-        match self {
-            SsimWindow::Uniform7 => "uniform",
-            SsimWindow::Gaussian => "gaussian",
-        }
-    }
 }
 
-impl std::fmt::Display for SsimWindow {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(self.name())
-    }
-}
-
-impl std::str::FromStr for SsimWindow {
-    type Err = crate::Error;
-    fn from_str(s: &str) -> crate::Result<SsimWindow> {
-        let l = s.to_ascii_lowercase();
-        SsimWindow::ALL
-            .into_iter()
-            .find(|w| w.name() == l)
-            .ok_or_else(|| {
-                crate::Error::invalid(format!("SSIM window {s:?}: use uniform or gaussian"))
-            })
-    }
+crate::choices! {
+    SsimWindow, ignore_case: true,
+    unknown: |s| Error::invalid(format!(
+        "SSIM window {s:?}: use {}",
+        crate::choice::listed::<SsimWindow>(", ", " or ")
+    )),
+    Uniform7 => "uniform": "7x7 uniform window, sample covariance (scikit-image)",
+    Gaussian => "gaussian": "11x11 Gaussian, sigma 1.5 (Wang et al. 2004)",
 }
 
 /// SSIM parameters.

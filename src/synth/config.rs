@@ -6,15 +6,12 @@
 
 use super::dictionaries;
 use super::job::{SynthJob, Target};
-use super::{
-    Calibration, Covariance, IlluminantChoice, MaskEval, Mode, RelightFormula, SynthOptions,
-};
+use super::{Calibration, Covariance, IlluminantChoice, Mode, RelightFormula, SynthOptions};
 use crate::dng::write::Compression;
 use crate::encode::exr::ExrOptions;
 use crate::error::{Error, Result};
 use crate::noise::NoiseModel;
 use std::path::PathBuf;
-use std::str::FromStr;
 
 /// Everything that makes a [`SynthJob`], with calibration as file paths.
 #[derive(Debug, Clone, PartialEq)]
@@ -135,84 +132,58 @@ pub fn parse_neutral(s: &str) -> Result<[f64; 3]> {
     }
 }
 
-impl FromStr for MaskEval {
-    type Err = Error;
-    /// `separable`, `exact`, `truncated:K` (K > 0 sigmas) or `release`.
-    fn from_str(s: &str) -> Result<MaskEval> {
-        match s {
-            "separable" => Ok(MaskEval::Separable),
-            "exact" => Ok(MaskEval::Exact),
-            "release" => Ok(MaskEval::Release),
-            _ => match s
-                .strip_prefix("truncated:")
-                .and_then(|k| k.parse::<f64>().ok())
-            {
-                Some(k) if k > 0.0 && k.is_finite() => Ok(MaskEval::Truncated { k }),
-                _ => Err(Error::invalid(format!(
-                    "{:?} (use separable, exact, truncated:K or release)",
-                    s
-                ))),
-            },
-        }
-    }
+/// The presets of `--compat` (docs/synthesis.md, "Release compatibility").
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Preset {
+    /// The authors' released code where it is deterministic.
+    Release,
 }
 
-impl FromStr for Mode {
-    type Err = Error;
-    /// `local`, `global`, `dimmed` or `day`.
-    fn from_str(s: &str) -> Result<Mode> {
-        Ok(match s {
-            "local" => Mode::Local,
-            "global" => Mode::Global,
-            "dimmed" => Mode::Dimmed,
-            "day" => Mode::Day,
-            _ => {
-                return Err(Error::invalid(format!(
-                    "mode {:?} (use local, global, dimmed or day)",
-                    s
-                )))
-            }
-        })
-    }
+crate::choices! {
+    Preset, ignore_case: false,
+    unknown: |s| Error::invalid(format!(
+        "preset {s:?} (use {})",
+        crate::choice::listed::<Preset>(", ", " or ")
+    )),
+    Release => "release": "The authors' released code where it is deterministic",
 }
 
-impl FromStr for RelightFormula {
-    type Err = Error;
-    /// `release` or `paper`.
-    fn from_str(s: &str) -> Result<RelightFormula> {
-        Ok(match s {
-            "release" => RelightFormula::Release,
-            "paper" => RelightFormula::Paper,
-            _ => {
-                return Err(Error::invalid(format!(
-                    "relight formula {:?} (use release or paper)",
-                    s
-                )))
-            }
-        })
-    }
+crate::choices! {
+    Mode, ignore_case: false,
+    unknown: |s| Error::invalid(format!(
+        "mode {s:?} (use {})",
+        crate::choice::listed::<Mode>(", ", " or ")
+    )),
+    Local => "local": "Several local lights (the paper's method)",
+    Global => "global": "One night illuminant",
+    Dimmed => "dimmed": "Dimmed day image (baseline)",
+    Day => "day": "The day image itself (baseline)",
 }
 
-impl FromStr for Covariance {
-    type Err = Error;
-    /// `unbiased` or `ml`.
-    fn from_str(s: &str) -> Result<Covariance> {
-        Ok(match s {
-            "unbiased" => Covariance::Unbiased,
-            "ml" => Covariance::MaximumLikelihood,
-            _ => {
-                return Err(Error::invalid(format!(
-                    "covariance {:?} (use unbiased or ml)",
-                    s
-                )))
-            }
-        })
-    }
+crate::choices! {
+    RelightFormula, ignore_case: false,
+    unknown: |s| Error::invalid(format!(
+        "relight formula {s:?} (use {})",
+        crate::choice::listed::<RelightFormula>(", ", " or ")
+    )),
+    Release => "release": "The authors' released code",
+    Paper => "paper": "The paper's equation",
+}
+
+crate::choices! {
+    Covariance, ignore_case: false,
+    unknown: |s| Error::invalid(format!(
+        "covariance {s:?} (use {})",
+        crate::choice::listed::<Covariance>(", ", " or ")
+    )),
+    Unbiased => "unbiased": "1/(M-1) (released code)",
+    MaximumLikelihood => "ml": "1/M (the paper's equation 2)",
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::synth::MaskEval;
 
     #[test]
     fn parses() {

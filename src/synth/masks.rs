@@ -11,6 +11,8 @@
 //! release (the authors' sampled, max-normalized and bilinearly resized kernel:
 //! [`release_resized`]).
 
+use crate::choice::Name;
+use crate::error::{Error, Result};
 use serde::{Deserialize, Serialize};
 
 /// Floor of release-style masks inside their window.
@@ -70,10 +72,55 @@ pub enum MaskEval {
 }
 
 impl MaskEval {
+    /// The names `--mask-eval` takes (`truncated` with its radius, `truncated:K`): the
+    /// synthesis table's choices, and what [`std::str::FromStr`] reads.
+    pub const NAMES: &'static [Name] = &[
+        Name::new(
+            "separable",
+            "Each light's row and column factors (f32): the fastest",
+        ),
+        Name::new("exact", "The 2-D exponential per pixel in f64 (reference)"),
+        Name {
+            param: Some("truncated:K"),
+            ..Name::new("truncated", "As exact, masks zeroed beyond K sigmas")
+        },
+        Name::new("release", "The authors' sampled kernel resized bilinearly"),
+    ];
+    /// The value of each of [`MaskEval::NAMES`] (None: the name takes a parameter).
+    const PLAIN: [Option<MaskEval>; 4] = [
+        Some(MaskEval::Separable),
+        Some(MaskEval::Exact),
+        None,
+        Some(MaskEval::Release),
+    ];
+
     fn k(&self) -> Option<f64> {
         match self {
             MaskEval::Truncated { k } => Some(*k),
             _ => None,
+        }
+    }
+}
+
+impl std::str::FromStr for MaskEval {
+    type Err = Error;
+    /// `separable`, `exact`, `truncated:K` (K > 0 sigmas) or `release`.
+    fn from_str(s: &str) -> Result<MaskEval> {
+        let names = MaskEval::NAMES.iter().zip(MaskEval::PLAIN);
+        let mut truncated = None;
+        for (n, v) in names {
+            match v {
+                Some(v) if n.accepts(s) => return Ok(v),
+                None if n.accepts(s) => truncated = s.split_once(':').map(|(_, k)| k),
+                _ => {}
+            }
+        }
+        match truncated.and_then(|k| k.parse::<f64>().ok()) {
+            Some(k) if k > 0.0 && k.is_finite() => Ok(MaskEval::Truncated { k }),
+            _ => Err(Error::invalid(format!(
+                "{s:?} (use {})",
+                crate::choice::list(MaskEval::NAMES, ", ", " or ")
+            ))),
         }
     }
 }

@@ -6,7 +6,6 @@ use crate::dng::write::Compression;
 use crate::error::{Error, Result};
 use crate::output::OutputPolicy;
 use std::path::{Path, PathBuf};
-use std::str::FromStr;
 
 /// Which targets to render from the clean night raw.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -23,15 +22,6 @@ pub enum Target {
 }
 
 impl Target {
-    /// Command-line and sidecar name: `exr`, `png`, `both` or `none`.
-    pub fn name(self) -> &'static str {
-        match self {
-            Target::Exr => "exr",
-            Target::Png => "png",
-            Target::Both => "both",
-            Target::None => "none",
-        }
-    }
     /// Whether an EXR target is written.
     pub fn exr(self) -> bool {
         matches!(self, Target::Exr | Target::Both)
@@ -42,39 +32,21 @@ impl Target {
     }
 }
 
-impl FromStr for Target {
-    type Err = Error;
-    fn from_str(s: &str) -> Result<Target> {
-        Ok(match s {
-            "exr" => Target::Exr,
-            "png" => Target::Png,
-            "both" => Target::Both,
-            "none" => Target::None,
-            _ => return Err(Error::malformed(format!("sidecar target {:?}", s))),
-        })
-    }
+crate::choices! {
+    Target, ignore_case: false,
+    unknown: |s| Error::malformed(format!(
+        "sidecar target {s:?} (use {})",
+        crate::choice::listed::<Target>(", ", " or ")
+    )),
+    Exr => "exr": "Linear EXR",
+    Png => "png": "sRGB PNG",
+    Both => "both": "Both",
+    None => "none": "None",
 }
 
-/// Sidecar name of a DNG compression: `none` or `ljpeg`.
+/// Sidecar name of a DNG compression: `none` or `ljpeg` (its [`Compression::name`]).
 pub fn compression_name(c: Compression) -> &'static str {
-    match c {
-        Compression::None => "none",
-        Compression::Ljpeg => "ljpeg",
-    }
-}
-
-impl FromStr for Compression {
-    type Err = Error;
-    /// The compression [`compression_name`] names.
-    fn from_str(s: &str) -> Result<Compression> {
-        let all = [Compression::None, Compression::Ljpeg];
-        all.into_iter()
-            .find(|c| compression_name(*c) == s)
-            .ok_or_else(|| {
-                let names = all.map(compression_name);
-                Error::invalid(format!("{s:?} (use {})", names.join(" or ")))
-            })
-    }
+    c.name()
 }
 
 /// One output of a variant.

@@ -170,6 +170,36 @@ fn mismatched_bursts_are_clear_errors() {
     assert_eq!(std::fs::read(&out).unwrap(), b"x");
 }
 
+/// The same frame given twice (as the same path, or another path to the same file) is bad
+/// usage, as Python's `merge` refuses it: one line naming the file, exit 2, nothing written.
+#[test]
+fn a_frame_given_twice_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let b = burst(
+        dir.path(),
+        "b",
+        2,
+        (32, 32),
+        (64.0, 1023.0),
+        (1e-3, 1e-5),
+        50,
+        1,
+    );
+    let out = dir.path().join("m.dng");
+    let name = b[0].file_name().unwrap().to_os_string();
+    let again = dir.path().join(".").join(&name);
+    for twice in [&b[0], &again] {
+        let (code, _, err) = run_os(&args!["merge", &b[0], &b[1], twice, "-o", &out]);
+        assert_eq!(code, 2, "{err}");
+        assert_eq!(err.trim_end().lines().count(), 1, "{err}");
+        assert!(
+            err.contains(&*name.to_string_lossy()) && err.contains("merge got this frame twice"),
+            "{err}"
+        );
+        assert!(!out.exists());
+    }
+}
+
 /// Real data: two copies of the shared Canon capture (14-bit in 16, ActiveArea, black 2056,
 /// white 15000, ISO unknown) merge to exact sums (K = 2) that rawpy and the DNG SDK read as
 /// the same image; brightness and a gray-card measurement run on it.

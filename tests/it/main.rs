@@ -16,6 +16,7 @@ mod calibrate_noise;
 mod calibrate_synth;
 mod checks_burst;
 mod checks_inputs;
+mod choices;
 mod cli_dialect;
 mod cli_docs;
 mod cli_options;

@@ -53,6 +53,16 @@ pub enum Compression {
     Ljpeg,
 }
 
+crate::choices! {
+    Compression, ignore_case: false,
+    unknown: |s| Error::invalid(format!(
+        "{s:?} (use {})",
+        crate::choice::listed::<Compression>(", ", " or ")
+    )),
+    None => "none": "Uncompressed",
+    Ljpeg => "ljpeg": "Lossless JPEG",
+}
+
 /// Where the raw image goes.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub enum RawIfd {

@@ -3,7 +3,6 @@
 
 use crate::error::{Error, Result};
 use exr::prelude::*;
-use std::str::FromStr;
 
 /// EXR compression choices.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize)]
@@ -40,19 +39,6 @@ impl ExrCompression {
         ExrCompression::B44,
         ExrCompression::B44a,
     ];
-    /// Command-line name.
-    pub fn name(&self) -> &'static str {
-        match self {
-            ExrCompression::None => "none",
-            ExrCompression::Rle => "rle",
-            ExrCompression::Zips => "zips",
-            ExrCompression::Zip => "zip",
-            ExrCompression::Piz => "piz",
-            ExrCompression::Pxr24 => "pxr24",
-            ExrCompression::B44 => "b44",
-            ExrCompression::B44a => "b44a",
-        }
-    }
     pub(super) fn to_exr(self) -> Compression {
         match self {
             ExrCompression::None => Compression::Uncompressed,
@@ -67,31 +53,20 @@ impl ExrCompression {
     }
 }
 
-impl std::fmt::Display for ExrCompression {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(self.name())
-    }
-}
-
-impl FromStr for ExrCompression {
-    type Err = Error;
-    fn from_str(s: &str) -> Result<ExrCompression> {
-        let l = s.to_ascii_lowercase();
-        ExrCompression::ALL
-            .into_iter()
-            .find(|c| c.name() == l)
-            .or(match l.as_str() {
-                "zip16" => Some(ExrCompression::Zip),
-                "zip1" => Some(ExrCompression::Zips),
-                "uncompressed" => Some(ExrCompression::None),
-                _ => None,
-            })
-            .ok_or_else(|| {
-                Error::invalid(format!(
-                    "unknown EXR compression {s:?} (none, rle, zips, zip, piz, pxr24, b44, b44a)"
-                ))
-            })
-    }
+crate::choices! {
+    ExrCompression, ignore_case: true,
+    unknown: |s| Error::invalid(format!(
+        "unknown EXR compression {s:?} ({})",
+        crate::choice::listed::<ExrCompression>(", ", ", ")
+    )),
+    Zip => "zip" | "zip16": "Lossless, zlib in 16-row blocks: the fastest",
+    Piz => "piz": "Lossless wavelet: slower; larger on synth targets, smaller on noisy images",
+    Zips => "zips" | "zip1": "Lossless, zlib row by row",
+    Rle => "rle": "Lossless run-length",
+    None => "none" | "uncompressed": "Uncompressed",
+    Pxr24 => "pxr24": "Lossy for half",
+    B44 => "b44": "Lossy for half: 4x4 blocks",
+    B44a => "b44a": "Lossy for half: b44, flat blocks smaller",
 }
 
 /// Options of [`write_exr`](super::write_exr).

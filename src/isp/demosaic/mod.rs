@@ -15,7 +15,6 @@ use super::rgb::RgbImage;
 use crate::error::{Error, Result};
 use crate::raw::Bayer;
 use rayon::prelude::*;
-use std::str::FromStr;
 
 /// Demosaicing method.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default, serde::Serialize)]
@@ -33,34 +32,17 @@ pub enum Demosaic {
 impl Demosaic {
     /// All methods.
     pub const ALL: [Demosaic; 3] = [Demosaic::Bilinear, Demosaic::Mhc, Demosaic::Menon];
-    /// Lower-case name as used on the command line.
-    pub fn name(&self) -> &'static str {
-        match self {
-            Demosaic::Bilinear => "bilinear",
-            Demosaic::Mhc => "mhc",
-            Demosaic::Menon => "menon",
-        }
-    }
 }
 
-impl std::fmt::Display for Demosaic {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(self.name())
-    }
-}
-
-impl FromStr for Demosaic {
-    type Err = Error;
-    fn from_str(s: &str) -> Result<Demosaic> {
-        match s.to_ascii_lowercase().as_str() {
-            "bilinear" => Ok(Demosaic::Bilinear),
-            "mhc" | "malvar" => Ok(Demosaic::Mhc),
-            "menon" | "ddfapd" => Ok(Demosaic::Menon),
-            _ => Err(Error::invalid(format!(
-                "unknown demosaic method {s:?} (bilinear, mhc, menon)"
-            ))),
-        }
-    }
+crate::choices! {
+    Demosaic, ignore_case: true,
+    unknown: |s| Error::invalid(format!(
+        "unknown demosaic method {s:?} ({})",
+        crate::choice::listed::<Demosaic>(", ", ", ")
+    )),
+    Bilinear => "bilinear": "Bilinear interpolation of each colour plane (fast, soft)",
+    Mhc => "mhc" | "malvar": "Malvar-He-Cutler 2004 gradient-corrected interpolation",
+    Menon => "menon" | "ddfapd": "Menon et al. 2007 directional filtering (DDFAPD)",
 }
 
 /// Demosaic a `width x height` CFA plane (row-major, Bayer pattern `bayer` at (0, 0)) into

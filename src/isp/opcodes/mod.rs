@@ -33,7 +33,6 @@ use crate::raw::meta::RawMeta;
 use crate::raw::RawImage;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
-use std::str::FromStr;
 
 /// Whether renders apply the file's opcode lists.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default, Serialize, Deserialize)]
@@ -49,36 +48,20 @@ pub enum OpcodeMode {
 impl OpcodeMode {
     /// Both modes.
     pub const ALL: [OpcodeMode; 2] = [OpcodeMode::Apply, OpcodeMode::Ignore];
-    /// `apply` or `ignore` (the one spelling: the options table reads it).
-    pub const fn name(self) -> &'static str {
-        match self {
-            OpcodeMode::Apply => "apply",
-            OpcodeMode::Ignore => "ignore",
-        }
-    }
     /// True for [`OpcodeMode::Apply`] (serde's `skip_serializing_if`).
     pub fn is_apply(&self) -> bool {
         *self == OpcodeMode::Apply
     }
 }
 
-impl std::fmt::Display for OpcodeMode {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(self.name())
-    }
-}
-
-impl FromStr for OpcodeMode {
-    type Err = Error;
-    fn from_str(s: &str) -> Result<OpcodeMode> {
-        match s.to_ascii_lowercase().as_str() {
-            "apply" => Ok(OpcodeMode::Apply),
-            "ignore" => Ok(OpcodeMode::Ignore),
-            _ => Err(Error::invalid(format!(
-                "opcodes {s:?} (use apply or ignore)"
-            ))),
-        }
-    }
+crate::choices! {
+    OpcodeMode, ignore_case: true,
+    unknown: |s| Error::invalid(format!(
+        "opcodes {s:?} (use {})",
+        crate::choice::listed::<OpcodeMode>(", ", " or ")
+    )),
+    Apply => "apply": "Apply them",
+    Ignore => "ignore": "Ignore them (the authors' data preparation)",
 }
 
 /// One opcode as reported: its list, name and id, and why it was skipped (skipped ones).

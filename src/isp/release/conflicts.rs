@@ -4,9 +4,31 @@
 //! the trainer's targets (`render_target(isp="release")`), each naming the option its own
 //! way.
 
+use crate::error::Error;
 use crate::isp::demosaic::Demosaic;
 use crate::isp::opcodes::OpcodeMode;
 use crate::isp::tone::DisplayTone;
+
+/// Which ISP renders (`render --isp`, `real-pairs --isp`, Python's `isp=`): day2night's
+/// own or the release's.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Isp {
+    /// day2night's ISP (docs/isp.md).
+    #[default]
+    Day2night,
+    /// The authors' release's target render reproduced (docs/isp.md).
+    Release,
+}
+
+crate::choices! {
+    Isp, ignore_case: false,
+    unknown: |s| Error::invalid(format!(
+        "isp {s:?}: use {}",
+        crate::choice::listed::<Isp>(", ", " or ")
+    )),
+    Day2night => "day2night": "day2night's ISP",
+    Release => "release": "The authors' release's target render reproduced",
+}
 
 /// An option the release fixes: its name (`demosaic`, `tone`, `opcodes`), its default
 /// and the release's own value.

@@ -28,7 +28,7 @@ pub mod menon;
 pub mod meta;
 pub mod mosaic;
 
-pub use conflicts::{conflicts, Conflict};
+pub use conflicts::{conflicts, Conflict, Isp};
 pub use finish::{Rgb, Rgb64};
 pub use meta::ReleaseMeta;
 

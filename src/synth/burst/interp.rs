@@ -20,24 +20,6 @@ impl Interp {
     /// All interpolants.
     pub const ALL: [Interp; 3] = [Interp::Bilinear, Interp::CatmullRom, Interp::Lanczos3];
 
-    /// Command-line name (the one spelling: the options table and the sidecar read it).
-    pub const fn name(self) -> &'static str {
-        match self {
-            Interp::Bilinear => "bilinear",
-            Interp::CatmullRom => "catmull-rom",
-            Interp::Lanczos3 => "lanczos3",
-        }
-    }
-
-    /// Other spellings accepted for the same interpolant.
-    pub const fn aliases(self) -> &'static [&'static str] {
-        match self {
-            Interp::Bilinear => &[],
-            Interp::CatmullRom => &["cubic"],
-            Interp::Lanczos3 => &["lanczos"],
-        }
-    }
-
     /// Taps on each side of the position: the kernel reads samples
     /// `floor(x) - radius + 1 ..= floor(x) + radius`.
     pub fn radius(self) -> usize {
@@ -81,24 +63,15 @@ impl Interp {
     }
 }
 
-impl std::fmt::Display for Interp {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(self.name())
-    }
-}
-
-impl std::str::FromStr for Interp {
-    type Err = crate::error::Error;
-    fn from_str(s: &str) -> crate::error::Result<Interp> {
-        Interp::ALL
-            .into_iter()
-            .find(|k| k.name() == s || k.aliases().contains(&s))
-            .ok_or_else(|| {
-                crate::error::Error::invalid(format!(
-                    "interpolant {s:?} (use bilinear, catmull-rom or lanczos3)"
-                ))
-            })
-    }
+crate::choices! {
+    Interp, ignore_case: false,
+    unknown: |s| crate::error::Error::invalid(format!(
+        "interpolant {s:?} (use {})",
+        crate::choice::listed::<Interp>(", ", " or ")
+    )),
+    CatmullRom => "catmull-rom" | "cubic": "Catmull-Rom cubic (4 taps per axis): interpolating, sharp",
+    Lanczos3 => "lanczos3" | "lanczos": "Lanczos, 3 lobes (6 taps per axis)",
+    Bilinear => "bilinear": "Bilinear (2 taps per axis): blurs",
 }
 
 fn sinc(x: f64) -> f64 {
@@ -148,9 +121,10 @@ mod tests {
 
     #[test]
     fn every_name_and_alias_parses_back() {
-        for k in Interp::ALL {
-            for s in std::iter::once(k.name()).chain(k.aliases().iter().copied()) {
-                assert_eq!(s.parse::<Interp>().unwrap(), k, "{s}");
+        use crate::choice::Choice;
+        for (n, k) in Interp::NAMES.iter().zip(Interp::VALUES) {
+            for s in std::iter::once(n.name).chain(n.aliases.iter().copied()) {
+                assert_eq!(s.parse::<Interp>().unwrap(), *k, "{s}");
             }
         }
     }

@@ -32,15 +32,14 @@ pub enum Motion {
     Shake,
 }
 
-impl std::str::FromStr for Motion {
-    type Err = Error;
-    fn from_str(s: &str) -> Result<Motion> {
-        match s {
-            "none" => Ok(Motion::None),
-            "shake" => Ok(Motion::Shake),
-            _ => Err(Error::invalid(format!("motion {s:?} (use none or shake)"))),
-        }
-    }
+crate::choices! {
+    Motion, ignore_case: false,
+    unknown: |s| Error::invalid(format!(
+        "motion {s:?} (use {})",
+        crate::choice::listed::<Motion>(", ", " or ")
+    )),
+    None => "none": "A tripod: the frames differ by their noise only",
+    Shake => "shake": "A hand-held camera: translation and roll as a random walk",
 }
 
 /// The hand-held walk's parameters (`--shake-step`, `--shake-roll`; docs/synthesis.md,

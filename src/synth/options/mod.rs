@@ -25,6 +25,7 @@ pub use table::{CONSTANTS, MAX_FRAMES, MAX_ROLL_DEG, MAX_STEP_PX, OPTIONS};
 use super::config::JobConfig;
 use super::SynthOptions;
 use crate::bounds::short;
+pub use crate::choice::Name;
 use crate::error::{Error, Result};
 use crate::isp::opcodes::OpcodeMode;
 use std::ops::Bound;
@@ -74,7 +75,7 @@ pub enum Kind {
     /// A file path (some options also take a name, e.g. `paper`).
     Path,
     /// One of a few names (a name may take a parameter, `truncated:K`, or have aliases).
-    Choice(&'static [Choice]),
+    Choice(&'static [Name]),
 }
 
 /// The values of a [`Kind::Float`] option: finite numbers within two bounds, each included,
@@ -225,63 +226,6 @@ impl Width {
             Width::U8 => u64::from(u8::MAX),
             Width::U32 => u64::from(u32::MAX),
             Width::U64 => u64::MAX,
-        }
-    }
-}
-
-/// One value of a [`Kind::Choice`] option.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct Choice {
-    /// The value as typed.
-    pub name: &'static str,
-    /// What it means (one line).
-    pub help: &'static str,
-    /// Other spellings of the same value (accepted, not listed).
-    pub aliases: &'static [&'static str],
-    /// The value as shown when the name takes a parameter, `name:PARAM` (`truncated:K`):
-    /// `name:` and any text are accepted, and the setter parses the text. None: the name
-    /// alone.
-    pub param: Option<&'static str>,
-}
-
-impl Choice {
-    /// A plain name: no alias, no parameter.
-    pub const fn new(name: &'static str, help: &'static str) -> Choice {
-        Choice {
-            name,
-            help,
-            aliases: &[],
-            param: None,
-        }
-    }
-
-    /// A name with its aliases (an enum's spellings), no parameter.
-    pub const fn of(
-        name: &'static str,
-        aliases: &'static [&'static str],
-        help: &'static str,
-    ) -> Choice {
-        Choice {
-            name,
-            help,
-            aliases,
-            param: None,
-        }
-    }
-
-    /// The value as a list of choices shows it (`truncated:K`).
-    pub fn shown(&self) -> &'static str {
-        self.param.unwrap_or(self.name)
-    }
-
-    /// Whether `text` spells this value: its name, an alias, or `name:...` when it takes a
-    /// parameter (the setter checks the parameter).
-    pub fn accepts(&self, text: &str) -> bool {
-        match self.param {
-            Some(_) => text
-                .strip_prefix(self.name)
-                .is_some_and(|rest| rest.starts_with(':')),
-            None => self.name == text || self.aliases.contains(&text),
         }
     }
 }
@@ -622,7 +566,7 @@ impl Draft {
                 }
             }
             (Kind::Choice(choices), Value::Text(t)) if !choices.iter().any(|c| c.accepts(t)) => {
-                let names: Vec<&str> = choices.iter().map(Choice::shown).collect();
+                let names: Vec<&str> = choices.iter().map(Name::shown).collect();
                 let list = match names.split_last() {
                     Some((last, [])) => last.to_string(),
                     Some((last, rest)) => format!("{} or {last}", rest.join(", ")),

@@ -2,13 +2,16 @@
 //! module). A new option is one entry here (docs/architecture.md, "Adding a synthesis
 //! option").
 
-use super::{Choice, Constant, Kind, OptDefault, OptionDef, Python, Range, Value, Width};
+use super::{Constant, Kind, OptDefault, OptionDef, Python, Range, Value, Width};
 use crate::bounds::{EXR_ZIP_LEVEL_RANGE, MAX_LIGHTS, SEED_RANGE};
+use crate::choice::Choice;
+use crate::dng::write::Compression;
 use crate::encode::exr::ExrCompression;
 use crate::error::{Error, Result};
 use crate::isp::opcodes::OpcodeMode;
 use crate::synth::burst::{Interp, Motion};
-use crate::synth::config::{parse_isos, parse_neutral};
+use crate::synth::config::{parse_isos, parse_neutral, Preset};
+use crate::synth::outputs::Target;
 use crate::synth::{Covariance, MaskEval, Mode, RelightFormula};
 use std::path::PathBuf;
 
@@ -68,13 +71,8 @@ carries its seed)",
     OptionDef {
         name: "mode",
         value_name: "MODE",
-        kind: Kind::Choice(&[
-            Choice::new("local", "Several local lights (the paper's method)"),
-            Choice::new("global", "One night illuminant"),
-            Choice::new("dimmed", "Dimmed day image (baseline)"),
-            Choice::new("day", "The day image itself (baseline)"),
-        ]),
-        default: OptDefault::Value("local"),
+        kind: Kind::Choice(Mode::NAMES),
+        default: OptDefault::Value(Mode::Local.name()),
         help: "Relighting mode",
         python: Python::Parameter,
         python_alias: None,
@@ -88,11 +86,8 @@ carries its seed)",
     OptionDef {
         name: "relight-formula",
         value_name: "RELIGHT_FORMULA",
-        kind: Kind::Choice(&[
-            Choice::new("release", "The authors' released code"),
-            Choice::new("paper", "The paper's equation"),
-        ]),
-        default: OptDefault::Value("release"),
+        kind: Kind::Choice(RelightFormula::NAMES),
+        default: OptDefault::Value(RelightFormula::Release.name()),
         help: "Local relighting formula",
         python: Python::Keyword,
         python_alias: Some("formula"),
@@ -204,11 +199,8 @@ RGB), `cie` (CIE 015:2018 night lamps through each file's colour matrices) or a 
     OptionDef {
         name: "covariance",
         value_name: "COVARIANCE",
-        kind: Kind::Choice(&[
-            Choice::new("unbiased", "1/(M-1) (released code)"),
-            Choice::new("ml", "1/M (the paper's equation 2)"),
-        ]),
-        default: OptDefault::Value("unbiased"),
+        kind: Kind::Choice(Covariance::NAMES),
+        default: OptDefault::Value(Covariance::Unbiased.name()),
         help: "Illuminant covariance estimator",
         python: Python::Keyword,
         python_alias: None,
@@ -331,19 +323,8 @@ for a network robust to a noise calibration that is off",
     OptionDef {
         name: "mask-eval",
         value_name: "MASK_EVAL",
-        kind: Kind::Choice(&[
-            Choice::new(
-                "separable",
-                "Each light's row and column factors (f32): the fastest",
-            ),
-            Choice::new("exact", "The 2-D exponential per pixel in f64 (reference)"),
-            Choice {
-                param: Some("truncated:K"),
-                ..Choice::new("truncated", "As exact, masks zeroed beyond K sigmas")
-            },
-            Choice::new("release", "The authors' sampled kernel resized bilinearly"),
-        ]),
-        default: OptDefault::Value("separable"),
+        kind: Kind::Choice(MaskEval::NAMES),
+        default: OptDefault::Value(MaskEval::NAMES[0].name),
         help: "Mask evaluation",
         python: Python::Keyword,
         python_alias: None,
@@ -357,29 +338,8 @@ for a network robust to a noise calibration that is off",
     OptionDef {
         name: "exr-compression",
         value_name: "KIND",
-        kind: Kind::Choice(&[
-            Choice {
-                aliases: &["zip16"],
-                ..Choice::new("zip", "Lossless, zlib in 16-row blocks: the fastest")
-            },
-            Choice::new(
-                "piz",
-                "Lossless wavelet: slower; larger on synth targets, smaller on noisy images",
-            ),
-            Choice {
-                aliases: &["zip1"],
-                ..Choice::new("zips", "Lossless, zlib row by row")
-            },
-            Choice::new("rle", "Lossless run-length"),
-            Choice {
-                aliases: &["uncompressed"],
-                ..Choice::new("none", "Uncompressed")
-            },
-            Choice::new("pxr24", "Lossy for half"),
-            Choice::new("b44", "Lossy for half: 4x4 blocks"),
-            Choice::new("b44a", "Lossy for half: b44, flat blocks smaller"),
-        ]),
-        default: OptDefault::Value("zip"),
+        kind: Kind::Choice(ExrCompression::NAMES),
+        default: OptDefault::Value(ExrCompression::Zip.name()),
         help: "EXR compression. See docs/benchmarks.md",
         python: Python::Files,
         python_alias: None,
@@ -418,13 +378,7 @@ at 18x and 50x the compression time). Lossless at every level. See docs/benchmar
     OptionDef {
         name: "opcodes",
         value_name: "MODE",
-        kind: Kind::Choice(&[
-            Choice::new(OpcodeMode::Apply.name(), "Apply them"),
-            Choice::new(
-                OpcodeMode::Ignore.name(),
-                "Ignore them (the authors' data preparation)",
-            ),
-        ]),
+        kind: Kind::Choice(OpcodeMode::NAMES),
         default: OptDefault::Derived("apply; ignore under --compat release"),
         help: "DNG opcode lists of the input in the rendered targets and inputs. The night DNGs \
 keep the lists either way",
@@ -467,14 +421,8 @@ one noisy DNG per ISO, as without a burst). See docs/synthesis.md, \"Bursts\"",
     OptionDef {
         name: "motion",
         value_name: "MOTION",
-        kind: Kind::Choice(&[
-            Choice::new("none", "A tripod: the frames differ by their noise only"),
-            Choice::new(
-                "shake",
-                "A hand-held camera: translation and roll as a random walk",
-            ),
-        ]),
-        default: OptDefault::Value("shake"),
+        kind: Kind::Choice(Motion::NAMES),
+        default: OptDefault::Value(Motion::Shake.name()),
         help: "Motion between the frames of a burst",
         python: Python::Keyword,
         python_alias: None,
@@ -525,23 +473,7 @@ pixels",
     OptionDef {
         name: "warp-interp",
         value_name: "KIND",
-        kind: Kind::Choice(&[
-            Choice::of(
-                Interp::CatmullRom.name(),
-                Interp::CatmullRom.aliases(),
-                "Catmull-Rom cubic (4 taps per axis): interpolating, sharp",
-            ),
-            Choice::of(
-                Interp::Lanczos3.name(),
-                Interp::Lanczos3.aliases(),
-                "Lanczos, 3 lobes (6 taps per axis)",
-            ),
-            Choice::of(
-                Interp::Bilinear.name(),
-                Interp::Bilinear.aliases(),
-                "Bilinear (2 taps per axis): blurs",
-            ),
-        ]),
+        kind: Kind::Choice(Interp::NAMES),
         default: OptDefault::Value(Interp::CatmullRom.name()),
         help: "Interpolant of the burst warp",
         python: Python::Keyword,
@@ -556,13 +488,8 @@ pixels",
     OptionDef {
         name: "target",
         value_name: "TARGET",
-        kind: Kind::Choice(&[
-            Choice::new("exr", "Linear EXR"),
-            Choice::new("png", "sRGB PNG"),
-            Choice::new("both", "Both"),
-            Choice::new("none", "None"),
-        ]),
-        default: OptDefault::Value("exr"),
+        kind: Kind::Choice(Target::NAMES),
+        default: OptDefault::Value(Target::Exr.name()),
         help: "Targets to render from the clean night raw",
         python: Python::Files,
         python_alias: None,
@@ -592,11 +519,8 @@ pixels",
     OptionDef {
         name: "compression",
         value_name: "COMPRESSION",
-        kind: Kind::Choice(&[
-            Choice::new("none", "Uncompressed"),
-            Choice::new("ljpeg", "Lossless JPEG"),
-        ]),
-        default: OptDefault::Value("none"),
+        kind: Kind::Choice(Compression::NAMES),
+        default: OptDefault::Value(Compression::None.name()),
         help: "DNG compression",
         python: Python::Files,
         python_alias: None,
@@ -625,10 +549,7 @@ pixels",
     OptionDef {
         name: "compat",
         value_name: "PRESET",
-        kind: Kind::Choice(&[Choice::new(
-            "release",
-            "The authors' released code where it is deterministic",
-        )]),
+        kind: Kind::Choice(Preset::NAMES),
         default: OptDefault::Off,
         help: "Reproduce the authors' released code where it is deterministic: implies \
 --truncate and --mask-eval release, truncates the noisy raws too, divides by the day neutral as \
@@ -643,10 +564,7 @@ See docs/synthesis.md, \"Release compatibility\"",
             // the one preset (Draft::set checks the name), or None
             d.release = match v {
                 Value::Unset => false,
-                v => {
-                    text(&v)?;
-                    true
-                }
+                v => text(&v)?.parse::<Preset>()? == Preset::Release,
             };
             Ok(())
         },
