@@ -78,7 +78,7 @@ impl DayInput {
     /// and crop planned from this input reuses it (a fresh training crop would otherwise
     /// read the whole frame for it).
     pub fn frame_mean(&self, plan: &Plan) -> Result<f64> {
-        let key = MeanKey::of(plan);
+        let key = plan.mean_key();
         let known = |v: &Vec<(MeanKey, f64)>| v.iter().find(|(k, _)| *k == key).map(|e| e.1);
         if let Some(m) = known(&lock(&self.frame_means)) {
             return Ok(m);
@@ -96,7 +96,7 @@ impl DayInput {
     /// whole-frame mean (a brightness dictionary's target mean).
     pub fn with_frame_mean(&self, mut plan: Plan) -> Result<Plan> {
         if matches!(plan.dim, DimPlan::TargetMean { .. }) {
-            plan.frame_mean = FrameMean::new(&plan, self.frame_mean(&plan)?);
+            plan.frame_mean = FrameMean::new(plan.mean_key(), self.frame_mean(&plan)?);
         }
         Ok(plan)
     }

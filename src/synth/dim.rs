@@ -83,34 +83,37 @@ pub struct MeanKey {
 }
 
 impl MeanKey {
-    /// The key of `plan`'s clean pass.
-    pub fn of(plan: &super::plan::Plan) -> MeanKey {
+    /// The key of a clean pass with these settings (a plan's: `Plan::mean_key`).
+    pub fn new(
+        day_neutral: [f64; 3],
+        keep_negative: bool,
+        keep_highlights: bool,
+        range_per_site: bool,
+    ) -> MeanKey {
         MeanKey {
-            day_neutral: plan.day_neutral.map(f64::to_bits),
-            keep_negative: plan.keep_negative,
-            keep_highlights: plan.keep_highlights,
-            range_per_site: plan.range_per_site,
+            day_neutral: day_neutral.map(f64::to_bits),
+            keep_negative,
+            keep_highlights,
+            range_per_site,
         }
     }
 }
 
-/// A plan's memo of its image's `mean(y_w)` ([`super::plan::Plan::frame_mean`]), with the
+/// A plan's memo of its image's `mean(y_w)` (`Plan::frame_mean`), with the
 /// key it was computed under: used only while the plan's key is still the same. It takes
 /// no part in comparing plans (two plans that differ only here are equal).
 #[derive(Debug, Clone, Copy, Default)]
 pub struct FrameMean(Option<(MeanKey, f64)>);
 
 impl FrameMean {
-    /// The memo of `mean` computed for `plan`.
-    pub fn new(plan: &super::plan::Plan, mean: f64) -> FrameMean {
-        FrameMean(Some((MeanKey::of(plan), mean)))
+    /// The memo of `mean`, computed under `key`.
+    pub fn new(key: MeanKey, mean: f64) -> FrameMean {
+        FrameMean(Some((key, mean)))
     }
 
-    /// The memo, if it was computed under `plan`'s key.
-    pub fn get(&self, plan: &super::plan::Plan) -> Option<f64> {
-        self.0
-            .filter(|(k, _)| *k == MeanKey::of(plan))
-            .map(|(_, m)| m)
+    /// The memo, if it was computed under `key`.
+    pub fn get(&self, key: MeanKey) -> Option<f64> {
+        self.0.filter(|(k, _)| *k == key).map(|(_, m)| m)
     }
 }
 

@@ -480,7 +480,7 @@ fn the_frame_mean_memo_changes_no_byte() {
         .plan;
     assert!(matches!(p.dim, DimPlan::TargetMean { .. }), "{:?}", p.dim);
     let memo = day.with_frame_mean(p.clone()).unwrap();
-    let m = memo.frame_mean.get(&memo).unwrap();
+    let m = memo.frame_mean.get(memo.mean_key()).unwrap();
     assert!(m > 0.0 && m.is_finite());
     // the memo takes no part in comparing plans, and the second call reads the memo
     assert_eq!(memo, p);
@@ -510,7 +510,7 @@ fn the_frame_mean_memo_changes_no_byte() {
     );
     // a wrong mean under the plan's key is used (the memo is trusted) ...
     let mut wrong = p.clone();
-    wrong.frame_mean = FrameMean::new(&p, m * 2.0);
+    wrong.frame_mean = FrameMean::new(p.mean_key(), m * 2.0);
     let w = synthesize(&day.raw, &wrong, &req).unwrap();
     assert_ne!(
         w.report.dim_scale.to_bits(),

@@ -609,6 +609,16 @@ fn plan_noise(
 }
 
 impl Plan {
+    /// The key of this plan's clean pass for its whole-frame mean (`Plan::frame_mean`).
+    pub fn mean_key(&self) -> super::dim::MeanKey {
+        super::dim::MeanKey::new(
+            self.day_neutral,
+            self.keep_negative,
+            self.keep_highlights,
+            self.range_per_site,
+        )
+    }
+
     /// Error unless this plan fits `img` (geometry and CFA) and is internally sane.
     pub fn check_against(&self, img: &RawImage) -> Result<()> {
         if self.format != PLAN_FORMAT {

@@ -270,7 +270,7 @@ impl<'a> CleanPass<'a> {
         let s = dim_factor(&plan.dim, || {
             let m = plan
                 .frame_mean
-                .get(plan)
+                .get(plan.mean_key())
                 .unwrap_or_else(|| pass.mean_y_w(img, yw_table.as_ref()));
             mean_wb = Some(m);
             m
