@@ -174,3 +174,34 @@ def test_fresh_pair_of_a_linearized_input_reads_the_linear_night_samples(day_dng
     assert not np.array_equal(got, twice)
     from day2night.train import targets
     assert np.array_equal(y, targets.srgb8(out["target"]))
+
+
+def _collate_and_where(batch):
+    """The trainer's collate, and whether its batch was made in shared memory (run in a
+    DataLoader worker)."""
+    from day2night.train import data
+    x, y = data.collate(batch)
+    import torch
+    return x, y, torch.tensor([x.is_shared(), y.is_shared()])
+
+
+def test_a_workers_batch_is_made_in_shared_memory():
+    """In a DataLoader worker the collated batch is written straight into shared memory (as
+    torch's own default_collate does), not copied there afterwards; the values equal the
+    in-process batch's."""
+    need_torch()
+    import torch
+    from day2night.train import data
+    rng = np.random.default_rng(3)
+    xs, ys = pairs(rng, [(128, 192)])
+    ds = data.FixedPatches(xs, ys, patch=64, stride=64)
+    here = [data.collate([ds[i] for i in range(k, min(k + 4, len(ds)))])
+            for k in range(0, len(ds), 4)]
+    assert not here[0][0].is_shared()
+    loader = torch.utils.data.DataLoader(ds, batch_size=4, num_workers=1,
+                                         collate_fn=_collate_and_where)
+    got = list(loader)
+    assert len(got) == len(here)
+    for (x, y, shared), (hx, hy) in zip(got, here):
+        assert bool(shared.all()), "the worker's batch was not made in shared memory"
+        assert torch.equal(x, hx) and torch.equal(y, hy)

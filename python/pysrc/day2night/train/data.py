@@ -255,4 +255,18 @@ def collate(batch):
     """Stack items of either dataset into (N x 3 x p x p, N x 3 x p x p)."""
     xs = [b[0] if b[0].dim() == 4 else b[0].unsqueeze(0) for b in batch]
     ys = [b[1] if b[1].dim() == 4 else b[1].unsqueeze(0) for b in batch]
-    return torch.cat(xs), torch.cat(ys)
+    return _cat(xs), _cat(ys)
+
+
+def _cat(ts):
+    """``torch.cat(ts)``; in a DataLoader worker straight into shared memory, as torch's own
+    ``default_collate`` does, so that the batch is not copied once more to reach the main
+    process (docs/benchmarks.md, the training loader)."""
+    out = None
+    if torch.utils.data.get_worker_info() is not None:
+        try:
+            storage = ts[0]._typed_storage()._new_shared(sum(t.numel() for t in ts))
+            out = ts[0].new(storage).resize_(sum(t.shape[0] for t in ts), *ts[0].shape[1:])
+        except (AttributeError, RuntimeError):
+            out = None  # a torch without these internals: the plain copy
+    return torch.cat(ts, out=out)
