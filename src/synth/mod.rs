@@ -25,6 +25,7 @@ pub mod file_sink;
 pub mod illuminant;
 pub mod illuminant_choice;
 pub mod job;
+mod light_row;
 pub mod masks;
 pub mod neutral;
 pub mod night;

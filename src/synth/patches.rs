@@ -172,17 +172,38 @@ pub fn cut_patches<T: Copy, U: Copy + Default>(
         )));
     }
     let (gw, gh) = (width / patch, height / patch);
-    // filled in order by `extend` (no zeroed buffer written twice: the zeroing of a fresh
-    // allocation was a tenth of a fresh item's time)
-    let mut out = Vec::with_capacity(gw * gh * 3 * patch * patch);
+    let plane = patch * patch;
+    // One tile at a time: each source row of the tile is read once and its three channels
+    // written into a small channel-first scratch tile (cache-resident), which is then
+    // appended whole. The output is filled in order (no zeroed buffer written twice: the
+    // zeroing of a fresh allocation was a tenth of a fresh item's time), and reading each
+    // row once instead of once per channel took the cutting from about 17 to about 5
+    // instructions per output value (callgrind, `benches/fresh.rs`).
+    let mut out = Vec::with_capacity(gw * gh * 3 * plane);
+    let mut tile = vec![U::default(); 3 * plane];
     for k in 0..gw * gh {
         let (gy, gx) = (k / gw, k % gw);
-        for c in 0..3 {
-            for i in 0..patch {
-                let src = &img[3 * ((gy * patch + i) * width + gx * patch)..][..3 * patch];
-                out.extend(src.chunks_exact(3).map(|px| f(px[c])));
+        let (t0, rest) = tile.split_at_mut(plane);
+        let (t1, t2) = rest.split_at_mut(plane);
+        for (i, ((d0, d1), d2)) in t0
+            .chunks_exact_mut(patch)
+            .zip(t1.chunks_exact_mut(patch))
+            .zip(t2.chunks_exact_mut(patch))
+            .enumerate()
+        {
+            let src = &img[3 * ((gy * patch + i) * width + gx * patch)..][..3 * patch];
+            for (((px, a), b), c) in src
+                .chunks_exact(3)
+                .zip(d0.iter_mut())
+                .zip(d1.iter_mut())
+                .zip(d2.iter_mut())
+            {
+                *a = f(px[0]);
+                *b = f(px[1]);
+                *c = f(px[2]);
             }
         }
+        out.extend_from_slice(&tile);
     }
     Ok(out)
 }

@@ -20,11 +20,12 @@
 //! 33-39 % of samples 1 DN low).
 
 use super::dim::dim_factor;
+use super::light_row::{local_row, parity, parity2, Prepared, Scratch};
 use super::masks::{LightKind, PreparedMask};
 use super::plan::Plan;
 use super::{Mode, SynthOutput};
 use crate::error::Result;
-use crate::normalize::{Normalizer, SiteTable};
+use crate::normalize::{round_clamp, Normalizer, SiteTable};
 use crate::raw::crop::Crop;
 use crate::raw::RawImage;
 use rayon::prelude::*;
@@ -42,21 +43,6 @@ pub struct RunReport {
     /// Warnings about what the renders made (a target or network input that came out
     /// constant, [`crate::isp::flat`]).
     pub warnings: crate::diagnostics::Diagnostics,
-}
-
-struct Prepared {
-    mask: PreparedMask,
-    illum: [f32; 3],
-    gain: f32,
-    weight: f32,
-}
-
-struct Scratch {
-    ye: Vec<f32>,
-    num: Vec<f32>,
-    den: Vec<f32>,
-    m: Vec<f32>,
-    blk: Vec<f64>,
 }
 
 /// Run normalize..denormalize: the clean night raw (whole stored image; outside the
@@ -386,14 +372,20 @@ impl<'a> CleanPass<'a> {
         let blk = &blk_row[x0.min(blk_row.len())..];
         if let Some(t) = &self.ye_table {
             let (t0, t1) = t.row(r);
-            for (i, (&x, ye)) in src.iter().zip(scr.ye.iter_mut()).enumerate() {
-                let c = x0 + i;
-                let tab = if c & 1 == 0 { t0 } else { t1 };
-                *ye = match tab.get(x as usize) {
-                    Some(&v) => v,
-                    None => self.y_w(x, norm.black_at(r, c), k[c & 1]) as f32 * s32,
-                };
-                sat += (norm.linearize(x) >= white) as u64;
+            // two columns at a time, so each lane has its own table (no per-sample parity)
+            let tabs = if x0 & 1 == 0 { [t0, t1] } else { [t1, t0] };
+            let look = |i: usize, x: u16, tab: &[f32]| match tab.get(x as usize) {
+                Some(&v) => v,
+                None => {
+                    let c = x0 + i;
+                    self.y_w(x, norm.black_at(r, c), k[c & 1]) as f32 * s32
+                }
+            };
+            for (p, (xs, ys)) in src.chunks(2).zip(scr.ye.chunks_mut(2)).enumerate() {
+                for (j, (&x, ye)) in xs.iter().zip(ys.iter_mut()).enumerate() {
+                    *ye = look(2 * p + j, x, tabs[j]);
+                    sat += (norm.linearize(x) >= white) as u64;
+                }
             }
         } else {
             for (i, ((&x, ye), &b)) in src
@@ -438,9 +430,21 @@ impl<'a> CleanPass<'a> {
         if self.ye_table.is_some() {
             // 2x2-periodic black: the even and odd columns' levels
             let b = parity2([norm.black_at(r, 0), norm.black_at(r, 1)], x0);
-            for (pair, y) in seg.chunks_mut(2).zip(scr.num.chunks(2)) {
-                for ((d, &y), &b) in pair.iter_mut().zip(y).zip(&b) {
-                    *d = norm.denormalize_with_black(y as f64, b, plan.truncate);
+            if plan.truncate {
+                for (pair, y) in seg.chunks_mut(2).zip(scr.num.chunks(2)) {
+                    for ((d, &y), &b) in pair.iter_mut().zip(y).zip(&b) {
+                        *d = norm.denormalize_with_black(y as f64, b, true);
+                    }
+                }
+            } else {
+                // `denormalize_with_black(y, b, false)` with its per-lane range and the
+                // white level taken out of the loop: the same expression, so the same bits
+                let range = b.map(|b| norm.range_at_black(b));
+                let white = norm.white.min(u16::MAX as f64);
+                for (pair, y) in seg.chunks_mut(2).zip(scr.num.chunks(2)) {
+                    for (j, (d, &y)) in pair.iter_mut().zip(y).enumerate() {
+                        *d = round_clamp(y as f64 * range[j] + b[j], white);
+                    }
                 }
             }
         } else {
@@ -473,169 +477,6 @@ impl<'a> CleanPass<'a> {
                 *d = lin as u16;
             }
         }
-    }
-}
-
-impl Scratch {
-    fn new(w: usize) -> Scratch {
-        Scratch {
-            ye: vec![0.0; w],
-            num: vec![0.0; w],
-            den: vec![0.0; w],
-            m: vec![0.0; w],
-            blk: Vec::new(),
-        }
-    }
-}
-
-/// [`parity`] for f64 pairs.
-#[inline]
-fn parity2(k: [f64; 2], c0: usize) -> [f64; 2] {
-    if c0 & 1 == 0 {
-        k
-    } else {
-        [k[1], k[0]]
-    }
-}
-
-/// The per-colour factors of a row segment starting at column `c0` (even/odd offsets).
-#[inline]
-fn parity(k: [f32; 2], c0: usize) -> [f32; 2] {
-    if c0 & 1 == 0 {
-        k
-    } else {
-        [k[1], k[0]]
-    }
-}
-
-/// Apply `f(num, den, ye, mask, k)` element-wise, two columns at a time so that the CFA
-/// factor is a constant per lane (no per-sample parity index; same arithmetic per element).
-#[inline]
-#[allow(clippy::needless_range_loop)] // one index into five fixed-size arrays: the lanes
-fn pairwise<F: Fn(&mut f32, &mut f32, f32, f32, f32)>(
-    num: &mut [f32],
-    den: &mut [f32],
-    ye: &[f32],
-    m: &[f32],
-    k: [f32; 2],
-    f: F,
-) {
-    let n = m.len().min(num.len()).min(den.len()).min(ye.len());
-    let (num, den, ye, m) = (&mut num[..n], &mut den[..n], &ye[..n], &m[..n]);
-    // Eight columns at a time through fixed-size arrays: the compiler unrolls the lanes
-    // into SIMD operations (the same operations per element, so the same bits); the
-    // pairs below take the rest (an even number of columns in, so the same parity).
-    let k8 = [k[0], k[1], k[0], k[1], k[0], k[1], k[0], k[1]];
-    let wide = n / 8 * 8;
-    let (num8, num) = num.split_at_mut(wide);
-    let (den8, den) = den.split_at_mut(wide);
-    let (ye8, ye) = ye.split_at(wide);
-    let (m8, m) = m.split_at(wide);
-    for (((nn, dd), yy), mm) in num8
-        .as_chunks_mut::<8>()
-        .0
-        .iter_mut()
-        .zip(den8.as_chunks_mut::<8>().0.iter_mut())
-        .zip(ye8.as_chunks::<8>().0)
-        .zip(m8.as_chunks::<8>().0)
-    {
-        for j in 0..8 {
-            f(&mut nn[j], &mut dd[j], yy[j], mm[j], k8[j]);
-        }
-    }
-    let n = n - wide;
-    for (((nn, dd), yy), mm) in num
-        .chunks_exact_mut(2)
-        .zip(den.chunks_exact_mut(2))
-        .zip(ye.chunks_exact(2))
-        .zip(m.chunks_exact(2))
-    {
-        f(&mut nn[0], &mut dd[0], yy[0], mm[0], k[0]);
-        f(&mut nn[1], &mut dd[1], yy[1], mm[1], k[1]);
-    }
-    if n % 2 == 1 {
-        let i = n - 1;
-        f(&mut num[i], &mut den[i], ye[i], m[i], k[0]);
-    }
-}
-
-/// Local relighting of active-area row `r` over the segment of the scratch buffers, whose
-/// first sample is active-area column `x0` (the masks' column ranges lie inside it).
-fn local_row(
-    r: usize,
-    x0: usize,
-    cols: [usize; 2],
-    ambient: &[Prepared],
-    locals: &[Prepared],
-    bulbs: &[Prepared],
-    scr: &mut Scratch,
-) {
-    let Scratch {
-        ye, num, den, m, ..
-    } = scr;
-    // Ambient: mask 1 everywhere.
-    match ambient.first() {
-        Some(a) => {
-            let k = parity([a.illum[cols[0]] * a.gain, a.illum[cols[1]] * a.gain], x0);
-            let w = a.weight;
-            for (c, ((n, d), &y)) in num
-                .iter_mut()
-                .zip(den.iter_mut())
-                .zip(ye.iter())
-                .enumerate()
-            {
-                *n = w * (y * k[c & 1]).clamp(0.0, 1.0);
-                *d = w;
-            }
-        }
-        None => {
-            num.fill(0.0);
-            den.fill(0.0);
-        }
-    }
-    for p in locals.iter().filter(|p| p.mask.on_row(r)) {
-        let (c0, c1) = p.mask.cols;
-        let mm = &mut m[..c1 - c0];
-        p.mask.fill_row(r, mm);
-        let k = [p.illum[cols[0]] * p.gain, p.illum[cols[1]] * p.gain];
-        let w = p.weight;
-        let (i0, i1) = (c0 - x0, c1 - x0);
-        pairwise(
-            &mut num[i0..i1],
-            &mut den[i0..i1],
-            &ye[i0..i1],
-            mm,
-            parity(k, c0),
-            |n, d, y, mv, k| {
-                let wm = w * mv;
-                *n += wm * (y * k).clamp(0.0, 1.0);
-                *d += wm;
-            },
-        );
-    }
-    for (n, &d) in num.iter_mut().zip(den.iter()) {
-        *n /= d.max(1e-30);
-    }
-    for p in bulbs.iter().filter(|p| p.mask.on_row(r)) {
-        let (c0, c1) = p.mask.cols;
-        let mm = &mut m[..c1 - c0];
-        p.mask.fill_row(r, mm);
-        let k = [p.illum[cols[0]], p.illum[cols[1]]];
-        let g = p.gain;
-        let (i0, i1) = (c0 - x0, c1 - x0);
-        pairwise(
-            &mut num[i0..i1],
-            &mut den[i0..i1],
-            &ye[i0..i1],
-            mm,
-            parity(k, c0),
-            |n, _, y, mv, k| {
-                *n += g * mv * (y * k).clamp(0.0, 1.0);
-            },
-        );
-    }
-    for n in num.iter_mut() {
-        *n = if n.is_nan() { 0.0 } else { n.clamp(0.0, 1.0) };
     }
 }
 

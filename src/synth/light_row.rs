@@ -1,0 +1,183 @@
+//! One row of the clean pass's light arithmetic ([`super::relight`]): the per-row scratch
+//! buffers, the prepared lights, and mode `local`'s sum over the ambient light, the local
+//! lights (a weighted mean) and the bulbs (added), two or eight columns at a time so that
+//! each lane has a constant CFA factor.
+
+use super::masks::PreparedMask;
+
+/// A light of the plan with its mask prepared for the pass's columns.
+pub(super) struct Prepared {
+    pub(super) mask: PreparedMask,
+    pub(super) illum: [f32; 3],
+    pub(super) gain: f32,
+    pub(super) weight: f32,
+}
+
+/// One thread's row buffers: the scaled white-balanced input `ye`, the light sum's
+/// numerator and denominator, a mask row, and the row's black levels.
+pub(super) struct Scratch {
+    pub(super) ye: Vec<f32>,
+    pub(super) num: Vec<f32>,
+    pub(super) den: Vec<f32>,
+    pub(super) m: Vec<f32>,
+    pub(super) blk: Vec<f64>,
+}
+
+impl Scratch {
+    pub(super) fn new(w: usize) -> Scratch {
+        Scratch {
+            ye: vec![0.0; w],
+            num: vec![0.0; w],
+            den: vec![0.0; w],
+            m: vec![0.0; w],
+            blk: Vec::new(),
+        }
+    }
+}
+
+/// [`parity`] for f64 pairs.
+#[inline]
+pub(super) fn parity2(k: [f64; 2], c0: usize) -> [f64; 2] {
+    if c0 & 1 == 0 {
+        k
+    } else {
+        [k[1], k[0]]
+    }
+}
+
+/// The per-colour factors of a row segment starting at column `c0` (even/odd offsets).
+#[inline]
+pub(super) fn parity(k: [f32; 2], c0: usize) -> [f32; 2] {
+    if c0 & 1 == 0 {
+        k
+    } else {
+        [k[1], k[0]]
+    }
+}
+
+/// Apply `f(num, den, ye, mask, k)` element-wise, two columns at a time so that the CFA
+/// factor is a constant per lane (no per-sample parity index; same arithmetic per element).
+#[inline]
+#[allow(clippy::needless_range_loop)] // one index into five fixed-size arrays: the lanes
+fn pairwise<F: Fn(&mut f32, &mut f32, f32, f32, f32)>(
+    num: &mut [f32],
+    den: &mut [f32],
+    ye: &[f32],
+    m: &[f32],
+    k: [f32; 2],
+    f: F,
+) {
+    let n = m.len().min(num.len()).min(den.len()).min(ye.len());
+    let (num, den, ye, m) = (&mut num[..n], &mut den[..n], &ye[..n], &m[..n]);
+    // Eight columns at a time through fixed-size arrays: the compiler unrolls the lanes
+    // into SIMD operations (the same operations per element, so the same bits); the
+    // pairs below take the rest (an even number of columns in, so the same parity).
+    let k8 = [k[0], k[1], k[0], k[1], k[0], k[1], k[0], k[1]];
+    let wide = n / 8 * 8;
+    let (num8, num) = num.split_at_mut(wide);
+    let (den8, den) = den.split_at_mut(wide);
+    let (ye8, ye) = ye.split_at(wide);
+    let (m8, m) = m.split_at(wide);
+    for (((nn, dd), yy), mm) in num8
+        .as_chunks_mut::<8>()
+        .0
+        .iter_mut()
+        .zip(den8.as_chunks_mut::<8>().0.iter_mut())
+        .zip(ye8.as_chunks::<8>().0)
+        .zip(m8.as_chunks::<8>().0)
+    {
+        for j in 0..8 {
+            f(&mut nn[j], &mut dd[j], yy[j], mm[j], k8[j]);
+        }
+    }
+    let n = n - wide;
+    for (((nn, dd), yy), mm) in num
+        .chunks_exact_mut(2)
+        .zip(den.chunks_exact_mut(2))
+        .zip(ye.chunks_exact(2))
+        .zip(m.chunks_exact(2))
+    {
+        f(&mut nn[0], &mut dd[0], yy[0], mm[0], k[0]);
+        f(&mut nn[1], &mut dd[1], yy[1], mm[1], k[1]);
+    }
+    if n % 2 == 1 {
+        let i = n - 1;
+        f(&mut num[i], &mut den[i], ye[i], m[i], k[0]);
+    }
+}
+
+/// Local relighting of active-area row `r` over the segment of the scratch buffers, whose
+/// first sample is active-area column `x0` (the masks' column ranges lie inside it).
+pub(super) fn local_row(
+    r: usize,
+    x0: usize,
+    cols: [usize; 2],
+    ambient: &[Prepared],
+    locals: &[Prepared],
+    bulbs: &[Prepared],
+    scr: &mut Scratch,
+) {
+    let Scratch {
+        ye, num, den, m, ..
+    } = scr;
+    // Ambient: mask 1 everywhere.
+    match ambient.first() {
+        Some(a) => {
+            let k = parity([a.illum[cols[0]] * a.gain, a.illum[cols[1]] * a.gain], x0);
+            let w = a.weight;
+            // eight columns at a time like the lights below (`m` is not read)
+            pairwise(num, den, ye, m, k, |n, d, y, _, k| {
+                *n = w * (y * k).clamp(0.0, 1.0);
+                *d = w;
+            });
+        }
+        None => {
+            num.fill(0.0);
+            den.fill(0.0);
+        }
+    }
+    for p in locals.iter().filter(|p| p.mask.on_row(r)) {
+        let (c0, c1) = p.mask.cols;
+        let mm = &mut m[..c1 - c0];
+        p.mask.fill_row(r, mm);
+        let k = [p.illum[cols[0]] * p.gain, p.illum[cols[1]] * p.gain];
+        let w = p.weight;
+        let (i0, i1) = (c0 - x0, c1 - x0);
+        pairwise(
+            &mut num[i0..i1],
+            &mut den[i0..i1],
+            &ye[i0..i1],
+            mm,
+            parity(k, c0),
+            |n, d, y, mv, k| {
+                let wm = w * mv;
+                *n += wm * (y * k).clamp(0.0, 1.0);
+                *d += wm;
+            },
+        );
+    }
+    for (n, &d) in num.iter_mut().zip(den.iter()) {
+        *n /= d.max(1e-30);
+    }
+    for p in bulbs.iter().filter(|p| p.mask.on_row(r)) {
+        let (c0, c1) = p.mask.cols;
+        let mm = &mut m[..c1 - c0];
+        p.mask.fill_row(r, mm);
+        let k = [p.illum[cols[0]], p.illum[cols[1]]];
+        let g = p.gain;
+        let (i0, i1) = (c0 - x0, c1 - x0);
+        pairwise(
+            &mut num[i0..i1],
+            &mut den[i0..i1],
+            &ye[i0..i1],
+            mm,
+            parity(k, c0),
+            |n, _, y, mv, k| {
+                *n += g * mv * (y * k).clamp(0.0, 1.0);
+            },
+        );
+    }
+    for n in num.iter_mut() {
+        *n = if n.is_nan() { 0.0 } else { n.clamp(0.0, 1.0) };
+    }
+}
