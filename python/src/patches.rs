@@ -10,9 +10,11 @@ use crate::raw::Raw;
 use crate::synth_options::{job_config, job_for};
 use day2night::isp::release_input::{check_table, release_table, RELEASE_GAMMA};
 use day2night::isp::tone::DisplayTone;
-use day2night::synth::patches::{crop_pair, cut_patches, PairInput};
+use day2night::synth::patches::{crop_pair, cut_patches, cut_patches_into, PairInput};
 use numpy::ndarray::{Array3, Array4};
-use numpy::{IntoPyArray, PyReadonlyArray1};
+use numpy::{
+    IntoPyArray, PyArrayMethods, PyReadonlyArray1, PyReadwriteArray4, PyUntypedArrayMethods,
+};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyTuple};
 
@@ -26,6 +28,7 @@ pub(crate) const PARAMS: &[Param] = &[
     Param::pos("table", ParamDefault::None),
     Param::pos("patch", ParamDefault::None),
     Param::pos("tone", ParamDefault::Str("srgb")),
+    Param::pos("out", ParamDefault::None),
 ];
 
 /// `fresh_pair`'s parameters after `iso`, bound as Python binds them (positional or
@@ -38,6 +41,7 @@ struct PairCall<'py> {
     table: Option<PyReadonlyArray1<'py, f32>>,
     patch: Option<usize>,
     tone: String,
+    out: Option<Bound<'py, PyAny>>,
     options: Bound<'py, PyDict>,
 }
 
@@ -53,6 +57,7 @@ impl<'py> PairCall<'py> {
             table: opt(p.get("table")?).map(|t| t.extract()).transpose()?,
             patch: opt(p.get("patch")?).map(|t| t.extract()).transpose()?,
             tone: args::string(p.get("tone")?, "tone")?,
+            out: opt(p.get("out")?),
             options,
         })
     }
@@ -111,6 +116,27 @@ pub(crate) fn fresh_pair<'py>(
     if patch == Some(0) {
         return Err(value_err("patch must be at least 1"));
     }
+    // `out=(x, y)`: the caller's float32 arrays of the patches (k x 3 x patch x patch each,
+    // C-contiguous, writable), written in place instead of returned as new arrays
+    let out = match &call.out {
+        None => None,
+        Some(o) => {
+            if patch.is_none() {
+                return Err(value_err("out= needs patch="));
+            }
+            let (x, y): (Bound<'py, PyAny>, Bound<'py, PyAny>) = o
+                .extract()
+                .map_err(|_| value_err("out must be a pair (x, y) of float32 arrays"))?;
+            let rw = |a: &Bound<'py, PyAny>, name: &str| -> PyResult<PyReadwriteArray4<'py, f32>> {
+                let a = a.cast::<numpy::PyArray4<f32>>().map_err(|_| {
+                    value_err(format!("out's {name} must be a 4-D float32 numpy array"))
+                })?;
+                a.try_readwrite()
+                    .map_err(|e| value_err(format!("out's {name} is not writable: {e}")))
+            };
+            Some((rw(&x, "x")?, rw(&y, "y")?, x, y))
+        }
+    };
     let cfg = job_config(mode, vec![iso.0], true, options)?;
     let r = raw.get();
     let a = r.day.raw.active_area();
@@ -123,6 +149,15 @@ pub(crate) fn fresh_pair<'py>(
             )));
         }
     }
+    let mut out = out;
+    let slices = match (out.as_mut(), patch) {
+        (Some((xa, ya, _, _)), Some(p)) => {
+            let want = [(crop.width / p) * (crop.height / p), 3, p, p];
+            let xs = out_slice(xa, want, "x")?;
+            Some((xs, out_slice(ya, want, "y")?))
+        }
+        _ => None,
+    };
     let day = r.cfa_day()?;
     let file_name = r.file_name.clone();
     let (planned, pair, x, y) = py
@@ -137,12 +172,17 @@ pub(crate) fn fresh_pair<'py>(
                 let look = |c: u16| table[(c as usize).min(table.len() - 1)];
                 // v / 255 per byte value (numpy's float32 division, tabulated)
                 let unit: Vec<f32> = (0..=255u8).map(|v| v as f32 / 255.0).collect();
-                let (x, y) = match patch {
-                    Some(p) => (
+                let (x, y) = match (patch, slices) {
+                    (Some(p), Some((xs, ys))) => {
+                        cut_patches_into(&pair.codes, w, h, p, look, xs)?;
+                        cut_patches_into(&pair.target, w, h, p, |v| unit[v as usize], ys)?;
+                        (Vec::new(), None)
+                    }
+                    (Some(p), None) => (
                         cut_patches(&pair.codes, w, h, p, look)?,
                         Some(cut_patches(&pair.target, w, h, p, |v| unit[v as usize])?),
                     ),
-                    None => (pair.codes.iter().map(|&c| look(c)).collect(), None),
+                    (None, _) => (pair.codes.iter().map(|&c| look(c)).collect(), None),
                 };
                 Ok((planned, pair, x, y))
             })
@@ -156,6 +196,11 @@ pub(crate) fn fresh_pair<'py>(
         &planned.report,
         &pair.report.warnings,
     )?;
+    if let Some((xa, ya, x, y)) = out {
+        // the borrows end before the arrays go back to the caller
+        drop((xa, ya));
+        return Ok((x, y));
+    }
     let shape_err = |e: numpy::ndarray::ShapeError| value_err(e.to_string());
     let (w, h) = (pair.width, pair.height);
     match (patch, y) {
@@ -171,4 +216,21 @@ pub(crate) fn fresh_pair<'py>(
             Ok((x.into_pyarray(py).into_any(), y.into_pyarray(py).into_any()))
         }
     }
+}
+
+/// The values of one of `out=`'s arrays, which must have the patches' shape `want` and be
+/// C-contiguous.
+fn out_slice<'a>(
+    a: &'a mut PyReadwriteArray4<'_, f32>,
+    want: [usize; 4],
+    name: &str,
+) -> PyResult<&'a mut [f32]> {
+    if a.shape() != want {
+        return Err(value_err(format!(
+            "out's {name} has shape {:?}, the patches need {want:?}",
+            a.shape()
+        )));
+    }
+    a.as_slice_mut()
+        .map_err(|_| value_err(format!("out's {name} must be C-contiguous")))
 }

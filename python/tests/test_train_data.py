@@ -134,6 +134,63 @@ def test_fresh_pair_arguments(day_dng):
         fresh_pair(raw, (1, 0, 64, 64), 1600)
 
 
+def test_fresh_pair_writes_its_patches_into_out(day_dng):
+    """out=(x, y): the patches are written into the caller's arrays (returned as given),
+    with the values of the arrays the call returns without it; wrong buffers are refused
+    before anything is computed."""
+    from day2night._native import fresh_pair
+    raw = day2night.read_dng(day_dng)
+    crop = (0, 0, 128, 128)
+    x, y = fresh_pair(raw, crop, 1600, patch=32)
+    bx = np.full((2 * 16, 3, 32, 32), np.nan, dtype=np.float32)
+    by = np.full_like(bx, np.nan)
+    gx, gy = fresh_pair(raw, crop, 1600, patch=32, out=(bx[16:], by[16:]))
+    assert gx.base is bx and gy.base is by
+    assert np.array_equal(bx[16:], x) and np.array_equal(by[16:], y)
+    assert np.isnan(bx[:16]).all() and np.isnan(by[:16]).all()
+    good = np.zeros_like(x)
+    for bad, match in [
+        ((np.zeros((15, 3, 32, 32), np.float32), good), "shape"),
+        ((np.zeros_like(x, dtype=np.float64), good), "float32"),
+        ((np.zeros((16, 3, 32, 64), np.float32)[..., ::2], good), "C-contiguous"),
+        ((good, good), "writable"),
+        ((good,), "pair"),
+    ]:
+        with pytest.raises(ValueError, match=match):
+            fresh_pair(raw, crop, 1600, patch=32, out=bad)
+    with pytest.raises(ValueError, match="patch"):
+        fresh_pair(raw, crop, 1600, out=(good, np.zeros_like(x)))
+    frozen = np.zeros_like(x)
+    frozen.flags.writeable = False
+    with pytest.raises(ValueError, match="writable"):
+        fresh_pair(raw, crop, 1600, patch=32, out=(np.zeros_like(x), frozen))
+
+
+def test_fresh_batches_are_made_in_place_with_the_items_values(day_dir):
+    """FreshPatches.__getitems__ (what a DataLoader calls) writes a batch's items straight
+    into one pair of tensors, in shared memory in a worker: the same values as collating
+    the items one by one, with 0 and 1 workers."""
+    need_torch()
+    import torch
+    from day2night.train import data
+    ds = data.FreshPatches(day_dir, crop=128, patch=64, isos=(1600, 3200), seed=2,
+                           crops_per_image=3)
+    ds.set_epoch(1)
+    want = [data.collate([ds[i] for i in range(k, min(k + 2, len(ds)))])
+            for k in range(0, len(ds), 2)]
+    batch = ds.__getitems__([0, 1])
+    assert isinstance(batch, data.Batch) and not batch[0].is_shared()
+    assert all(torch.equal(a, b) for a, b in zip(data.collate(batch), want[0]))
+    for workers in (0, 1):
+        loader = torch.utils.data.DataLoader(ds, batch_size=2, num_workers=workers,
+                                             collate_fn=_collate_and_where)
+        got = list(loader)
+        assert len(got) == len(want)
+        for (x, y, shared), (wx, wy) in zip(got, want):
+            assert bool(shared.all()) == (workers == 1)
+            assert torch.equal(x, wx) and torch.equal(y, wy)
+
+
 def test_noise_estimate_is_made_once_per_raw_with_the_same_numbers(day_dng):
     raw = day2night.read_dng(day_dng)
     meta = dict(raw.meta)

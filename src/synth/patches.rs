@@ -208,6 +208,59 @@ pub fn cut_patches<T: Copy, U: Copy + Default>(
     Ok(out)
 }
 
+/// [`cut_patches`] into `out`, which must hold exactly the `(height / patch) * (width /
+/// patch) * 3 * patch * patch` values of the tiles (a caller's buffer: the training loader
+/// passes a slice of its batch, so that the patches are written where they are used).
+pub fn cut_patches_into<T: Copy, U: Copy>(
+    img: &[T],
+    width: usize,
+    height: usize,
+    patch: usize,
+    f: impl Fn(T) -> U,
+    out: &mut [U],
+) -> Result<()> {
+    if patch == 0 || img.len() != width * height * 3 {
+        return Err(Error::invalid(format!(
+            "cannot cut {patch} x {patch} patches from {} samples of a {width} x {height} x 3 image",
+            img.len()
+        )));
+    }
+    let (gw, gh) = (width / patch, height / patch);
+    let plane = patch * patch;
+    if out.len() != gw * gh * 3 * plane {
+        return Err(Error::invalid(format!(
+            "the {gw} x {gh} patches of {patch} x {patch} x 3 need {} values, the buffer holds {}",
+            gw * gh * 3 * plane,
+            out.len()
+        )));
+    }
+    // the same loop as `cut_patches`, writing each tile in place
+    for (k, tile) in out.chunks_exact_mut(3 * plane).enumerate() {
+        let (gy, gx) = (k / gw, k % gw);
+        let (t0, rest) = tile.split_at_mut(plane);
+        let (t1, t2) = rest.split_at_mut(plane);
+        for (i, ((d0, d1), d2)) in t0
+            .chunks_exact_mut(patch)
+            .zip(t1.chunks_exact_mut(patch))
+            .zip(t2.chunks_exact_mut(patch))
+            .enumerate()
+        {
+            let src = &img[3 * ((gy * patch + i) * width + gx * patch)..][..3 * patch];
+            for (((px, a), b), c) in src
+                .chunks_exact(3)
+                .zip(d0.iter_mut())
+                .zip(d1.iter_mut())
+                .zip(d2.iter_mut())
+            {
+                *a = f(px[0]);
+                *b = f(px[1]);
+                *c = f(px[2]);
+            }
+        }
+    }
+    Ok(())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -233,6 +286,11 @@ mod tests {
                 }
             }
         }
+        let mut into = vec![0.0f32; t.len()];
+        cut_patches_into(&img, w, h, p, |v| v as f32, &mut into).unwrap();
+        assert_eq!(into, t);
+        assert!(cut_patches_into(&img, w, h, p, |v| v as f32, &mut into[1..]).is_err());
+        assert!(cut_patches_into(&img, w, h, 0, |v| v as f32, &mut into).is_err());
         assert!(cut_patches(&img, w, h, 0, |v| v).is_err());
         assert!(cut_patches(&img[1..], w, h, p, |v| v).is_err());
     }

@@ -204,11 +204,11 @@ class FreshPatches(Dataset):
     def epoch(self):
         return self.pairs.epoch
 
-    def _pair(self, index, patch):
+    def _pair(self, index, patch, out=None):
         q = self.pairs.place(self.pair_index(index))
         return fresh_pair(q["raw"], q["crop"], q["iso"], seed=self.seed, variant=q["variant"],
                           mode=self.mode, task=self.task, table=preprocess._table(self.gamma),
-                          patch=patch, **self.options)
+                          patch=patch, out=out, **self.options)
 
     def arrays(self, index):
         """(input H x W x 3 float32, target H x W x 3 uint8) of item ``index``."""
@@ -229,6 +229,18 @@ class FreshPatches(Dataset):
     def __getitem__(self, index):
         xs, ys = self._pair(int(index), self.patch)
         return torch.from_numpy(xs), torch.from_numpy(ys)
+
+    def __getitems__(self, indices):
+        """The items ``indices`` as one batch (what a ``DataLoader`` asks for): each item's
+        patches are written by the native call straight into its rows of the batch's two
+        tensors, in shared memory inside a worker, so that ``collate`` passes them on
+        without a copy (docs/benchmarks.md, the training loader)."""
+        k, p = self.patches_per_item, self.patch
+        x, y = (_batch_tensor((len(indices) * k, 3, p, p)) for _ in range(2))
+        xa, ya = x.numpy(), y.numpy()
+        for j, index in enumerate(indices):
+            self._pair(int(index), p, out=(xa[j * k:(j + 1) * k], ya[j * k:(j + 1) * k]))
+        return Batch(x, y)
 
 
 def fresh_budget(shapes, patch=64, sides=(), max_crop=512, tolerance=0.05):
@@ -251,11 +263,34 @@ def fresh_budget(shapes, patch=64, sides=(), max_crop=512, tolerance=0.05):
     raise ValueError(f"images smaller than one {patch}x{patch} patch")
 
 
+class Batch(tuple):
+    """(x, y) of items already made as one batch (``FreshPatches.__getitems__``)."""
+
+    def __new__(cls, x, y):
+        return super().__new__(cls, (x, y))
+
+
 def collate(batch):
-    """Stack items of either dataset into (N x 3 x p x p, N x 3 x p x p)."""
+    """Stack items of either dataset into (N x 3 x p x p, N x 3 x p x p); a ``Batch`` is
+    already that."""
+    if isinstance(batch, Batch):
+        return batch[0], batch[1]
     xs = [b[0] if b[0].dim() == 4 else b[0].unsqueeze(0) for b in batch]
     ys = [b[1] if b[1].dim() == 4 else b[1].unsqueeze(0) for b in batch]
     return _cat(xs), _cat(ys)
+
+
+def _batch_tensor(shape):
+    """An uninitialized float32 tensor of ``shape``; in a DataLoader worker in shared memory
+    (as ``_cat`` makes its batches), so that it reaches the main process without a copy."""
+    if torch.utils.data.get_worker_info() is not None:
+        try:
+            t = torch.empty(0, dtype=torch.float32)
+            storage = t._typed_storage()._new_shared(int(np.prod(shape)))
+            return t.new(storage).resize_(*shape)
+        except (AttributeError, RuntimeError):
+            pass  # a torch without these internals: private memory, copied by torch
+    return torch.empty(shape, dtype=torch.float32)
 
 
 def _cat(ts):
