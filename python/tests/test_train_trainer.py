@@ -144,12 +144,13 @@ def test_fresh_synthesis_source(tmp_path, sets, day_dir):
     from day2night.train import data, trainer
     fresh = data.FreshPatches(day_dir, crop=128, patch=64, isos=(1600,), seed=1)
     seen = []
-    fresh_getitem = fresh.__getitem__
 
     class Spy(type(fresh)):
-        def __getitem__(self, i):
+        # every item goes through _pair, whether the loader asks for a batch of items
+        # (__getitems__, the DataLoader's way) or for one (__getitem__)
+        def _pair(self, i, patch, out=None):
             seen.append((self.epoch, i))
-            return fresh_getitem(i)
+            return super()._pair(i, patch, out)
 
     fresh.__class__ = Spy
     out = trainer.train(config(tmp_path / "f", epochs=2), fresh,
