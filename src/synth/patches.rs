@@ -165,44 +165,15 @@ pub fn cut_patches<T: Copy, U: Copy + Default>(
     patch: usize,
     f: impl Fn(T) -> U,
 ) -> Result<Vec<U>> {
-    if patch == 0 || img.len() != width * height * 3 {
-        return Err(Error::invalid(format!(
-            "cannot cut {patch} x {patch} patches from {} samples of a {width} x {height} x 3 image",
-            img.len()
-        )));
-    }
-    let (gw, gh) = (width / patch, height / patch);
+    let (gw, gh) = grid(img, width, height, patch)?;
     let plane = patch * patch;
-    // One tile at a time: each source row of the tile is read once and its three channels
-    // written into a small channel-first scratch tile (cache-resident), which is then
-    // appended whole. The output is filled in order (no zeroed buffer written twice: the
-    // zeroing of a fresh allocation was a tenth of a fresh item's time), and reading each
-    // row once instead of once per channel took a 512 x 512 crop's cutting from 13.4 M to
-    // 8.7 M instructions (callgrind of `benches/fresh.rs`; docs/benchmarks.md).
+    // One tile at a time into a small cache-resident scratch tile, appended whole: the
+    // output is filled in order (no zeroed buffer written twice: the zeroing of a fresh
+    // allocation was a tenth of a fresh item's time).
     let mut out = Vec::with_capacity(gw * gh * 3 * plane);
     let mut tile = vec![U::default(); 3 * plane];
     for k in 0..gw * gh {
-        let (gy, gx) = (k / gw, k % gw);
-        let (t0, rest) = tile.split_at_mut(plane);
-        let (t1, t2) = rest.split_at_mut(plane);
-        for (i, ((d0, d1), d2)) in t0
-            .chunks_exact_mut(patch)
-            .zip(t1.chunks_exact_mut(patch))
-            .zip(t2.chunks_exact_mut(patch))
-            .enumerate()
-        {
-            let src = &img[3 * ((gy * patch + i) * width + gx * patch)..][..3 * patch];
-            for (((px, a), b), c) in src
-                .chunks_exact(3)
-                .zip(d0.iter_mut())
-                .zip(d1.iter_mut())
-                .zip(d2.iter_mut())
-            {
-                *a = f(px[0]);
-                *b = f(px[1]);
-                *c = f(px[2]);
-            }
-        }
+        write_tile(img, width, patch, (k / gw, k % gw), &f, &mut tile);
         out.extend_from_slice(&tile);
     }
     Ok(out)
@@ -219,13 +190,7 @@ pub fn cut_patches_into<T: Copy, U: Copy>(
     f: impl Fn(T) -> U,
     out: &mut [U],
 ) -> Result<()> {
-    if patch == 0 || img.len() != width * height * 3 {
-        return Err(Error::invalid(format!(
-            "cannot cut {patch} x {patch} patches from {} samples of a {width} x {height} x 3 image",
-            img.len()
-        )));
-    }
-    let (gw, gh) = (width / patch, height / patch);
+    let (gw, gh) = grid(img, width, height, patch)?;
     let plane = patch * patch;
     if out.len() != gw * gh * 3 * plane {
         return Err(Error::invalid(format!(
@@ -234,31 +199,57 @@ pub fn cut_patches_into<T: Copy, U: Copy>(
             out.len()
         )));
     }
-    // the same loop as `cut_patches`, writing each tile in place
     for (k, tile) in out.chunks_exact_mut(3 * plane).enumerate() {
-        let (gy, gx) = (k / gw, k % gw);
-        let (t0, rest) = tile.split_at_mut(plane);
-        let (t1, t2) = rest.split_at_mut(plane);
-        for (i, ((d0, d1), d2)) in t0
-            .chunks_exact_mut(patch)
-            .zip(t1.chunks_exact_mut(patch))
-            .zip(t2.chunks_exact_mut(patch))
-            .enumerate()
-        {
-            let src = &img[3 * ((gy * patch + i) * width + gx * patch)..][..3 * patch];
-            for (((px, a), b), c) in src
-                .chunks_exact(3)
-                .zip(d0.iter_mut())
-                .zip(d1.iter_mut())
-                .zip(d2.iter_mut())
-            {
-                *a = f(px[0]);
-                *b = f(px[1]);
-                *c = f(px[2]);
-            }
-        }
+        write_tile(img, width, patch, (k / gw, k % gw), &f, tile);
     }
     Ok(())
+}
+
+/// The tile grid's columns and rows, after checking the image's length and the patch.
+fn grid<T>(img: &[T], width: usize, height: usize, patch: usize) -> Result<(usize, usize)> {
+    if patch == 0 || img.len() != width * height * 3 {
+        return Err(Error::invalid(format!(
+            "cannot cut {patch} x {patch} patches from {} samples of a {width} x {height} x 3 image",
+            img.len()
+        )));
+    }
+    Ok((width / patch, height / patch))
+}
+
+/// Tile `(gy, gx)` of `img`, channel-first, into `tile` (`3 * patch * patch` values). Each
+/// source row is read once and its three channels written at once: reading it once per
+/// channel cost a 512 x 512 crop's cutting 13.4 M instructions against 8.7 M now
+/// (callgrind of `benches/fresh.rs`; docs/benchmarks.md).
+#[inline]
+fn write_tile<T: Copy, U>(
+    img: &[T],
+    width: usize,
+    patch: usize,
+    (gy, gx): (usize, usize),
+    f: &impl Fn(T) -> U,
+    tile: &mut [U],
+) {
+    let plane = patch * patch;
+    let (t0, rest) = tile.split_at_mut(plane);
+    let (t1, t2) = rest.split_at_mut(plane);
+    for (i, ((d0, d1), d2)) in t0
+        .chunks_exact_mut(patch)
+        .zip(t1.chunks_exact_mut(patch))
+        .zip(t2.chunks_exact_mut(patch))
+        .enumerate()
+    {
+        let src = &img[3 * ((gy * patch + i) * width + gx * patch)..][..3 * patch];
+        for (((px, a), b), c) in src
+            .chunks_exact(3)
+            .zip(d0.iter_mut())
+            .zip(d1.iter_mut())
+            .zip(d2.iter_mut())
+        {
+            *a = f(px[0]);
+            *b = f(px[1]);
+            *c = f(px[2]);
+        }
+    }
 }
 
 #[cfg(test)]
