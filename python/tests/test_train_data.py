@@ -191,6 +191,24 @@ def test_fresh_batches_are_made_in_place_with_the_items_values(day_dir):
             assert torch.equal(x, wx) and torch.equal(y, wy)
 
 
+def test_fresh_patches_take_the_cache_bounds_and_preload(day_dir):
+    """FreshPatches passes ``cache``/``cache_bytes`` to its NightPairs (not to the synthesis,
+    which refused them as unknown options), and ``preload`` decodes the images: the same
+    items as without it."""
+    need_torch()
+    import torch
+    from day2night.train import data
+    ref = data.FreshPatches(day_dir, crop=128, patch=64, isos=(1600,), seed=4,
+                            crops_per_image=2, cache=1)
+    want = [ref[i] for i in range(len(ref))]
+    assert ref.pairs.cached() == ["b.dng"]
+    ds = data.FreshPatches(day_dir, crop=128, patch=64, isos=(1600,), seed=4,
+                           crops_per_image=2, cache_bytes=1 << 40)
+    assert ds.preload() == 2 and ds.pairs.cached() == ["a.dng", "b.dng"]
+    for (x, y), (wx, wy) in zip((ds[i] for i in range(len(ds))), want):
+        assert torch.equal(x, wx) and torch.equal(y, wy)
+
+
 def test_noise_estimate_is_made_once_per_raw_with_the_same_numbers(day_dng):
     raw = day2night.read_dng(day_dng)
     meta = dict(raw.meta)

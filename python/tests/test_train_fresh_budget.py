@@ -75,6 +75,8 @@ def test_same_batches_whatever_the_worker_count(stand_in):
     for workers in (0, 2):
         cfg = trainer.TrainConfig(out_dir=str(root / "w"), batch_size=32, workers=workers)
         loader, sampler = trainer.make_loader(fresh, cfg, 0, 1, shuffle=True)
+        # with workers, the images are decoded here first, for the forked workers to share
+        assert len(fresh.pairs.cached()) == (len(files) if workers else 0)
         sampler.set_epoch(3)
         fresh.set_epoch(3)
         got[workers] = [(x.clone(), y.clone()) for x, y in loader]

@@ -49,6 +49,15 @@ def pack_bayer(plane, meta, top=0, left=0):
     return out
 
 
+#: ``NightPairs``' default bound on the decoded images kept per process (their planes).
+CACHE_BYTES = 4 << 30
+
+
+def _plane_bytes(meta):
+    """Bytes of a decoded image's plane: width x height x samples x 2."""
+    return int(meta["width"]) * int(meta["height"]) * int(meta.get("samples_per_pixel") or 1) * 2
+
+
 def _draw(seed, epoch, index):
     """The random stream of one item: SHA-256 of (seed, epoch, index), the same in every
     process (Python's ``hash`` is salted per process, so it is not used)."""
@@ -62,7 +71,13 @@ class NightPairs:
     Parameters: ``day_dir`` (a folder of ``.dng`` files, sorted by name), ``crop`` (side of
     the square crop, even), ``isos`` (each item draws one), ``seed``, ``crops_per_image``
     (items per image and epoch), ``mode`` and any ``synthesize`` option (``bulbs``,
-    ``noise_model``, ...), ``cache`` (decoded images kept per process).
+    ``noise_model``, ...). Decoded images are kept per process, least recently used out
+    first: at most ``cache`` of them (None: no count limit) and at most ``cache_bytes`` of
+    their planes (4 GiB by default, enough for the 60 training images of the paper's
+    experiment at 12 MP: 1.5 GB). An image that is not kept is decoded again for each of
+    its items, which costs about ten times the item itself (docs/benchmarks.md, "Fresh
+    synthesis over many images"). ``preload()`` decodes them up front: call it before a
+    DataLoader starts its worker processes, which then share the decoded images.
 
     Each item is a dict: ``noisy`` (4 x crop/2 x crop/2 float32, the noisy Bayer crop packed
     and normalized), ``clean`` (the same for the clean raw), ``target`` (3 x crop x crop
@@ -73,6 +88,7 @@ class NightPairs:
     >>> item = ds[0]
     >>> item["noisy"].shape, item["target"].shape
     ((4, 256, 256), (3, 512, 512))
+    >>> ds.preload()              # the workers (forked) share the decoded images
     >>> loader = torch.utils.data.DataLoader(ds, batch_size=8, num_workers=2)
     >>> for epoch in range(10):
     ...     ds.set_epoch(epoch)   # with persistent workers, re-create the iterator
@@ -80,7 +96,7 @@ class NightPairs:
     """
 
     def __init__(self, day_dir, crop=512, isos=NOISY_ISOS, seed=0, crops_per_image=1,
-                 mode="local", cache=4, **options):
+                 mode="local", cache=None, cache_bytes=CACHE_BYTES, **options):
         self.day_dir = os.fspath(day_dir)
         if not os.path.isdir(self.day_dir):
             raise ValueError(f"{self.day_dir}: not a folder")
@@ -104,7 +120,14 @@ class NightPairs:
             raise ValueError("crops_per_image must be at least 1")
         self.mode = mode
         self.options = dict(options)
-        self.cache_size = max(1, int(cache))
+        if cache is not None:
+            cache = operator.index(cache)
+            if cache < 1:
+                raise ValueError(f"cache {cache}: keep at least 1 decoded image (None: no limit)")
+        cache_bytes = operator.index(cache_bytes)
+        if cache_bytes < 0:
+            raise ValueError(f"cache_bytes {cache_bytes} must be at least 0")
+        self.cache_size, self.cache_bytes = cache, cache_bytes
         self.epoch = 0
         self._cache = OrderedDict()
 
@@ -121,18 +144,53 @@ class NightPairs:
         state["_cache"] = OrderedDict()
         return state
 
+    def _read(self, name):
+        """Decode image ``name``: (raw, its DefaultCrop, the bytes of its plane)."""
+        raw = read_dng(os.path.join(self.day_dir, name))
+        meta = raw.meta
+        return raw, tuple(meta["default_crop"]), _plane_bytes(meta)
+
     def _raw(self, name):
         """The decoded image ``name`` and its DefaultCrop, from this process's cache."""
         entry = self._cache.get(name)
         if entry is None:
-            raw = read_dng(os.path.join(self.day_dir, name))
-            entry = (raw, tuple(raw.meta["default_crop"]))
+            entry = self._read(name)
             self._cache[name] = entry
-            while len(self._cache) > self.cache_size:
+            # the least recently used out beyond the bounds; the image just read stays
+            while len(self._cache) > 1 and (
+                    (self.cache_size is not None and len(self._cache) > self.cache_size)
+                    or self._cached_bytes() > self.cache_bytes):
                 self._cache.popitem(last=False)
         else:
             self._cache.move_to_end(name)
-        return entry
+        return entry[:2]
+
+    def _cached_bytes(self):
+        return sum(e[2] for e in self._cache.values())
+
+    def cached(self):
+        """The names of the images this process keeps decoded, least recently used first."""
+        return list(self._cache)
+
+    def preload(self):
+        """Decode the images in name order while the cache keeps them (``cache`` images,
+        ``cache_bytes``), each with the per-image work of its first item done (the noise
+        estimate of an input without a NoiseProfile), and return how many are kept. Worker
+        processes that a DataLoader forks afterwards share them (``__getstate__`` keeps the
+        cache out of pickles: under the spawn start method each worker decodes its own)."""
+        for name in self.files:
+            if name not in self._cache:
+                if self.cache_size is not None and len(self._cache) >= self.cache_size:
+                    break
+                entry = self._read(name)
+                if self._cache and self._cached_bytes() + entry[2] > self.cache_bytes:
+                    break
+                self._cache[name] = entry
+            raw, (y0, x0, _, _), _ = self._cache[name]
+            # the first item's per-image work (the noise estimate), on the smallest crop
+            night_pair(raw, self.seed, 0, self.isos[0], (y0 + y0 % 2, x0 + x0 % 2, 2, 2),
+                       mode=self.mode, **self.options)
+        return len(self._cache)
 
     def params(self, index):
         """The draws of item ``index`` at the current epoch: file, variant, ISO and the

@@ -33,7 +33,7 @@ import numpy as np
 from .._native import fresh_pair, synthesize
 from ..atomic import open_atomic
 from ..isos import NOISY_ISOS
-from ..pairs import NightPairs
+from ..pairs import CACHE_BYTES, NightPairs
 from . import cache, preprocess, targets
 from ._torch import Dataset, torch
 
@@ -157,12 +157,14 @@ class FreshPatches(Dataset):
     """Fresh synthesis: item i of epoch e is the ``crop`` x ``crop`` night synthesis
     ``NightPairs(day_dir, crop, isos, seed, crops_per_image)`` draws for (e, i), cut into
     (crop/patch)^2 patches. ``task``: "noisy" (input = the noisy raw of the drawn ISO) or
-    "clean" (the clean night raw). ``gamma`` as ``preprocess.network_input``. Other keyword
-    arguments are ``synthesize`` options (bulbs, noise_model, ...)."""
+    "clean" (the clean night raw). ``gamma`` as ``preprocess.network_input``. ``cache`` and
+    ``cache_bytes`` bound the decoded images kept per process, as ``NightPairs``'
+    (``preload()`` decodes them before a loader forks its workers). Other keyword arguments
+    are ``synthesize`` options (bulbs, noise_model, ...)."""
 
     def __init__(self, day_dir, crop=512, patch=64, isos=NOISY_ISOS, seed=0,
                  crops_per_image=1, task="noisy", gamma=preprocess.GAMMA, mode="local",
-                 items_per_image=None, **options):
+                 items_per_image=None, cache=None, cache_bytes=CACHE_BYTES, **options):
         if task not in ("noisy", "clean"):
             raise ValueError(f"task {task!r}: use 'noisy' or 'clean'")
         if crop % patch or crop < patch:
@@ -173,7 +175,8 @@ class FreshPatches(Dataset):
                 raise ValueError(f"items_per_image {counts}: need counts >= 0, not all 0")
             crops_per_image = max(counts)
         self.pairs = NightPairs(day_dir, crop=crop, isos=isos, seed=seed,
-                                crops_per_image=crops_per_image, mode=mode, **options)
+                                crops_per_image=crops_per_image, mode=mode, cache=cache,
+                                cache_bytes=cache_bytes, **options)
         if counts is not None and len(counts) != len(self.pairs.files):
             raise ValueError(f"items_per_image has {len(counts)} counts for "
                              f"{len(self.pairs.files)} day images in {day_dir}")
@@ -199,6 +202,11 @@ class FreshPatches(Dataset):
 
     def set_epoch(self, epoch):
         self.pairs.set_epoch(epoch)
+
+    def preload(self):
+        """``NightPairs.preload``: decode the day images in this process (within the cache's
+        bounds) so that the loader's forked workers share them; returns how many are kept."""
+        return self.pairs.preload()
 
     @property
     def epoch(self):

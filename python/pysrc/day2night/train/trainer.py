@@ -49,7 +49,12 @@ def make_model(cfg):
 
 def make_loader(dataset, cfg, rank, world, shuffle):
     """A DataLoader over this rank's ``DistributedSampler`` shard; a batch holds
-    ``batch_size / world`` patches (items of several patches count as that many)."""
+    ``batch_size / world`` patches (items of several patches count as that many). With
+    worker processes, a dataset that decodes its images (``FreshPatches``) decodes them here
+    first (``preload``, within its cache's bounds), so that the workers, forked anew each
+    epoch, share them instead of each decoding every image it meets."""
+    if cfg.workers > 0 and hasattr(dataset, "preload"):
+        dataset.preload()
     sampler = torch.utils.data.DistributedSampler(
         dataset, num_replicas=world, rank=rank, shuffle=shuffle, seed=cfg.seed, drop_last=False)
     per_rank = max(1, cfg.batch_size // world)
