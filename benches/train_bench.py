@@ -1,8 +1,8 @@
 """Benchmarks of the night ISP trainer (day2night.train; issue 31), run by hand, not a test.
 
     python benches/train_bench.py train  [--features 32] [--batch 128] [--steps 5] [--runs 3]
-    python benches/train_bench.py fresh  DAY.dng [--crop 512] [--items 40] [--runs 3] [--train-steps 1]
-    python benches/train_bench.py loader DAY.dng [--crop 512] [--items 40] [--batch 128] [--runs 3]
+    python benches/train_bench.py fresh  DAY.dng [--crop 512] [--items 40] [--runs 3] [--train-steps 1] [--images 1]
+    python benches/train_bench.py loader DAY.dng [--crop 512] [--items 40] [--batch 128] [--runs 3] [--images 1]
     python benches/train_bench.py cache  DAY.dng [--tiles 6x8] [--runs 3]
     python benches/train_bench.py noise  DAY.dng [--calls 200] [--runs 3]
     python benches/train_bench.py infer  DAY.dng [--features 32] [--tile 512] [--check-features 4]
@@ -15,6 +15,12 @@
   --features, one thread, after the fresh runs; --train-steps 0 skips it); then the numpy
   path of earlier versions on the same items, stage by stage (synthesis, network input,
   sRGB target, cutting). The Rust split of an item: benches/fresh.rs.
+- --images N (fresh, loader): the day folder holds N names of the DNG (links), as a
+  training set of N images does (the experiment's: 60), and the items are drawn at random
+  over them, so each image is decoded again whenever the dataset's per-process cache no
+  longer holds it. With 1 (the default) every item reads the same decoded image. fresh
+  times its items after the dataset's preload() where it has one (a training run's state
+  after its first epoch), the preload itself apart; loader times make_loader apart.
 - noise: synthesize(raw, crop=64 px) calls/s on an input whose NoiseProfile is removed
   (ISO known: the noise is estimated from the image) against the same input with it.
 - infer: peak RSS of a full-image inference (a child process per run, GNU-time-like
@@ -69,32 +75,52 @@ def bench_train(a):
             "runs": rates, "patches_per_cpu_s": statistics.median(cpu) * a.batch}
 
 
+def day_folder(dng, images):
+    """A temporary folder of ``images`` names (links) of ``dng``: day.dng for one, else
+    day000.dng, day001.dng, ..."""
+    d = tempfile.mkdtemp()
+    names = ["day.dng"] if images == 1 else [f"day{i:03d}.dng" for i in range(images)]
+    for n in names:
+        os.symlink(os.path.abspath(dng), os.path.join(d, n))
+    return d
+
+
 def bench_fresh(a):
+    import random
+    import warnings
     import torch
     import day2night
     from day2night.train import data, preprocess, targets
     day2night.set_threads(1)
     torch.set_num_threads(1)
-    d = tempfile.mkdtemp()
-    os.symlink(os.path.abspath(a.dng), os.path.join(d, "day.dng"))
+    warnings.simplefilter("ignore")  # one warning per image name otherwise (--images)
+    d = day_folder(a.dng, a.images)
     ds = data.FreshPatches(d, crop=a.crop, patch=64, isos=(1600, 3200), seed=0,
                            crops_per_image=10**6)
     ds[0]  # decode the image into the dataset's cache, make its noise estimate
-    rates, cpu_rates, k = [], [], 1
+    preload = None
+    if hasattr(ds, "preload"):  # the images a training run keeps after its first epoch
+        t = time.perf_counter()
+        ds.preload()
+        preload = time.perf_counter() - t
+    # one image: items 1, 2, 3, ...; several: items drawn at random over all the images
+    draw = random.Random(0)
+    order = (iter(range(1, len(ds))) if a.images == 1
+             else (draw.randrange(len(ds)) for _ in iter(int, 1)))
+    rates, cpu_rates = [], []
     for _ in range(a.runs):
         t, c = time.perf_counter(), time.process_time()
         for _ in range(a.items):
-            ds[k]
-            k += 1
+            ds[next(order)]
         rates.append(a.items / (time.perf_counter() - t))
         cpu_rates.append(a.items / (time.process_time() - c))
     s = statistics.median(rates)
     # per CPU second of the process (all its threads): what a core gives when the machine
     # is shared and the wall clock counts other processes' time too
-    res = {"bench": "fresh", "crop": a.crop, "threads": 1, "items_per_s": s,
+    res = {"bench": "fresh", "crop": a.crop, "images": a.images, "threads": 1, "items_per_s": s,
            "patches_per_s_per_core": s * ds.patches_per_item, "runs": rates,
            "patches_per_cpu_s": statistics.median(cpu_rates) * ds.patches_per_item,
-           "cpu_runs": cpu_rates}
+           "cpu_runs": cpu_rates, "preload_s": preload}
     # the numpy path of earlier versions on the same items, stage by stage
     stages = {"synthesize": [], "input": [], "target": [], "cut": []}
     old, old_cpu = [], []
@@ -202,17 +228,27 @@ def bench_loader(a):
     processes, each over the same --items items of one epoch (median of --runs); then the
     trainer's own consumption (training steps/s x batch at --features, this process's
     torch threads) unless --train-steps 0."""
+    import warnings
     import torch
     from day2night.train import data, trainer
-    d = tempfile.mkdtemp()
-    os.symlink(os.path.abspath(a.dng), os.path.join(d, "day.dng"))
-    ds = data.FreshPatches(d, crop=a.crop, patch=64, isos=(1600, 3200), seed=0,
-                           items_per_image=[a.items])
-    out = {"bench": "loader", "crop": a.crop, "items": a.items, "batch": a.batch,
-           "patches_per_item": ds.patches_per_item, "workers": {}}
+    warnings.simplefilter("ignore")  # one warning per image name otherwise (--images)
+    d = day_folder(a.dng, a.images)
+    counts = [a.items // a.images + (i < a.items % a.images) for i in range(a.images)]
+
+    def dataset():
+        return data.FreshPatches(d, crop=a.crop, patch=64, isos=(1600, 3200), seed=0,
+                                 items_per_image=counts)
+
+    out = {"bench": "loader", "crop": a.crop, "items": a.items, "images": a.images,
+           "batch": a.batch, "patches_per_item": dataset().patches_per_item, "workers": {}}
     for workers in (0, 1, 2):
+        # a new dataset for each worker count: none starts with the images that the
+        # previous count decoded; what make_loader prepares is timed apart
+        ds = dataset()
         cfg = trainer.TrainConfig(out_dir=d, batch_size=a.batch, workers=workers)
+        t = time.perf_counter()
         loader, sampler = trainer.make_loader(ds, cfg, 0, 1, shuffle=True)
+        prepare = time.perf_counter() - t
         rates = []
         for run in range(a.runs):
             sampler.set_epoch(run)
@@ -221,7 +257,8 @@ def bench_loader(a):
             for x, _ in loader:
                 n += x.shape[0]
             rates.append(n / (time.perf_counter() - t))
-        out["workers"][workers] = {"patches_per_s": statistics.median(rates), "runs": rates}
+        out["workers"][workers] = {"patches_per_s": statistics.median(rates), "runs": rates,
+                                   "make_loader_s": prepare}
         print(f"workers {workers}: {statistics.median(rates):.0f} patches/s", file=sys.stderr)
     if a.train_steps:
         a.steps, a.runs = a.train_steps, 1
@@ -274,6 +311,8 @@ def main():
     p.add_argument("--runs", type=int, default=3)
     p.add_argument("--crop", type=int, default=512)
     p.add_argument("--items", type=int, default=40)
+    p.add_argument("--images", type=int, default=1,
+                   help="fresh, loader: names (links) of the DNG in the day folder")
     p.add_argument("--train-steps", type=int, default=1)
     p.add_argument("--calls", type=int, default=200)
     p.add_argument("--tile", type=int, default=512)
