@@ -259,7 +259,9 @@ fn predict(raw: &[u8], tmp: &mut Vec<u8>) {
 /// [`fill_block`] (half samples) followed by [`predict`]'s byte split, in one pass: the low
 /// byte of planar sample `j` goes to `tmp[j]`, the high byte to `tmp[n + j]` (`n` samples),
 /// exactly where the split of the little-endian planar bytes puts them. The delta step is
-/// left to the caller.
+/// left to the caller. Compiled twice, the second time for AVX2, picked at run time (the
+/// same bytes: the conversion is integer arithmetic and one f32 addition).
+#[multiversion::multiversion(targets("x86_64+avx2"))]
 fn fill_split_half(rows: &[f32], w: usize, tmp: &mut Vec<u8>) {
     let lines = rows.len() / (3 * w);
     let n = lines * 3 * w;
@@ -295,6 +297,7 @@ fn fill_split_half(rows: &[f32], w: usize, tmp: &mut Vec<u8>) {
 }
 
 /// OpenEXR's delta step of [`predict`], in place.
+#[multiversion::multiversion(targets("x86_64+avx2"))]
 fn delta(tmp: &mut [u8]) {
     let mut prev = match tmp.first() {
         Some(&p) => p,
