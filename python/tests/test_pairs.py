@@ -131,3 +131,22 @@ def test_items_equal_numpy_packing_with_a_black_level_pattern(tmp_path):
         assert it["target"].flags.c_contiguous and it["noisy"].flags.c_contiguous
     with pytest.raises(ValueError, match="even"):
         night_pair(raw, 0, 0, 800, (0, 0, 15, 16))
+
+
+def test_epoch_index_pairs_and_the_epoch_sampler(day_dir):
+    """An (epoch, index) pair makes item index of that epoch whatever the dataset's own
+    epoch; EpochSampler pairs a sampler's indices with the epoch current when iteration
+    starts (what persistent DataLoader workers need)."""
+    from day2night.pairs import EpochSampler
+    ds = NightPairs(day_dir, crop=16, seed=3, crops_per_image=2)
+    ds.set_epoch(7)
+    want = [ds[i] for i in range(len(ds))]
+    ds.set_epoch(0)
+    assert all(same(w, ds[(7, i)]) for i, w in enumerate(want))
+    assert not same(want[0], ds[0])
+    sampler = EpochSampler([2, 0, 3], ds)
+    ds.set_epoch(4)
+    it = iter(sampler)
+    ds.set_epoch(5)  # too late for the iteration already started
+    assert list(it) == [(4, 2), (4, 0), (4, 3)] and len(sampler) == 3
+    assert list(sampler) == [(5, 2), (5, 0), (5, 3)]

@@ -83,6 +83,20 @@ def test_same_batches_whatever_the_worker_count(stand_in):
     assert len(got[0]) == len(got[2]) > 1
     for (x0, y0), (x2, y2) in zip(got[0], got[2]):
         assert torch.equal(x0, x2) and torch.equal(y0, y2)
+    # the workers persist from epoch to epoch (the epoch rides with the indices): each
+    # epoch's batches are still the in-process loader's of that epoch
+    persistent, _ = trainer.make_loader(fresh, cfg, 0, 1, shuffle=False)
+    plain, _ = trainer.make_loader(
+        fresh, trainer.TrainConfig(out_dir=str(root / "w"), batch_size=32, workers=0), 0, 1,
+        shuffle=False)
+    assert persistent.persistent_workers and not plain.persistent_workers
+    for epoch in (5, 6):
+        fresh.set_epoch(epoch)
+        want = list(plain)
+        got_epoch = list(persistent)
+        assert len(got_epoch) == len(want)
+        for (x, y), (wx, wy) in zip(got_epoch, want):
+            assert torch.equal(x, wx) and torch.equal(y, wy), epoch
     # another epoch draws other crops
     first = fresh[0][0].numpy()
     fresh.set_epoch(4)

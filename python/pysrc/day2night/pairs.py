@@ -65,6 +65,34 @@ def _draw(seed, epoch, index):
     return random.Random(int.from_bytes(key, "little"))
 
 
+def epoch_index(index):
+    """(epoch or None, index) of an item index or of an (epoch, index) pair (EpochSampler)."""
+    if isinstance(index, tuple):
+        epoch, index = index
+        return int(epoch), int(index)
+    return None, int(index)
+
+
+class EpochSampler:
+    """``sampler``'s indices as (epoch, index) pairs, with the epoch of ``dataset`` when an
+    epoch's iteration starts. Persistent ``DataLoader`` workers keep their own copy of the
+    dataset, which ``set_epoch`` in the main process does not reach; with these pairs they
+    still make each epoch's items (``NightPairs`` and ``FreshPatches`` take them).
+
+    >>> loader = torch.utils.data.DataLoader(ds, sampler=EpochSampler(sampler, ds),
+    ...                                      num_workers=2, persistent_workers=True)"""
+
+    def __init__(self, sampler, dataset):
+        self.sampler, self.dataset = sampler, dataset
+
+    def __iter__(self):
+        epoch = self.dataset.epoch  # now, not at the first item
+        return ((epoch, i) for i in self.sampler)
+
+    def __len__(self):
+        return len(self.sampler)
+
+
 class NightPairs:
     """Map-style dataset of fresh night pairs synthesized on random crops of day DNGs.
 
@@ -91,7 +119,7 @@ class NightPairs:
     >>> ds.preload()              # the workers (forked) share the decoded images
     >>> loader = torch.utils.data.DataLoader(ds, batch_size=8, num_workers=2)
     >>> for epoch in range(10):
-    ...     ds.set_epoch(epoch)   # with persistent workers, re-create the iterator
+    ...     ds.set_epoch(epoch)   # persistent workers: sampler=EpochSampler(sampler, ds)
     ...     for batch in loader: ...
     """
 
@@ -192,12 +220,13 @@ class NightPairs:
                        mode=self.mode, **self.options)
         return len(self._cache)
 
-    def params(self, index):
-        """The draws of item ``index`` at the current epoch: file, variant, ISO and the
-        crop's (top, left) as fractions to be placed inside the image's DefaultCrop."""
+    def params(self, index, epoch=None):
+        """The draws of item ``index`` at ``epoch`` (None: the current one): file, variant,
+        ISO and the crop's (top, left) as fractions to be placed inside the image's
+        DefaultCrop."""
         if not 0 <= index < len(self):
             raise IndexError(f"index {index} out of range for {len(self)} items")
-        rng = _draw(self.seed, self.epoch, index)
+        rng = _draw(self.seed, self.epoch if epoch is None else int(epoch), index)
         return {
             "file": self.files[index // self.crops_per_image],
             "variant": rng.randrange(2**31),
@@ -206,13 +235,14 @@ class NightPairs:
             "v": rng.random(),
         }
 
-    def place(self, index):
-        """Where item ``index`` of the current epoch is synthesized: a dict with ``raw``
-        (the decoded image), ``variant``, ``iso`` and ``crop`` ((top, left, height, width)
-        in active-area coordinates: an even position inside the image's DefaultCrop)."""
+    def place(self, index, epoch=None):
+        """Where item ``index`` of ``epoch`` (None: the current one) is synthesized: a dict
+        with ``raw`` (the decoded image), ``variant``, ``iso`` and ``crop`` ((top, left,
+        height, width) in active-area coordinates: an even position inside the image's
+        DefaultCrop)."""
         if index < 0:
             index += len(self)
-        p = self.params(index)
+        p = self.params(index, epoch)
         raw, (y0, x0, ch, cw) = self._raw(p["file"])
         c = self.crop
         if c > ch or c > cw:
@@ -228,7 +258,8 @@ class NightPairs:
         return {"raw": raw, "variant": p["variant"], "iso": p["iso"], "crop": (top, left, c, c)}
 
     def __getitem__(self, index):
-        q = self.place(index)
+        """Item ``index`` of the current epoch, or of epoch e for an (e, index) pair."""
+        q = self.place(*reversed(epoch_index(index)))
         raw, iso, (top, left, _, _) = q["raw"], q["iso"], q["crop"]
         # One call: the synthesis of the crop and the arrays in their final layout (Rust).
         out = night_pair(raw, self.seed, q["variant"], iso, q["crop"], mode=self.mode,

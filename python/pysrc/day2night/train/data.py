@@ -33,7 +33,7 @@ import numpy as np
 from .._native import fresh_pair, synthesize
 from ..atomic import open_atomic
 from ..isos import NOISY_ISOS
-from ..pairs import CACHE_BYTES, NightPairs
+from ..pairs import CACHE_BYTES, EpochSampler, NightPairs, epoch_index
 from . import cache, preprocess, targets
 from ._torch import Dataset, torch
 
@@ -213,7 +213,8 @@ class FreshPatches(Dataset):
         return self.pairs.epoch
 
     def _pair(self, index, patch, out=None):
-        q = self.pairs.place(self.pair_index(index))
+        epoch, index = epoch_index(index)
+        q = self.pairs.place(self.pair_index(index), epoch)
         return fresh_pair(q["raw"], q["crop"], q["iso"], seed=self.seed, variant=q["variant"],
                           mode=self.mode, task=self.task, table=preprocess._table(self.gamma),
                           patch=patch, out=out, **self.options)
@@ -235,7 +236,9 @@ class FreshPatches(Dataset):
         return x, targets.srgb8(out["target"])
 
     def __getitem__(self, index):
-        xs, ys = self._pair(int(index), self.patch)
+        """Item ``index`` of the current epoch, or of epoch e for an (e, index) pair (what
+        ``pairs.EpochSampler`` gives persistent workers)."""
+        xs, ys = self._pair(index, self.patch)
         return torch.from_numpy(xs), torch.from_numpy(ys)
 
     def __getitems__(self, indices):
@@ -247,7 +250,7 @@ class FreshPatches(Dataset):
         x, y = (_batch_tensor((len(indices) * k, 3, p, p)) for _ in range(2))
         xa, ya = x.numpy(), y.numpy()
         for j, index in enumerate(indices):
-            self._pair(int(index), p, out=(xa[j * k:(j + 1) * k], ya[j * k:(j + 1) * k]))
+            self._pair(index, p, out=(xa[j * k:(j + 1) * k], ya[j * k:(j + 1) * k]))
         return Batch(x, y)
 
 

@@ -30,7 +30,7 @@ import time
 from ..atomic import open_atomic, write_text
 from ._torch import no_grad, torch
 from .config import TrainConfig  # noqa: F401  (trainer.TrainConfig, as before)
-from .data import collate
+from .data import EpochSampler, FreshPatches, collate
 from .unet import UNet
 
 
@@ -51,16 +51,21 @@ def make_loader(dataset, cfg, rank, world, shuffle):
     """A DataLoader over this rank's ``DistributedSampler`` shard; a batch holds
     ``batch_size / world`` patches (items of several patches count as that many). With
     worker processes, a dataset that decodes its images (``FreshPatches``) decodes them here
-    first (``preload``, within its cache's bounds), so that the workers, forked anew each
-    epoch, share them instead of each decoding every image it meets."""
+    first (``preload``, within its cache's bounds), so that the workers forked from this
+    process share them instead of each decoding every image it meets; ``FreshPatches``'
+    workers then persist from epoch to epoch, their indices (epoch, index) pairs."""
     if cfg.workers > 0 and hasattr(dataset, "preload"):
         dataset.preload()
     sampler = torch.utils.data.DistributedSampler(
         dataset, num_replicas=world, rank=rank, shuffle=shuffle, seed=cfg.seed, drop_last=False)
     per_rank = max(1, cfg.batch_size // world)
     items = max(1, per_rank // getattr(dataset, "patches_per_item", 1))
+    # Fresh synthesis keeps its workers from epoch to epoch: their indices carry the epoch
+    # (EpochSampler), which set_epoch in this process could not give their copies.
+    persistent = cfg.workers > 0 and isinstance(dataset, FreshPatches)
     loader = torch.utils.data.DataLoader(
-        dataset, batch_size=items, sampler=sampler, num_workers=cfg.workers,
+        dataset, batch_size=items, sampler=EpochSampler(sampler, dataset) if persistent
+        else sampler, num_workers=cfg.workers, persistent_workers=persistent,
         collate_fn=collate, pin_memory=cfg.device.startswith("cuda"))
     return loader, sampler
 
