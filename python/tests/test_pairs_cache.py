@@ -13,7 +13,7 @@ import pytest
 
 import day2night
 from day2night import NightPairs
-from day2night.pairs import CACHE_BYTES
+from day2night.image_cache import CACHE_BYTES
 
 
 @pytest.fixture

@@ -11,11 +11,11 @@ import hashlib
 import operator
 import os
 import random
-from collections import OrderedDict
 
 import numpy as np
 
-from ._native import check_int, night_pair, read_dng
+from ._native import check_int, night_pair
+from .image_cache import CACHE_BYTES, DecodedImages
 from .isos import NOISY_ISOS
 
 
@@ -47,15 +47,6 @@ def pack_bayer(plane, meta, top=0, left=0):
             b = black[((top + i) % rr) * rc + (left + j) % rc]
             out[2 * i + j] = (plane[i::2, j::2].astype(np.float32) - np.float32(b)) / np.float32(scale)
     return out
-
-
-#: ``NightPairs``' default bound on the decoded images kept per process (their planes).
-CACHE_BYTES = 4 << 30
-
-
-def _plane_bytes(meta):
-    """Bytes of a decoded image's plane: width x height x samples x 2."""
-    return int(meta["width"]) * int(meta["height"]) * int(meta.get("samples_per_pixel") or 1) * 2
 
 
 def _draw(seed, epoch, index):
@@ -148,16 +139,8 @@ class NightPairs:
             raise ValueError("crops_per_image must be at least 1")
         self.mode = mode
         self.options = dict(options)
-        if cache is not None:
-            cache = operator.index(cache)
-            if cache < 1:
-                raise ValueError(f"cache {cache}: keep at least 1 decoded image (None: no limit)")
-        cache_bytes = operator.index(cache_bytes)
-        if cache_bytes < 0:
-            raise ValueError(f"cache_bytes {cache_bytes} must be at least 0")
-        self.cache_size, self.cache_bytes = cache, cache_bytes
+        self.images = DecodedImages(self.day_dir, cache, cache_bytes)
         self.epoch = 0
-        self._cache = OrderedDict()
 
     def __len__(self):
         return len(self.files) * self.crops_per_image
@@ -166,59 +149,25 @@ class NightPairs:
         """Draw new variants and crops: items are functions of (seed, epoch, index)."""
         self.epoch = int(epoch)
 
-    def __getstate__(self):
-        # Decoded images stay in the process that read them (workers read their own).
-        state = self.__dict__.copy()
-        state["_cache"] = OrderedDict()
-        return state
-
-    def _read(self, name):
-        """Decode image ``name``: (raw, its DefaultCrop, the bytes of its plane)."""
-        raw = read_dng(os.path.join(self.day_dir, name))
-        meta = raw.meta
-        return raw, tuple(meta["default_crop"]), _plane_bytes(meta)
-
-    def _raw(self, name):
-        """The decoded image ``name`` and its DefaultCrop, from this process's cache."""
-        entry = self._cache.get(name)
-        if entry is None:
-            entry = self._read(name)
-            self._cache[name] = entry
-            # the least recently used out beyond the bounds; the image just read stays
-            while len(self._cache) > 1 and (
-                    (self.cache_size is not None and len(self._cache) > self.cache_size)
-                    or self._cached_bytes() > self.cache_bytes):
-                self._cache.popitem(last=False)
-        else:
-            self._cache.move_to_end(name)
-        return entry[:2]
-
-    def _cached_bytes(self):
-        return sum(e[2] for e in self._cache.values())
-
     def cached(self):
         """The names of the images this process keeps decoded, least recently used first."""
-        return list(self._cache)
+        return self.images.names()
 
     def preload(self):
         """Decode the images in name order while the cache keeps them (``cache`` images,
         ``cache_bytes``), each with the per-image work of its first item done (the noise
         estimate of an input without a NoiseProfile), and return how many are kept. Worker
-        processes that a DataLoader forks afterwards share them (``__getstate__`` keeps the
-        cache out of pickles: under the spawn start method each worker decodes its own)."""
+        processes that a DataLoader forks afterwards share them (a pickle carries no decoded
+        image: under the spawn start method each worker decodes its own)."""
         for name in self.files:
-            if name not in self._cache:
-                if self.cache_size is not None and len(self._cache) >= self.cache_size:
-                    break
-                entry = self._read(name)
-                if self._cache and self._cached_bytes() + entry[2] > self.cache_bytes:
-                    break
-                self._cache[name] = entry
-            raw, (y0, x0, _, _), _ = self._cache[name]
+            kept = self.images.add(name)
+            if kept is None:
+                break
+            raw, (y0, x0, _, _) = kept
             # the first item's per-image work (the noise estimate), on the smallest crop
             night_pair(raw, self.seed, 0, self.isos[0], (y0 + y0 % 2, x0 + x0 % 2, 2, 2),
                        mode=self.mode, **self.options)
-        return len(self._cache)
+        return len(self.images)
 
     def params(self, index, epoch=None):
         """The draws of item ``index`` at ``epoch`` (None: the current one): file, variant,
@@ -243,7 +192,7 @@ class NightPairs:
         if index < 0:
             index += len(self)
         p = self.params(index, epoch)
-        raw, (y0, x0, ch, cw) = self._raw(p["file"])
+        raw, (y0, x0, ch, cw) = self.images.get(p["file"])
         c = self.crop
         if c > ch or c > cw:
             raise ValueError(f"{raw.path}: crop {c} is larger than the image's {cw}x{ch} DefaultCrop")
@@ -259,7 +208,8 @@ class NightPairs:
 
     def __getitem__(self, index):
         """Item ``index`` of the current epoch, or of epoch e for an (e, index) pair."""
-        q = self.place(*reversed(epoch_index(index)))
+        epoch, index = epoch_index(index)
+        q = self.place(index, epoch)
         raw, iso, (top, left, _, _) = q["raw"], q["iso"], q["crop"]
         # One call: the synthesis of the crop and the arrays in their final layout (Rust).
         out = night_pair(raw, self.seed, q["variant"], iso, q["crop"], mode=self.mode,

@@ -33,7 +33,8 @@ import numpy as np
 from .._native import fresh_pair, synthesize
 from ..atomic import open_atomic
 from ..isos import NOISY_ISOS
-from ..pairs import CACHE_BYTES, EpochSampler, NightPairs, epoch_index
+from ..image_cache import CACHE_BYTES
+from ..pairs import EpochSampler, NightPairs, epoch_index
 from . import cache, preprocess, targets
 from ._torch import Dataset, torch
 
