@@ -191,6 +191,11 @@ fn eq_mask64(a: &[u8; 64], b: &[u8; 64]) -> u64 {
 
 /// `eq[w]` bit k = whether `input[start + 64 w + k]` equals the byte before it (false for
 /// position 0 and past `end`).
+///
+/// Compiled twice, the second time for AVX2 and BMI1/2, picked at run time: the same
+/// operations per element, so the same bits (docs/benchmarks.md, "AVX2 copies of the hot
+/// loops").
+#[multiversion::multiversion(targets("x86_64+avx2+bmi1+bmi2+lzcnt"))]
 #[inline(never)]
 fn eq_bitmap(input: &[u8], start: usize, end: usize, eq: &mut Vec<u64>) {
     // one load per cache line first: many independent loads in flight pull a chunk that is
@@ -253,8 +258,13 @@ impl BlockEncoder {
     /// `input[start..end]` (the byte before `start`, if any, counts as a predecessor), store them
     /// split into matches of 3..=258 in
     /// `runs` and count the remaining literal bytes into `lit_hist`.
-    #[inline(never)]
     fn scan_runs(&mut self, input: &[u8], start: usize, end: usize, lit_hist: &mut [u32]) {
+        scan_runs(self, input, start, end, lit_hist);
+    }
+
+    /// [`BlockEncoder::scan_runs`]'s body.
+    #[inline(always)]
+    fn scan_runs_body(&mut self, input: &[u8], start: usize, end: usize, lit_hist: &mut [u32]) {
         self.runs.clear();
         eq_bitmap(input, start, end, &mut self.eq);
         let eq = &self.eq;
@@ -499,8 +509,20 @@ fn cl_extra(sym: usize) -> u64 {
     }
 }
 
+/// [`BlockEncoder::scan_runs`], compiled twice like [`write_symbols`].
+#[multiversion::multiversion(targets("x86_64+avx2+bmi1+bmi2+lzcnt"))]
+#[inline(never)]
+fn scan_runs(enc: &mut BlockEncoder, input: &[u8], start: usize, end: usize, lit_hist: &mut [u32]) {
+    enc.scan_runs_body(input, start, end, lit_hist);
+}
+
 /// The literals and matches of `input[start..end]` then end-of-block, through `t`. The caller
 /// reserved room for the whole block in `w`.
+///
+/// Compiled twice, the second time for AVX2 and BMI1/2 (shifts by a variable count,
+/// trailing-zero counts), picked at run time: integer arithmetic only, so the same bytes
+/// (docs/benchmarks.md, "AVX2 copies of the hot loops").
+#[multiversion::multiversion(targets("x86_64+avx2+bmi1+bmi2+lzcnt"))]
 #[inline(never)]
 fn write_symbols(
     t: &Tables,

@@ -66,6 +66,11 @@ pub fn encode_u8(img: &RgbImage, tone: DisplayTone) -> Vec<u8> {
 
 /// [`encode_u8`] of a slice of samples, on the calling thread (for band-wise encoding:
 /// the same bytes as the whole-image call gives for these samples).
+///
+/// Compiled twice, the second time for AVX2, picked at run time: the same
+/// operations per element, so the same bits (docs/benchmarks.md, "AVX2 copies of the hot
+/// loops").
+#[multiversion::multiversion(targets("x86_64+avx2"))]
 pub fn encode_u8_slice(src: &[f32], tone: DisplayTone) -> Vec<u8> {
     match Lut8::cached(tone) {
         Some(lut) => src.iter().map(|&v| lut.get(v)).collect(),

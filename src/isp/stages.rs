@@ -273,7 +273,11 @@ impl Rows {
 }
 
 /// [`Stage::Colour`] on one interleaved row.
-#[inline]
+///
+/// Compiled twice, the second time for AVX2, picked at run time: the same
+/// operations per element, so the same bits (docs/benchmarks.md, "AVX2 copies of the hot
+/// loops").
+#[multiversion::multiversion(targets("x86_64+avx2"))]
 fn colour(r: &Rows, row: &mut [f32]) {
     match &r.colour {
         Colour::Matrix(m) => matrix_row(row, m),

@@ -280,6 +280,20 @@ impl<'a> RowNoise<'a> {
         &self,
         stream: NoiseStream,
         key: &[u8; 32],
+        rows: (usize, usize),
+        x0: usize,
+        seg: &mut [u16],
+        scratch: &mut Vec<f64>,
+    ) {
+        noise_row_from(self, stream, key, rows, x0, seg, scratch);
+    }
+
+    /// [`RowNoise::row_from`]'s body.
+    #[inline(always)]
+    fn row_from_body(
+        &self,
+        stream: NoiseStream,
+        key: &[u8; 32],
         (r, sr): (usize, usize),
         x0: usize,
         seg: &mut [u16],
@@ -363,6 +377,21 @@ impl<'a> RowNoise<'a> {
 #[inline]
 fn draw<R: Rng>(rng: &mut R) -> f64 {
     StandardNormal.sample(rng)
+}
+
+/// [`RowNoise::row_from`], compiled twice, the second time for AVX2, picked at run time (the
+/// same operations per sample, so the same bits).
+#[multiversion::multiversion(targets("x86_64+avx2"))]
+fn noise_row_from(
+    rows: &RowNoise<'_>,
+    stream: NoiseStream,
+    key: &[u8; 32],
+    at: (usize, usize),
+    x0: usize,
+    seg: &mut [u16],
+    scratch: &mut Vec<f64>,
+) {
+    rows.row_from_body(stream, key, at, x0, seg, scratch);
 }
 
 #[cfg(test)]

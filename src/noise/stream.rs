@@ -121,6 +121,11 @@ pub fn row_rng_v2(key: &[u8; 32], row: usize) -> Xoshiro256PlusPlus {
 
 /// Fill `out` with standard normals from the version-2 stream of row `row` (the ziggurat
 /// of [`StandardNormal`], one after the other).
+///
+/// Compiled twice, the second time for AVX2, picked at run time: the same
+/// operations per element, so the same bits (docs/benchmarks.md, "AVX2 copies of the hot
+/// loops").
+#[multiversion::multiversion(targets("x86_64+avx2"))]
 pub fn fill_normals_v2(key: &[u8; 32], row: usize, out: &mut [f64]) {
     let mut rng = row_rng_v2(key, row);
     for n in out.iter_mut() {

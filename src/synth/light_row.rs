@@ -57,7 +57,7 @@ pub(super) fn parity(k: [f32; 2], c0: usize) -> [f32; 2] {
 
 /// Apply `f(num, den, ye, mask, k)` element-wise, two columns at a time so that the CFA
 /// factor is a constant per lane (no per-sample parity index; same arithmetic per element).
-#[inline]
+#[inline(always)]
 #[allow(clippy::needless_range_loop)] // one index into five fixed-size arrays: the lanes
 fn pairwise<F: Fn(&mut f32, &mut f32, f32, f32, f32)>(
     num: &mut [f32],
@@ -108,6 +108,11 @@ fn pairwise<F: Fn(&mut f32, &mut f32, f32, f32, f32)>(
 
 /// Local relighting of active-area row `r` over the segment of the scratch buffers, whose
 /// first sample is active-area column `x0` (the masks' column ranges lie inside it).
+///
+/// Compiled twice, the second time for AVX2, picked at run time: the same
+/// operations per element, so the same bits (docs/benchmarks.md, "AVX2 copies of the hot
+/// loops").
+#[multiversion::multiversion(targets("x86_64+avx2"))]
 pub(super) fn local_row(
     r: usize,
     x0: usize,

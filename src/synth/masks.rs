@@ -259,6 +259,12 @@ impl PreparedMask {
     }
     /// Fill `out[i]` with the mask at columns `cols.0 + i` of row `r` (which must be on_row).
     pub fn fill_row(&self, r: usize, out: &mut [f32]) {
+        fill_row(self, r, out);
+    }
+
+    /// [`PreparedMask::fill_row`]'s body.
+    #[inline(always)]
+    fn fill_row_body(&self, r: usize, out: &mut [f32]) {
         let floor = self.floor as f32;
         if let Some(k) = &self.release {
             // The release floors the f64 kernel, then stores the mask as f32.
@@ -312,6 +318,13 @@ impl PreparedMask {
         sub.fill_row(r, &mut v);
         v[0]
     }
+}
+
+/// [`PreparedMask::fill_row`], compiled twice, the second time for AVX2, picked at run time
+/// (the same operations per element, so the same bits).
+#[multiversion::multiversion(targets("x86_64+avx2"))]
+fn fill_row(mask: &PreparedMask, r: usize, out: &mut [f32]) {
+    mask.fill_row_body(r, out);
 }
 
 /// `[start, end)` of `len` samples starting at `start` (possibly negative), cut to `[0, n)`.

@@ -355,6 +355,12 @@ impl<'a> CleanPass<'a> {
     /// from `stored`, the input's whole stored row `r + top`; returns the number of
     /// saturated input sites among them.
     fn row(&self, r: usize, stored: &[u16], seg: &mut [u16], scr: &mut Scratch) -> u64 {
+        clean_row(self, r, stored, seg, scr)
+    }
+
+    /// [`CleanPass::row`]'s body.
+    #[inline(always)]
+    fn row_body(&self, r: usize, stored: &[u16], seg: &mut [u16], scr: &mut Scratch) -> u64 {
         let (norm, plan, x0, sw) = (&self.norm, self.plan, self.x0, self.sw);
         let s32 = self.s as f32;
         let white = norm.white;
@@ -494,6 +500,20 @@ pub fn run(img: &RawImage, plan: &Plan) -> Result<SynthOutput> {
         noisy,
         report,
     })
+}
+
+/// [`CleanPass::row`], compiled twice, the second time for AVX2, picked at run time (the
+/// same operations per element, so the same bits; docs/benchmarks.md, "AVX2 copies of the hot
+/// loops").
+#[multiversion::multiversion(targets("x86_64+avx2"))]
+fn clean_row(
+    pass: &CleanPass<'_>,
+    r: usize,
+    stored: &[u16],
+    seg: &mut [u16],
+    scr: &mut Scratch,
+) -> u64 {
+    pass.row_body(r, stored, seg, scr)
 }
 
 #[cfg(test)]

@@ -410,6 +410,11 @@ pub(super) fn row_bytes(w: usize, bits: usize) -> usize {
 
 /// Unpack one row of `dst.len()` samples: 8-bit bytes, 16-bit in file byte order, other
 /// depths packed MSB-first (the DNG convention whatever the byte order).
+///
+/// Compiled twice, the second time for AVX2 and BMI1/2, picked at run time: the same
+/// operations per element, so the same bits (docs/benchmarks.md, "AVX2 copies of the hot
+/// loops").
+#[multiversion::multiversion(targets("x86_64+avx2+bmi1+bmi2+lzcnt"))]
 pub fn unpack_row(src: &[u8], dst: &mut [u16], bits: usize, order: ByteOrder) {
     match bits {
         8 => {

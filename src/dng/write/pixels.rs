@@ -132,6 +132,11 @@ pub(super) fn extract_tile(img: &RawImage, x0: usize, y0: usize, tw: usize, th: 
 
 /// Rows of `w` samples at `bits` bits: 8 -> bytes, 16 -> 16-bit words in file byte order,
 /// other depths -> MSB-first packed, each row padded to a byte boundary.
+///
+/// Compiled twice, the second time for AVX2 and BMI1/2, picked at run time: the same
+/// operations per element, so the same bits (docs/benchmarks.md, "AVX2 copies of the hot
+/// loops").
+#[multiversion::multiversion(targets("x86_64+avx2+bmi1+bmi2+lzcnt"))]
 pub(super) fn pack_rows(samples: &[u16], w: usize, bits: u16, big: bool) -> Vec<u8> {
     match bits {
         16 => {

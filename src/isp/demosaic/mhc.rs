@@ -20,6 +20,11 @@ pub(super) fn run(p: &Padded, bayer: Bayer, post: &Post) -> RgbImage {
 /// The colour of each pixel only alternates along a row, so the row is dispatched once to
 /// a loop over pixel pairs specialized for its two kinds ([`pixel`]); the arithmetic of
 /// each pixel is exactly that of [`rgb_row_generic`] (tested equal bit for bit).
+///
+/// Compiled twice, the second time for AVX2, picked at run time: the same
+/// operations per element, so the same bits (docs/benchmarks.md, "AVX2 copies of the hot
+/// loops").
+#[multiversion::multiversion(targets("x86_64+avx2"))]
 pub(crate) fn rgb_row(
     d: &[f32],
     s: usize,
