@@ -195,6 +195,46 @@ impl Normalizer {
     }
 }
 
+/// [`round_clamp`] to a fixed white level, in operations the compiler keeps in whole
+/// registers: the saturating float-to-integer `as` casts are converted one sample at a time
+/// on x86-64, which kept the loops that quantize every sample (the clean row, the noise
+/// rows) from vectorizing. The same value as `round_clamp(v, white)` for every `v` and
+/// `white` (tested against it in noise::apply).
+#[derive(Debug, Clone, Copy)]
+pub struct RoundClamp {
+    /// `white as u32`, the largest result.
+    top: f64,
+}
+
+impl RoundClamp {
+    /// 2^52: adding it to a non-negative float below 2^52 rounds it to an integer.
+    const SHIFT: f64 = 4_503_599_627_370_496.0;
+
+    /// The rounding to `white`.
+    pub fn new(white: f64) -> RoundClamp {
+        RoundClamp {
+            top: (white as u32) as f64,
+        }
+    }
+
+    /// `round_clamp(v, white)`: below 0.5 (or NaN) 0; else `floor(min(v + 0.5, top))`,
+    /// which is `min(floor(v + 0.5), top)` (the saturating cast's value). The floor of
+    /// `x` in `[0, 2^32]`: adding 2^52 rounds it to the nearest integer `r` (exactly, in
+    /// that binade), the low bits of the sum are `r`, and `r - 1` where `r` rounded up.
+    #[inline(always)]
+    pub fn apply(self, v: f64) -> u16 {
+        let x = (v + 0.5).min(self.top);
+        let t = x + Self::SHIFT;
+        let r = (t.to_bits() as i64).wrapping_sub(Self::SHIFT.to_bits() as i64)
+            - i64::from(t - Self::SHIFT > x);
+        if v >= 0.5 {
+            r as u16
+        } else {
+            0
+        }
+    }
+}
+
 /// A table of a function of (2x2 position, stored value) for every stored value up to the
 /// white level, built only when the black level depends on the 2x2 position alone
 /// ([`Normalizer::black_is_2x2_periodic`]): then a per-sample expression of the site's

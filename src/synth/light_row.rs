@@ -55,10 +55,16 @@ pub(super) fn parity(k: [f32; 2], c0: usize) -> [f32; 2] {
     }
 }
 
-/// Apply `f(num, den, ye, mask, k)` element-wise, two columns at a time so that the CFA
-/// factor is a constant per lane (no per-sample parity index; same arithmetic per element).
+/// Apply `f(num, den, ye, mask, k)` element-wise, where `k` is `k[0]` at the even and
+/// `k[1]` at the odd positions of the slices (the CFA factor of the column's colour).
+///
+/// One flat loop with the factor selected by the index's parity: the compiler turns it
+/// into whole-register operations (the select is a blend of two broadcast factors). An
+/// earlier shape, eight columns at a time through fixed-size arrays, made the compiler
+/// vectorize across the chunks instead and spend most of its instructions on shuffles
+/// (docs/benchmarks.md, "The light sum as flat loops"). The arithmetic per element is
+/// the same, so are the bits.
 #[inline(always)]
-#[allow(clippy::needless_range_loop)] // one index into five fixed-size arrays: the lanes
 fn pairwise<F: Fn(&mut f32, &mut f32, f32, f32, f32)>(
     num: &mut [f32],
     den: &mut [f32],
@@ -69,40 +75,9 @@ fn pairwise<F: Fn(&mut f32, &mut f32, f32, f32, f32)>(
 ) {
     let n = m.len().min(num.len()).min(den.len()).min(ye.len());
     let (num, den, ye, m) = (&mut num[..n], &mut den[..n], &ye[..n], &m[..n]);
-    // Eight columns at a time through fixed-size arrays: the compiler unrolls the lanes
-    // into SIMD operations (the same operations per element, so the same bits); the
-    // pairs below take the rest (an even number of columns in, so the same parity).
-    let k8 = [k[0], k[1], k[0], k[1], k[0], k[1], k[0], k[1]];
-    let wide = n / 8 * 8;
-    let (num8, num) = num.split_at_mut(wide);
-    let (den8, den) = den.split_at_mut(wide);
-    let (ye8, ye) = ye.split_at(wide);
-    let (m8, m) = m.split_at(wide);
-    for (((nn, dd), yy), mm) in num8
-        .as_chunks_mut::<8>()
-        .0
-        .iter_mut()
-        .zip(den8.as_chunks_mut::<8>().0.iter_mut())
-        .zip(ye8.as_chunks::<8>().0)
-        .zip(m8.as_chunks::<8>().0)
-    {
-        for j in 0..8 {
-            f(&mut nn[j], &mut dd[j], yy[j], mm[j], k8[j]);
-        }
-    }
-    let n = n - wide;
-    for (((nn, dd), yy), mm) in num
-        .chunks_exact_mut(2)
-        .zip(den.chunks_exact_mut(2))
-        .zip(ye.chunks_exact(2))
-        .zip(m.chunks_exact(2))
-    {
-        f(&mut nn[0], &mut dd[0], yy[0], mm[0], k[0]);
-        f(&mut nn[1], &mut dd[1], yy[1], mm[1], k[1]);
-    }
-    if n % 2 == 1 {
-        let i = n - 1;
-        f(&mut num[i], &mut den[i], ye[i], m[i], k[0]);
+    for i in 0..n {
+        let kk = if i & 1 == 0 { k[0] } else { k[1] };
+        f(&mut num[i], &mut den[i], ye[i], m[i], kk);
     }
 }
 

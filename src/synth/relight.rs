@@ -25,7 +25,7 @@ use super::masks::{LightKind, PreparedMask};
 use super::plan::Plan;
 use super::{Mode, SynthOutput};
 use crate::error::Result;
-use crate::normalize::{round_clamp, Normalizer, SiteTable};
+use crate::normalize::{Normalizer, RoundClamp, SiteTable};
 use crate::raw::crop::Crop;
 use crate::raw::RawImage;
 use rayon::prelude::*;
@@ -380,18 +380,23 @@ impl<'a> CleanPass<'a> {
             let (t0, t1) = t.row(r);
             // two columns at a time, so each lane has its own table (no per-sample parity)
             let tabs = if x0 & 1 == 0 { [t0, t1] } else { [t1, t0] };
-            let look = |i: usize, x: u16, tab: &[f32]| match tab.get(x as usize) {
-                Some(&v) => v,
-                None => {
-                    let c = x0 + i;
-                    self.y_w(x, norm.black_at(r, c), k[c & 1]) as f32 * s32
-                }
-            };
-            for (p, (xs, ys)) in src.chunks(2).zip(scr.ye.chunks_mut(2)).enumerate() {
-                for (j, (&x, ye)) in xs.iter().zip(ys.iter_mut()).enumerate() {
-                    *ye = look(2 * p + j, x, tabs[j]);
-                    sat += (norm.linearize(x) >= white) as u64;
-                }
+            // Flat loops, the table picked by the index's parity: the saturation count
+            // becomes whole-register compares, and the lookups lose the pairs' bookkeeping
+            // (docs/benchmarks.md, "The light sum as flat loops").
+            sat += if norm.is_identity() {
+                src.iter().filter(|&&x| x as f64 >= white).count()
+            } else {
+                src.iter().filter(|&&x| norm.linearize(x) >= white).count()
+            } as u64;
+            for (i, (&x, ye)) in src.iter().zip(scr.ye.iter_mut()).enumerate() {
+                let tab = if i & 1 == 0 { tabs[0] } else { tabs[1] };
+                *ye = match tab.get(x as usize) {
+                    Some(&v) => v,
+                    None => {
+                        let c = x0 + i;
+                        self.y_w(x, norm.black_at(r, c), k[c & 1]) as f32 * s32
+                    }
+                };
             }
         } else {
             for (i, ((&x, ye), &b)) in src
@@ -446,11 +451,14 @@ impl<'a> CleanPass<'a> {
                 // `denormalize_with_black(y, b, false)` with its per-lane range and the
                 // white level taken out of the loop: the same expression, so the same bits
                 let range = b.map(|b| norm.range_at_black(b));
-                let white = norm.white.min(u16::MAX as f64);
-                for (pair, y) in seg.chunks_mut(2).zip(scr.num.chunks(2)) {
-                    for (j, (d, &y)) in pair.iter_mut().zip(y).enumerate() {
-                        *d = round_clamp(y as f64 * range[j] + b[j], white);
-                    }
+                let round = RoundClamp::new(norm.white.min(u16::MAX as f64));
+                for (i, (d, &y)) in seg.iter_mut().zip(scr.num.iter()).enumerate() {
+                    let (rg, bl) = if i & 1 == 0 {
+                        (range[0], b[0])
+                    } else {
+                        (range[1], b[1])
+                    };
+                    *d = round.apply(y as f64 * rg + bl);
                 }
             }
         } else {
