@@ -53,14 +53,18 @@ pub fn encode_u8(img: &RgbImage, tone: DisplayTone) -> Vec<u8> {
             let mut out = vec![0u8; img.data.len()];
             out.par_chunks_mut(1 << 16)
                 .zip(img.data.par_chunks(1 << 16))
-                .for_each(|(o, i)| {
-                    for (o, &v) in o.iter_mut().zip(i) {
-                        *o = lut.get(v);
-                    }
-                });
+                .for_each(|(o, i)| lut_into(lut, i, o));
             out
         }
         None => encode_u8_slow(img, tone),
+    }
+}
+
+/// `out[i] = lut.get(src[i])`, compiled twice like [`encode_u8_slice`] (the same bits).
+#[multiversion::multiversion(targets("x86_64+avx2"))]
+fn lut_into(lut: &Lut8, src: &[f32], out: &mut [u8]) {
+    for (o, &v) in out.iter_mut().zip(src) {
+        *o = lut.get(v);
     }
 }
 

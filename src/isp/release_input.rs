@@ -163,22 +163,44 @@ pub fn release_codes(plane: &CfaPlane<'_>, frame: &FrameFacts<'_>) -> Result<Vec
                     *d = quant(at(x), k0 | (i & 1));
                 }
             }
-            None => {
-                // two columns at a time: the site constants are fixed per lane
-                let mut pairs = dst.chunks_exact_mut(2);
-                for (d, x) in (&mut pairs).zip(src.chunks_exact(2)) {
-                    d[0] = quant(x[0] as f32, k0);
-                    d[1] = quant(x[1] as f32, k1);
-                }
-                if let (Some(d), Some(&x)) = (pairs.into_remainder().first_mut(), src.last()) {
-                    if width % 2 == 1 {
-                        *d = quant(x as f32, k0);
-                    }
-                }
-            }
+            None => quant_row(src, dst, &s, [k0, k1]),
         }
     }
     Ok(demosaic_codes(&q, width, height, &s.colour))
+}
+
+/// Steps 1-3 and the quantization of one row of linear samples whose even columns are site
+/// `k[0]` and odd ones `k[1]`: [`release_codes`]'s expression per sample, with the site's
+/// constants selected by the column's parity (a flat loop the compiler turns into
+/// whole-register operations; the same float32 operations, so the same codes).
+#[multiversion::multiversion(targets("x86_64+avx2"))]
+fn quant_row(src: &[u16], dst: &mut [u16], s: &Sites, k: [usize; 2]) {
+    let pick = |a: &[f32; 4]| [a[k[0]], a[k[1]]];
+    let (black, scale, neutral) = (pick(&s.black), pick(&s.scale), pick(&s.neutral));
+    for (i, (&x, d)) in src.iter().zip(dst.iter_mut()).enumerate() {
+        // a select, not an index: an index into the pairs kept the loop scalar
+        let (b, sc, n) = if i & 1 == 0 {
+            (black[0], scale[0], neutral[0])
+        } else {
+            (black[1], scale[1], neutral[1])
+        };
+        let v = (x as f32 - b).max(0.0) / sc;
+        // `max` then `min` rather than `clamp`: NaN becomes 0 here, where `clamp` kept it
+        // and the cast made it code 0, so the codes are the same
+        #[allow(clippy::manual_clamp)] // on purpose: NaN must become 0, not stay NaN
+        let v = (v / n).max(0.0).min(1.0);
+        *d = trunc_code(v * RELEASE_SCALE as f32);
+    }
+}
+
+/// `t as u16` for `t` in `[0, 16383]`, by float arithmetic the compiler keeps in whole
+/// registers (the saturating `as` cast is converted one sample at a time on x86-64):
+/// adding 2^23 rounds `t` to the nearest integer `r` (exact in that binade), and `r - 1`
+/// is the truncation where `r` rounded up.
+#[inline(always)]
+fn trunc_code(t: f32) -> u16 {
+    let r = (t + 8_388_608.0).to_bits().wrapping_sub(0x4B00_0000) as i32;
+    (r - i32::from(r as f32 > t)) as u16
 }
 
 /// OpenCV's bilinear Bayer demosaic (`cv2.cvtColor(q, COLOR_BAYER_*2RGB)`) of 14-bit (or
@@ -225,45 +247,91 @@ fn demosaic_codes(q: &[u16], width: usize, height: usize, colour: &[usize; 4]) -
 }
 
 /// The bilinear demosaic of the inner samples (rows and columns 1..n-1).
+///
+/// Each row holds two colours, at its even and odd columns: the row is computed by a copy
+/// of the loop made for that pair, so that no sample branches on its colour (the same
+/// integer arithmetic per sample, so the same codes; a pattern that is no Bayer row takes
+/// the general loop).
+#[multiversion::multiversion(targets("x86_64+avx2"))]
 fn demosaic_inner(q: &[u16], w: usize, h: usize, colour: &[usize; 4], out: &mut [u16]) {
     for y in 1..h - 1 {
-        let up = &q[(y - 1) * w..y * w];
-        let mid = &q[y * w..(y + 1) * w];
-        let dn = &q[(y + 1) * w..(y + 2) * w];
+        let rows = Rows {
+            up: &q[(y - 1) * w..y * w],
+            mid: &q[y * w..(y + 1) * w],
+            dn: &q[(y + 1) * w..(y + 2) * w],
+        };
         let orow = &mut out[3 * y * w..3 * (y + 1) * w];
         let k0 = (y & 1) << 1;
-        for x in 1..w - 1 {
-            let k = k0 | (x & 1);
-            let c = colour[k];
-            let (l, r) = (mid[x - 1] as u32, mid[x + 1] as u32);
-            let (u, d) = (up[x] as u32, dn[x] as u32);
-            let v = mid[x];
-            let rgb = if c == 1 {
-                // the row's other colour from the horizontal neighbours, the column's from
-                // the vertical ones
-                let hor = ((l + r + 1) >> 1) as u16;
-                let ver = ((u + d + 1) >> 1) as u16;
-                if colour[k ^ 1] == 0 {
-                    [hor, v, ver]
-                } else {
-                    [ver, v, hor]
+        match (colour[k0], colour[k0 | 1]) {
+            (0, 1) => bayer_row::<0, 1>(&rows, orow),
+            (1, 0) => bayer_row::<1, 0>(&rows, orow),
+            (1, 2) => bayer_row::<1, 2>(&rows, orow),
+            (2, 1) => bayer_row::<2, 1>(&rows, orow),
+            (ce, co) => {
+                for x in 1..w - 1 {
+                    let (c, c_other) = if x & 1 == 0 { (ce, co) } else { (co, ce) };
+                    orow[3 * x..3 * x + 3].copy_from_slice(&rows.rgb(x, c, c_other));
                 }
-            } else {
-                let g = ((l + r + u + d + 2) >> 2) as u16;
-                let diag =
-                    up[x - 1] as u32 + up[x + 1] as u32 + dn[x - 1] as u32 + dn[x + 1] as u32;
-                let other = ((diag + 2) >> 2) as u16;
-                if c == 0 {
-                    [v, g, other]
-                } else {
-                    [other, g, v]
-                }
-            };
-            let o = &mut orow[3 * x..3 * x + 3];
-            o[0] = rgb[0];
-            o[1] = rgb[1];
-            o[2] = rgb[2];
+            }
         }
+    }
+}
+
+/// The rows above, at and below the one being demosaiced.
+struct Rows<'a> {
+    up: &'a [u16],
+    mid: &'a [u16],
+    dn: &'a [u16],
+}
+
+impl Rows<'_> {
+    /// RGB at inner column `x`, whose colour is `c`; `c_other` is the row's other colour.
+    #[inline(always)]
+    fn rgb(&self, x: usize, c: usize, c_other: usize) -> [u16; 3] {
+        let Rows { up, mid, dn } = *self;
+        let (l, r) = (mid[x - 1] as u32, mid[x + 1] as u32);
+        let (u, d) = (up[x] as u32, dn[x] as u32);
+        let v = mid[x];
+        if c == 1 {
+            // the row's other colour from the horizontal neighbours, the column's from the
+            // vertical ones
+            let hor = ((l + r + 1) >> 1) as u16;
+            let ver = ((u + d + 1) >> 1) as u16;
+            if c_other == 0 {
+                [hor, v, ver]
+            } else {
+                [ver, v, hor]
+            }
+        } else {
+            let g = ((l + r + u + d + 2) >> 2) as u16;
+            let diag = up[x - 1] as u32 + up[x + 1] as u32 + dn[x - 1] as u32 + dn[x + 1] as u32;
+            let other = ((diag + 2) >> 2) as u16;
+            if c == 0 {
+                [v, g, other]
+            } else {
+                [other, g, v]
+            }
+        }
+    }
+}
+
+/// [`demosaic_inner`]'s loop over one row whose even columns are colour `CE` and odd ones
+/// `CO`: the columns two at a time, each with its colour fixed.
+#[inline(always)]
+fn bayer_row<const CE: usize, const CO: usize>(rows: &Rows<'_>, orow: &mut [u16]) {
+    let w = rows.mid.len();
+    let mut x = 1;
+    while x + 1 < w - 1 {
+        // x is odd here, x + 1 even
+        let a = rows.rgb(x, CO, CE);
+        let b = rows.rgb(x + 1, CE, CO);
+        let o = &mut orow[3 * x..3 * x + 6];
+        o[..3].copy_from_slice(&a);
+        o[3..].copy_from_slice(&b);
+        x += 2;
+    }
+    if x < w - 1 {
+        orow[3 * x..3 * x + 3].copy_from_slice(&rows.rgb(x, CO, CE));
     }
 }
 
@@ -298,6 +366,35 @@ pub fn check_table(table: &[f32]) -> Result<()> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn trunc_code_is_the_cast() {
+        let mut ts: Vec<f32> = Vec::new();
+        // every integer code, its neighbours and the halves between them
+        for k in 0..=RELEASE_SCALE {
+            let t = k as f32;
+            ts.extend([
+                t,
+                t.next_down(),
+                t.next_up(),
+                t + 0.5,
+                (t + 0.5).next_down(),
+            ]);
+        }
+        // a spread of the float32 inputs in [0, 1], scaled as the quantizer scales them
+        let one = 1.0f32.to_bits();
+        ts.extend(
+            (0..one)
+                .step_by(9_973)
+                .map(|b| f32::from_bits(b) * RELEASE_SCALE as f32),
+        );
+        ts.extend([0.0, -0.0, RELEASE_SCALE as f32]);
+        for t in ts {
+            if (0.0..=RELEASE_SCALE as f32).contains(&t) {
+                assert_eq!(trunc_code(t), t as u16, "{t}");
+            }
+        }
+    }
 
     fn levels(black: Vec<f64>, repeat: (usize, usize), white: f64) -> Levels {
         Levels {

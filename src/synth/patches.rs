@@ -170,11 +170,9 @@ pub fn cut_patches<T: Copy, U: Copy + Default>(
     // One tile at a time into a small cache-resident scratch tile, appended whole: the
     // output is filled in order (no zeroed buffer written twice: the zeroing of a fresh
     // allocation was a tenth of a fresh item's time).
-    let mut out = Vec::with_capacity(gw * gh * 3 * plane);
-    let mut tile = vec![U::default(); 3 * plane];
-    for k in 0..gw * gh {
-        write_tile(img, width, patch, (k / gw, k % gw), &f, &mut tile);
-        out.extend_from_slice(&tile);
+    let mut out = vec![U::default(); gw * gh * 3 * plane];
+    for (k, tile) in out.chunks_exact_mut(3 * plane).enumerate() {
+        write_tile(img, width, patch, (k / gw, k % gw), &f, tile);
     }
     Ok(out)
 }
