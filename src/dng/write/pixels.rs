@@ -171,15 +171,21 @@ pub(super) fn pack4<const BITS: u32, const NB: usize>(
     row: &[u16],
     out: &mut [u8],
 ) -> (usize, usize) {
-    let n = row.len() / 4;
+    let n = (row.len() / 4).min(out.len() / NB);
     let m = (1u64 << BITS) - 1;
-    for (o, g) in out.chunks_exact_mut(NB).zip(row.chunks_exact(4)) {
+    for (j, g) in row.chunks_exact(4).take(n).enumerate() {
         let v = (g[0] as u64 & m) << (3 * BITS)
             | (g[1] as u64 & m) << (2 * BITS)
             | (g[2] as u64 & m) << BITS
             | (g[3] as u64 & m);
-        let be = v.to_be_bytes();
-        o.copy_from_slice(&be[8 - NB..]);
+        let o = j * NB;
+        // One 8-byte store, its group's bytes first: the next group overwrites the rest
+        // (one store instead of a 4- and a 1-byte one). The last groups, with fewer than
+        // 8 bytes left in the row, store exactly their own.
+        match out.get_mut(o..o + 8) {
+            Some(d) => d.copy_from_slice(&(v << (64 - 4 * BITS)).to_be_bytes()),
+            None => out[o..o + NB].copy_from_slice(&v.to_be_bytes()[8 - NB..]),
+        }
     }
     (n * 4, n * NB)
 }
