@@ -3,7 +3,7 @@
 //! lights (a weighted mean) and the bulbs (added), two or eight columns at a time so that
 //! each lane has a constant CFA factor.
 
-use super::masks::PreparedMask;
+use super::masks::{MaskRow, PreparedMask};
 
 /// A light of the plan with its mask prepared for the pass's columns.
 pub(super) struct Prepared {
@@ -81,6 +81,59 @@ fn pairwise<F: Fn(&mut f32, &mut f32, f32, f32, f32)>(
     }
 }
 
+/// [`pairwise`] with the mask computed where it is used: `mask(cols[i])` is sample `i`'s
+/// mask (a [`MaskRow`]'s expression), not read from a filled row.
+#[inline(always)]
+fn pairwise_masked<T: Copy, G: Fn(T) -> f32, F: Fn(&mut f32, &mut f32, f32, f32, f32)>(
+    (num, den, ye): (&mut [f32], &mut [f32], &[f32]),
+    cols: &[T],
+    mask: G,
+    k: [f32; 2],
+    f: F,
+) {
+    let n = cols.len().min(num.len()).min(den.len()).min(ye.len());
+    let (num, den, ye, cols) = (&mut num[..n], &mut den[..n], &ye[..n], &cols[..n]);
+    for i in 0..n {
+        let kk = if i & 1 == 0 { k[0] } else { k[1] };
+        f(&mut num[i], &mut den[i], ye[i], mask(cols[i]), kk);
+    }
+}
+
+/// Apply `f(num, den, ye, mask, k)` over light `p`'s columns of row `r` (the scratch
+/// buffers' segment starts at active-area column `x0`), with `k` the CFA factors of the
+/// even and odd active-area columns. A separable mask is computed in the loop; an exact
+/// one is filled into the scratch's mask row first.
+#[inline(always)]
+fn over_light<F: Fn(&mut f32, &mut f32, f32, f32, f32)>(
+    p: &Prepared,
+    r: usize,
+    x0: usize,
+    k: [f32; 2],
+    scr: &mut Scratch,
+    f: F,
+) {
+    let Scratch {
+        ye, num, den, m, ..
+    } = scr;
+    let (c0, c1) = p.mask.cols;
+    let (i0, i1) = (c0 - x0, c1 - x0);
+    let bufs = (&mut num[i0..i1], &mut den[i0..i1], &ye[i0..i1]);
+    let k = parity(k, c0);
+    match p.mask.row_view(r) {
+        Some(MaskRow::Release { rf, cols, floor }) => {
+            pairwise_masked(bufs, cols, |cf| (rf * cf).max(floor) as f32, k, f)
+        }
+        Some(MaskRow::Separable { rf, cols, floor }) => {
+            pairwise_masked(bufs, cols, |cf| (rf * cf).max(floor), k, f)
+        }
+        None => {
+            let mm = &mut m[..c1 - c0];
+            p.mask.fill_row(r, mm);
+            pairwise(bufs.0, bufs.1, bufs.2, mm, k, f);
+        }
+    }
+}
+
 /// Local relighting of active-area row `r` over the segment of the scratch buffers, whose
 /// first sample is active-area column `x0` (the masks' column ranges lie inside it).
 ///
@@ -97,67 +150,45 @@ pub(super) fn local_row(
     bulbs: &[Prepared],
     scr: &mut Scratch,
 ) {
-    let Scratch {
-        ye, num, den, m, ..
-    } = scr;
     // Ambient: mask 1 everywhere.
     match ambient.first() {
         Some(a) => {
             let k = parity([a.illum[cols[0]] * a.gain, a.illum[cols[1]] * a.gain], x0);
             let w = a.weight;
-            // eight columns at a time like the lights below (`m` is not read)
+            let Scratch {
+                ye, num, den, m, ..
+            } = &mut *scr;
+            // the lights' loop (`m` is not read)
             pairwise(num, den, ye, m, k, |n, d, y, _, k| {
                 *n = w * (y * k).clamp(0.0, 1.0);
                 *d = w;
             });
         }
         None => {
-            num.fill(0.0);
-            den.fill(0.0);
+            scr.num.fill(0.0);
+            scr.den.fill(0.0);
         }
     }
     for p in locals.iter().filter(|p| p.mask.on_row(r)) {
-        let (c0, c1) = p.mask.cols;
-        let mm = &mut m[..c1 - c0];
-        p.mask.fill_row(r, mm);
         let k = [p.illum[cols[0]] * p.gain, p.illum[cols[1]] * p.gain];
         let w = p.weight;
-        let (i0, i1) = (c0 - x0, c1 - x0);
-        pairwise(
-            &mut num[i0..i1],
-            &mut den[i0..i1],
-            &ye[i0..i1],
-            mm,
-            parity(k, c0),
-            |n, d, y, mv, k| {
-                let wm = w * mv;
-                *n += wm * (y * k).clamp(0.0, 1.0);
-                *d += wm;
-            },
-        );
+        over_light(p, r, x0, k, scr, |n, d, y, mv, k| {
+            let wm = w * mv;
+            *n += wm * (y * k).clamp(0.0, 1.0);
+            *d += wm;
+        });
     }
-    for (n, &d) in num.iter_mut().zip(den.iter()) {
+    for (n, &d) in scr.num.iter_mut().zip(scr.den.iter()) {
         *n /= d.max(1e-30);
     }
     for p in bulbs.iter().filter(|p| p.mask.on_row(r)) {
-        let (c0, c1) = p.mask.cols;
-        let mm = &mut m[..c1 - c0];
-        p.mask.fill_row(r, mm);
         let k = [p.illum[cols[0]], p.illum[cols[1]]];
         let g = p.gain;
-        let (i0, i1) = (c0 - x0, c1 - x0);
-        pairwise(
-            &mut num[i0..i1],
-            &mut den[i0..i1],
-            &ye[i0..i1],
-            mm,
-            parity(k, c0),
-            |n, _, y, mv, k| {
-                *n += g * mv * (y * k).clamp(0.0, 1.0);
-            },
-        );
+        over_light(p, r, x0, k, scr, |n, _, y, mv, k| {
+            *n += g * mv * (y * k).clamp(0.0, 1.0);
+        });
     }
-    for n in num.iter_mut() {
+    for n in scr.num.iter_mut() {
         *n = if n.is_nan() { 0.0 } else { n.clamp(0.0, 1.0) };
     }
 }

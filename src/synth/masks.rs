@@ -262,6 +262,29 @@ impl PreparedMask {
         fill_row(self, r, out);
     }
 
+    /// Row `r`'s mask as its row factor and column factors, for a caller that computes
+    /// each sample where it uses it: sample `i` is `g(cols[i])` with the expression of
+    /// [`fill_row`](Self::fill_row), so the same bits. `None` for the exact evaluation
+    /// (a full Gaussian per sample): fill a row instead.
+    #[inline]
+    pub(crate) fn row_view(&self, r: usize) -> Option<MaskRow<'_>> {
+        if let Some(k) = &self.release {
+            return Some(MaskRow::Release {
+                rf: k.row(r),
+                cols: &self.col64,
+                floor: self.floor,
+            });
+        }
+        match self.eval {
+            MaskEval::Exact => None,
+            _ => Some(MaskRow::Separable {
+                rf: self.row_factor(r) as f32,
+                cols: &self.col_factor,
+                floor: self.floor as f32,
+            }),
+        }
+    }
+
     /// [`PreparedMask::fill_row`]'s body.
     #[inline(always)]
     fn fill_row_body(&self, r: usize, out: &mut [f32]) {
@@ -318,6 +341,22 @@ impl PreparedMask {
         sub.fill_row(r, &mut v);
         v[0]
     }
+}
+
+/// One row of a separable mask ([`PreparedMask::row_view`]).
+pub(crate) enum MaskRow<'a> {
+    /// The release kernel: `(rf * cols[i]).max(floor) as f32`, in f64.
+    Release {
+        rf: f64,
+        cols: &'a [f64],
+        floor: f64,
+    },
+    /// The separable Gaussian: `(rf * cols[i]).max(floor)`, in f32.
+    Separable {
+        rf: f32,
+        cols: &'a [f32],
+        floor: f32,
+    },
 }
 
 /// [`PreparedMask::fill_row`], compiled twice, the second time for AVX2, picked at run time
