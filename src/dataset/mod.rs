@@ -298,6 +298,12 @@ pub trait Processor: Sync {
     fn load(&self, path: &Path, bytes: &[u8]) -> Result<Self::Loaded>;
     /// Make every output of one unit through `sink`.
     fn process(&self, input: &Self::Loaded, unit: &Unit, sink: &Sink) -> Result<UnitInfo>;
+    /// [`process`](Self::process) for the last unit computed from an input, which may use
+    /// up the decoded input (the synthesis relights the day plane in place instead of
+    /// copying it). The same outputs; by default it is `process`.
+    fn process_last(&self, input: Self::Loaded, unit: &Unit, sink: &Sink) -> Result<UnitInfo> {
+        self.process(&input, unit, sink)
+    }
     /// Warnings about a decoded input (metadata corrections), said once per input through
     /// the run's [`Progress`]. None by default.
     fn warnings(&self, input: &Self::Loaded) -> crate::diagnostics::Diagnostics {

@@ -485,7 +485,11 @@ fn process_input<P: Processor>(
         .collect();
     let mut out = Vec::with_capacity(units.len());
     let mut loaded: Option<std::result::Result<P::Loaded, String>> = None;
-    for (u, d) in units.iter().zip(decisions) {
+    // The last unit computed from this input may use the decoded input up.
+    let last = decisions
+        .iter()
+        .rposition(|d| matches!(d, Decision::Redo(_)));
+    for (i, (u, d)) in units.iter().zip(decisions).enumerate() {
         if stop_requested().is_some() {
             break;
         }
@@ -507,19 +511,40 @@ fn process_input<P: Processor>(
             }
         }
         let prev = previous.get(&(u.rel.clone(), u.variant));
-        let rec = match loaded.as_ref() {
+        let to = UnitOutput {
+            out_dir: &opts.out_dir,
+            policy,
+            wait: opts.wait,
+        };
+        let rec = match loaded.take() {
+            Some(Ok(input)) if Some(i) == last => compute_unit(
+                processor,
+                UnitInput::Last(input),
+                u,
+                prev,
+                blank(u, &input_sha),
+                to,
+            ),
             Some(Ok(input)) => {
-                let to = UnitOutput {
-                    out_dir: &opts.out_dir,
-                    policy,
-                    wait: opts.wait,
-                };
-                compute_unit(processor, input, u, prev, blank(u, &input_sha), to)
+                let rec = compute_unit(
+                    processor,
+                    UnitInput::Shared(&input),
+                    u,
+                    prev,
+                    blank(u, &input_sha),
+                    to,
+                );
+                loaded = Some(Ok(input));
+                rec
             }
-            Some(Err(msg)) => Record {
-                error: Some(msg.clone()),
-                ..blank(u, &input_sha)
-            },
+            Some(Err(msg)) => {
+                let rec = Record {
+                    error: Some(msg.clone()),
+                    ..blank(u, &input_sha)
+                };
+                loaded = Some(Err(msg));
+                rec
+            }
             None => Record {
                 error: Some("not loaded".into()),
                 ..blank(u, &input_sha)
@@ -583,12 +608,21 @@ pub struct UnitOutput<'a> {
     pub wait: bool,
 }
 
+/// The decoded input a unit is computed from: shared while later units of the same input
+/// still need it, handed over to the last one ([`Processor::process_last`]).
+pub enum UnitInput<'a, L> {
+    /// Borrowed: more units of this input follow.
+    Shared(&'a L),
+    /// Owned: the input's last unit.
+    Last(L),
+}
+
 /// Make one unit's outputs under its [`OutputSetLock`] and return its record (`rec`, the
 /// blank record, filled in): `ok` with the files written, or `failed` with the error (a
 /// panic is caught). Files the previous record listed that are no longer made are removed.
 pub fn compute_unit<P: Processor>(
     processor: &P,
-    input: &P::Loaded,
+    input: UnitInput<'_, P::Loaded>,
     u: &Unit,
     prev: Option<&Record>,
     mut rec: Record,
@@ -603,7 +637,10 @@ pub fn compute_unit<P: Processor>(
     // One process at a time writes a unit's outputs (docs/concurrency.md).
     let res = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
         let _unit = OutputSetLock::acquire(out_dir, &u.id, wait)?;
-        processor.process(input, u, &sink)
+        match input {
+            UnitInput::Shared(input) => processor.process(input, u, &sink),
+            UnitInput::Last(input) => processor.process_last(input, u, &sink),
+        }
     }));
     match res {
         Ok(Ok(info)) => {

@@ -74,14 +74,7 @@ impl Processor for SynthProcessor {
     }
 
     fn process(&self, input: &DayInput, unit: &Unit, sink: &Sink) -> Result<UnitInfo> {
-        let job = if unit.variants == self.job.variants {
-            Cow::Borrowed(&self.job)
-        } else {
-            Cow::Owned(SynthJob {
-                variants: unit.variants,
-                ..self.job.clone()
-            })
-        };
+        let job = self.job_for(unit);
         let plan = job.plan(input, &unit.rel, unit.seed, unit.variant.saturating_sub(1))?;
         let out = job.run_variant(input, &plan, sink)?;
         Ok(UnitInfo {
@@ -89,6 +82,35 @@ impl Processor for SynthProcessor {
             night_neutral: Some(plan.plan.night_neutral),
             stages: out.stages,
         })
+    }
+
+    /// The last unit of an input relights the day plane in place
+    /// ([`SynthJob::run_variant_owned`], as `synth` does for its last variant): the same
+    /// files, without a copy of the plane (its time and its page faults).
+    fn process_last(&self, input: DayInput, unit: &Unit, sink: &Sink) -> Result<UnitInfo> {
+        let job = self.job_for(unit);
+        let plan = job.plan(&input, &unit.rel, unit.seed, unit.variant.saturating_sub(1))?;
+        let night_neutral = Some(plan.plan.night_neutral);
+        let out = job.run_variant_owned(input, &plan, sink)?;
+        Ok(UnitInfo {
+            iso: out.isos,
+            night_neutral,
+            stages: out.stages,
+        })
+    }
+}
+
+impl SynthProcessor {
+    /// The job for `unit` (its variant count, which the dataset may set per input).
+    fn job_for(&self, unit: &Unit) -> Cow<'_, SynthJob> {
+        if unit.variants == self.job.variants {
+            Cow::Borrowed(&self.job)
+        } else {
+            Cow::Owned(SynthJob {
+                variants: unit.variants,
+                ..self.job.clone()
+            })
+        }
     }
 }
 

@@ -21,7 +21,7 @@ use super::progress::ProgressSink;
 use super::resume::{decide, Decision, Reason};
 use super::run::{
     blank_record, check_out_dir, compute_unit, load_input, plan_tasks, remove_stale_temp_files,
-    unit_id, want, UnitOutput,
+    unit_id, want, UnitInput, UnitOutput,
 };
 use super::{sha256_hex, Processor, Shard, Split, SplitRule, Unit};
 use crate::error::{Error, Result, ResultExt};
@@ -234,7 +234,7 @@ pub fn write_units<P: Processor>(
                             policy: &policy,
                             wait: o.wait,
                         };
-                        compute_unit(processor, input, unit, prev, blank, to)
+                        compute_unit(processor, UnitInput::Shared(input), unit, prev, blank, to)
                     }
                     Err(msg) => Record {
                         error: Some(msg.clone()),
