@@ -1,7 +1,7 @@
 //! One row of the clean pass's light arithmetic ([`super::relight`]): the per-row scratch
 //! buffers, the prepared lights, and mode `local`'s sum over the ambient light, the local
-//! lights (a weighted mean) and the bulbs (added), two or eight columns at a time so that
-//! each lane has a constant CFA factor.
+//! lights (a weighted mean) and the bulbs (added), as flat loops that select each column's
+//! CFA factor by its parity.
 
 use super::masks::{MaskRow, PreparedMask};
 

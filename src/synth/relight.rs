@@ -378,7 +378,7 @@ impl<'a> CleanPass<'a> {
         let blk = &blk_row[x0.min(blk_row.len())..];
         if let Some(t) = &self.ye_table {
             let (t0, t1) = t.row(r);
-            // two columns at a time, so each lane has its own table (no per-sample parity)
+            // the even and odd columns' tables
             let tabs = if x0 & 1 == 0 { [t0, t1] } else { [t1, t0] };
             // Flat loops, the table picked by the index's parity: the saturation count
             // becomes whole-register compares, and the lookups lose the pairs' bookkeeping
