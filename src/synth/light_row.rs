@@ -62,8 +62,8 @@ pub(super) fn parity(k: [f32; 2], c0: usize) -> [f32; 2] {
 /// into whole-register operations (the select is a blend of two broadcast factors). An
 /// earlier shape, eight columns at a time through fixed-size arrays, made the compiler
 /// vectorize across the chunks instead and spend most of its instructions on shuffles
-/// (docs/benchmarks.md, "The light sum as flat loops"). The arithmetic per element is
-/// the same, so are the bits.
+/// (docs/benchmarks.md, "Flat loops where the compiler had gone wrong"). The arithmetic
+/// per element is the same, so are the bits.
 #[inline(always)]
 fn pairwise<F: Fn(&mut f32, &mut f32, f32, f32, f32)>(
     num: &mut [f32],
@@ -73,16 +73,11 @@ fn pairwise<F: Fn(&mut f32, &mut f32, f32, f32, f32)>(
     k: [f32; 2],
     f: F,
 ) {
-    let n = m.len().min(num.len()).min(den.len()).min(ye.len());
-    let (num, den, ye, m) = (&mut num[..n], &mut den[..n], &ye[..n], &m[..n]);
-    for i in 0..n {
-        let kk = if i & 1 == 0 { k[0] } else { k[1] };
-        f(&mut num[i], &mut den[i], ye[i], m[i], kk);
-    }
+    pairwise_masked((num, den, ye), m, |v| v, k, f);
 }
 
-/// [`pairwise`] with the mask computed where it is used: `mask(cols[i])` is sample `i`'s
-/// mask (a [`MaskRow`]'s expression), not read from a filled row.
+/// [`pairwise`] with sample `i`'s mask `mask(cols[i])`: a filled mask row with the
+/// identity, or a [`MaskRow`]'s expression computed where it is used.
 #[inline(always)]
 fn pairwise_masked<T: Copy, G: Fn(T) -> f32, F: Fn(&mut f32, &mut f32, f32, f32, f32)>(
     (num, den, ye): (&mut [f32], &mut [f32], &[f32]),

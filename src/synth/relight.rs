@@ -382,7 +382,7 @@ impl<'a> CleanPass<'a> {
             let tabs = if x0 & 1 == 0 { [t0, t1] } else { [t1, t0] };
             // Flat loops, the table picked by the index's parity: the saturation count
             // becomes whole-register compares, and the lookups lose the pairs' bookkeeping
-            // (docs/benchmarks.md, "The light sum as flat loops").
+            // (docs/benchmarks.md, "Flat loops where the compiler had gone wrong").
             sat += if norm.is_identity() {
                 src.iter().filter(|&&x| x as f64 >= white).count()
             } else {
