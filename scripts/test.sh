@@ -130,16 +130,26 @@ if [ "$py_tests" = 1 ]; then
   torch_req=python/tests/requirements-train.txt
   torch_stamp="$VENV/.train-requirements.sha"
   torch_want=$(sha256sum "$torch_req" | cut -d' ' -f1)
+  # An install that pip reports done is stamped only once `import torch` works: one cut
+  # short (a full disk, a lost connection) can leave torch's files half there, and pip
+  # then calls the requirement satisfied. Not stamped, such a venv is tried again next time
+  # and its tests skip with the import's error (D2N_REQUIRE_TORCH=1: fail) meanwhile.
+  torch_err=""
+  torch_check() {
+    local out
+    out=$("$VENV/bin/python" -c "import torch, tensorboard" 2>&1) || { echo "$out" | tail -1; return 1; }
+  }
   if [ "$(cat "$torch_stamp" 2>/dev/null)" = "$torch_want" ]; then
     export D2N_REQUIRE_TORCH=1
-  elif "$VENV/bin/python" -m pip install --quiet --disable-pip-version-check --only-binary=:all: -r "$torch_req"; then
+  elif "$VENV/bin/python" -m pip install --quiet --disable-pip-version-check --only-binary=:all: -r "$torch_req" \
+      && torch_err=$(torch_check); then
     echo "$torch_want" > "$torch_stamp"
     export D2N_REQUIRE_TORCH=1
   elif [ "${D2N_REQUIRE_TORCH:-}" = 1 ]; then
-    echo "scripts/test.sh: D2N_REQUIRE_TORCH=1 but $torch_req could not be installed" >&2
+    echo "scripts/test.sh: D2N_REQUIRE_TORCH=1 but $torch_req could not be installed${torch_err:+ ($torch_err)}" >&2
     exit 1
   else
-    export D2N_TORCH_SKIP_REASON="torch could not be installed from $torch_req (no wheel for this platform or Python, or no network): test_train_*.py tests that need it skipped"
+    export D2N_TORCH_SKIP_REASON="torch could not be installed from $torch_req (no wheel for this platform or Python, no network, or an install cut short${torch_err:+: $torch_err}): the tests that need it skipped"
     echo "scripts/test.sh: $D2N_TORCH_SKIP_REASON" >&2
   fi
   export D2N_BIN="${CARGO_TARGET_DIR:-$PWD/target}/debug/day2night"

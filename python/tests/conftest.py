@@ -87,14 +87,29 @@ def day_dir(tmp_path, day_dng):
     return d
 
 
-def need_torch():
-    """torch for the trainer's tests (python/tests/test_train_*.py): imported, or the test
-    skips with the reason scripts/test.sh gave, or fails when D2N_REQUIRE_TORCH=1 (set by
-    scripts/test.sh once torch is installed)."""
-    try:
-        import torch
-    except ImportError as e:
+_TORCH = []  # [(module or None, why not)], filled by the first need_torch()
+
+
+def need_torch(module=False):
+    """torch for the trainer's and the experiment's tests: imported, or the test (the whole
+    module with ``module=True``, called at its top) skips with the reason scripts/test.sh
+    gave, or fails when D2N_REQUIRE_TORCH=1 (set by scripts/test.sh once torch is installed).
+
+    torch is imported once per pytest process: a damaged install (a shared library missing,
+    as a pip install cut short leaves it) raises OSError the first time and ImportError
+    ("can only be initialized once") after, so both are caught, and the first reason is the
+    one every skip gives."""
+    if not _TORCH:
+        try:
+            import torch
+        except (ImportError, OSError) as e:
+            _TORCH.append((None, f"{type(e).__name__}: {e}"))
+        else:
+            _TORCH.append((torch, None))
+    torch, why = _TORCH[0]
+    if torch is None:
         if os.environ.get("D2N_REQUIRE_TORCH") == "1":
-            pytest.fail(f"D2N_REQUIRE_TORCH=1 but torch cannot be imported: {e}")
-        pytest.skip(os.environ.get("D2N_TORCH_SKIP_REASON") or f"torch is not installed ({e})")
+            pytest.fail(f"D2N_REQUIRE_TORCH=1 but torch cannot be imported: {why}", pytrace=False)
+        reason = os.environ.get("D2N_TORCH_SKIP_REASON") or f"torch cannot be imported ({why})"
+        pytest.skip(reason, allow_module_level=module)
     return torch

@@ -17,13 +17,9 @@ import sys
 import numpy as np
 import pytest
 
-try:
-    import torch  # noqa: F401
-except ImportError as e:  # the trainer's tests skip the same way (scripts/test.sh)
-    if os.environ.get("D2N_REQUIRE_TORCH") == "1":
-        pytest.fail(f"D2N_REQUIRE_TORCH=1 but torch cannot be imported: {e}", pytrace=False)
-    pytest.skip(os.environ.get("D2N_TORCH_SKIP_REASON") or f"torch is not installed ({e})",
-                allow_module_level=True)
+from conftest import need_torch
+
+need_torch(module=True)  # skips (or fails) the module the trainer's tests' way
 
 import experiment_mini as mini  # noqa: E402
 from conftest import FIXTURES, cli_path, require_tool  # noqa: E402

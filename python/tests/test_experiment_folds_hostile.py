@@ -19,6 +19,7 @@ import sys
 import numpy as np
 import pytest
 
+from conftest import need_torch
 from day2night.experiment import folds, foldpickle, protocol, release_folds
 
 P = pickle
@@ -250,7 +251,7 @@ def test_the_command_lines_refuse_with_one_line_and_write_nothing(tmp_path, caps
     good = write(tmp_path, "k.p", pickle.dumps(release_lists()))
     assert release_folds.main(["export", str(good), "-o", str(good / "x.json")]) == 2
     assert capsys.readouterr().err.count("\n") == 1
-    pytest.importorskip("torch")
+    need_torch()
     from day2night.experiment.__main__ import main
 
     run = tmp_path / "run"

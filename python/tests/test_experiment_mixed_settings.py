@@ -8,6 +8,7 @@ import pickle
 
 import pytest
 
+from conftest import need_torch
 from day2night.experiment import prepare, records
 from day2night.experiment.config import ExperimentError
 from test_experiment_protocol import experiment, release_lists, tiny_real_set
@@ -104,7 +105,7 @@ def test_folds_json_is_never_relabelled(tmp_path):
 def test_deleting_config_json_never_relabels_a_release_run(tmp_path):
     """The issue's reproducer: a --protocol release run, its config.json deleted, rerun with
     day2night's options and one more row: refused before anything is written."""
-    pytest.importorskip("torch")
+    need_torch()
     real, days = tiny_real_set(tmp_path / "real", 105)
     k = tmp_path / "k_fold_indices_saved.p"
     k.write_bytes(pickle.dumps(release_lists()))

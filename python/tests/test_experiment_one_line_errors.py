@@ -7,6 +7,7 @@ import signal
 
 import pytest
 
+from conftest import need_torch
 from day2night.experiment import __main__ as cli
 from day2night.experiment import runner
 
@@ -39,14 +40,14 @@ class _Raises:
 
 
 def _iterate(dataset):
-    torch = pytest.importorskip("torch")
+    torch = need_torch()
     for _ in torch.utils.data.DataLoader(dataset, num_workers=1):
         pass
 
 
 @pytest.mark.skipif(not hasattr(signal, "SIGKILL"), reason="needs SIGKILL")
 def test_a_killed_worker_is_one_line_exit_1_and_says_resume(tmp_path, monkeypatch, capsys):
-    pytest.importorskip("torch")
+    need_torch()
     code, err = run_main(tmp_path, monkeypatch, capsys, lambda: _iterate(_Dies()))
     assert code == 1
     assert err.startswith("day2night.experiment: error: a DataLoader worker died: ")
@@ -54,7 +55,7 @@ def test_a_killed_worker_is_one_line_exit_1_and_says_resume(tmp_path, monkeypatc
 
 
 def test_an_error_inside_a_worker_is_its_own_line(tmp_path, monkeypatch, capsys):
-    pytest.importorskip("torch")
+    need_torch()
     code, err = run_main(tmp_path, monkeypatch, capsys, lambda: _iterate(_Raises()))
     assert code == 2
     assert "RUN/data/real/000.in.npy: code 20000 past the 16384-entry table" in err

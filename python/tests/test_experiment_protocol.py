@@ -10,7 +10,7 @@ import pickle
 import numpy as np
 import pytest
 
-from conftest import ROOT
+from conftest import ROOT, need_torch
 from day2night.experiment import folds, protocol, release_folds, release_noise
 
 
@@ -277,7 +277,7 @@ def experiment(day, real, out, **options):
 
 
 def test_folds_file_writes_the_release_lists_and_the_options_are_recorded(tmp_path):
-    pytest.importorskip("torch")
+    need_torch()
     from day2night.experiment.runner import ExperimentError
 
     real, days = tiny_real_set(tmp_path / "real", 105)

@@ -6,7 +6,7 @@ align can give; an old float32 cache is migrated, a damaged or unknown one refus
 import numpy as np
 import pytest
 
-from conftest import FIXTURES
+from conftest import FIXTURES, need_torch
 
 import day2night
 from day2night.experiment import pairs
@@ -88,8 +88,7 @@ def test_damaged_and_unknown_stores_are_refused(tmp_path, x_full):
 
 
 def test_save_pair_and_fixed_patches_read_the_store(tmp_path, x_full):
-    torch = pytest.importorskip("torch")  # FixedPatches is a torch Dataset
-    del torch
+    need_torch()  # FixedPatches is a torch Dataset
     from day2night.train import data
 
     y = (np.arange(x_full.size) % 251).astype(np.uint8).reshape(x_full.shape)

@@ -8,7 +8,9 @@ import os
 
 import pytest
 
-torch = pytest.importorskip("torch")
+from conftest import need_torch
+
+torch = need_torch(module=True)
 
 from day2night.train import trainer  # noqa: E402
 

@@ -5,7 +5,9 @@ import dataclasses
 
 import pytest
 
-pytest.importorskip("torch")
+from conftest import need_torch
+
+need_torch(module=True)
 
 from day2night.train import __main__ as cli  # noqa: E402
 from day2night.train.trainer import TrainConfig  # noqa: E402

@@ -54,3 +54,25 @@ def test_experiment_help_without_torch():
             "Experiment(ExperimentConfig(day='d', real='r', output='o')).prepare()")
     assert "training needs torch" in r.stderr and "pip install day2night[train]" in r.stderr, \
         r.stderr
+
+
+def test_a_damaged_torch_counts_as_missing(tmp_path):
+    # a torch whose import raises OSError, as an install cut short leaves it (CI once had
+    # torch/lib/libtorch_global_deps.so missing): the experiment's modules still import,
+    # the torch-free rows' code runs, and the first use of torch names the extra and the
+    # OSError
+    fake = tmp_path / "torch"
+    fake.mkdir()
+    (fake / "__init__.py").write_text(
+        "raise OSError('torch/lib/libtorch_global_deps.so: cannot open shared object file')\n")
+    code = (f"import sys; sys.path.insert(0, {str(tmp_path)!r})\n"
+            "from day2night.experiment import burst, pairs, prepare, rows\n"
+            "import day2night.train as t\n"
+            "from day2night.train import _torch\n"
+            "assert not _torch.available()\n"
+            "print('imported')\nt.UNet()")
+    r = run(code)
+    assert "imported" in r.stdout, r.stderr
+    assert r.returncode != 0
+    assert "pip install day2night[train]" in r.stderr, r.stderr
+    assert "OSError: torch/lib/libtorch_global_deps.so" in r.stderr, r.stderr
