@@ -516,40 +516,12 @@ fn process_input<P: Processor>(
             policy,
             wait: opts.wait,
         };
-        let rec = match loaded.take() {
-            Some(Ok(input)) if Some(i) == last => compute_unit(
-                processor,
-                UnitInput::Last(input),
-                u,
-                prev,
-                blank(u, &input_sha),
-                to,
-            ),
-            Some(Ok(input)) => {
-                let rec = compute_unit(
-                    processor,
-                    UnitInput::Shared(&input),
-                    u,
-                    prev,
-                    blank(u, &input_sha),
-                    to,
-                );
-                loaded = Some(Ok(input));
-                rec
-            }
-            Some(Err(msg)) => {
-                let rec = Record {
-                    error: Some(msg.clone()),
-                    ..blank(u, &input_sha)
-                };
-                loaded = Some(Err(msg));
-                rec
-            }
-            None => Record {
-                error: Some("not loaded".into()),
-                ..blank(u, &input_sha)
-            },
+        let at = Loaded {
+            last: Some(i) == last,
+            blank: blank(u, &input_sha),
+            to,
         };
+        let rec = compute_loaded(processor, &mut loaded, u, prev, at);
         if rec.status != Status::Ok && stop_requested().is_some() {
             // Stopped by an interrupt: no record, the rerun computes the unit.
             break;
@@ -606,6 +578,53 @@ pub struct UnitOutput<'a> {
     pub policy: &'a OutputPolicy,
     /// Wait for a lock another process holds, instead of failing.
     pub wait: bool,
+}
+
+/// How [`compute_loaded`] makes a unit: whether it is the last unit computed from its input,
+/// its blank record, and where its outputs go.
+pub struct Loaded<'a> {
+    /// The last unit of its input that is computed: it takes the decoded input.
+    pub last: bool,
+    /// The unit's blank record ([`compute_unit`]'s `rec`).
+    pub blank: Record,
+    /// Where its outputs go.
+    pub to: UnitOutput<'a>,
+}
+
+/// [`compute_unit`] from an input's load (`loaded`, filled by [`load_input`] before the
+/// first unit that is computed): the last unit takes the decoded input out
+/// ([`UnitInput::Last`]), the others borrow it; a load that failed gives each unit a
+/// failed record with its message.
+pub fn compute_loaded<P: Processor>(
+    processor: &P,
+    loaded: &mut Option<std::result::Result<P::Loaded, String>>,
+    u: &Unit,
+    prev: Option<&Record>,
+    at: Loaded<'_>,
+) -> Record {
+    let Loaded { last, blank, to } = at;
+    match loaded.take() {
+        Some(Ok(input)) if last => {
+            compute_unit(processor, UnitInput::Last(input), u, prev, blank, to)
+        }
+        Some(Ok(input)) => {
+            let rec = compute_unit(processor, UnitInput::Shared(&input), u, prev, blank, to);
+            *loaded = Some(Ok(input));
+            rec
+        }
+        Some(Err(msg)) => {
+            let rec = Record {
+                error: Some(msg.clone()),
+                ..blank
+            };
+            *loaded = Some(Err(msg));
+            rec
+        }
+        None => Record {
+            error: Some("not loaded".into()),
+            ..blank
+        },
+    }
 }
 
 /// The decoded input a unit is computed from: shared while later units of the same input

@@ -20,8 +20,8 @@ use super::manifest::{self, Record};
 use super::progress::ProgressSink;
 use super::resume::{decide, Decision, Reason};
 use super::run::{
-    blank_record, check_out_dir, compute_unit, load_input, plan_tasks, remove_stale_temp_files,
-    unit_id, want, UnitInput, UnitOutput,
+    blank_record, check_out_dir, compute_loaded, load_input, plan_tasks, remove_stale_temp_files,
+    unit_id, want, Loaded, UnitOutput,
 };
 use super::{sha256_hex, Processor, Shard, Split, SplitRule, Unit};
 use crate::error::{Error, Result, ResultExt};
@@ -183,16 +183,29 @@ pub fn write_units<P: Processor>(
     };
     let mut loaded: Option<std::result::Result<P::Loaded, String>> = None;
     let mut done = Vec::with_capacity(units.len());
-    for (unit, previous) in units {
-        let journal = journal_path(out_dir, &unit.rel, unit.variant);
-        let journaled = read_journal(&journal);
+    // Every unit's latest record and decision first: the last unit that is computed may
+    // take the decoded input (relighting in place, as `dataset` does).
+    let decided: Vec<(PathBuf, Option<Record>, Decision)> = units
+        .iter()
+        .map(|(unit, previous)| {
+            let journal = journal_path(out_dir, &unit.rel, unit.variant);
+            let journaled = read_journal(&journal);
+            let decision = decide(
+                journaled.as_ref().or(previous.as_ref()),
+                want(unit, &input_sha, &options_sha),
+                out_dir,
+                o.overwrite,
+            );
+            (journal, journaled, decision)
+        })
+        .collect();
+    let last = decided
+        .iter()
+        .rposition(|(_, _, d)| matches!(d, Decision::Redo(_)));
+    for (i, ((unit, previous), (journal, journaled, decision))) in
+        units.iter().zip(decided).enumerate()
+    {
         let prev = journaled.as_ref().or(previous.as_ref());
-        let decision = decide(
-            prev,
-            want(unit, &input_sha, &options_sha),
-            out_dir,
-            o.overwrite,
-        );
         let (rec, reason) = match &read {
             Err(msg) => {
                 let reason = match decision {
@@ -218,30 +231,28 @@ pub fn write_units<P: Processor>(
                     .map_err(Error::Io)
                     .in_file(out_dir)?;
                 let blank = blank_record(unit, &input_sha, &options_sha);
-                let input = loaded.get_or_insert_with(|| {
+                if loaded.is_none() {
                     let l = load_input(processor, &unit.path, bytes);
                     if let Ok(input) = &l {
                         for w in processor.warnings(input) {
                             o.progress.warning(&unit.path, &w);
                         }
                     }
-                    l
-                });
-                let rec = match input {
-                    Ok(input) => {
-                        let to = UnitOutput {
-                            out_dir,
-                            policy: &policy,
-                            wait: o.wait,
-                        };
-                        compute_unit(processor, UnitInput::Shared(input), unit, prev, blank, to)
-                    }
-                    Err(msg) => Record {
-                        error: Some(msg.clone()),
-                        ..blank
+                    loaded = Some(l);
+                }
+                let at = Loaded {
+                    last: Some(i) == last,
+                    blank,
+                    to: UnitOutput {
+                        out_dir,
+                        policy: &policy,
+                        wait: o.wait,
                     },
                 };
-                (rec, reason)
+                (
+                    compute_loaded(processor, &mut loaded, unit, prev, at),
+                    reason,
+                )
             }
         };
         let mut rec = rec;

@@ -56,8 +56,11 @@ fn manifest_is_complete_and_true() {
     let out = tempfile::tempdir().unwrap();
     let mut o = opts(day.path(), out.path());
     o.variants = 2;
-    let s = dataset::run(&o, &Fake::new("x")).unwrap();
+    let fake = Fake::new("x");
+    let s = dataset::run(&o, &fake).unwrap();
     assert_eq!((s.units, s.done, s.outputs_written), (18, 18, 72));
+    // of each input's two variants the second takes the decoded input
+    assert_eq!(fake.lasts.load(Ordering::SeqCst), 9);
     let l = manifest::read(&out.path().join("manifest.jsonl")).unwrap();
     assert_eq!((l.records.len(), l.bad_lines), (18, 0));
     let mut seeds = std::collections::HashSet::new();
@@ -92,6 +95,8 @@ fn resume_does_no_work_then_recomputes_only_what_changed() {
     let o = opts(day.path(), out.path());
     let f1 = Fake::new("x");
     dataset::run(&o, &f1).unwrap();
+    // one unit per input, each its input's last: it takes the decoded input
+    assert_eq!(f1.lasts.load(Ordering::SeqCst), 12);
     let before = tree(out.path(), true);
 
     let f2 = Fake::new("x");
@@ -121,6 +126,7 @@ fn resume_does_no_work_then_recomputes_only_what_changed() {
     let s = dataset::run(&o, &f3).unwrap();
     assert_eq!((s.done, s.skipped), (2, 10));
     assert_eq!(f3.units.load(Ordering::SeqCst), 2);
+    assert_eq!(f3.lasts.load(Ordering::SeqCst), 2);
     assert_eq!(s.recomputed.get("input changed"), Some(&1));
     assert_eq!(s.recomputed.get("outputs missing or altered"), Some(&1));
     assert!(s.describe().contains("1 input changed"), "{}", s.describe());

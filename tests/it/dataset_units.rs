@@ -186,6 +186,8 @@ fn write_units_loads_each_input_once_for_all_its_variants() {
     let one = Fake::new("x");
     let records_a = write_all(&planned, a.path(), &one);
     assert_eq!(one.loads.load(Ordering::SeqCst), 12);
+    // each unit is its input's last: it takes the decoded input
+    assert_eq!(one.lasts.load(Ordering::SeqCst), 12);
     units::write_manifest(a.path(), records_a, Shard::ALL).unwrap();
 
     // Grouped by input: one load per input, the same tree.
@@ -207,6 +209,8 @@ fn write_units_loads_each_input_once_for_all_its_variants() {
     }
     assert_eq!(grouped.loads.load(Ordering::SeqCst), 4);
     assert_eq!(grouped.units.load(Ordering::SeqCst), 12);
+    // the third variant of each input takes the decoded input, the first two borrow it
+    assert_eq!(grouped.lasts.load(Ordering::SeqCst), 4);
     units::write_manifest(b.path(), records, Shard::ALL).unwrap();
     assert_eq!(tree(a.path(), true), tree(b.path(), true));
 
@@ -224,9 +228,11 @@ fn write_units_loads_each_input_once_for_all_its_variants() {
     assert_eq!(
         (
             again.loads.load(Ordering::SeqCst),
-            again.units.load(Ordering::SeqCst)
+            again.units.load(Ordering::SeqCst),
+            // the middle variant is the last one computed: it takes the input
+            again.lasts.load(Ordering::SeqCst)
         ),
-        (1, 1)
+        (1, 1, 1)
     );
 
     // Units of two inputs in one call are refused.

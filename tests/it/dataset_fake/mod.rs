@@ -16,6 +16,9 @@ pub struct Fake {
     pub option: String,
     pub loads: AtomicUsize,
     pub units: AtomicUsize,
+    /// Units given their input to use up ([`Processor::process_last`]; counted in `units`
+    /// too).
+    pub lasts: AtomicUsize,
 }
 
 impl Fake {
@@ -24,6 +27,7 @@ impl Fake {
             option: option.into(),
             loads: AtomicUsize::new(0),
             units: AtomicUsize::new(0),
+            lasts: AtomicUsize::new(0),
         }
     }
 }
@@ -39,6 +43,10 @@ impl Processor for Fake {
             return Err(Error::malformed("not a fake day file"));
         }
         Ok(bytes.to_vec())
+    }
+    fn process_last(&self, input: Vec<u8>, unit: &Unit, sink: &Sink) -> Result<UnitInfo> {
+        self.lasts.fetch_add(1, Ordering::SeqCst);
+        self.process(&input, unit, sink)
     }
     fn process(&self, input: &Vec<u8>, unit: &Unit, sink: &Sink) -> Result<UnitInfo> {
         self.units.fetch_add(1, Ordering::SeqCst);
