@@ -164,9 +164,12 @@ fn make_strip(
             src.fill_rows(y0, &mut buf);
             // The depth was chosen from the bound before any row existed: a sample above
             // it would be packed wrong, so it is an error, not a silently different file.
-            if let Some(&v) = buf.iter().find(|&&v| v > bound) {
+            // (the maximum first: a loop of whole-register maxima, where a search stops
+            // at every sample to test it)
+            let max = buf.iter().fold(0u16, |m, &v| m.max(v));
+            if max > bound {
                 return Err(Error::invalid(format!(
-                    "sample {v} in rows {y0}.. exceeds the source's bound {bound}"
+                    "sample {max} in rows {y0}.. exceeds the source's bound {bound}"
                 )));
             }
             pack_rows(&buf, w, bits, big)
