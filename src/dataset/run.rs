@@ -591,7 +591,7 @@ pub struct Loaded<'a> {
     pub to: UnitOutput<'a>,
 }
 
-/// [`compute_unit`] from an input's load (`loaded`, filled by [`load_input`] before the
+/// [`compute_unit`] from an input's load (`loaded`, filled by `load_input` before the
 /// first unit that is computed): the last unit takes the decoded input out
 /// ([`UnitInput::Last`]), the others borrow it; a load that failed gives each unit a
 /// failed record with its message.
